@@ -1,0 +1,3 @@
+//! CANopen: EMCY decoding, code tables, error register bits.
+
+pub mod codes;

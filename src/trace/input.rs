@@ -1,0 +1,129 @@
+//! Opening inputs: files, stdin, and gzip read transparently (by magic bytes,
+//! never by file name, so `trace.log.gz` piped through stdin works too).
+
+use std::fs::File;
+use std::io::{self, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
+
+/// Where an input comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Source {
+    Stdin,
+    Path(PathBuf),
+}
+
+impl Source {
+    /// `-` means stdin, as in every Unix filter.
+    pub fn from_arg(arg: &Path) -> Source {
+        if arg.as_os_str() == "-" {
+            Source::Stdin
+        } else {
+            Source::Path(arg.to_path_buf())
+        }
+    }
+
+    /// The name used in reports and diagnostics.
+    pub fn display_name(&self) -> String {
+        match self {
+            Source::Stdin => "<stdin>".to_string(),
+            Source::Path(p) => p.display().to_string(),
+        }
+    }
+}
+
+/// An opened input: a byte stream already decompressed if it was gzip.
+pub struct Opened {
+    pub reader: Box<dyn Read + Send>,
+    pub gzip: bool,
+}
+
+/// Opens a source. Errors carry a message fit for `error: NAME: message`.
+pub fn open(source: &Source) -> io::Result<Opened> {
+    let raw: Box<dyn Read + Send> = match source {
+        Source::Stdin => Box::new(io::stdin()),
+        Source::Path(path) => {
+            let file = File::open(path)?;
+            if file.metadata()?.is_dir() {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    "is a directory",
+                ));
+            }
+            Box::new(file)
+        }
+    };
+    sniff_gzip(raw)
+}
+
+/// Reads up to two bytes to look for the gzip magic, then puts them back in
+/// front of the stream. Works on pipes that deliver one byte at a time.
+pub fn sniff_gzip(mut raw: Box<dyn Read + Send>) -> io::Result<Opened> {
+    let mut head = [0u8; 2];
+    let mut got = 0;
+    while got < head.len() {
+        match raw.read(&mut head[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    let prefix = io::Cursor::new(head).take(got as u64);
+    let stream = prefix.chain(raw);
+    if got == 2 && head == GZIP_MAGIC {
+        // MultiGzDecoder: `cat a.gz b.gz` is a valid gzip stream of two members.
+        let decoder =
+            flate2::read::MultiGzDecoder::new(BufReader::with_capacity(256 * 1024, stream));
+        Ok(Opened {
+            reader: Box::new(decoder),
+            gzip: true,
+        })
+    } else {
+        Ok(Opened {
+            reader: Box::new(stream),
+            gzip: false,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn read_all(data: Vec<u8>) -> (Vec<u8>, bool) {
+        let mut opened = sniff_gzip(Box::new(io::Cursor::new(data))).unwrap();
+        let mut out = Vec::new();
+        opened.reader.read_to_end(&mut out).unwrap();
+        (out, opened.gzip)
+    }
+
+    #[test]
+    fn plain_text_passes_through() {
+        assert_eq!(read_all(b"abc".to_vec()), (b"abc".to_vec(), false));
+        assert_eq!(read_all(b"a".to_vec()), (b"a".to_vec(), false));
+        assert_eq!(read_all(Vec::new()), (Vec::new(), false));
+    }
+
+    #[test]
+    fn gzip_is_decompressed_including_concatenated_members() {
+        let mut gz = Vec::new();
+        for part in [&b"hello "[..], b"world"] {
+            let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            enc.write_all(part).unwrap();
+            gz.extend(enc.finish().unwrap());
+        }
+        assert_eq!(read_all(gz), (b"hello world".to_vec(), true));
+    }
+
+    #[test]
+    fn directories_are_refused() {
+        let err = match open(&Source::Path(PathBuf::from("."))) {
+            Err(e) => e,
+            Ok(_) => panic!("opened a directory"),
+        };
+        assert_eq!(err.to_string(), "is a directory");
+    }
+}

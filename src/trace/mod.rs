@@ -1,0 +1,320 @@
+//! Trace readers: one line parser per text format, all yielding [`Frame`].
+//!
+//! Every line is classified as exactly one of: a frame, a known non-frame line
+//! (header, comment, status, blank: "skipped"), or a malformed line with a
+//! reason. Parsers never panic and never stop: the caller counts and reports.
+
+pub mod asc;
+pub mod candump_log;
+pub mod candump_screen;
+pub mod detect;
+pub mod hex;
+pub mod input;
+pub mod lines;
+pub mod time;
+
+use std::borrow::Cow;
+use std::fmt;
+
+pub use time::{Span, Timestamp};
+
+/// The text formats we read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Format {
+    /// `candump -l` / `-L` log lines: `(1469439874.299654) can0 081#1043080100000000`.
+    CandumpLog,
+    /// candump's default screen output: `  can0  081   [8]  10 43 08 01 00 00 00 00`.
+    CandumpScreen,
+    /// Vector ASC (CANalyzer/CANoe, log2asc).
+    Asc,
+}
+
+impl Format {
+    pub const ALL: [Format; 3] = [Format::CandumpLog, Format::CandumpScreen, Format::Asc];
+
+    /// The name used on the command line and in the `format` JSON key.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::CandumpLog => "candump",
+            Format::CandumpScreen => "candump-screen",
+            Format::Asc => "asc",
+        }
+    }
+
+    pub fn parser(self) -> Box<dyn LineParser> {
+        match self {
+            Format::CandumpLog => Box::new(candump_log::CandumpLogParser::new()),
+            Format::CandumpScreen => Box::new(candump_screen::CandumpScreenParser::new()),
+            Format::Asc => Box::new(asc::AscParser::new()),
+        }
+    }
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What kind of frame a line carries. Only `Data` frames can be EMCY.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FrameKind {
+    /// Classic CAN data frame, 0..=8 bytes.
+    Data,
+    /// Remote transmission request; carries no data.
+    Remote,
+    /// Error frame; `id` holds the error class bits as the trace wrote them.
+    Error,
+    /// CAN FD frame, 0..=64 bytes.
+    Fd,
+}
+
+/// Up to 64 payload bytes, inline (no allocation per frame).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Payload {
+    bytes: [u8; 64],
+    len: u8,
+}
+
+impl Payload {
+    pub const MAX: usize = 64;
+
+    pub const fn new() -> Payload {
+        Payload {
+            bytes: [0; 64],
+            len: 0,
+        }
+    }
+
+    /// Appends a byte; `false` (and nothing stored) when already full.
+    #[inline]
+    pub fn push(&mut self, b: u8) -> bool {
+        match self.bytes.get_mut(usize::from(self.len)) {
+            Some(slot) => {
+                *slot = b;
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    pub fn from_slice(data: &[u8]) -> Option<Payload> {
+        let mut p = Payload::new();
+        for &b in data {
+            if !p.push(b) {
+                return None;
+            }
+        }
+        Some(p)
+    }
+
+    pub fn as_slice(&self) -> &[u8] {
+        &self.bytes[..usize::from(self.len)]
+    }
+
+    pub fn len(&self) -> usize {
+        usize::from(self.len)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+impl Default for Payload {
+    fn default() -> Self {
+        Payload::new()
+    }
+}
+
+impl fmt::Debug for Payload {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Payload({})", HexBytes(self.as_slice()))
+    }
+}
+
+/// Formats bytes as contiguous uppercase hex (`1043080100000000`).
+pub struct HexBytes<'a>(pub &'a [u8]);
+
+impl fmt::Display for HexBytes<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for b in self.0 {
+            write!(f, "{b:02X}")?;
+        }
+        Ok(())
+    }
+}
+
+/// One CAN frame read from a trace line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Frame<'a> {
+    /// Seconds as the trace wrote them; `None` when the trace has no times
+    /// (candump screen output without `-t`) or the frame was not of interest.
+    pub time: Option<Timestamp>,
+    /// Interface (candump) or channel number (ASC) exactly as written.
+    pub channel: &'a [u8],
+    /// 11- or 29-bit identifier (for error frames, the error class bits).
+    pub id: u32,
+    /// 29-bit identifier. For candump this follows the digit count, not the value.
+    pub extended: bool,
+    pub kind: FrameKind,
+    /// Number of data bytes the frame carries (0 for remote frames).
+    pub len: u8,
+    /// The data bytes; filled only for frames the caller's [`Interest`]
+    /// covers (id-first filtering: other frames are validated, not decoded).
+    pub data: Payload,
+}
+
+/// Which identifiers the caller wants decoded. Parsers read the id first and
+/// skip decoding time and data for everything else.
+#[derive(Clone)]
+pub struct Interest {
+    standard: [u64; 32],
+    extended: bool,
+}
+
+impl Interest {
+    /// Decode every frame (tests, conversions).
+    pub fn all() -> Interest {
+        Interest {
+            standard: [u64::MAX; 32],
+            extended: true,
+        }
+    }
+
+    pub fn none() -> Interest {
+        Interest {
+            standard: [0; 32],
+            extended: false,
+        }
+    }
+
+    pub fn add_standard(&mut self, id: u32) {
+        if let Some(word) = self.standard.get_mut((id >> 6) as usize) {
+            *word |= 1 << (id & 63);
+        }
+    }
+
+    pub fn add_standard_range(&mut self, ids: std::ops::RangeInclusive<u32>) {
+        for id in ids {
+            self.add_standard(id);
+        }
+    }
+
+    #[inline]
+    pub fn wants(&self, id: u32, extended: bool) -> bool {
+        if extended {
+            return self.extended;
+        }
+        match self.standard.get((id >> 6) as usize) {
+            Some(word) => word & (1 << (id & 63)) != 0,
+            None => false,
+        }
+    }
+}
+
+/// Why a line is not a frame of the format being read.
+pub type Reason = Cow<'static, str>;
+
+/// The classification of one line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Parsed<'a> {
+    Frame(Frame<'a>),
+    /// A line that is known not to be a frame (header, comment, status, blank).
+    Skipped,
+    Malformed(Reason),
+}
+
+/// A parser for one text format. Parsers may keep state across lines (ASC
+/// headers set the number base and relative timestamps).
+pub trait LineParser: Send {
+    fn format(&self) -> Format;
+
+    /// Classifies one line (terminator already removed). Must not panic on
+    /// any input.
+    fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a>;
+}
+
+/// Splits off leading spaces and tabs.
+#[inline]
+pub(crate) fn trim_start(s: &[u8]) -> &[u8] {
+    let n = s.iter().take_while(|b| **b == b' ' || **b == b'\t').count();
+    &s[n..]
+}
+
+#[inline]
+pub(crate) fn trim_end(s: &[u8]) -> &[u8] {
+    let n = s
+        .iter()
+        .rev()
+        .take_while(|b| **b == b' ' || **b == b'\t')
+        .count();
+    &s[..s.len() - n]
+}
+
+/// Splits `s` at the first space or tab: (token, rest starting at the blank).
+#[inline]
+pub(crate) fn split_token(s: &[u8]) -> (&[u8], &[u8]) {
+    let end = s
+        .iter()
+        .position(|b| *b == b' ' || *b == b'\t')
+        .unwrap_or(s.len());
+    s.split_at(end)
+}
+
+/// Iterates whitespace-separated tokens.
+pub(crate) fn tokens(s: &[u8]) -> impl Iterator<Item = &[u8]> {
+    s.split(|b| *b == b' ' || *b == b'\t')
+        .filter(|t| !t.is_empty())
+}
+
+/// True for lines that carry nothing (only blanks).
+#[inline]
+pub(crate) fn is_blank(s: &[u8]) -> bool {
+    s.iter().all(|b| *b == b' ' || *b == b'\t')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn payload_holds_64_bytes_and_refuses_more() {
+        let mut p = Payload::new();
+        for i in 0..64 {
+            assert!(p.push(i as u8));
+        }
+        assert!(!p.push(0));
+        assert_eq!(p.len(), 64);
+        assert!(Payload::from_slice(&[0; 65]).is_none());
+    }
+
+    #[test]
+    fn interest_bitset() {
+        let mut i = Interest::none();
+        i.add_standard_range(0x81..=0xFF);
+        assert!(i.wants(0x81, false));
+        assert!(i.wants(0xFF, false));
+        assert!(!i.wants(0x80, false));
+        assert!(!i.wants(0x81, true));
+        assert!(!i.wants(0x7FF, false));
+        assert!(!i.wants(u32::MAX, false));
+        i.add_standard(5000); // out of range: ignored, no panic
+        assert!(Interest::all().wants(0x1234_5678, true));
+    }
+
+    #[test]
+    fn tokenizing() {
+        assert_eq!(trim_start(b" \t x "), b"x ");
+        assert_eq!(trim_end(b" x \t"), b" x");
+        assert_eq!(split_token(b"ab cd"), (&b"ab"[..], &b" cd"[..]));
+        assert_eq!(
+            tokens(b"  a  b\tc ").collect::<Vec<_>>(),
+            [b"a", b"b", b"c"]
+        );
+        assert!(is_blank(b" \t"));
+        assert!(!is_blank(b" x"));
+        assert_eq!(HexBytes(&[0x10, 0xab]).to_string(), "10AB");
+    }
+}
