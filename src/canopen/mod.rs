@@ -1,3 +1,5 @@
 //! CANopen: EMCY decoding, code tables, error register bits.
 
 pub mod codes;
+pub mod emcy;
+pub mod register;

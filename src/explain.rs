@@ -1,0 +1,192 @@
+//! `emcy-decode explain`: what a code means, or what one raw payload says
+//! (what users read off an EtherCAT master or a drive's display).
+
+use std::fmt::Write as _;
+
+use anyhow::{Result, bail};
+use serde_json::json;
+
+use crate::canopen::codes;
+use crate::canopen::emcy::Emcy;
+use crate::canopen::register::{self, Register};
+use crate::trace::hex;
+
+/// Parses `10 43 09 01`, `1043090100000000`, `10:43:09`, `0x10,0x43` into bytes.
+pub fn parse_payload(text: &str) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    for token in text
+        .split(|c: char| c.is_whitespace() || matches!(c, ':' | ',' | '-' | '.'))
+        .filter(|t| !t.is_empty())
+    {
+        let digits = token
+            .strip_prefix("0x")
+            .or_else(|| token.strip_prefix("0X"))
+            .unwrap_or(token);
+        let digits = digits.as_bytes();
+        if digits.len() == 1 {
+            match hex::nibble(digits[0]) {
+                Some(v) => bytes.push(v),
+                None => bail!("'{token}' is not a hex byte"),
+            }
+            continue;
+        }
+        if digits.is_empty() || digits.len() % 2 != 0 {
+            bail!("'{token}' is not a whole number of hex bytes");
+        }
+        for pair in digits.chunks_exact(2) {
+            match hex::parse_byte(pair[0], pair[1]) {
+                Some(b) => bytes.push(b),
+                None => bail!("'{token}' is not hexadecimal"),
+            }
+        }
+    }
+    if bytes.len() > 8 {
+        bail!("an EMCY payload has at most 8 bytes; got {}", bytes.len());
+    }
+    Ok(bytes)
+}
+
+pub fn parse_code(text: &str) -> Result<u16> {
+    match hex::parse_code(text) {
+        Some(c) => Ok(c),
+        None => bail!("'{text}' is not an error code (1-4 hex digits, optional 0x)"),
+    }
+}
+
+fn register_bit_text(bit: Option<u8>) -> String {
+    match bit {
+        Some(b) => format!("bit {b} ({})", register::BIT_NAMES[usize::from(b & 7)]),
+        None => "none (only bit 0, generic)".to_string(),
+    }
+}
+
+/// `explain CODE` as text.
+pub fn code_text(code: u16) -> String {
+    let info = codes::lookup(code);
+    let mut s = String::new();
+    let _ = writeln!(s, "code         0x{code:04X}");
+    let _ = writeln!(s, "class        {}", info.class.slug());
+    let _ = writeln!(s, "description  {}", info.description());
+    let _ = writeln!(
+        s,
+        "register     {}",
+        register_bit_text(info.class.register_bit())
+    );
+    let _ = writeln!(s, "listed       {}", if info.listed { "yes" } else { "no" });
+    s
+}
+
+pub fn code_json(code: u16) -> serde_json::Value {
+    let info = codes::lookup(code);
+    json!({
+        "code": format!("0x{code:04X}"),
+        "class": info.class.slug(),
+        "description": info.description().to_string(),
+        "register_bit": info.class.register_bit(),
+        "listed": info.listed,
+    })
+}
+
+/// `explain --data` as text.
+pub fn payload_text(data: &[u8]) -> Result<String> {
+    let emcy = decode(data)?;
+    let info = emcy.info();
+    let mut warnings = Vec::new();
+    emcy.frame_warnings(&info, &mut warnings);
+    let mut s = String::new();
+    let hex: Vec<String> = data.iter().map(|b| format!("{b:02X}")).collect();
+    let _ = writeln!(s, "data          {}", hex.join(" "));
+    let _ = writeln!(s, "code          0x{:04X}", emcy.code);
+    let _ = writeln!(s, "class         {}", info.class.slug());
+    let _ = writeln!(s, "description   {}", info.description());
+    let names: Vec<&str> = emcy.register.names().collect();
+    let _ = writeln!(
+        s,
+        "register      0x{:02X} ({})",
+        emcy.register.0,
+        if names.is_empty() {
+            "no bits".to_string()
+        } else {
+            names.join(", ")
+        }
+    );
+    let mfr: Vec<String> = emcy
+        .manufacturer()
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "manufacturer  {}",
+        if mfr.is_empty() {
+            "-".to_string()
+        } else {
+            mfr.join(" ")
+        }
+    );
+    if warnings.is_empty() {
+        let _ = writeln!(s, "warnings      none");
+    }
+    for w in &warnings {
+        let _ = writeln!(s, "warning       {w}");
+    }
+    Ok(s)
+}
+
+pub fn payload_json(data: &[u8]) -> Result<serde_json::Value> {
+    let emcy = decode(data)?;
+    let info = emcy.info();
+    let mut warnings = Vec::new();
+    emcy.frame_warnings(&info, &mut warnings);
+    Ok(json!({
+        "data": crate::trace::HexBytes(data).to_string(),
+        "code": format!("0x{:04X}", emcy.code),
+        "class": info.class.slug(),
+        "description": info.description().to_string(),
+        "register": emcy.register.0,
+        "register_bits": Register(emcy.register.0).names().collect::<Vec<_>>(),
+        "manufacturer": crate::trace::HexBytes(emcy.manufacturer()).to_string(),
+        "warnings": warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>(),
+    }))
+}
+
+fn decode(data: &[u8]) -> Result<Emcy> {
+    Emcy::decode(data).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn payload_spellings() {
+        let want = vec![0x10, 0x43, 0x09, 0x01, 0, 0, 0, 0];
+        for text in [
+            "10 43 09 01 00 00 00 00",
+            "1043090100000000",
+            "10:43:09:01:00:00:00:00",
+            "0x10,0x43,0x09,0x01,0x00,0x00,0x00,0x00",
+            "10-43-09-01 00000000",
+        ] {
+            assert_eq!(parse_payload(text).unwrap(), want, "{text}");
+        }
+        assert_eq!(parse_payload("0 0 0").unwrap(), [0, 0, 0]);
+        assert!(parse_payload("104").is_err());
+        assert!(parse_payload("zz").is_err());
+        assert!(parse_payload("00 00 00 00 00 00 00 00 00").is_err());
+    }
+
+    #[test]
+    fn payload_needs_three_bytes() {
+        let err = payload_text(&[0x10, 0x43]).unwrap_err().to_string();
+        assert!(err.contains("need 3"), "{err}");
+    }
+
+    #[test]
+    fn codes() {
+        assert_eq!(parse_code("4310").unwrap(), 0x4310);
+        assert!(parse_code("43100").is_err());
+        assert!(code_text(0x4310).contains("bit 3 (temperature)"));
+        assert_eq!(code_json(0x4310)["register_bit"], 3);
+    }
+}

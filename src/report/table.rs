@@ -1,0 +1,316 @@
+//! The human report: per input, the EMCY events as they are decoded (streamed
+//! with fixed columns, so a trace with a million events prints without holding
+//! them), then the node states and error timeline; at the end the input counts.
+
+use std::io::{self, Write};
+
+use anstyle::{AnsiColor, Style};
+use comfy_table::{CellAlignment, Table, presets};
+
+use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::canopen::codes;
+use crate::trace::Timestamp;
+
+const RED: Style = AnsiColor::Red.on_default().bold();
+const YELLOW: Style = AnsiColor::Yellow.on_default();
+const GREEN: Style = AnsiColor::Green.on_default();
+const BOLD: Style = Style::new().bold();
+
+pub struct TableReport<W: Write> {
+    out: W,
+    color: bool,
+    /// Column widths fixed by the first event of an input.
+    layout: Option<Layout>,
+    flush_each: bool,
+}
+
+#[derive(Clone, Copy)]
+struct Layout {
+    time: usize,
+    channel: usize,
+}
+
+const REGISTER_WIDTH: usize = 14;
+const MANUFACTURER_WIDTH: usize = 14;
+
+impl<W: Write> TableReport<W> {
+    pub fn new(out: W, color: bool, flush_each: bool) -> Self {
+        TableReport {
+            out,
+            color,
+            layout: None,
+            flush_each,
+        }
+    }
+
+    fn paint(&self, style: Style, text: &str) -> String {
+        if self.color {
+            format!("{}{text}{}", style.render(), style.render_reset())
+        } else {
+            text.to_string()
+        }
+    }
+
+    fn layout_for(&mut self, time: Option<Timestamp>, channel: &str) -> io::Result<Layout> {
+        if let Some(l) = self.layout {
+            return Ok(l);
+        }
+        let l = Layout {
+            time: time.map_or(1, |t| t.to_string().len()).max(4),
+            channel: channel.len().max(7),
+        };
+        self.layout = Some(l);
+        let header = format!(
+            "{:<tw$}  {:<cw$}  NODE  CODE    TR  {:<rw$}  {:<mw$}  DESCRIPTION",
+            "TIME",
+            "CHANNEL",
+            "REGISTER",
+            "MANUFACTURER",
+            tw = l.time,
+            cw = l.channel,
+            rw = REGISTER_WIDTH,
+            mw = MANUFACTURER_WIDTH,
+        );
+        writeln!(self.out, "{}", self.paint(BOLD, &header))?;
+        Ok(l)
+    }
+
+    fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: u8) -> String {
+        let time = time.map_or_else(|| "-".to_string(), |t| t.to_string());
+        format!(
+            "{time:<tw$}  {channel:<cw$}  {node:>4}  ",
+            tw = l.time,
+            cw = l.channel
+        )
+    }
+
+    fn description_indent(l: Layout) -> usize {
+        l.time + 2 + l.channel + 2 + 6 + 8 + 4 + REGISTER_WIDTH + 2 + MANUFACTURER_WIDTH + 2
+    }
+
+    fn end_event(&mut self) -> io::Result<()> {
+        if self.flush_each {
+            self.out.flush()?;
+        }
+        Ok(())
+    }
+}
+
+fn codes_list(codes: &[u16]) -> String {
+    codes
+        .iter()
+        .map(|c| format!("0x{c:04X}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn spaced_hex(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+impl<W: Write> Renderer for TableReport<W> {
+    fn begin_input(&mut self, file: &str) -> io::Result<()> {
+        self.layout = None;
+        writeln!(self.out, "{}", self.paint(BOLD, &format!("== {file}")))
+    }
+
+    fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
+        let l = self.layout_for(ev.time, ev.channel)?;
+        let code = format!("0x{:04X}", ev.emcy.code);
+        let style = match ev.transition {
+            Some(1 | 3) => RED,
+            Some(2) => YELLOW,
+            Some(4) => GREEN,
+            _ => Style::new(),
+        };
+        let transition = ev
+            .transition
+            .map_or_else(|| "-".to_string(), |t| t.to_string());
+        let register = format!("{:02X} {}", ev.emcy.register.0, ev.emcy.register.short());
+        let mut description = ev.info.description().to_string();
+        if !ev.cleared.is_empty() {
+            description.push_str(&format!(" (cleared {})", codes_list(ev.cleared)));
+        }
+        let line = format!(
+            "{}{}  {transition:>2}  {register:<rw$}  {:<mw$}  {description}",
+            self.prefix(l, ev.time, ev.channel, ev.node),
+            self.paint(style, &code),
+            spaced_hex(ev.emcy.manufacturer()),
+            rw = REGISTER_WIDTH,
+            mw = MANUFACTURER_WIDTH,
+        );
+        writeln!(self.out, "{}", line.trim_end())?;
+        let indent = Self::description_indent(l);
+        for w in ev.warnings {
+            let text = self.paint(YELLOW, &format!("warning: {w}"));
+            writeln!(self.out, "{:indent$}{text}", "")?;
+        }
+        self.end_event()
+    }
+
+    fn boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
+        let l = self.layout_for(ev.time, ev.channel)?;
+        let what = if ev.cleared.is_empty() {
+            "NMT boot-up".to_string()
+        } else {
+            format!("NMT boot-up (cleared {})", codes_list(ev.cleared))
+        };
+        let indent = Self::description_indent(l) - (l.time + 2 + l.channel + 2 + 6);
+        writeln!(
+            self.out,
+            "{}{}{:pad$}{what}",
+            self.prefix(l, ev.time, ev.channel, ev.node),
+            self.paint(GREEN, "boot  "),
+            "",
+            pad = indent - 6,
+        )?;
+        self.end_event()
+    }
+
+    fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
+        if self.layout.is_none() {
+            writeln!(self.out, "no EMCY frames")?;
+        }
+        if input.nodes.is_empty() {
+            return writeln!(self.out);
+        }
+        writeln!(self.out)?;
+        let mut nodes = new_table(&["CHANNEL", "NODE", "EMCY", "STATE AT END", "ACTIVE"]);
+        for n in &input.nodes {
+            nodes.add_row(vec![
+                n.channel.clone(),
+                n.node.to_string(),
+                n.emcy_count.to_string(),
+                n.state.slug().to_string(),
+                if n.active.is_empty() {
+                    "-".to_string()
+                } else {
+                    codes_list(&n.active)
+                },
+            ]);
+        }
+        right_align(&mut nodes, &[1, 2]);
+        writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
+        write_table(&mut self.out, &nodes)?;
+
+        let mut errors = new_table(&[
+            "CHANNEL",
+            "NODE",
+            "CODE",
+            "DESCRIPTION",
+            "START",
+            "END",
+            "DURATION",
+            "CLEARED BY",
+        ]);
+        let mut any = false;
+        for n in &input.nodes {
+            for iv in &n.errors {
+                any = true;
+                let end_time = iv.end.and_then(|e| e.time);
+                let (end, duration) = match (iv.end, iv.start.time, end_time) {
+                    (None, _, _) => ("active".to_string(), "-".to_string()),
+                    (Some(_), Some(s), Some(e)) => (e.to_string(), e.since(s).to_string()),
+                    (Some(e), _, _) => (format!("line {}", e.line), "-".to_string()),
+                };
+                errors.add_row(vec![
+                    n.channel.clone(),
+                    n.node.to_string(),
+                    format!("0x{:04X}", iv.code),
+                    codes::lookup(iv.code).description().to_string(),
+                    iv.start
+                        .time
+                        .map_or_else(|| format!("line {}", iv.start.line), |t| t.to_string()),
+                    end,
+                    duration,
+                    iv.cleared_by.map_or("-", |c| c.slug()).to_string(),
+                ]);
+            }
+        }
+        if any {
+            right_align(&mut errors, &[1, 6]);
+            writeln!(self.out)?;
+            writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
+            write_table(&mut self.out, &errors)?;
+        }
+        writeln!(self.out)
+    }
+
+    fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
+        let mut t = new_table(&[
+            "FILE",
+            "FORMAT",
+            "LINES",
+            "FRAMES",
+            "EMCY",
+            "BOOT",
+            "SKIPPED",
+            "MALFORMED",
+        ]);
+        for i in inputs {
+            let c = &i.counts;
+            t.add_row(vec![
+                i.file.clone(),
+                i.format.map_or("-", |f| f.name()).to_string(),
+                c.lines.to_string(),
+                c.frames.to_string(),
+                c.emcy.to_string(),
+                c.boot.to_string(),
+                c.skipped.to_string(),
+                c.malformed.to_string(),
+            ]);
+        }
+        right_align(&mut t, &[2, 3, 4, 5, 6, 7]);
+        writeln!(self.out, "{}", self.paint(BOLD, "Inputs"))?;
+        write_table(&mut self.out, &t)?;
+        self.out.flush()
+    }
+}
+
+fn new_table(header: &[&str]) -> Table {
+    let mut t = Table::new();
+    t.load_style(presets::NOTHING);
+    t.set_header(header.to_vec());
+    for c in t.column_iter_mut() {
+        c.set_padding((0, 2));
+    }
+    t
+}
+
+/// comfy-table pads every cell; trailing blanks make golden files noisy.
+fn write_table(out: &mut impl Write, table: &Table) -> io::Result<()> {
+    for line in table.lines() {
+        writeln!(out, "{}", line.trim_end())?;
+    }
+    Ok(())
+}
+
+fn right_align(t: &mut Table, columns: &[usize]) {
+    for &i in columns {
+        if let Some(c) = t.column_mut(i) {
+            c.set_cell_alignment(CellAlignment::Right);
+        }
+    }
+}
+
+/// Whether to colour: `--color always|never`, or auto = a terminal and no `NO_COLOR`.
+pub fn use_color(choice: ColorChoice, is_terminal: bool) -> bool {
+    match choice {
+        ColorChoice::Always => true,
+        ColorChoice::Never => false,
+        ColorChoice::Auto => {
+            is_terminal && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty())
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ColorChoice {
+    Auto,
+    Always,
+    Never,
+}

@@ -1,0 +1,160 @@
+//! Runs a parsed command line and decides the exit code.
+
+use std::io::{self, IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+
+use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
+use crate::cli::{Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat};
+use crate::explain;
+use crate::report::json::{JsonDocument, Ndjson};
+use crate::report::table::{TableReport, use_color};
+use crate::report::{InputReport, Renderer};
+use crate::trace::input::{self, Source};
+
+/// The exit codes of the contract in `--help`.
+pub const EXIT_OK: u8 = 0;
+pub const EXIT_FAIL_ON: u8 = 1;
+pub const EXIT_ERROR: u8 = 2;
+
+pub fn run(cli: Cli) -> Result<ExitCode> {
+    match cli.command {
+        Some(Command::Explain(args)) => explain_command(&args),
+        None => decode_command(&cli.decode),
+    }
+}
+
+fn explain_command(args: &ExplainArgs) -> Result<ExitCode> {
+    let text = match (&args.data, &args.code, args.format) {
+        (Some(data), _, ExplainFormat::Text) => {
+            explain::payload_text(&explain::parse_payload(data)?)?
+        }
+        (Some(data), _, ExplainFormat::Json) => {
+            format!(
+                "{:#}\n",
+                explain::payload_json(&explain::parse_payload(data)?)?
+            )
+        }
+        (None, Some(code), ExplainFormat::Text) => explain::code_text(explain::parse_code(code)?),
+        (None, Some(code), ExplainFormat::Json) => {
+            format!("{:#}\n", explain::code_json(explain::parse_code(code)?))
+        }
+        (None, None, _) => anyhow::bail!("give a CODE or --data"),
+    };
+    let mut out = io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        Err(e) if e.kind() != io::ErrorKind::BrokenPipe => return Err(e.into()),
+        _ => {}
+    }
+    Ok(ExitCode::from(EXIT_OK))
+}
+
+fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
+    let opts = Options {
+        input_format: args.input_format.map(Into::into),
+        nodes: args.node.clone(),
+        channels: args.channel.clone(),
+        max_diagnostics: args.max_diagnostics,
+        ..Options::default()
+    };
+    let sources: Vec<Source> = if args.files.is_empty() {
+        vec![Source::Stdin]
+    } else {
+        args.files
+            .iter()
+            .map(|p: &PathBuf| Source::from_arg(p))
+            .collect()
+    };
+    let stdout = io::stdout();
+    let live = !stdout.is_terminal() && sources == [Source::Stdin] && io::stdin().is_terminal();
+    let out = io::BufWriter::with_capacity(64 * 1024, stdout.lock());
+    let mut renderer: Box<dyn Renderer> = match args.format {
+        OutputFormat::Table => {
+            let color = use_color(args.color, io::stdout().is_terminal());
+            Box::new(TableReport::new(out, color, live))
+        }
+        OutputFormat::Json => Box::new(JsonDocument::new(out)),
+        OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
+    };
+    let mut log = DiagnosticLog::new(io::stderr());
+
+    match decode_all(&sources, &opts, renderer.as_mut(), &mut log) {
+        Ok(outcome) => Ok(ExitCode::from(exit_code(args, &outcome))),
+        // The reader of our output went away (`| head -1`): not an error.
+        Err(OutputError(e)) if e.kind() == io::ErrorKind::BrokenPipe => Ok(ExitCode::from(EXIT_OK)),
+        Err(OutputError(e)) => {
+            log.error(&format!("writing output: {e}"));
+            Ok(ExitCode::from(EXIT_ERROR))
+        }
+    }
+}
+
+/// What all inputs amounted to.
+pub struct Outcome {
+    pub analyses: Vec<Analysis>,
+    /// Inputs that could not be opened.
+    pub open_failures: usize,
+}
+
+fn decode_all(
+    sources: &[Source],
+    opts: &Options,
+    renderer: &mut dyn Renderer,
+    log: &mut DiagnosticLog<io::Stderr>,
+) -> Result<Outcome, OutputError> {
+    let mut analyses = Vec::new();
+    let mut open_failures = 0;
+    for source in sources {
+        let name = source.display_name();
+        let opened = match input::open(source) {
+            Ok(o) => o,
+            Err(e) => {
+                log.error(&format!("{name}: {}", describe_io(&e)));
+                open_failures += 1;
+                continue;
+            }
+        };
+        let analysis = analyze::analyze(&name, opened.reader, opened.gzip, opts, renderer, log)?;
+        if let Some(err) = &analysis.report.error {
+            log.error(&format!("{name}: {err}"));
+        }
+        analyses.push(analysis);
+    }
+    let reports: Vec<InputReport> = analyses.iter().map(|a| a.report.clone()).collect();
+    renderer
+        .finish(&reports, &log.collected)
+        .map_err(OutputError)?;
+    Ok(Outcome {
+        analyses,
+        open_failures,
+    })
+}
+
+/// `No such file or directory` without Rust's `(os error 2)` suffix.
+fn describe_io(e: &io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    }
+}
+
+fn exit_code(args: &DecodeArgs, outcome: &Outcome) -> u8 {
+    let reports = outcome.analyses.iter().map(|a| &a.report);
+    let input_failed = outcome.open_failures > 0 || reports.clone().any(|r| r.error.is_some());
+    let strict_failed = args.strict
+        && reports
+            .clone()
+            .any(|r| r.counts.malformed > 0 || r.counts.emcy_invalid > 0);
+    if input_failed || strict_failed {
+        return EXIT_ERROR;
+    }
+    let failed = match args.fail_on {
+        FailOn::Never => false,
+        FailOn::Any => outcome.analyses.iter().any(|a| a.errors_raised > 0),
+        FailOn::Active => reports.flat_map(|r| &r.nodes).any(|n| !n.active.is_empty()),
+    };
+    if failed { EXIT_FAIL_ON } else { EXIT_OK }
+}

@@ -1,0 +1,408 @@
+//! The per-node error state machine (CiA 301 EMCY transitions 0-4, as the
+//! S200/S300/AX2000 manuals describe it) and the error intervals it yields.
+//!
+//! Rules, exactly:
+//! - A node starts error-free.
+//! - code != 0x0000: transition 1 from error-free, 3 otherwise; the code becomes
+//!   active (a repeat of an active code does not open a second interval).
+//! - code == 0x0000, register != 0: transition 2 if error-occurred (else none
+//!   and a warning); the node is error-occurred. An active error closes
+//!   (partial reset) when its class bit was set in the register when it was
+//!   raised and is clear now. Errors that cannot be attributed stay active.
+//! - code == 0x0000, register == 0: transition 4 if error-occurred (else none
+//!   and a warning); every active error closes (reset); error-free.
+//! - NMT boot-up closes every active error (boot) and returns to error-free.
+
+use crate::canopen::codes;
+use crate::canopen::emcy::{Emcy, Warning};
+use crate::canopen::register::Register;
+use crate::trace::Timestamp;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum State {
+    #[default]
+    ErrorFree,
+    ErrorOccurred,
+}
+
+impl State {
+    pub fn slug(self) -> &'static str {
+        match self {
+            State::ErrorFree => "error_free",
+            State::ErrorOccurred => "error_occurred",
+        }
+    }
+}
+
+/// How an error interval ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ClearedBy {
+    /// Code 0x0000 with register 0x00 (transition 4).
+    Reset,
+    /// Code 0x0000 whose register no longer shows the error's class bit (transition 2).
+    PartialReset,
+    /// The node sent an NMT boot-up: it restarted.
+    Boot,
+}
+
+impl ClearedBy {
+    pub fn slug(self) -> &'static str {
+        match self {
+            ClearedBy::Reset => "reset",
+            ClearedBy::PartialReset => "partial_reset",
+            ClearedBy::Boot => "boot",
+        }
+    }
+}
+
+/// Where in the trace something happened.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct At {
+    pub time: Option<Timestamp>,
+    pub line: u64,
+}
+
+/// One error from the EMCY that raised it to the frame that cleared it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Interval {
+    pub code: u16,
+    pub start: At,
+    pub end: Option<At>,
+    pub cleared_by: Option<ClearedBy>,
+    /// The error register sent with the raising EMCY: the class bit that must
+    /// later drop for a partial reset to be attributed to this error.
+    pub raised_register: Register,
+}
+
+/// What one EMCY did to its node.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Step {
+    /// 1-4, or `None` for a reset that changed nothing.
+    pub transition: Option<u8>,
+    pub state: State,
+    /// Codes closed by this frame.
+    pub cleared: Vec<u16>,
+}
+
+/// The error history of one node.
+#[derive(Clone, Debug, Default)]
+pub struct NodeTimeline {
+    state: State,
+    intervals: Vec<Interval>,
+    /// Indices into `intervals` of the open ones, in the order they were raised.
+    active: Vec<usize>,
+    emcy_count: u64,
+}
+
+impl NodeTimeline {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn state(&self) -> State {
+        self.state
+    }
+
+    pub fn emcy_count(&self) -> u64 {
+        self.emcy_count
+    }
+
+    /// Every error seen, in the order raised; open ones have `end: None`.
+    pub fn intervals(&self) -> &[Interval] {
+        &self.intervals
+    }
+
+    /// Codes active now, in the order they were raised.
+    pub fn active_codes(&self) -> impl Iterator<Item = u16> + '_ {
+        self.active
+            .iter()
+            .filter_map(|&i| self.intervals.get(i).map(|iv| iv.code))
+    }
+
+    /// Applies one EMCY. Warnings that depend on the node's history are
+    /// appended to `warnings`.
+    pub fn emcy(&mut self, emcy: &Emcy, at: At, warnings: &mut Vec<Warning>) -> Step {
+        self.emcy_count += 1;
+        let was = self.state;
+        let mut cleared = Vec::new();
+        let transition = if !emcy.is_reset() {
+            if !self.active_codes().any(|c| c == emcy.code) {
+                self.active.push(self.intervals.len());
+                self.intervals.push(Interval {
+                    code: emcy.code,
+                    start: at,
+                    end: None,
+                    cleared_by: None,
+                    raised_register: emcy.register,
+                });
+            }
+            self.state = State::ErrorOccurred;
+            Some(if was == State::ErrorFree { 1 } else { 3 })
+        } else if emcy.register.0 != 0 {
+            let now = emcy.register;
+            self.close_where(at, ClearedBy::PartialReset, &mut cleared, |iv| {
+                codes::lookup(iv.code)
+                    .class
+                    .register_bit()
+                    .is_some_and(|bit| iv.raised_register.has(bit) && !now.has(bit))
+            });
+            self.state = State::ErrorOccurred;
+            if was == State::ErrorFree {
+                warnings.push(Warning::PartialResetWhileErrorFree);
+                None
+            } else {
+                if cleared.is_empty() {
+                    warnings.push(Warning::PartialResetUnattributed { register: now.0 });
+                }
+                Some(2)
+            }
+        } else {
+            self.close_where(at, ClearedBy::Reset, &mut cleared, |_| true);
+            self.state = State::ErrorFree;
+            if was == State::ErrorFree {
+                warnings.push(Warning::ResetWhileErrorFree);
+                None
+            } else {
+                Some(4)
+            }
+        };
+        Step {
+            transition,
+            state: self.state,
+            cleared,
+        }
+    }
+
+    /// Applies an NMT boot-up; returns the codes it closed.
+    pub fn boot(&mut self, at: At) -> Vec<u16> {
+        let mut cleared = Vec::new();
+        self.close_where(at, ClearedBy::Boot, &mut cleared, |_| true);
+        self.state = State::ErrorFree;
+        cleared
+    }
+
+    fn close_where(
+        &mut self,
+        at: At,
+        by: ClearedBy,
+        cleared: &mut Vec<u16>,
+        mut closes: impl FnMut(&Interval) -> bool,
+    ) {
+        let intervals = &mut self.intervals;
+        self.active.retain(|&i| {
+            let Some(iv) = intervals.get_mut(i) else {
+                return false;
+            };
+            if !closes(iv) {
+                return true;
+            }
+            iv.end = Some(at);
+            iv.cleared_by = Some(by);
+            cleared.push(iv.code);
+            false
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn emcy(code: u16, register: u8) -> Emcy {
+        let [lo, hi] = code.to_le_bytes();
+        Emcy::decode(&[lo, hi, register, 0, 0, 0, 0, 0]).unwrap()
+    }
+
+    fn at(line: u64) -> At {
+        At {
+            time: Some(Timestamp::from_parts(line, 0, 1)),
+            line,
+        }
+    }
+
+    /// Applies frames (code, register) in order; returns transitions and warnings tags.
+    fn run(frames: &[(u16, u8)]) -> (NodeTimeline, Vec<(Option<u8>, Vec<&'static str>)>) {
+        let mut t = NodeTimeline::new();
+        let mut steps = Vec::new();
+        for (i, &(code, reg)) in frames.iter().enumerate() {
+            let mut w = Vec::new();
+            let step = t.emcy(&emcy(code, reg), at(i as u64 + 1), &mut w);
+            steps.push((step.transition, w.iter().map(Warning::tag).collect()));
+        }
+        (t, steps)
+    }
+
+    fn summary(t: &NodeTimeline) -> Vec<(u16, Option<u64>, Option<&'static str>)> {
+        t.intervals()
+            .iter()
+            .map(|iv| {
+                (
+                    iv.code,
+                    iv.end.map(|e| e.line),
+                    iv.cleared_by.map(ClearedBy::slug),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn starts_error_free() {
+        let t = NodeTimeline::new();
+        assert_eq!(t.state(), State::ErrorFree);
+        assert_eq!(t.active_codes().count(), 0);
+    }
+
+    #[test]
+    fn transition_1_error_free_to_error_occurred() {
+        let (t, steps) = run(&[(0x4310, 0x09)]);
+        assert_eq!(steps[0].0, Some(1));
+        assert_eq!(t.state(), State::ErrorOccurred);
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310]);
+    }
+
+    #[test]
+    fn transition_3_new_error_while_in_error() {
+        let (t, steps) = run(&[(0x4310, 0x09), (0x2310, 0x0B)]);
+        assert_eq!(steps[1].0, Some(3));
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310, 0x2310]);
+    }
+
+    #[test]
+    fn repeated_code_keeps_one_interval() {
+        let (t, steps) = run(&[(0x4310, 0x09), (0x4310, 0x09)]);
+        assert_eq!(steps[1].0, Some(3));
+        assert_eq!(t.intervals().len(), 1);
+        assert_eq!(t.emcy_count(), 2);
+    }
+
+    #[test]
+    fn transition_4_reset_closes_everything() {
+        let (t, steps) = run(&[(0x4310, 0x09), (0x2310, 0x0B), (0x0000, 0x00)]);
+        assert_eq!(steps[2].0, Some(4));
+        assert_eq!(t.state(), State::ErrorFree);
+        assert_eq!(
+            summary(&t),
+            [
+                (0x4310, Some(3), Some("reset")),
+                (0x2310, Some(3), Some("reset"))
+            ]
+        );
+    }
+
+    #[test]
+    fn transition_2_closes_the_error_whose_class_bit_dropped() {
+        // Temperature (bit 3) and current (bit 1) raised; the register drops bit 1.
+        let (t, steps) = run(&[(0x4310, 0x09), (0x2310, 0x0B), (0x0000, 0x09)]);
+        assert_eq!(steps[2], (Some(2), vec![]));
+        assert_eq!(t.state(), State::ErrorOccurred);
+        assert_eq!(
+            summary(&t),
+            [
+                (0x4310, None, None),
+                (0x2310, Some(3), Some("partial_reset"))
+            ]
+        );
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310]);
+    }
+
+    #[test]
+    fn partial_reset_that_names_no_error_keeps_all_active() {
+        // The S300 manual's example: the register still shows the temperature bit.
+        let (t, steps) = run(&[(0x4310, 0x08), (0x0000, 0x08)]);
+        assert_eq!(steps[1], (Some(2), vec!["partial_reset_unattributed"]));
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310]);
+    }
+
+    #[test]
+    fn errors_without_a_class_bit_are_never_inferred_closed() {
+        // 0x5530 (hardware) has no register bit; 0x8611 (monitoring) neither.
+        let (t, _) = run(&[(0x5530, 0x01), (0x8611, 0x21), (0x0000, 0x01)]);
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x5530, 0x8611]);
+    }
+
+    #[test]
+    fn inference_needs_the_bit_set_when_raised() {
+        // 0x2310 raised without the current bit: a later register without it proves nothing.
+        let (t, _) = run(&[(0x2310, 0x01), (0x4310, 0x09), (0x0000, 0x01)]);
+        assert_eq!(
+            summary(&t),
+            [
+                (0x2310, None, None),
+                (0x4310, Some(3), Some("partial_reset"))
+            ]
+        );
+    }
+
+    #[test]
+    fn each_class_bit_attributes_its_class() {
+        for (code, bit) in [
+            (0x2310u16, 1u8),
+            (0x3210, 2),
+            (0x4210, 3),
+            (0x8110, 4),
+            (0x8210, 4),
+            (0xFF01, 7),
+        ] {
+            let raised = 0x01 | (1 << bit);
+            let (t, _) = run(&[(code, raised), (0x1000, 0x01 | 0x20), (0x0000, 0x21)]);
+            assert_eq!(
+                summary(&t)[0],
+                (code, Some(3), Some("partial_reset")),
+                "code {code:04X}"
+            );
+        }
+    }
+
+    #[test]
+    fn partial_reset_while_error_free_warns_and_enters_error_occurred() {
+        let (t, steps) = run(&[(0x0000, 0x08)]);
+        assert_eq!(steps[0], (None, vec!["partial_reset_while_error_free"]));
+        assert_eq!(t.state(), State::ErrorOccurred);
+    }
+
+    #[test]
+    fn reset_while_error_free_warns() {
+        let (t, steps) = run(&[(0x0000, 0x00)]);
+        assert_eq!(steps[0], (None, vec!["reset_while_error_free"]));
+        assert_eq!(t.state(), State::ErrorFree);
+    }
+
+    #[test]
+    fn boot_closes_everything_and_returns_error_free() {
+        let (mut t, _) = run(&[(0x4310, 0x09), (0x3210, 0x05)]);
+        assert_eq!(t.boot(at(9)), [0x4310, 0x3210]);
+        assert_eq!(t.state(), State::ErrorFree);
+        assert_eq!(
+            summary(&t),
+            [
+                (0x4310, Some(9), Some("boot")),
+                (0x3210, Some(9), Some("boot"))
+            ]
+        );
+        assert!(t.boot(at(10)).is_empty());
+        // After boot a new error is transition 1 again.
+        let mut w = Vec::new();
+        assert_eq!(
+            t.emcy(&emcy(0x4310, 0x09), at(11), &mut w).transition,
+            Some(1)
+        );
+        assert_eq!(t.intervals().len(), 3);
+    }
+
+    #[test]
+    fn odd_reset_codes_are_errors() {
+        let (t, steps) = run(&[(0x0012, 0x01)]);
+        assert_eq!(steps[0].0, Some(1));
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x0012]);
+    }
+
+    #[test]
+    fn step_reports_what_it_cleared() {
+        let mut t = NodeTimeline::new();
+        let mut w = Vec::new();
+        t.emcy(&emcy(0x4310, 0x09), at(1), &mut w);
+        let step = t.emcy(&emcy(0, 0), at(2), &mut w);
+        assert_eq!(step.cleared, [0x4310]);
+        assert_eq!(step.state, State::ErrorFree);
+    }
+}
