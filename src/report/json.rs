@@ -8,8 +8,9 @@ use serde::Serialize;
 
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeJson, Renderer};
 
+/// Keeps the kind of an underlying I/O error (a broken pipe must stay one).
 fn to_io(e: serde_json::Error) -> io::Error {
-    io::Error::other(e)
+    io::Error::from(e)
 }
 
 /// Events in trace order, then node objects, then input objects.

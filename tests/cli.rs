@@ -1,0 +1,519 @@
+//! The command-line contract: exit codes, flags, stdin, errors.
+
+mod common;
+
+use std::io::Write;
+use std::process::Stdio;
+
+use common::emcy_decode;
+use predicates::prelude::*;
+use serde_json::Value;
+
+fn ndjson_objects(stdout: &[u8]) -> Vec<Value> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("valid JSON line"))
+        .collect()
+}
+
+fn of_type<'a>(objects: &'a [Value], kind: &str) -> Vec<&'a Value> {
+    objects.iter().filter(|o| o["type"] == kind).collect()
+}
+
+// ---- exit codes ----------------------------------------------------------------
+
+#[test]
+fn success_is_exit_0() {
+    emcy_decode().arg("fixtures/s300.log").assert().code(0);
+}
+
+#[test]
+fn fail_on_any_exits_1_when_an_error_code_was_seen() {
+    emcy_decode()
+        .args(["--fail-on", "any", "fixtures/s300.log"])
+        .assert()
+        .code(1);
+}
+
+#[test]
+fn fail_on_any_ignores_traces_with_only_resets() {
+    let trace = "(1.000000) can0 081#0000000000000000\n";
+    emcy_decode()
+        .args(["--fail-on", "any", "-"])
+        .write_stdin(trace)
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn fail_on_active_exits_1_only_when_an_error_is_still_active() {
+    // s300 ends with 0x5111 active; stoeber ends error-free.
+    emcy_decode()
+        .args(["--fail-on", "active", "fixtures/s300.log"])
+        .assert()
+        .code(1);
+    emcy_decode()
+        .args(["--fail-on", "active", "fixtures/stoeber.log"])
+        .assert()
+        .code(0);
+    emcy_decode()
+        .args(["--fail-on", "any", "fixtures/stoeber.log"])
+        .assert()
+        .code(1);
+}
+
+#[test]
+fn fail_on_respects_the_node_filter() {
+    // In s300 only node 1 has errors.
+    emcy_decode()
+        .args(["--fail-on", "active", "--node", "2", "fixtures/s300.log"])
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn missing_file_is_one_error_line_and_exit_2() {
+    emcy_decode()
+        .arg("fixtures/does-not-exist.log")
+        .assert()
+        .code(2)
+        .stderr(predicate::eq(
+            "error: fixtures/does-not-exist.log: No such file or directory\n",
+        ));
+}
+
+#[test]
+fn other_files_are_still_reported_when_one_is_missing() {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "nope.log", "fixtures/stoeber.log"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let objects = ndjson_objects(&out.stdout);
+    assert_eq!(of_type(&objects, "input").len(), 1);
+}
+
+#[test]
+fn directory_is_an_error() {
+    emcy_decode()
+        .arg("fixtures")
+        .assert()
+        .code(2)
+        .stderr(predicate::eq("error: fixtures: is a directory\n"));
+}
+
+#[test]
+fn unknown_format_is_one_error_line_and_exit_2() {
+    let out = emcy_decode()
+        .arg("-")
+        .write_stdin("this is not a trace\nnor is this\n")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("error: <stdin>: cannot detect the trace format"));
+    assert!(stderr.contains("--input-format"));
+}
+
+#[test]
+fn empty_input_is_fine() {
+    emcy_decode().arg("-").write_stdin("").assert().code(0);
+    emcy_decode()
+        .arg("-")
+        .write_stdin("\n\n# only comments\n")
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn strict_makes_malformed_lines_exit_2() {
+    // edge.log contains one malformed line and one 2-byte EMCY.
+    emcy_decode().arg("fixtures/edge.log").assert().code(0);
+    emcy_decode()
+        .args(["--strict", "fixtures/edge.log"])
+        .assert()
+        .code(2);
+    emcy_decode()
+        .args(["--strict", "fixtures/stoeber.log"])
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn errors_outrank_fail_on() {
+    emcy_decode()
+        .args(["--strict", "--fail-on", "any", "fixtures/edge.log"])
+        .assert()
+        .code(2);
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    emcy_decode().arg("--format=xml").assert().code(2);
+    emcy_decode().args(["--node", "0"]).assert().code(2);
+    emcy_decode().args(["--node", "128"]).assert().code(2);
+    emcy_decode().arg("--no-such-flag").assert().code(2);
+}
+
+#[test]
+fn broken_pipe_is_exit_0_without_a_panic_message() {
+    // A long trace into a reader that closes after one line.
+    let mut trace = String::new();
+    for i in 0..50_000 {
+        trace.push_str(&format!("({i}.000000) can0 081#1043090100000000\n"));
+    }
+    let dir = tempdir();
+    let path = dir.join("long.log");
+    std::fs::write(&path, trace).unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
+        .args(["--format", "ndjson"])
+        .arg(&path)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        let mut stdout = child.stdout.take().unwrap();
+        let mut first = [0u8; 16];
+        std::io::Read::read_exact(&mut stdout, &mut first).unwrap();
+    } // dropped: the pipe closes
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+}
+
+fn tempdir() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "emcy-decode-test-{}-{}",
+        std::process::id(),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn help_documents_exit_codes_and_examples() {
+    emcy_decode()
+        .arg("--help")
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("Exit status:"))
+        .stdout(predicate::str::contains(
+            "1  the --fail-on condition was met",
+        ))
+        .stdout(predicate::str::contains("emcy-decode explain 4310"));
+}
+
+// ---- inputs ----------------------------------------------------------------------
+
+#[test]
+fn stdin_by_dash_and_by_default() {
+    let trace = std::fs::read("fixtures/s300.log").unwrap();
+    for args in [
+        &["--format", "ndjson", "-"][..],
+        &["--format", "ndjson"][..],
+    ] {
+        let out = emcy_decode()
+            .args(args)
+            .write_stdin(trace.clone())
+            .output()
+            .unwrap();
+        let objects = ndjson_objects(&out.stdout);
+        assert_eq!(of_type(&objects, "emcy").len(), 7);
+        assert_eq!(of_type(&objects, "input")[0]["file"], "<stdin>");
+    }
+}
+
+#[test]
+fn gzip_on_stdin_is_decompressed() {
+    let gz = std::fs::read("fixtures/s300.log.gz").unwrap();
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin(gz)
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&out.stdout);
+    assert_eq!(of_type(&objects, "emcy").len(), 7);
+    assert_eq!(of_type(&objects, "input")[0]["gzip"], true);
+}
+
+#[test]
+fn corrupt_gzip_reports_what_was_read_then_exit_2() {
+    let gz = std::fs::read("fixtures/s300.log.gz").unwrap();
+    let cut = &gz[..gz.len() - 30];
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin(cut.to_vec())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.starts_with("error: <stdin>: "), "{stderr}");
+    let objects = ndjson_objects(&out.stdout);
+    let input = of_type(&objects, "input")[0];
+    assert!(input["error"].is_string());
+    assert!(input["lines"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn input_format_can_be_forced() {
+    // A candump log read as ASC is all malformed, and that is what was asked.
+    let out = emcy_decode()
+        .args([
+            "--format",
+            "ndjson",
+            "--input-format",
+            "asc",
+            "fixtures/stoeber.log",
+        ])
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&out.stdout);
+    let input = of_type(&objects, "input")[0];
+    assert_eq!(input["format"], "asc");
+    assert_eq!(input["frames"], 0);
+    assert_eq!(input["malformed"], input["lines"]);
+    // The right forced format reads it.
+    let out = emcy_decode()
+        .args([
+            "--format",
+            "ndjson",
+            "--input-format",
+            "candump",
+            "fixtures/stoeber.log",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(of_type(&ndjson_objects(&out.stdout), "emcy").len(), 2);
+}
+
+#[test]
+fn malformed_lines_are_reported_with_file_and_line_then_counted() {
+    let trace = "(1.0) can0 081#1043090100000000\nnot a frame\n(2.0) can0 081#00\n(3.0) can0 081#0000000000000000\n";
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin(trace)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(
+        stderr,
+        "<stdin>:2: expected '(' and a timestamp at the start of the line\n\
+         <stdin>:3: node 1: EMCY frame has 1 data byte; code and error register need 3\n"
+    );
+    let objects = ndjson_objects(&out.stdout);
+    let input = of_type(&objects, "input")[0];
+    assert_eq!(input["lines"], 4);
+    assert_eq!(input["frames"], 3);
+    assert_eq!(input["malformed"], 1);
+    assert_eq!(input["emcy"], 2);
+    assert_eq!(input["emcy_invalid"], 1);
+    // The valid EMCY after the garbage was decoded and reset the error.
+    let emcy = of_type(&objects, "emcy");
+    assert_eq!(emcy[1]["transition"], 4);
+}
+
+#[test]
+fn max_diagnostics_bounds_printing_not_counting() {
+    let trace = "garbage\n".repeat(30) + "(1.0) can0 081#1043090100000000\n";
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "--max-diagnostics", "3", "-"])
+        .write_stdin(trace)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 4, "{stderr}");
+    assert!(stderr.ends_with("<stdin>: 27 more diagnostics not shown (--max-diagnostics 3)\n"));
+    let objects = ndjson_objects(&out.stdout);
+    assert_eq!(of_type(&objects, "input")[0]["malformed"], 30);
+    assert_eq!(of_type(&objects, "emcy").len(), 1);
+}
+
+// ---- filters ----------------------------------------------------------------------
+
+#[test]
+fn node_filter_accepts_lists_and_repeats() {
+    for args in [
+        &["--node", "1,3"][..],
+        &["--node", "1", "--node", "3"][..],
+        &["--node", "0x01,0x03"][..],
+    ] {
+        let out = emcy_decode()
+            .args(["--format", "ndjson"])
+            .args(args)
+            .arg("fixtures/edge.log")
+            .output()
+            .unwrap();
+        let objects = ndjson_objects(&out.stdout);
+        for o in objects.iter().filter(|o| o["type"] != "input") {
+            let node = o["node"].as_u64().unwrap();
+            assert!(node == 1 || node == 3, "{o}");
+        }
+        assert!(!of_type(&objects, "emcy").is_empty());
+    }
+}
+
+#[test]
+fn channel_filter() {
+    let out = emcy_decode()
+        .args([
+            "--format",
+            "ndjson",
+            "--channel",
+            "can10",
+            "fixtures/edge.log",
+        ])
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&out.stdout);
+    let events = of_type(&objects, "emcy");
+    assert_eq!(events.len(), 2);
+    assert!(events.iter().all(|e| e["channel"] == "can10"));
+}
+
+// ---- output ------------------------------------------------------------------------
+
+#[test]
+fn json_is_one_document_with_the_four_arrays() {
+    let out = emcy_decode()
+        .args(["--format", "json", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    for key in ["inputs", "events", "nodes", "diagnostics"] {
+        assert!(doc[key].is_array(), "{key}");
+    }
+    // 7 EMCY and 2 boot-ups.
+    assert_eq!(doc["events"].as_array().unwrap().len(), 9);
+}
+
+#[test]
+fn times_are_exact_json_numbers() {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin("(1700000000.123456789) can0 081#1043090100000000\n")
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("\"time\":1700000000.123456789,"), "{text}");
+}
+
+#[test]
+fn table_has_no_colour_unless_asked() {
+    emcy_decode()
+        .arg("fixtures/s300.log")
+        .assert()
+        .stdout(predicate::str::contains("\u{1b}[").not());
+    emcy_decode()
+        .args(["--color", "always", "fixtures/s300.log"])
+        .assert()
+        .stdout(predicate::str::contains("\u{1b}["));
+}
+
+#[test]
+fn ndjson_order_is_events_then_nodes_then_inputs() {
+    let out = emcy_decode()
+        .args([
+            "--format",
+            "ndjson",
+            "fixtures/s300.log",
+            "fixtures/festo.log",
+        ])
+        .output()
+        .unwrap();
+    let kinds: Vec<String> = ndjson_objects(&out.stdout)
+        .iter()
+        .map(|o| o["type"].as_str().unwrap().to_string())
+        .collect();
+    let rank = |k: &str| match k {
+        "emcy" | "boot" => 0,
+        "node" => 1,
+        "input" => 2,
+        other => panic!("unknown type {other}"),
+    };
+    assert!(
+        kinds.windows(2).all(|w| rank(&w[0]) <= rank(&w[1])),
+        "{kinds:?}"
+    );
+    assert_eq!(kinds.iter().filter(|k| *k == "input").count(), 2);
+}
+
+// ---- explain -------------------------------------------------------------------------
+
+#[test]
+fn explain_code() {
+    for code in ["4310", "0x4310", "0X4310"] {
+        emcy_decode()
+            .args(["explain", code])
+            .assert()
+            .code(0)
+            .stdout(predicate::str::contains(
+                "description  Temperature · drive · excess temperature drive",
+            ))
+            .stdout(predicate::str::contains("register     bit 3 (temperature)"));
+    }
+    emcy_decode()
+        .args(["explain", "xyz"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::starts_with(
+            "error: 'xyz' is not an error code",
+        ));
+}
+
+#[test]
+fn explain_data() {
+    emcy_decode()
+        .args(["explain", "--data", "10 43 09 01 00 00 00 00"])
+        .assert()
+        .code(0)
+        .stdout(predicate::eq(
+            "data          10 43 09 01 00 00 00 00\n\
+             code          0x4310\n\
+             class         temperature\n\
+             description   Temperature · drive · excess temperature drive\n\
+             register      0x09 (generic, temperature)\n\
+             manufacturer  01 00 00 00 00\n\
+             warnings      none\n",
+        ));
+    let out = emcy_decode()
+        .args(["explain", "--format", "json", "--data", "1043080100000000"])
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["code"], "0x4310");
+    assert_eq!(
+        v["warnings"][0].as_str().unwrap().split(':').next(),
+        Some("no_generic_bit")
+    );
+    emcy_decode()
+        .args(["explain", "--data", "10 43"])
+        .assert()
+        .code(2);
+}
+
+#[test]
+fn stdin_pipe_streams_events() {
+    // Events of a piped stream come out even though more input is pending
+    // when the writer pauses: checked by writing in two parts.
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
+        .args(["--format", "ndjson", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    stdin
+        .write_all(b"(1.0) can0 081#1043090100000000\n")
+        .unwrap();
+    drop(stdin);
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(of_type(&ndjson_objects(&out.stdout), "emcy").len(), 1);
+}
