@@ -68,7 +68,9 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
             .collect()
     };
     let stdout = io::stdout();
-    let live = !stdout.is_terminal() && sources == [Source::Stdin] && io::stdin().is_terminal();
+    // Reading a live stream (`candump -L can0 | emcy-decode -`): each event
+    // must show up when its line arrives, not when a buffer fills.
+    let live = sources == [Source::Stdin] && input::stdin_is_stream();
     let out = io::BufWriter::with_capacity(64 * 1024, stdout.lock());
     let mut renderer: Box<dyn Renderer> = match args.format {
         OutputFormat::Table => {

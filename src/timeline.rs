@@ -220,8 +220,11 @@ mod tests {
         }
     }
 
-    /// Applies frames (code, register) in order; returns transitions and warnings tags.
-    fn run(frames: &[(u16, u8)]) -> (NodeTimeline, Vec<(Option<u8>, Vec<&'static str>)>) {
+    /// Per frame: the transition and the warning tags.
+    type Steps = Vec<(Option<u8>, Vec<&'static str>)>;
+
+    /// Applies frames (code, register) in order.
+    fn run(frames: &[(u16, u8)]) -> (NodeTimeline, Steps) {
         let mut t = NodeTimeline::new();
         let mut steps = Vec::new();
         for (i, &(code, reg)) in frames.iter().enumerate() {

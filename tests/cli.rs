@@ -500,9 +500,10 @@ fn explain_data() {
 }
 
 #[test]
-fn stdin_pipe_streams_events() {
-    // Events of a piped stream come out even though more input is pending
-    // when the writer pauses: checked by writing in two parts.
+fn events_from_a_pipe_arrive_before_the_writer_finishes() {
+    // `candump -L can0 | emcy-decode --format ndjson -`: the event must be
+    // printed while stdin is still open.
+    use std::io::BufRead;
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
         .args(["--format", "ndjson", "-"])
         .stdin(Stdio::piped())
@@ -510,10 +511,25 @@ fn stdin_pipe_streams_events() {
         .spawn()
         .unwrap();
     let mut stdin = child.stdin.take().unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut lines = std::io::BufReader::new(stdout).lines();
+        while let Some(Ok(line)) = lines.next() {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
     stdin
         .write_all(b"(1.0) can0 081#1043090100000000\n")
         .unwrap();
+    stdin.flush().unwrap();
+    let first = rx
+        .recv_timeout(std::time::Duration::from_secs(30))
+        .expect("the event arrived while stdin was still open");
+    let v: Value = serde_json::from_str(&first).unwrap();
+    assert_eq!(v["code"], "0x4310");
     drop(stdin);
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(of_type(&ndjson_objects(&out.stdout), "emcy").len(), 1);
+    assert!(child.wait().unwrap().success());
 }

@@ -30,7 +30,7 @@ struct Layout {
     channel: usize,
 }
 
-const REGISTER_WIDTH: usize = 14;
+const REGISTER_WIDTH: usize = 16;
 const MANUFACTURER_WIDTH: usize = 14;
 
 impl<W: Write> TableReport<W> {
@@ -174,6 +174,11 @@ impl<W: Write> Renderer for TableReport<W> {
     fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
         if self.layout.is_none() {
             writeln!(self.out, "no EMCY frames")?;
+        } else {
+            writeln!(
+                self.out,
+                "TR = transition: 1 first error, 2 one error reset, 3 further error, 4 all reset"
+            )?;
         }
         if input.nodes.is_empty() {
             return writeln!(self.out);

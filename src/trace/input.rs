@@ -57,6 +57,32 @@ pub fn open(source: &Source) -> io::Result<Opened> {
     sniff_gzip(raw)
 }
 
+/// True when stdin is a pipe, terminal or socket (a live stream), false for a
+/// redirected regular file.
+pub fn stdin_is_stream() -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsFd;
+        use std::os::unix::fs::FileTypeExt;
+        let stdin = io::stdin();
+        let Ok(fd) = stdin.as_fd().try_clone_to_owned() else {
+            return false;
+        };
+        match File::from(fd).metadata() {
+            Ok(m) => {
+                let t = m.file_type();
+                t.is_fifo() || t.is_char_device() || t.is_socket()
+            }
+            Err(_) => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        use std::io::IsTerminal;
+        io::stdin().is_terminal()
+    }
+}
+
 /// Reads up to two bytes to look for the gzip magic, then puts them back in
 /// front of the stream. Works on pipes that deliver one byte at a time.
 pub fn sniff_gzip(mut raw: Box<dyn Read + Send>) -> io::Result<Opened> {

@@ -263,12 +263,6 @@ pub(crate) fn split_token(s: &[u8]) -> (&[u8], &[u8]) {
     s.split_at(end)
 }
 
-/// Iterates whitespace-separated tokens.
-pub(crate) fn tokens(s: &[u8]) -> impl Iterator<Item = &[u8]> {
-    s.split(|b| *b == b' ' || *b == b'\t')
-        .filter(|t| !t.is_empty())
-}
-
 /// True for lines that carry nothing (only blanks).
 #[inline]
 pub(crate) fn is_blank(s: &[u8]) -> bool {
@@ -309,10 +303,6 @@ mod tests {
         assert_eq!(trim_start(b" \t x "), b"x ");
         assert_eq!(trim_end(b" x \t"), b" x");
         assert_eq!(split_token(b"ab cd"), (&b"ab"[..], &b" cd"[..]));
-        assert_eq!(
-            tokens(b"  a  b\tc ").collect::<Vec<_>>(),
-            [b"a", b"b", b"c"]
-        );
         assert!(is_blank(b" \t"));
         assert!(!is_blank(b" x"));
         assert_eq!(HexBytes(&[0x10, 0xab]).to_string(), "10AB");
