@@ -2,6 +2,7 @@
 //! that print it. The JSON key names here are a public contract (README).
 
 pub mod json;
+pub mod ndjson;
 pub mod table;
 
 use std::io;
@@ -108,6 +109,11 @@ pub trait Renderer {
 }
 
 // ---- JSON shapes -------------------------------------------------------------
+
+/// Keeps the kind of an underlying I/O error (a broken pipe must stay one).
+fn to_io(e: serde_json::Error) -> io::Error {
+    io::Error::from(e)
+}
 
 /// `"0x4310"`: codes are strings so that jq users compare them as written.
 pub struct Code(pub u16);
