@@ -267,6 +267,15 @@ pub fn analyze<R: Read, E: Write>(
             decided = true;
             diags.release(log);
         }
+        if let Some(other) = detector.take_foreign() {
+            counts.other_format += 1;
+            let primary = detector.format().map_or("?", Format::name);
+            let msg = format!(
+                "line is in {} format, not {primary} like the rest; read anyway",
+                other.name()
+            );
+            diags.report(log, decided, line_no, msg);
+        }
         if frame.kind != FrameKind::Data || frame.extended {
             continue;
         }

@@ -75,7 +75,8 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
     let out = io::BufWriter::with_capacity(64 * 1024, stdout.lock());
     let mut renderer: Box<dyn Renderer> = match args.format {
         OutputFormat::Table => {
-            let color = use_color(args.color, io::stdout().is_terminal());
+            let no_color = std::env::var_os("NO_COLOR");
+            let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
             Box::new(TableReport::new(out, color, live))
         }
         OutputFormat::Json => Box::new(JsonDocument::new(out)),

@@ -533,3 +533,23 @@ fn events_from_a_pipe_arrive_before_the_writer_finishes() {
     drop(stdin);
     assert!(child.wait().unwrap().success());
 }
+
+#[test]
+fn a_pasted_line_of_another_format_is_decoded_with_a_warning() {
+    let trace = "(1.0) can0 081#1043090100000000\n  can0  081   [8]  00 00 00 00 00 00 00 00\n";
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin(trace)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        "<stdin>:2: line is in candump-screen format, not candump like the rest; read anyway\n"
+    );
+    let objects = ndjson_objects(&out.stdout);
+    let emcy = of_type(&objects, "emcy");
+    assert_eq!(emcy.len(), 2);
+    assert_eq!(emcy[1]["transition"], 4);
+    assert_eq!(of_type(&objects, "input")[0]["other_format"], 1);
+}

@@ -66,6 +66,8 @@ pub struct Counts {
     pub boot: u64,
     /// Frames on an EMCY id too short to decode (fewer than 3 bytes).
     pub emcy_invalid: u64,
+    /// Frames read in another format than the one detected (mixed files).
+    pub other_format: u64,
 }
 
 /// Everything known about one input after reading it.

@@ -2,65 +2,99 @@
 //!
 //! Until a format is known every line goes to every parser (so ASC header
 //! lines still set the base and timestamp mode); the first line that one of
-//! them reads as a frame fixes the format for the rest of the input. Lines
-//! before that are skipped when some format knows them as non-frame lines
-//! and malformed when none does.
+//! them reads as a frame fixes the format. Lines before that are skipped when
+//! some format knows them as non-frame lines and malformed when none does.
+//!
+//! Formats can mix (a pasted screen excerpt inside a log, two files
+//! concatenated): a line that is malformed in the detected format but a frame
+//! in another one is still read, and [`Detector::take_foreign`] says so, so the
+//! caller warns. No EMCY is lost because a file changed its mind.
 
 use super::{Format, Interest, LineParser, Parsed};
 
 pub struct Detector {
-    state: State,
-}
-
-enum State {
-    Locked(Box<dyn LineParser>),
-    Undecided(Vec<Box<dyn LineParser>>),
+    parsers: Vec<Box<dyn LineParser>>,
+    /// Index of the detected format's parser.
+    primary: Option<usize>,
+    /// `--input-format`: no fallback to other formats.
+    forced: bool,
+    /// The format of the last frame when it was not the primary one.
+    foreign: Option<Format>,
 }
 
 impl Detector {
     /// Detects the format from the lines as they come.
     pub fn auto() -> Detector {
         Detector {
-            state: State::Undecided(Format::ALL.iter().map(|f| f.parser()).collect()),
+            parsers: Format::ALL.iter().map(|f| f.parser()).collect(),
+            primary: None,
+            forced: false,
+            foreign: None,
         }
     }
 
-    /// Reads every line as `format` (`--input-format`).
+    /// Reads every line as `format` (`--input-format`), nothing else.
     pub fn forced(format: Format) -> Detector {
         Detector {
-            state: State::Locked(format.parser()),
+            parsers: vec![format.parser()],
+            primary: Some(0),
+            forced: true,
+            foreign: None,
         }
     }
 
     /// The format, once known.
     pub fn format(&self) -> Option<Format> {
-        match &self.state {
-            State::Locked(p) => Some(p.format()),
-            State::Undecided(_) => None,
-        }
+        self.primary
+            .and_then(|i| self.parsers.get(i))
+            .map(|p| p.format())
+    }
+
+    /// After a frame: `Some(format)` when it was read by another format than
+    /// the detected one. Cleared by the call.
+    pub fn take_foreign(&mut self) -> Option<Format> {
+        self.foreign.take()
     }
 
     pub fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
-        let parsers = match &mut self.state {
-            State::Locked(p) => return p.parse(line, interest),
-            State::Undecided(parsers) => parsers,
+        self.foreign = None;
+        let Some(primary) = self.primary else {
+            return self.parse_undecided(line, interest);
         };
+        let reason = match self
+            .parsers
+            .get_mut(primary)
+            .map(|p| p.parse(line, interest))
+        {
+            Some(Parsed::Malformed(reason)) => reason,
+            Some(other) => return other,
+            None => return Parsed::Malformed("no parser".into()),
+        };
+        if !self.forced {
+            for (i, parser) in self.parsers.iter_mut().enumerate() {
+                if i == primary {
+                    continue;
+                }
+                if let Parsed::Frame(frame) = parser.parse(line, interest) {
+                    self.foreign = Some(parser.format());
+                    return Parsed::Frame(frame);
+                }
+            }
+        }
+        Parsed::Malformed(reason)
+    }
+
+    fn parse_undecided<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         let mut skipped = false;
-        let mut found = None;
-        for (i, parser) in parsers.iter_mut().enumerate() {
+        for (i, parser) in self.parsers.iter_mut().enumerate() {
             match parser.parse(line, interest) {
                 Parsed::Frame(frame) => {
-                    found = Some((i, frame));
-                    break;
+                    self.primary = Some(i);
+                    return Parsed::Frame(frame);
                 }
                 Parsed::Skipped => skipped = true,
                 Parsed::Malformed(_) => {}
             }
-        }
-        if let Some((i, frame)) = found {
-            let parser = parsers.swap_remove(i);
-            self.state = State::Locked(parser);
-            return Parsed::Frame(frame);
         }
         if skipped {
             Parsed::Skipped
@@ -69,5 +103,76 @@ impl Detector {
                 "not a line of any format read (candump log, candump screen, Vector ASC)".into(),
             )
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kinds(lines: &[&str], detector: &mut Detector) -> Vec<(String, Option<Format>)> {
+        lines
+            .iter()
+            .map(|l| {
+                let p = detector.parse(l.as_bytes(), &Interest::all());
+                let kind = match p {
+                    Parsed::Frame(_) => "frame".to_string(),
+                    Parsed::Skipped => "skipped".to_string(),
+                    Parsed::Malformed(_) => "malformed".to_string(),
+                };
+                (kind, detector.take_foreign())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn first_frame_decides() {
+        let mut d = Detector::auto();
+        assert_eq!(d.format(), None);
+        let got = kinds(&["", "garbage", "(1.0) can0 081#00"], &mut d);
+        assert_eq!(got[0].0, "skipped");
+        assert_eq!(got[1].0, "malformed");
+        assert_eq!(got[2].0, "frame");
+        assert_eq!(d.format(), Some(Format::CandumpLog));
+    }
+
+    #[test]
+    fn asc_header_before_the_first_frame_is_applied() {
+        let mut d = Detector::auto();
+        d.parse(b"base dec  timestamps absolute", &Interest::all());
+        match d.parse(b"   1.000000 1  129  Rx   d 3 16 67 9", &Interest::all()) {
+            Parsed::Frame(f) => {
+                assert_eq!(f.id, 0x81);
+                assert_eq!(f.data.as_slice(), [0x10, 0x43, 0x09]);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(d.format(), Some(Format::Asc));
+    }
+
+    #[test]
+    fn a_line_of_another_format_is_read_and_flagged() {
+        let mut d = Detector::auto();
+        let got = kinds(
+            &[
+                "(1.0) can0 081#00",
+                "  can0  081   [1]  00",
+                "(2.0) can0 081#00",
+                "neither",
+            ],
+            &mut d,
+        );
+        assert_eq!(got[0], ("frame".to_string(), None));
+        assert_eq!(got[1], ("frame".to_string(), Some(Format::CandumpScreen)));
+        assert_eq!(got[2], ("frame".to_string(), None));
+        assert_eq!(got[3], ("malformed".to_string(), None));
+        assert_eq!(d.format(), Some(Format::CandumpLog));
+    }
+
+    #[test]
+    fn forced_format_reads_nothing_else() {
+        let mut d = Detector::forced(Format::CandumpLog);
+        let got = kinds(&["  can0  081   [1]  00"], &mut d);
+        assert_eq!(got[0], ("malformed".to_string(), None));
     }
 }
