@@ -60,6 +60,7 @@ impl Base {
 }
 
 /// Reads ASC lines; keeps the header settings and the running time.
+#[derive(Clone)]
 pub struct AscParser {
     base: Base,
     relative: bool,
@@ -88,6 +89,19 @@ impl Default for AscParser {
 impl LineParser for AscParser {
     fn format(&self) -> Format {
         Format::Asc
+    }
+
+    fn fork(&self) -> Box<dyn LineParser> {
+        Box::new(self.clone())
+    }
+
+    /// The number base; relative timestamps chain every line to the last.
+    fn context(&self) -> Option<u8> {
+        match (self.relative, self.base) {
+            (true, _) => None,
+            (false, Base::Hex) => Some(0),
+            (false, Base::Dec) => Some(1),
+        }
     }
 
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {

@@ -9,18 +9,19 @@
 //! The number of id digits decides the frame type (3 = standard, 8 =
 //! extended), not the value: `00000081#...` is an extended frame.
 
-use super::hex;
+use super::time::MAX_FRACTION_DIGITS;
 use super::{
     Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp, is_blank,
     split_token, trim_end, trim_start,
 };
+use super::{hex, scan};
 use crate::trace::Format;
 
 /// candump sets this bit in an 8-digit id to mark an error frame.
 pub const ERROR_FLAG: u32 = 0x2000_0000;
 const EFF_MASK: u32 = 0x1FFF_FFFF;
 
-#[derive(Default)]
+#[derive(Default, Clone, Copy)]
 pub struct CandumpLogParser;
 
 impl CandumpLogParser {
@@ -32,6 +33,15 @@ impl CandumpLogParser {
 impl LineParser for CandumpLogParser {
     fn format(&self) -> Format {
         Format::CandumpLog
+    }
+
+    fn fork(&self) -> Box<dyn LineParser> {
+        Box::new(CandumpLogParser)
+    }
+
+    /// Stateless: every line stands alone.
+    fn context(&self) -> Option<u8> {
+        Some(0)
     }
 
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
@@ -55,6 +65,14 @@ pub(crate) fn is_candump_non_frame(line: &[u8]) -> bool {
 }
 
 fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
+    match canonical(line, interest) {
+        Some(frame) => Ok(Some(frame)),
+        None => parse_line_full(line, interest),
+    }
+}
+
+/// Every form the format allows, with a reason for what it does not.
+fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
     if is_candump_non_frame(line) {
         return Ok(None);
     }
@@ -89,6 +107,80 @@ fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a
     }
     frame.channel = channel;
     Ok(Some(frame))
+}
+
+/// The fast path for what `candump -l` writes, nearly every line of a real
+/// log: `(SECS.FRAC) DEV ID#HEX` with a single space between fields, 3 or 8
+/// id digits and 0-8 plain data bytes, optionally ` T`/` R`. Anything else
+/// (padding, dots, remote, FD, raw DLC, errors of any kind) returns `None`
+/// and goes to the full parser, which is the one source of error messages;
+/// the fast path only accepts lines the full parser accepts identically.
+#[inline]
+fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
+    if line.first() != Some(&b'(') {
+        return None;
+    }
+    let int_len = scan::digit_run(line, 1);
+    let dot = 1 + int_len;
+    if int_len == 0 || int_len > 19 || line.get(dot) != Some(&b'.') {
+        return None;
+    }
+    let frac_len = scan::digit_run(line, dot + 1);
+    let close = dot + 1 + frac_len;
+    if frac_len == 0 || frac_len > MAX_FRACTION_DIGITS || line.get(close) != Some(&b')') {
+        return None;
+    }
+    let dev_start = close + 2;
+    if line.get(close + 1) != Some(&b' ') {
+        return None;
+    }
+    let dev_len = scan::token_run(line, dev_start);
+    let id_start = dev_start + dev_len + 1;
+    if dev_len == 0 || line.get(dev_start + dev_len) != Some(&b' ') {
+        return None;
+    }
+    let id_len = scan::hex_run(line, id_start);
+    let hash = id_start + id_len;
+    if line.get(hash) != Some(&b'#') {
+        return None;
+    }
+    let id_text = line.get(id_start..hash)?;
+    let id = hex::parse_u32(id_text)?;
+    let (extended, kind) = match id_len {
+        3 if id <= 0x7FF => (false, FrameKind::Data),
+        8 if id & !(EFF_MASK | ERROR_FLAG) != 0 => return None,
+        8 if id & ERROR_FLAG != 0 => (true, FrameKind::Error),
+        8 => (true, FrameKind::Data),
+        _ => return None,
+    };
+    let data_start = hash + 1;
+    let data_end = match line {
+        [.., b' ', b'T' | b'R'] => line.len() - 2,
+        _ => line.len(),
+    };
+    let data_len = data_end.checked_sub(data_start)?;
+    if data_len % 2 != 0 || data_len > 16 || !scan::all_hex(line.get(data_start..data_end)?) {
+        return None;
+    }
+    let mut frame = Frame {
+        time: None,
+        channel: line.get(dev_start..dev_start + dev_len)?,
+        id,
+        extended,
+        kind,
+        len: (data_len / 2) as u8,
+        data: Payload::new(),
+    };
+    if interest.wants(id, extended) {
+        // At most 19 digits: always fits in u64.
+        let secs = scan::decimal_u64(line.get(1..dot)?);
+        let frac = scan::decimal_u64(line.get(dot + 1..close)?);
+        frame.time = Some(Timestamp::from_parts(secs, frac, frac_len as u8));
+        for pair in line.get(data_start..data_end)?.chunks_exact(2) {
+            frame.data.push(hex::parse_byte(pair[0], pair[1])?);
+        }
+    }
+    Some(frame)
 }
 
 /// Parses `ID#DATA`, `ID#R[len]`, `ID##<flags>DATA` (the token after the
@@ -360,6 +452,50 @@ mod tests {
         assert!(malformed("(99999999999999999999.0) can0 081#00").contains("overflow"));
         let long_id = format!("(1.0) can0 {}#00", "1".repeat(10_000));
         assert!(malformed(&long_id).contains("10000 digits"));
+    }
+
+    proptest::proptest! {
+        /// The fast path may decline a line, but what it accepts the full
+        /// parser accepts identically.
+        #[test]
+        fn fast_path_agrees_with_the_full_parser(
+            line in "\\(([0-9]{0,21}\\.[0-9]{0,20}|x)\\)[ ]{1,2}[a-z0-9._-]{0,5}[ ]{1,2}[0-9a-fA-F]{0,9}[#_.R]{0,2}[0-9a-fA-FRr._#]{0,20}( T| R| X|  )?",
+            narrow in proptest::bool::ANY,
+        ) {
+            let mut interest = if narrow { Interest::none() } else { Interest::all() };
+            interest.add_standard(0x81);
+            if let Some(fast) = canonical(line.as_bytes(), &interest) {
+                proptest::prop_assert_eq!(Ok(Some(fast)), parse_line_full(line.as_bytes(), &interest));
+            }
+        }
+
+        /// Lines of the canonical shape are taken by the fast path (unless the
+        /// id is out of range) and read the same as by the full parser.
+        #[test]
+        fn canonical_lines_take_the_fast_path(
+            line in "\\([0-9]{1,19}\\.[0-9]{1,18}\\) [a-z0-9]{1,5} ([0-7][0-9a-fA-F]{2}|[01][0-9a-fA-F]{7})#([0-9a-fA-F]{2}){0,8}( T| R)?",
+            narrow in proptest::bool::ANY,
+        ) {
+            let mut interest = if narrow { Interest::none() } else { Interest::all() };
+            interest.add_standard(0x81);
+            let fast = canonical(line.as_bytes(), &interest);
+            proptest::prop_assert!(fast.is_some(), "declined {}", line);
+            proptest::prop_assert_eq!(Ok(fast), parse_line_full(line.as_bytes(), &interest));
+        }
+    }
+
+    #[test]
+    fn fast_path_takes_the_common_line() {
+        assert!(
+            canonical(
+                b"(1469439874.299654) can0 081#1043080100000000",
+                &Interest::all()
+            )
+            .is_some()
+        );
+        assert!(canonical(b"(1469439874.299654) can0 00000081#10 T", &Interest::all()).is_some());
+        assert!(canonical(b"(1469439874.299654)  can0 081#10", &Interest::all()).is_none());
+        assert!(canonical(b"(1469439874.299654) can0 081#R", &Interest::all()).is_none());
     }
 
     #[test]

@@ -44,7 +44,7 @@ const ESC: u8 = 0x1B;
 
 /// Reader for candump's default screen output. Stateless: every line
 /// carries all it needs (ids are told apart by digit count, not indentation).
-#[derive(Default)]
+#[derive(Default, Clone, Copy)]
 pub struct CandumpScreenParser;
 
 impl CandumpScreenParser {
@@ -56,6 +56,15 @@ impl CandumpScreenParser {
 impl LineParser for CandumpScreenParser {
     fn format(&self) -> Format {
         Format::CandumpScreen
+    }
+
+    fn fork(&self) -> Box<dyn LineParser> {
+        Box::new(CandumpScreenParser)
+    }
+
+    /// Stateless: times are taken as printed, so no line depends on another.
+    fn context(&self) -> Option<u8> {
+        Some(0)
     }
 
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {

@@ -43,6 +43,26 @@ impl Detector {
         }
     }
 
+    /// A copy in the current state (all parsers forked), for another thread.
+    pub fn fork(&self) -> Detector {
+        Detector {
+            parsers: self.parsers.iter().map(|p| p.fork()).collect(),
+            primary: self.primary,
+            forced: self.forced,
+            foreign: None,
+        }
+    }
+
+    /// The combined [`LineParser::context`] of every parser plus the detected
+    /// format; `None` when some parser chains lines (parse sequentially).
+    pub fn context(&self) -> Option<u64> {
+        let mut ctx = u64::from(self.primary.map_or(0xFF, |p| p as u8));
+        for p in &self.parsers {
+            ctx = (ctx << 8) | u64::from(p.context()?);
+        }
+        Some(ctx)
+    }
+
     /// The format, once known.
     pub fn format(&self) -> Option<Format> {
         self.primary

@@ -1,9 +1,12 @@
-//! Splits a byte stream into lines without allocating per line.
+//! Splits a byte stream into blocks of whole lines, and blocks into lines,
+//! without allocating per line.
 //!
-//! One large buffer, `memchr` for the newline, slices handed out borrowed.
-//! Lines longer than a cap are not buffered (a 100 MB line without a newline
-//! must not take 100 MB): the reader reports their length and skips to the
-//! next newline. Bytes need not be UTF-8.
+//! A [`Block`] is a buffer of whole lines (~1 MiB from a file, less from a
+//! pipe: whatever one read returned, so live input is not delayed). Blocks are
+//! the unit of parallel parsing. Lines longer than a cap are not buffered (a
+//! 100 MB line without a newline must not take 100 MB): the reader measures
+//! them, skips to the next newline and reports them as [`RawLine::TooLong`].
+//! Bytes need not be UTF-8.
 
 use std::io::{self, Read};
 
@@ -11,7 +14,8 @@ use std::io::{self, Read};
 /// lines are under 500 bytes (a 64-byte CAN FD frame in ASC is ~400).
 pub const DEFAULT_MAX_LINE: usize = 64 * 1024;
 
-const READ_CHUNK: usize = 256 * 1024;
+/// Bytes asked of the input per read; also the usual block size.
+pub const DEFAULT_BLOCK: usize = 1024 * 1024;
 
 /// One line of input, terminator (`\n` or `\r\n`) removed.
 #[derive(Debug, PartialEq, Eq)]
@@ -21,15 +25,200 @@ pub enum RawLine<'a> {
     TooLong(u64),
 }
 
-pub struct LineReader<R> {
-    inner: R,
-    buf: Vec<u8>,
-    start: usize,
-    end: usize,
-    eof: bool,
+/// Whole lines of input.
+#[derive(Debug, Default)]
+pub struct Block {
+    /// Lines, each ending in `\n` except possibly the last line of the input.
+    pub bytes: Vec<u8>,
+    /// A too-long line that came right before `bytes` (its length).
+    pub too_long_before: Option<u64>,
+    /// The input's last block: its last line may lack a newline.
+    pub last: bool,
+}
+
+impl Block {
+    /// The lines of this block, in order.
+    pub fn lines(&self, max_line: usize) -> BlockLines<'_> {
+        BlockLines {
+            rest: &self.bytes,
+            too_long: self.too_long_before,
+            max_line,
+        }
+    }
+}
+
+pub struct BlockLines<'a> {
+    rest: &'a [u8],
+    too_long: Option<u64>,
     max_line: usize,
-    line_no: u64,
+}
+
+impl<'a> Iterator for BlockLines<'a> {
+    type Item = RawLine<'a>;
+
+    #[inline]
+    fn next(&mut self) -> Option<RawLine<'a>> {
+        if let Some(n) = self.too_long.take() {
+            return Some(RawLine::TooLong(n));
+        }
+        if self.rest.is_empty() {
+            return None;
+        }
+        let (line, rest) = match memchr::memchr(b'\n', self.rest) {
+            Some(pos) => (&self.rest[..pos], &self.rest[pos + 1..]),
+            None => (self.rest, &self.rest[self.rest.len()..]),
+        };
+        self.rest = rest;
+        if line.len() > self.max_line {
+            return Some(RawLine::TooLong(line.len() as u64));
+        }
+        Some(RawLine::Text(line.strip_suffix(b"\r").unwrap_or(line)))
+    }
+}
+
+/// Cuts a stream into [`Block`]s at line boundaries.
+pub struct BlockReader<R> {
+    inner: R,
+    /// Bytes read but not yet handed out: the start of an unfinished line.
+    carry: Vec<u8>,
+    block: usize,
+    max_line: usize,
+    eof: bool,
+    /// Length so far of a too-long line being skipped.
+    skipping: Option<u64>,
+    /// A too-long line that ended; goes in front of the next block.
+    too_long: Option<u64>,
     bytes_read: u64,
+}
+
+impl<R: Read> BlockReader<R> {
+    pub fn new(inner: R, block: usize, max_line: usize) -> Self {
+        BlockReader {
+            inner,
+            carry: Vec::new(),
+            block: block.max(1),
+            max_line: max_line.max(1),
+            eof: false,
+            skipping: None,
+            too_long: None,
+            bytes_read: 0,
+        }
+    }
+
+    pub fn max_line(&self) -> usize {
+        self.max_line
+    }
+
+    /// Bytes consumed from the underlying reader so far.
+    pub fn bytes_read(&self) -> u64 {
+        self.bytes_read
+    }
+
+    /// The next block, built in `buf` (a recycled buffer; its contents are
+    /// discarded). `Ok(None)` at end of input. An I/O error (corrupt gzip) is
+    /// returned once; the unfinished line before it is dropped.
+    pub fn next_block(&mut self, mut buf: Vec<u8>) -> io::Result<Option<Block>> {
+        loop {
+            if self.skipping.is_some() {
+                self.skip_long_line()?;
+                continue;
+            }
+            // Whole lines already buffered: hand them out.
+            if let Some(last_nl) = memchr::memrchr(b'\n', &self.carry) {
+                buf.clear();
+                buf.extend_from_slice(&self.carry[last_nl + 1..]);
+                self.carry.truncate(last_nl + 1);
+                std::mem::swap(&mut buf, &mut self.carry);
+                return Ok(Some(Block {
+                    bytes: buf,
+                    too_long_before: self.too_long.take(),
+                    last: false,
+                }));
+            }
+            if self.eof {
+                if self.carry.is_empty() && self.too_long.is_none() {
+                    return Ok(None);
+                }
+                buf.clear();
+                std::mem::swap(&mut buf, &mut self.carry);
+                return Ok(Some(Block {
+                    bytes: buf,
+                    too_long_before: self.too_long.take(),
+                    last: true,
+                }));
+            }
+            if self.carry.len() > self.max_line {
+                // No newline within the cap: measure and skip the rest of the line.
+                self.skipping = Some(self.carry.len() as u64);
+                self.carry.clear();
+                continue;
+            }
+            self.read_more()?;
+        }
+    }
+
+    /// One read appended to `carry` (a pipe returns what it has, so live
+    /// lines are not held back waiting for a full block).
+    fn read_more(&mut self) -> io::Result<()> {
+        let start = self.carry.len();
+        let want = self.block.max(self.max_line + 1);
+        self.carry.resize(start + want, 0);
+        let result = loop {
+            match self.inner.read(&mut self.carry[start..]) {
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                other => break other,
+            }
+        };
+        match result {
+            Ok(n) => {
+                self.carry.truncate(start + n);
+                self.bytes_read += n as u64;
+                if n == 0 {
+                    self.eof = true;
+                }
+                Ok(())
+            }
+            Err(e) => {
+                self.carry.truncate(start);
+                Err(e)
+            }
+        }
+    }
+
+    /// Discards bytes up to the next newline, counting them.
+    fn skip_long_line(&mut self) -> io::Result<()> {
+        let Some(mut len) = self.skipping else {
+            return Ok(());
+        };
+        self.carry.clear();
+        self.read_more()?;
+        match memchr::memchr(b'\n', &self.carry) {
+            Some(pos) => {
+                len += pos as u64;
+                self.carry.drain(..=pos);
+                self.skipping = None;
+                self.too_long = Some(len);
+            }
+            None if self.eof => {
+                self.skipping = None;
+                self.too_long = Some(len);
+            }
+            None => {
+                len += self.carry.len() as u64;
+                self.carry.clear();
+                self.skipping = Some(len);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Line by line over a [`BlockReader`], for callers that want one line at a time.
+pub struct LineReader<R> {
+    blocks: BlockReader<R>,
+    block: Block,
+    pos: usize,
+    line_no: u64,
 }
 
 impl<R: Read> LineReader<R> {
@@ -38,16 +227,11 @@ impl<R: Read> LineReader<R> {
     }
 
     pub fn with_max_line(inner: R, max_line: usize) -> Self {
-        let max_line = max_line.max(1);
         LineReader {
-            inner,
-            buf: vec![0; max_line + READ_CHUNK],
-            start: 0,
-            end: 0,
-            eof: false,
-            max_line,
+            blocks: BlockReader::new(inner, DEFAULT_BLOCK, max_line),
+            block: Block::default(),
+            pos: 0,
             line_no: 0,
-            bytes_read: 0,
         }
     }
 
@@ -58,105 +242,67 @@ impl<R: Read> LineReader<R> {
 
     /// Bytes consumed from the underlying reader so far.
     pub fn bytes_read(&self) -> u64 {
-        self.bytes_read
+        self.blocks.bytes_read()
     }
 
-    /// The next line, `Ok(None)` at end of input. An I/O error (a corrupt
-    /// gzip member, a vanished file) is returned once; lines before it were
-    /// all delivered.
+    /// The next line, `Ok(None)` at end of input.
     pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
         loop {
-            if let Some(pos) = memchr::memchr(b'\n', &self.buf[self.start..self.end]) {
-                let begin = self.start;
-                let stop = begin + pos;
-                self.start = stop + 1;
+            if let Some(n) = self.block.too_long_before.take() {
                 self.line_no += 1;
-                if pos > self.max_line {
-                    return Ok(Some(RawLine::TooLong(pos as u64)));
+                return Ok(Some(RawLine::TooLong(n)));
+            }
+            if self.pos < self.block.bytes.len() {
+                break;
+            }
+            let buf = std::mem::take(&mut self.block.bytes);
+            match self.blocks.next_block(buf)? {
+                Some(block) => {
+                    self.block = block;
+                    self.pos = 0;
                 }
-                return Ok(Some(RawLine::Text(strip_cr(&self.buf[begin..stop]))));
+                None => return Ok(None),
             }
-            let pending = self.end - self.start;
-            if self.eof {
-                if pending == 0 {
-                    return Ok(None);
-                }
-                let begin = self.start;
-                self.start = self.end;
-                self.line_no += 1;
-                return Ok(Some(RawLine::Text(strip_cr(&self.buf[begin..self.end]))));
-            }
-            if pending > self.max_line {
-                let len = self.skip_long_line()?;
-                self.line_no += 1;
-                return Ok(Some(RawLine::TooLong(len)));
-            }
-            self.fill()?;
         }
+        let rest = &self.block.bytes[self.pos..];
+        let mut lines = BlockLines {
+            rest,
+            too_long: None,
+            max_line: self.blocks.max_line(),
+        };
+        let line = lines.next();
+        self.pos = self.block.bytes.len() - lines.rest.len();
+        self.line_no += 1;
+        Ok(line)
     }
-
-    /// Moves the partial line to the front and reads more after it.
-    fn fill(&mut self) -> io::Result<()> {
-        if self.start > 0 {
-            self.buf.copy_within(self.start..self.end, 0);
-            self.end -= self.start;
-            self.start = 0;
-        }
-        loop {
-            match self.inner.read(&mut self.buf[self.end..]) {
-                Ok(0) => {
-                    self.eof = true;
-                    return Ok(());
-                }
-                Ok(n) => {
-                    self.end += n;
-                    self.bytes_read += n as u64;
-                    return Ok(());
-                }
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                Err(e) => return Err(e),
-            }
-        }
-    }
-
-    /// Discards the current over-long line up to and including its newline;
-    /// returns its length. Memory stays at one buffer however long it is.
-    fn skip_long_line(&mut self) -> io::Result<u64> {
-        let mut len = (self.end - self.start) as u64;
-        self.start = 0;
-        self.end = 0;
-        loop {
-            self.fill()?;
-            if let Some(pos) = memchr::memchr(b'\n', &self.buf[..self.end]) {
-                len += pos as u64;
-                self.start = pos + 1;
-                return Ok(len);
-            }
-            len += self.end as u64;
-            self.end = 0;
-            if self.eof {
-                return Ok(len);
-            }
-        }
-    }
-}
-
-fn strip_cr(line: &[u8]) -> &[u8] {
-    line.strip_suffix(b"\r").unwrap_or(line)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn describe(line: RawLine<'_>) -> String {
+        match line {
+            RawLine::Text(t) => String::from_utf8_lossy(t).into_owned(),
+            RawLine::TooLong(n) => format!("<too long {n}>"),
+        }
+    }
+
     fn collect(input: &[u8], max: usize) -> Vec<String> {
         let mut r = LineReader::with_max_line(input, max);
         let mut out = Vec::new();
         while let Some(line) = r.next_line().unwrap() {
-            out.push(match line {
-                RawLine::Text(t) => String::from_utf8_lossy(t).into_owned(),
-                RawLine::TooLong(n) => format!("<too long {n}>"),
-            });
+            out.push(describe(line));
+        }
+        out
+    }
+
+    /// Lines via blocks of a given size, as the parallel reader sees them.
+    fn collect_blocks<R: Read>(input: R, block: usize, max: usize) -> Vec<String> {
+        let mut r = BlockReader::new(input, block, max);
+        let mut out = Vec::new();
+        while let Some(b) = r.next_block(Vec::new()).unwrap() {
+            out.extend(b.lines(max).map(describe));
         }
         out
     }
@@ -214,12 +360,61 @@ mod tests {
     #[test]
     fn byte_at_a_time_reader_gives_the_same_lines() {
         let input = b"first\r\nsecond\n0123456789abc\nlast";
+        let want = ["first", "second", "<too long 13>", "last"];
         let mut r = LineReader::with_max_line(Trickle(input), 12);
         let mut out = Vec::new();
         while let Some(line) = r.next_line().unwrap() {
-            out.push(format!("{line:?}"));
+            out.push(describe(line));
         }
-        assert_eq!(out.len(), 4);
-        assert_eq!(out[2], "TooLong(13)");
+        assert_eq!(out, want);
+        assert_eq!(collect_blocks(Trickle(input), 3, 12), want);
+    }
+
+    #[test]
+    fn any_block_size_gives_the_same_lines() {
+        let mut input = Vec::new();
+        for i in 0..200 {
+            input.extend(format!("line {i}\r\n").bytes());
+            if i % 37 == 0 {
+                input.extend(vec![b'L'; 100 + i]);
+                input.push(b'\n');
+            }
+        }
+        input.extend(b"tail");
+        let want = collect(&input, 64);
+        assert!(want.iter().any(|l| l.starts_with("<too long")));
+        for block in [1, 2, 7, 64, 65, 1000, 1 << 20] {
+            assert_eq!(collect_blocks(&input[..], block, 64), want, "block {block}");
+        }
+    }
+
+    #[test]
+    fn a_long_line_at_the_end_is_still_reported() {
+        let input = vec![b'q'; 300];
+        assert_eq!(collect_blocks(&input[..], 16, 20), ["<too long 300>"]);
+    }
+
+    #[test]
+    fn read_errors_surface_after_the_complete_lines() {
+        struct Failing(u8);
+        impl Read for Failing {
+            fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+                self.0 += 1;
+                match self.0 {
+                    1 => {
+                        let data = b"one\ntw";
+                        buf[..data.len()].copy_from_slice(data);
+                        Ok(data.len())
+                    }
+                    _ => Err(io::Error::other("corrupt")),
+                }
+            }
+        }
+        let mut r = LineReader::new(Failing(0));
+        assert_eq!(
+            r.next_line().unwrap().map(describe),
+            Some("one".to_string())
+        );
+        assert!(r.next_line().is_err());
     }
 }

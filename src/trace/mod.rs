@@ -11,6 +11,7 @@ pub mod detect;
 pub mod hex;
 pub mod input;
 pub mod lines;
+pub mod scan;
 pub mod time;
 
 use std::borrow::Cow;
@@ -234,6 +235,15 @@ pub trait LineParser: Send {
     /// Classifies one line (terminator already removed). Must not panic on
     /// any input.
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a>;
+
+    /// A copy in the current state, to parse later blocks on another thread.
+    fn fork(&self) -> Box<dyn LineParser>;
+
+    /// The state later lines depend on, as a small exact value (below 256):
+    /// a block parsed from a fork is valid only if the state it started from
+    /// equals the state the previous block ended in. `None` when every line
+    /// depends on the one before (ASC relative times): parse sequentially.
+    fn context(&self) -> Option<u8>;
 }
 
 /// Splits off leading spaces and tabs.

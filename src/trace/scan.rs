@@ -1,0 +1,213 @@
+//! Word-at-a-time (SWAR) scanning for the readers' hot path: eight bytes per
+//! step with plain integer arithmetic, no `unsafe`. Each function has a naive
+//! twin in the tests and a property test that they agree.
+
+const LO: u64 = 0x0101_0101_0101_0101;
+const HI: u64 = 0x8080_8080_8080_8080;
+const LOW7: u64 = 0x7F7F_7F7F_7F7F_7F7F;
+
+#[inline(always)]
+fn word(s: &[u8], at: usize) -> Option<u64> {
+    let bytes: [u8; 8] = s.get(at..at + 8)?.try_into().ok()?;
+    Some(u64::from_le_bytes(bytes))
+}
+
+/// High bit set in every byte of `x` that is greater than `n` (n < 128).
+#[inline(always)]
+fn bytes_above(x: u64, n: u8) -> u64 {
+    // Masking to 7 bits first keeps the addition from carrying across bytes.
+    (((x & LOW7) + LO * u64::from(127 - n)) | x) & HI
+}
+
+/// High bit set in every zero byte of `x` (exact, no false positives).
+#[inline(always)]
+fn zero_bytes(x: u64) -> u64 {
+    !(((x & LOW7) + LOW7) | x | LOW7)
+}
+
+/// High bit set in every byte of `x` that is not an ASCII digit.
+#[inline(always)]
+fn non_digits(x: u64) -> u64 {
+    bytes_above(x ^ (LO * u64::from(b'0')), 9)
+}
+
+/// High bit set in every byte of `x` that is not a hex digit (either case).
+#[inline(always)]
+fn non_hex(x: u64) -> u64 {
+    // Letters: fold case, then a..f is 0x61..0x66, i.e. (x|0x20)^0x60 in 1..=6.
+    let letters = (x | (LO * 0x20)) ^ (LO * 0x60);
+    let not_letter = bytes_above(letters, 6) | zero_bytes(letters);
+    non_digits(x) & not_letter
+}
+
+#[inline(always)]
+fn first_marked(mask: u64) -> usize {
+    (mask.trailing_zeros() / 8) as usize
+}
+
+/// Length of the run of ASCII digits starting at `from`.
+#[inline]
+pub fn digit_run(s: &[u8], from: usize) -> usize {
+    let mut i = from;
+    while let Some(x) = word(s, i) {
+        let m = non_digits(x);
+        if m != 0 {
+            return i + first_marked(m) - from;
+        }
+        i += 8;
+    }
+    while let Some(b) = s.get(i) {
+        if !b.is_ascii_digit() {
+            break;
+        }
+        i += 1;
+    }
+    i.saturating_sub(from)
+}
+
+/// Length of the run of hex digits starting at `from`.
+#[inline]
+pub fn hex_run(s: &[u8], from: usize) -> usize {
+    let mut i = from;
+    while let Some(x) = word(s, i) {
+        let m = non_hex(x);
+        if m != 0 {
+            return i + first_marked(m) - from;
+        }
+        i += 8;
+    }
+    while let Some(b) = s.get(i) {
+        if !b.is_ascii_hexdigit() {
+            break;
+        }
+        i += 1;
+    }
+    i.saturating_sub(from)
+}
+
+/// Length of the run of bytes above b' ' (no space, tab or control byte)
+/// starting at `from`: a device name or token.
+#[inline]
+pub fn token_run(s: &[u8], from: usize) -> usize {
+    let mut i = from;
+    while let Some(x) = word(s, i) {
+        // Bytes >= 0x80 count as "above" (UTF-8 in device names is fine).
+        let small = !bytes_above(x, 0x20) & HI;
+        if small != 0 {
+            return i + first_marked(small) - from;
+        }
+        i += 8;
+    }
+    while let Some(&b) = s.get(i) {
+        if b <= b' ' {
+            break;
+        }
+        i += 1;
+    }
+    i.saturating_sub(from)
+}
+
+/// True when every byte of `s` is a hex digit. Whole words, the last one
+/// overlapping the previous, so no byte loop for lengths >= 8.
+#[inline]
+pub fn all_hex(s: &[u8]) -> bool {
+    let n = s.len();
+    if n < 8 {
+        return s.iter().all(u8::is_ascii_hexdigit);
+    }
+    let mut bad = 0;
+    let mut i = 0;
+    while i + 8 <= n {
+        bad |= word(s, i).map_or(HI, non_hex);
+        i += 8;
+    }
+    if i < n {
+        bad |= word(s, n - 8).map_or(HI, non_hex);
+    }
+    bad == 0
+}
+
+/// Value of a run of at most 19 ASCII digits (caller validated them).
+#[inline]
+pub fn decimal_u64(digits: &[u8]) -> u64 {
+    digits.iter().fold(0u64, |v, &d| {
+        v.wrapping_mul(10)
+            .wrapping_add(u64::from(d.wrapping_sub(b'0')))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn naive_run(s: &[u8], from: usize, f: impl Fn(u8) -> bool) -> usize {
+        s.get(from..)
+            .map_or(0, |t| t.iter().take_while(|b| f(**b)).count())
+    }
+
+    #[test]
+    fn every_byte_value_is_classified_like_std() {
+        for b in 0..=255u8 {
+            let s = [b; 9];
+            assert_eq!(
+                digit_run(&s, 0),
+                if b.is_ascii_digit() { 9 } else { 0 },
+                "{b:#x}"
+            );
+            assert_eq!(
+                hex_run(&s, 0),
+                if b.is_ascii_hexdigit() { 9 } else { 0 },
+                "{b:#x}"
+            );
+            assert_eq!(token_run(&s, 0), if b > b' ' { 9 } else { 0 }, "{b:#x}");
+        }
+    }
+
+    #[test]
+    fn runs_stop_at_the_first_other_byte() {
+        assert_eq!(digit_run(b"1700000000.123456)", 0), 10);
+        assert_eq!(digit_run(b"1700000000.123456)", 11), 6);
+        assert_eq!(hex_run(b"1043080100000000 T", 0), 16);
+        assert_eq!(hex_run(b"10430801000000g0", 0), 14);
+        assert_eq!(token_run(b"vcan-0.1 081#00", 0), 8);
+        assert_eq!(digit_run(b"", 0), 0);
+        assert_eq!(digit_run(b"12", 5), 0);
+    }
+
+    #[test]
+    fn whole_slices_of_hex() {
+        assert!(all_hex(b""));
+        assert!(all_hex(b"0a"));
+        assert!(all_hex(b"1043080100000000"));
+        assert!(all_hex(b"1043080100000000AB"));
+        assert!(!all_hex(b"104308010000000G"));
+        assert!(!all_hex(b"G043080100000000AB"));
+        assert!(!all_hex(b"1043080100000000AG"));
+        assert!(!all_hex(b"1g"));
+    }
+
+    #[test]
+    fn decimal() {
+        assert_eq!(decimal_u64(b"1700000000"), 1_700_000_000);
+        assert_eq!(
+            decimal_u64(b"9999999999999999999"),
+            9_999_999_999_999_999_999
+        );
+        assert_eq!(decimal_u64(b""), 0);
+    }
+
+    proptest! {
+        #[test]
+        fn swar_runs_equal_naive_runs(s in prop::collection::vec(prop_oneof![
+            any::<u8>(),
+            b'0'..=b'9',
+            prop::sample::select(b"abcdefABCDEF .#()".to_vec()),
+        ], 0..40), from in 0usize..42) {
+            prop_assert_eq!(digit_run(&s, from), naive_run(&s, from, |b| b.is_ascii_digit()));
+            prop_assert_eq!(hex_run(&s, from), naive_run(&s, from, |b| b.is_ascii_hexdigit()));
+            prop_assert_eq!(token_run(&s, from), naive_run(&s, from, |b| b > b' '));
+            prop_assert_eq!(all_hex(&s), s.iter().all(u8::is_ascii_hexdigit));
+        }
+    }
+}
