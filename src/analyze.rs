@@ -2,15 +2,25 @@
 //! events for the renderer. Reading never stops for a bad line; it stops only
 //! at end of input, on an input I/O error (recorded in the report) or when the
 //! output is gone (returned as [`OutputError`]).
+//!
+//! Lines are classified block by block by one loop ([`classify_block`]) into a
+//! [`LineSink`]. Sequentially the sink is the [`Consumer`] itself. On large
+//! inputs worker threads classify blocks into compact records (only the lines
+//! that matter: EMCY/boot candidates and diagnostics) and the consumer
+//! replays them in order, so output is identical whatever the thread count.
 
+use std::collections::BTreeMap;
 use std::io::{self, Read, Write};
+use std::ops::Range;
+use std::sync::mpsc::{self, Receiver};
+use std::sync::{Arc, Mutex};
 
 use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::timeline::{At, NodeTimeline};
 use crate::trace::detect::Detector;
-use crate::trace::lines::{LineReader, RawLine};
-use crate::trace::{Format, FrameKind, Interest, Parsed};
+use crate::trace::lines::{Block, BlockReader, DEFAULT_BLOCK, RawLine};
+use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Timestamp};
 
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
@@ -25,6 +35,10 @@ pub struct Options {
     pub max_diagnostics: usize,
     /// Lines longer than this are reported and skipped.
     pub max_line: usize,
+    /// Threads classifying lines; 1 = all on the calling thread.
+    pub threads: usize,
+    /// Bytes per read / per block handed to a thread.
+    pub block_size: usize,
 }
 
 impl Default for Options {
@@ -35,6 +49,8 @@ impl Default for Options {
             channels: Vec::new(),
             max_diagnostics: 20,
             max_line: crate::trace::lines::DEFAULT_MAX_LINE,
+            threads: 1,
+            block_size: DEFAULT_BLOCK,
         }
     }
 }
@@ -96,6 +112,52 @@ fn interest() -> Interest {
     i.add_standard_range(emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127);
     i
 }
+
+// ---- classification -----------------------------------------------------------
+
+/// A frame read in another format than the file's: (its format, the file's).
+type Foreign = Option<(Format, Format)>;
+
+/// Receives classified lines; `idx` is the line's 0-based index in its block.
+trait LineSink {
+    fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
+    fn skipped(&mut self);
+    fn malformed(&mut self, idx: u64, reason: Reason);
+    fn lines(&mut self, n: u64);
+}
+
+fn too_long(n: u64, max_line: usize) -> Reason {
+    format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
+}
+
+/// The one loop that classifies lines, sequentially or on a worker.
+fn classify_block(
+    block: &Block,
+    max_line: usize,
+    detector: &mut Detector,
+    interest: &Interest,
+    sink: &mut impl LineSink,
+) -> Result<(), OutputError> {
+    let mut idx = 0u64;
+    for raw in block.lines(max_line) {
+        match raw {
+            RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
+            RawLine::Text(text) => match detector.parse(text, interest) {
+                Parsed::Frame(frame) => {
+                    let foreign = detector.take_foreign().zip(detector.format());
+                    sink.frame(idx, &frame, foreign)?;
+                }
+                Parsed::Skipped => sink.skipped(),
+                Parsed::Malformed(reason) => sink.malformed(idx, reason),
+            },
+        }
+        idx += 1;
+    }
+    sink.lines(idx);
+    Ok(())
+}
+
+// ---- the consumer: timelines, events, counts, diagnostics ---------------------------
 
 /// Per-channel node timelines. Channels are few; nodes are 1..=127.
 #[derive(Default)]
@@ -196,8 +258,266 @@ impl InputDiagnostics {
     }
 }
 
+/// Turns classified lines into timelines, events and counts, in line order.
+struct Consumer<'r, 'l, E: Write> {
+    file: &'r str,
+    opts: &'r Options,
+    renderer: &'r mut dyn Renderer,
+    log: &'l mut DiagnosticLog<E>,
+    counts: Counts,
+    nodes: Nodes,
+    diags: InputDiagnostics,
+    errors_raised: u64,
+    decided: bool,
+    /// Lines before the current block.
+    line_base: u64,
+    warnings: Vec<Warning>,
+    active: Vec<u16>,
+}
+
+impl<E: Write> Consumer<'_, '_, E> {
+    fn line_no(&self, idx: u64) -> u64 {
+        self.line_base + idx + 1
+    }
+}
+
+impl<E: Write> LineSink for Consumer<'_, '_, E> {
+    fn lines(&mut self, n: u64) {
+        self.counts.lines += n;
+        self.line_base += n;
+    }
+
+    fn skipped(&mut self) {
+        self.counts.skipped += 1;
+    }
+
+    fn malformed(&mut self, idx: u64, reason: Reason) {
+        self.counts.malformed += 1;
+        let line = self.line_no(idx);
+        self.diags
+            .report(self.log, self.decided, line, reason.into_owned());
+    }
+
+    fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
+        self.counts.frames += 1;
+        let line_no = self.line_no(idx);
+        if !self.decided {
+            self.decided = true;
+            self.diags.release(self.log);
+        }
+        if let Some((other, primary)) = foreign {
+            self.counts.other_format += 1;
+            let msg = format!(
+                "line is in {} format, not {} like the rest; read anyway",
+                other.name(),
+                primary.name()
+            );
+            self.diags.report(self.log, true, line_no, msg);
+        }
+        if frame.kind != FrameKind::Data || frame.extended {
+            return Ok(());
+        }
+        let at = At {
+            time: frame.time,
+            line: line_no,
+        };
+        let data = frame.data.as_slice();
+        if let Some(node) = emcy::emcy_node(frame.id) {
+            let emcy = match Emcy::decode(data) {
+                Ok(e) => e,
+                Err(short) => {
+                    self.counts.emcy_invalid += 1;
+                    self.diags
+                        .report(self.log, true, line_no, format!("node {node}: {short}"));
+                    return Ok(());
+                }
+            };
+            self.counts.emcy += 1;
+            let info = emcy.info();
+            self.warnings.clear();
+            emcy.frame_warnings(&info, &mut self.warnings);
+            let (channel, timeline) = self.nodes.get(frame.channel, node);
+            let step = timeline.emcy(&emcy, at, &mut self.warnings);
+            if !self.opts.selects(channel, node) {
+                return Ok(());
+            }
+            if !emcy.is_reset() {
+                self.errors_raised += 1;
+            }
+            self.active.clear();
+            self.active.extend(timeline.active_codes());
+            let event = EmcyEvent {
+                file: self.file,
+                line: line_no,
+                time: frame.time,
+                channel,
+                node,
+                cob_id: frame.id,
+                data,
+                emcy: &emcy,
+                info: &info,
+                transition: step.transition,
+                state: step.state,
+                active: &self.active,
+                cleared: &step.cleared,
+                warnings: &self.warnings,
+            };
+            self.renderer.emcy(&event).map_err(OutputError)?;
+        } else if let Some(node) = emcy::boot_node(frame.id, data) {
+            self.counts.boot += 1;
+            let (channel, timeline) = self.nodes.get(frame.channel, node);
+            let cleared = timeline.boot(at);
+            if self.opts.selects(channel, node) {
+                let event = BootEvent {
+                    file: self.file,
+                    line: line_no,
+                    time: frame.time,
+                    channel,
+                    node,
+                    cleared: &cleared,
+                };
+                self.renderer.boot(&event).map_err(OutputError)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+// ---- worker records -------------------------------------------------------------
+
+/// What a worker keeps of a line for the consumer.
+enum Record {
+    Frame {
+        idx: u64,
+        time: Option<Timestamp>,
+        channel: Range<usize>,
+        id: u32,
+        kind: FrameKind,
+        extended: bool,
+        len: u8,
+        data: Payload,
+        foreign: Foreign,
+    },
+    Malformed {
+        idx: u64,
+        reason: Reason,
+    },
+}
+
+/// A worker's summary of one block.
+struct BlockResult {
+    seq: u64,
+    block: Block,
+    /// The detector state the block was parsed from, and the one after it.
+    start_context: Option<u64>,
+    end: Detector,
+    lines: u64,
+    /// Frames the consumer would ignore (not EMCY/boot candidates), counted only.
+    plain_frames: u64,
+    skipped: u64,
+    /// Malformed lines beyond the diagnostics limit: counted, not reported.
+    unreported: u64,
+    records: Vec<Record>,
+    /// Channel names of the frame records, back to back.
+    channels: Vec<u8>,
+}
+
+/// The worker-side sink: keeps only what the consumer needs.
+struct Recorder<'i> {
+    interest: &'i Interest,
+    limit: usize,
+    result: BlockResult,
+    malformed_kept: usize,
+}
+
+impl LineSink for Recorder<'_> {
+    fn lines(&mut self, n: u64) {
+        self.result.lines += n;
+    }
+
+    fn skipped(&mut self) {
+        self.result.skipped += 1;
+    }
+
+    fn malformed(&mut self, idx: u64, reason: Reason) {
+        // The consumer shows at most `limit` per input, in line order, so no
+        // block needs to keep more than that.
+        if self.malformed_kept < self.limit {
+            self.malformed_kept += 1;
+            self.result.records.push(Record::Malformed { idx, reason });
+        } else {
+            self.result.unreported += 1;
+        }
+    }
+
+    fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
+        let candidate = frame.kind == FrameKind::Data
+            && !frame.extended
+            && self.interest.wants(frame.id, false);
+        if !candidate && foreign.is_none() {
+            self.result.plain_frames += 1;
+            return Ok(());
+        }
+        let start = self.result.channels.len();
+        self.result.channels.extend_from_slice(frame.channel);
+        self.result.records.push(Record::Frame {
+            idx,
+            time: frame.time,
+            channel: start..self.result.channels.len(),
+            id: frame.id,
+            kind: frame.kind,
+            extended: frame.extended,
+            len: frame.len,
+            data: frame.data.clone(),
+            foreign,
+        });
+        Ok(())
+    }
+}
+
+impl<E: Write> Consumer<'_, '_, E> {
+    /// Replays a worker's block result as if its lines had been read here.
+    fn replay(&mut self, r: BlockResult) -> Result<Block, OutputError> {
+        self.counts.frames += r.plain_frames;
+        self.counts.skipped += r.skipped;
+        self.counts.malformed += r.unreported;
+        self.diags.suppressed += r.unreported;
+        for record in r.records {
+            match record {
+                Record::Malformed { idx, reason } => self.malformed(idx, reason),
+                Record::Frame {
+                    idx,
+                    time,
+                    channel,
+                    id,
+                    kind,
+                    extended,
+                    len,
+                    data,
+                    foreign,
+                } => {
+                    let frame = Frame {
+                        time,
+                        channel: r.channels.get(channel).unwrap_or_default(),
+                        id,
+                        extended,
+                        kind,
+                        len,
+                        data,
+                    };
+                    self.frame(idx, &frame, foreign)?;
+                }
+            }
+        }
+        self.lines(r.lines);
+        Ok(r.block)
+    }
+}
+
+// ---- drivers ---------------------------------------------------------------------
+
 /// Reads one input to the end and reports it.
-pub fn analyze<R: Read, E: Write>(
+pub fn analyze<R: Read + Send, E: Write>(
     file: &str,
     reader: R,
     gzip: bool,
@@ -211,150 +531,78 @@ pub fn analyze<R: Read, E: Write>(
         Some(f) => Detector::forced(f),
         None => Detector::auto(),
     };
-    let mut lines = LineReader::with_max_line(reader, opts.max_line);
-    let mut counts = Counts::default();
-    let mut nodes = Nodes::default();
-    let mut diags = InputDiagnostics {
-        file: file.to_string(),
-        limit: opts.max_diagnostics,
-        shown: 0,
-        suppressed: 0,
-        pending: Vec::new(),
+    let mut blocks = BlockReader::new(reader, opts.block_size, opts.max_line);
+    let mut consumer = Consumer {
+        file,
+        opts,
+        renderer,
+        decided: detector.format().is_some(),
+        log,
+        counts: Counts::default(),
+        nodes: Nodes::default(),
+        diags: InputDiagnostics {
+            file: file.to_string(),
+            limit: opts.max_diagnostics,
+            shown: 0,
+            suppressed: 0,
+            pending: Vec::new(),
+        },
+        errors_raised: 0,
+        line_base: 0,
+        warnings: Vec::new(),
+        active: Vec::new(),
     };
-    let mut errors_raised = 0u64;
-    let mut warnings: Vec<Warning> = Vec::new();
-    let mut active: Vec<u16> = Vec::new();
-    let mut error = None;
-    let mut decided = detector.format().is_some();
 
-    loop {
-        let raw = match lines.next_line() {
-            Ok(Some(raw)) => raw,
-            Ok(None) => break,
+    // Sequential until the format is known (and for inputs whose lines chain,
+    // or when one thread was asked for); then, if allowed, in parallel.
+    let mut error = None;
+    let mut buf = Vec::new();
+    let format = loop {
+        if opts.threads > 1 && detector.format().is_some() && detector.context().is_some() {
+            let (read_error, detector) = parallel(blocks, detector, &interest, &mut consumer)?;
+            error = read_error;
+            break detector.format();
+        }
+        match blocks.next_block(buf) {
+            Ok(Some(block)) => {
+                classify_block(
+                    &block,
+                    opts.max_line,
+                    &mut detector,
+                    &interest,
+                    &mut consumer,
+                )?;
+                buf = block.bytes;
+            }
+            Ok(None) => break detector.format(),
             Err(e) => {
                 error = Some(e.to_string());
-                break;
-            }
-        };
-        counts.lines += 1;
-        let line_no = counts.lines;
-        let text = match raw {
-            RawLine::Text(t) => t,
-            RawLine::TooLong(n) => {
-                counts.malformed += 1;
-                let msg = format!(
-                    "line of {n} bytes is longer than the {} byte limit; skipped",
-                    opts.max_line
-                );
-                diags.report(log, decided, line_no, msg);
-                continue;
-            }
-        };
-        let frame = match detector.parse(text, &interest) {
-            Parsed::Frame(f) => f,
-            Parsed::Skipped => {
-                counts.skipped += 1;
-                continue;
-            }
-            Parsed::Malformed(reason) => {
-                counts.malformed += 1;
-                diags.report(log, decided, line_no, reason.into_owned());
-                continue;
-            }
-        };
-        counts.frames += 1;
-        if !decided {
-            decided = true;
-            diags.release(log);
-        }
-        if let Some(other) = detector.take_foreign() {
-            counts.other_format += 1;
-            let primary = detector.format().map_or("?", Format::name);
-            let msg = format!(
-                "line is in {} format, not {primary} like the rest; read anyway",
-                other.name()
-            );
-            diags.report(log, decided, line_no, msg);
-        }
-        if frame.kind != FrameKind::Data || frame.extended {
-            continue;
-        }
-        let at = At {
-            time: frame.time,
-            line: line_no,
-        };
-        let data = frame.data.as_slice();
-        if let Some(node) = emcy::emcy_node(frame.id) {
-            let emcy = match Emcy::decode(data) {
-                Ok(e) => e,
-                Err(short) => {
-                    counts.emcy_invalid += 1;
-                    diags.report(log, decided, line_no, format!("node {node}: {short}"));
-                    continue;
-                }
-            };
-            counts.emcy += 1;
-            let info = emcy.info();
-            warnings.clear();
-            emcy.frame_warnings(&info, &mut warnings);
-            let (channel, timeline) = nodes.get(frame.channel, node);
-            let step = timeline.emcy(&emcy, at, &mut warnings);
-            if !opts.selects(channel, node) {
-                continue;
-            }
-            if !emcy.is_reset() {
-                errors_raised += 1;
-            }
-            active.clear();
-            active.extend(timeline.active_codes());
-            let event = EmcyEvent {
-                file,
-                line: line_no,
-                time: frame.time,
-                channel,
-                node,
-                cob_id: frame.id,
-                data,
-                emcy: &emcy,
-                info: &info,
-                transition: step.transition,
-                state: step.state,
-                active: &active,
-                cleared: &step.cleared,
-                warnings: &warnings,
-            };
-            renderer.emcy(&event).map_err(OutputError)?;
-        } else if let Some(node) = emcy::boot_node(frame.id, data) {
-            counts.boot += 1;
-            let (channel, timeline) = nodes.get(frame.channel, node);
-            let cleared = timeline.boot(at);
-            if opts.selects(channel, node) {
-                let event = BootEvent {
-                    file,
-                    line: line_no,
-                    time: frame.time,
-                    channel,
-                    node,
-                    cleared: &cleared,
-                };
-                renderer.boot(&event).map_err(OutputError)?;
+                break detector.format();
             }
         }
-    }
+    };
+    finish(consumer, format, gzip, error)
+}
 
-    let format = detector.format();
-    if format.is_none() && counts.malformed > 0 && error.is_none() {
+fn finish<E: Write>(
+    mut consumer: Consumer<'_, '_, E>,
+    format: Option<Format>,
+    gzip: bool,
+    mut error: Option<String>,
+) -> Result<Analysis, OutputError> {
+    let file = consumer.file;
+    if format.is_none() && consumer.counts.malformed > 0 && error.is_none() {
         error = Some(
             "cannot detect the trace format: no line is a candump log, candump screen or \
              Vector ASC frame (force one with --input-format candump|candump-screen|asc)"
                 .to_string(),
         );
     } else {
-        diags.release(log);
-        if diags.suppressed > 0 {
-            log.note(&format!(
+        consumer.diags.release(consumer.log);
+        if consumer.diags.suppressed > 0 {
+            consumer.log.note(&format!(
                 "{file}: {} more diagnostics not shown (--max-diagnostics {})",
-                diags.suppressed, opts.max_diagnostics
+                consumer.diags.suppressed, consumer.opts.max_diagnostics
             ));
         }
     }
@@ -362,13 +610,149 @@ pub fn analyze<R: Read, E: Write>(
         file: file.to_string(),
         format,
         gzip,
-        counts,
-        nodes: nodes.into_reports(opts),
+        counts: consumer.counts,
+        nodes: std::mem::take(&mut consumer.nodes).into_reports(consumer.opts),
         error,
     };
-    renderer.end_input(&report).map_err(OutputError)?;
+    consumer.renderer.end_input(&report).map_err(OutputError)?;
     Ok(Analysis {
         report,
-        errors_raised,
+        errors_raised: consumer.errors_raised,
     })
+}
+
+enum Message {
+    Result(BlockResult),
+    /// Reading failed after `seq` blocks.
+    ReadError(u64, io::Error),
+}
+
+/// Workers classify blocks; the calling thread consumes their results in
+/// order. A block whose start state differs from the state the previous
+/// block ended in (an ASC header changed the base mid-file) is classified
+/// again here, so the result never depends on the split. Returns the read
+/// error, if any, and the detector's final state.
+fn parallel<R: Read + Send, E: Write>(
+    mut blocks: BlockReader<R>,
+    detector: Detector,
+    interest: &Interest,
+    consumer: &mut Consumer<'_, '_, E>,
+) -> Result<(Option<String>, Detector), OutputError> {
+    let threads = consumer.opts.threads.max(1);
+    let max_line = consumer.opts.max_line;
+    let limit = consumer.opts.max_diagnostics;
+    let mut current = detector;
+    std::thread::scope(|scope| {
+        let (block_tx, block_rx) = mpsc::sync_channel::<(u64, Block)>(threads * 2);
+        let block_rx = Arc::new(Mutex::new(block_rx));
+        let (result_tx, result_rx) = mpsc::channel::<Message>();
+        let (recycle_tx, recycle_rx) = mpsc::channel::<Vec<u8>>();
+
+        let reader_tx = result_tx.clone();
+        scope.spawn(move || {
+            let mut seq = 0;
+            loop {
+                let buf = recycle_rx.try_recv().unwrap_or_default();
+                match blocks.next_block(buf) {
+                    Ok(Some(block)) => {
+                        if block_tx.send((seq, block)).is_err() {
+                            return;
+                        }
+                        seq += 1;
+                    }
+                    Ok(None) => return,
+                    Err(e) => {
+                        let _ = reader_tx.send(Message::ReadError(seq, e));
+                        return;
+                    }
+                }
+            }
+        });
+
+        for _ in 0..threads {
+            let mut det = current.fork();
+            let rx = Arc::clone(&block_rx);
+            let tx = result_tx.clone();
+            let interest = interest.clone();
+            scope.spawn(move || {
+                while let Some((seq, block)) = next_job(&rx) {
+                    let start_context = det.context();
+                    let mut rec = Recorder {
+                        interest: &interest,
+                        limit,
+                        malformed_kept: 0,
+                        result: BlockResult {
+                            seq,
+                            block: Block::default(),
+                            start_context,
+                            end: det.fork(),
+                            lines: 0,
+                            plain_frames: 0,
+                            skipped: 0,
+                            unreported: 0,
+                            records: Vec::new(),
+                            channels: Vec::new(),
+                        },
+                    };
+                    // A recorder never fails: it only collects.
+                    let _ = classify_block(&block, max_line, &mut det, &interest, &mut rec);
+                    let mut result = rec.result;
+                    result.end = det.fork();
+                    result.block = block;
+                    if tx.send(Message::Result(result)).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        drop(result_tx);
+
+        consume_in_order(
+            result_rx,
+            &recycle_tx,
+            &mut current,
+            interest,
+            consumer,
+            max_line,
+        )
+    })
+    .map(|error| (error, current))
+}
+
+fn next_job(rx: &Mutex<Receiver<(u64, Block)>>) -> Option<(u64, Block)> {
+    rx.lock().ok()?.recv().ok()
+}
+
+fn consume_in_order<E: Write>(
+    results: Receiver<Message>,
+    recycle: &mpsc::Sender<Vec<u8>>,
+    current: &mut Detector,
+    interest: &Interest,
+    consumer: &mut Consumer<'_, '_, E>,
+    max_line: usize,
+) -> Result<Option<String>, OutputError> {
+    let mut next = 0u64;
+    let mut pending: BTreeMap<u64, BlockResult> = BTreeMap::new();
+    let mut read_error: Option<(u64, io::Error)> = None;
+    for message in results {
+        match message {
+            Message::Result(r) => {
+                pending.insert(r.seq, r);
+            }
+            Message::ReadError(seq, e) => read_error = Some((seq, e)),
+        }
+        while let Some(r) = pending.remove(&next) {
+            let block = if r.start_context.is_some() && r.start_context == current.context() {
+                let mut r = r;
+                std::mem::swap(current, &mut r.end);
+                consumer.replay(r)?
+            } else {
+                classify_block(&r.block, max_line, current, interest, consumer)?;
+                r.block
+            };
+            let _ = recycle.send(block.bytes);
+            next += 1;
+        }
+    }
+    Ok(read_error.map(|(_, e)| e.to_string()))
 }

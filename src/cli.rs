@@ -82,6 +82,11 @@ pub struct DecodeArgs {
     #[arg(long, default_value_t = 20, value_name = "N")]
     pub max_diagnostics: usize,
 
+    /// Threads for reading large inputs (0 = automatic: all cores for files
+    /// over 16 MiB and gzip input, one for small files and live streams)
+    #[arg(long, short = 'j', default_value_t = 0, value_name = "N")]
+    pub threads: usize,
+
     /// When to colour the table
     #[arg(long, value_enum, default_value_t = ColorChoice::Auto, value_name = "WHEN")]
     pub color: ColorChoice,

@@ -83,8 +83,12 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
     };
     let mut log = DiagnosticLog::new(io::stderr());
+    let threads = Threads {
+        requested: args.threads,
+        live,
+    };
 
-    match decode_all(&sources, &opts, renderer.as_mut(), &mut log) {
+    match decode_all(&sources, &opts, threads, renderer.as_mut(), &mut log) {
         Ok(outcome) => Ok(ExitCode::from(exit_code(args, &outcome))),
         // The reader of our output went away (`| head -1`): not an error.
         Err(OutputError(e)) if e.kind() == io::ErrorKind::BrokenPipe => Ok(ExitCode::from(EXIT_OK)),
@@ -102,9 +106,36 @@ pub struct Outcome {
     pub open_failures: usize,
 }
 
+/// How many threads an input gets.
+#[derive(Clone, Copy)]
+struct Threads {
+    /// `-j N`; 0 = automatic.
+    requested: usize,
+    /// A live stream: events must not wait for a block to fill.
+    live: bool,
+}
+
+/// Inputs below this size are read on one thread: starting workers costs
+/// more than it saves.
+const PARALLEL_MIN_BYTES: u64 = 16 * 1024 * 1024;
+
+impl Threads {
+    fn for_input(self, opened: &input::Opened) -> usize {
+        if self.requested > 0 {
+            return self.requested;
+        }
+        let big = opened.gzip || opened.size.is_some_and(|s| s >= PARALLEL_MIN_BYTES);
+        if self.live || !big {
+            return 1;
+        }
+        std::thread::available_parallelism().map_or(1, |n| n.get().min(8))
+    }
+}
+
 fn decode_all(
     sources: &[Source],
     opts: &Options,
+    threads: Threads,
     renderer: &mut dyn Renderer,
     log: &mut DiagnosticLog<io::Stderr>,
 ) -> Result<Outcome, OutputError> {
@@ -120,7 +151,18 @@ fn decode_all(
                 continue;
             }
         };
-        let analysis = analyze::analyze(&name, opened.reader, opened.gzip, opts, renderer, log)?;
+        let input_opts = Options {
+            threads: threads.for_input(&opened),
+            ..opts.clone()
+        };
+        let analysis = analyze::analyze(
+            &name,
+            opened.reader,
+            opened.gzip,
+            &input_opts,
+            renderer,
+            log,
+        )?;
         if let Some(err) = &analysis.report.error {
             log.error(&format!("{name}: {err}"));
         }

@@ -91,10 +91,6 @@ impl LineParser for AscParser {
         Format::Asc
     }
 
-    fn fork(&self) -> Box<dyn LineParser> {
-        Box::new(self.clone())
-    }
-
     /// The number base; relative timestamps chain every line to the last.
     fn context(&self) -> Option<u8> {
         match (self.relative, self.base) {

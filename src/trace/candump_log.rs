@@ -35,15 +35,12 @@ impl LineParser for CandumpLogParser {
         Format::CandumpLog
     }
 
-    fn fork(&self) -> Box<dyn LineParser> {
-        Box::new(CandumpLogParser)
-    }
-
     /// Stateless: every line stands alone.
     fn context(&self) -> Option<u8> {
         Some(0)
     }
 
+    #[inline]
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         match parse_line(line, interest) {
             Ok(Some(frame)) => Parsed::Frame(frame),
@@ -64,6 +61,7 @@ pub(crate) fn is_candump_non_frame(line: &[u8]) -> bool {
         || t.starts_with(b"DROPCOUNT")
 }
 
+#[inline]
 fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
     match canonical(line, interest) {
         Some(frame) => Ok(Some(frame)),

@@ -58,10 +58,6 @@ impl LineParser for CandumpScreenParser {
         Format::CandumpScreen
     }
 
-    fn fork(&self) -> Box<dyn LineParser> {
-        Box::new(CandumpScreenParser)
-    }
-
     /// Stateless: times are taken as printed, so no line depends on another.
     fn context(&self) -> Option<u8> {
         Some(0)

@@ -10,10 +10,10 @@
 //! in another one is still read, and [`Detector::take_foreign`] says so, so the
 //! caller warns. No EMCY is lost because a file changed its mind.
 
-use super::{Format, Interest, LineParser, Parsed};
+use super::{AnyParser, Format, Interest, LineParser, Parsed};
 
 pub struct Detector {
-    parsers: Vec<Box<dyn LineParser>>,
+    parsers: Vec<AnyParser>,
     /// Index of the detected format's parser.
     primary: Option<usize>,
     /// `--input-format`: no fallback to other formats.
@@ -46,7 +46,7 @@ impl Detector {
     /// A copy in the current state (all parsers forked), for another thread.
     pub fn fork(&self) -> Detector {
         Detector {
-            parsers: self.parsers.iter().map(|p| p.fork()).collect(),
+            parsers: self.parsers.clone(),
             primary: self.primary,
             forced: self.forced,
             foreign: None,
@@ -76,6 +76,7 @@ impl Detector {
         self.foreign.take()
     }
 
+    #[inline]
     pub fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         self.foreign = None;
         let Some(primary) = self.primary else {

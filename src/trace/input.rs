@@ -37,24 +37,30 @@ impl Source {
 pub struct Opened {
     pub reader: Box<dyn Read + Send>,
     pub gzip: bool,
+    /// Size on disk, for regular files.
+    pub size: Option<u64>,
 }
 
 /// Opens a source. Errors carry a message fit for `error: NAME: message`.
 pub fn open(source: &Source) -> io::Result<Opened> {
-    let raw: Box<dyn Read + Send> = match source {
-        Source::Stdin => Box::new(io::stdin()),
+    let (raw, size): (Box<dyn Read + Send>, Option<u64>) = match source {
+        Source::Stdin => (Box::new(io::stdin()), None),
         Source::Path(path) => {
             let file = File::open(path)?;
-            if file.metadata()?.is_dir() {
+            let meta = file.metadata()?;
+            if meta.is_dir() {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidInput,
                     "is a directory",
                 ));
             }
-            Box::new(file)
+            let size = meta.is_file().then_some(meta.len());
+            (Box::new(file), size)
         }
     };
-    sniff_gzip(raw)
+    let mut opened = sniff_gzip(raw)?;
+    opened.size = size;
+    Ok(opened)
 }
 
 /// True when stdin is a pipe, terminal or socket (a live stream), false for a
@@ -105,11 +111,13 @@ pub fn sniff_gzip(mut raw: Box<dyn Read + Send>) -> io::Result<Opened> {
         Ok(Opened {
             reader: Box::new(decoder),
             gzip: true,
+            size: None,
         })
     } else {
         Ok(Opened {
             reader: Box::new(stream),
             gzip: false,
+            size: None,
         })
     }
 }

@@ -39,18 +39,34 @@ pub struct Block {
 impl Block {
     /// The lines of this block, in order.
     pub fn lines(&self, max_line: usize) -> BlockLines<'_> {
-        BlockLines {
-            rest: &self.bytes,
-            too_long: self.too_long_before,
-            max_line,
-        }
+        BlockLines::new(&self.bytes, self.too_long_before, max_line)
     }
 }
 
+/// One vectorised newline search over the whole block, not one call per line.
 pub struct BlockLines<'a> {
-    rest: &'a [u8],
+    bytes: &'a [u8],
+    newlines: memchr::Memchr<'a>,
+    start: usize,
     too_long: Option<u64>,
     max_line: usize,
+}
+
+impl<'a> BlockLines<'a> {
+    fn new(bytes: &'a [u8], too_long: Option<u64>, max_line: usize) -> Self {
+        BlockLines {
+            bytes,
+            newlines: memchr::memchr_iter(b'\n', bytes),
+            start: 0,
+            too_long,
+            max_line,
+        }
+    }
+
+    /// Bytes of the block not yet returned as lines.
+    fn consumed(&self) -> usize {
+        self.start
+    }
 }
 
 impl<'a> Iterator for BlockLines<'a> {
@@ -61,14 +77,19 @@ impl<'a> Iterator for BlockLines<'a> {
         if let Some(n) = self.too_long.take() {
             return Some(RawLine::TooLong(n));
         }
-        if self.rest.is_empty() {
-            return None;
-        }
-        let (line, rest) = match memchr::memchr(b'\n', self.rest) {
-            Some(pos) => (&self.rest[..pos], &self.rest[pos + 1..]),
-            None => (self.rest, &self.rest[self.rest.len()..]),
+        let begin = self.start;
+        let end = match self.newlines.next() {
+            Some(pos) => {
+                self.start = pos + 1;
+                pos
+            }
+            None if begin < self.bytes.len() => {
+                self.start = self.bytes.len();
+                self.bytes.len()
+            }
+            None => return None,
         };
-        self.rest = rest;
+        let line = self.bytes.get(begin..end).unwrap_or_default();
         if line.len() > self.max_line {
             return Some(RawLine::TooLong(line.len() as u64));
         }
@@ -79,8 +100,10 @@ impl<'a> Iterator for BlockLines<'a> {
 /// Cuts a stream into [`Block`]s at line boundaries.
 pub struct BlockReader<R> {
     inner: R,
-    /// Bytes read but not yet handed out: the start of an unfinished line.
+    /// Bytes read but not yet handed out (the start of an unfinished line)
+    /// are `carry[..filled]`; the rest is reusable space, never re-zeroed.
     carry: Vec<u8>,
+    filled: usize,
     block: usize,
     max_line: usize,
     eof: bool,
@@ -96,6 +119,7 @@ impl<R: Read> BlockReader<R> {
         BlockReader {
             inner,
             carry: Vec::new(),
+            filled: 0,
             block: block.max(1),
             max_line: max_line.max(1),
             eof: false,
@@ -123,12 +147,17 @@ impl<R: Read> BlockReader<R> {
                 self.skip_long_line()?;
                 continue;
             }
-            // Whole lines already buffered: hand them out.
-            if let Some(last_nl) = memchr::memrchr(b'\n', &self.carry) {
-                buf.clear();
-                buf.extend_from_slice(&self.carry[last_nl + 1..]);
-                self.carry.truncate(last_nl + 1);
+            let data = &self.carry[..self.filled];
+            // Whole lines already buffered: hand them out, keep the rest.
+            if let Some(last_nl) = memchr::memrchr(b'\n', data) {
+                let rest = self.filled - (last_nl + 1);
+                if buf.len() < rest {
+                    buf.resize(rest, 0);
+                }
+                buf[..rest].copy_from_slice(&self.carry[last_nl + 1..self.filled]);
                 std::mem::swap(&mut buf, &mut self.carry);
+                buf.truncate(last_nl + 1);
+                self.filled = rest;
                 return Ok(Some(Block {
                     bytes: buf,
                     too_long_before: self.too_long.take(),
@@ -136,21 +165,22 @@ impl<R: Read> BlockReader<R> {
                 }));
             }
             if self.eof {
-                if self.carry.is_empty() && self.too_long.is_none() {
+                if self.filled == 0 && self.too_long.is_none() {
                     return Ok(None);
                 }
-                buf.clear();
                 std::mem::swap(&mut buf, &mut self.carry);
+                buf.truncate(self.filled);
+                self.filled = 0;
                 return Ok(Some(Block {
                     bytes: buf,
                     too_long_before: self.too_long.take(),
                     last: true,
                 }));
             }
-            if self.carry.len() > self.max_line {
+            if self.filled > self.max_line {
                 // No newline within the cap: measure and skip the rest of the line.
-                self.skipping = Some(self.carry.len() as u64);
-                self.carry.clear();
+                self.skipping = Some(self.filled as u64);
+                self.filled = 0;
                 continue;
             }
             self.read_more()?;
@@ -160,27 +190,22 @@ impl<R: Read> BlockReader<R> {
     /// One read appended to `carry` (a pipe returns what it has, so live
     /// lines are not held back waiting for a full block).
     fn read_more(&mut self) -> io::Result<()> {
-        let start = self.carry.len();
-        let want = self.block.max(self.max_line + 1);
-        self.carry.resize(start + want, 0);
-        let result = loop {
-            match self.inner.read(&mut self.carry[start..]) {
+        let start = self.filled;
+        let end = start + self.block.max(self.max_line + 1);
+        if self.carry.len() < end {
+            // Only the part never used before is zeroed.
+            self.carry.resize(end, 0);
+        }
+        loop {
+            match self.inner.read(&mut self.carry[start..end]) {
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                other => break other,
-            }
-        };
-        match result {
-            Ok(n) => {
-                self.carry.truncate(start + n);
-                self.bytes_read += n as u64;
-                if n == 0 {
-                    self.eof = true;
+                Err(e) => return Err(e),
+                Ok(n) => {
+                    self.filled += n;
+                    self.bytes_read += n as u64;
+                    self.eof = n == 0;
+                    return Ok(());
                 }
-                Ok(())
-            }
-            Err(e) => {
-                self.carry.truncate(start);
-                Err(e)
             }
         }
     }
@@ -190,12 +215,13 @@ impl<R: Read> BlockReader<R> {
         let Some(mut len) = self.skipping else {
             return Ok(());
         };
-        self.carry.clear();
+        self.filled = 0;
         self.read_more()?;
-        match memchr::memchr(b'\n', &self.carry) {
+        match memchr::memchr(b'\n', &self.carry[..self.filled]) {
             Some(pos) => {
                 len += pos as u64;
-                self.carry.drain(..=pos);
+                self.carry.copy_within(pos + 1..self.filled, 0);
+                self.filled -= pos + 1;
                 self.skipping = None;
                 self.too_long = Some(len);
             }
@@ -204,8 +230,8 @@ impl<R: Read> BlockReader<R> {
                 self.too_long = Some(len);
             }
             None => {
-                len += self.carry.len() as u64;
-                self.carry.clear();
+                len += self.filled as u64;
+                self.filled = 0;
                 self.skipping = Some(len);
             }
         }
@@ -264,14 +290,10 @@ impl<R: Read> LineReader<R> {
                 None => return Ok(None),
             }
         }
-        let rest = &self.block.bytes[self.pos..];
-        let mut lines = BlockLines {
-            rest,
-            too_long: None,
-            max_line: self.blocks.max_line(),
-        };
+        let rest = self.block.bytes.get(self.pos..).unwrap_or_default();
+        let mut lines = BlockLines::new(rest, None, self.blocks.max_line());
         let line = lines.next();
-        self.pos = self.block.bytes.len() - lines.rest.len();
+        self.pos += lines.consumed();
         self.line_no += 1;
         Ok(line)
     }

@@ -42,11 +42,13 @@ impl Format {
         }
     }
 
-    pub fn parser(self) -> Box<dyn LineParser> {
+    pub fn parser(self) -> AnyParser {
         match self {
-            Format::CandumpLog => Box::new(candump_log::CandumpLogParser::new()),
-            Format::CandumpScreen => Box::new(candump_screen::CandumpScreenParser::new()),
-            Format::Asc => Box::new(asc::AscParser::new()),
+            Format::CandumpLog => AnyParser::CandumpLog(candump_log::CandumpLogParser::new()),
+            Format::CandumpScreen => {
+                AnyParser::CandumpScreen(candump_screen::CandumpScreenParser::new())
+            }
+            Format::Asc => AnyParser::Asc(asc::AscParser::new()),
         }
     }
 }
@@ -70,11 +72,15 @@ pub enum FrameKind {
     Fd,
 }
 
-/// Up to 64 payload bytes, inline (no allocation per frame).
-#[derive(Clone, Copy, PartialEq, Eq)]
+/// Up to 64 payload bytes. Classic frames (all that EMCY and NMT use) stay
+/// inline; CAN FD data past 8 bytes goes to the heap. Frames are moved on
+/// the hot path, so this keeps them small; FD data is decoded only for the
+/// ids a caller asked for.
+#[derive(Clone, PartialEq, Eq)]
 pub struct Payload {
-    bytes: [u8; 64],
+    inline: [u8; 8],
     len: u8,
+    long: Option<Box<[u8; 64]>>,
 }
 
 impl Payload {
@@ -82,22 +88,30 @@ impl Payload {
 
     pub const fn new() -> Payload {
         Payload {
-            bytes: [0; 64],
+            inline: [0; 8],
             len: 0,
+            long: None,
         }
     }
 
     /// Appends a byte; `false` (and nothing stored) when already full.
     #[inline]
     pub fn push(&mut self, b: u8) -> bool {
-        match self.bytes.get_mut(usize::from(self.len)) {
-            Some(slot) => {
-                *slot = b;
-                self.len += 1;
-                true
-            }
-            None => false,
+        let i = usize::from(self.len);
+        if i < self.inline.len() && self.long.is_none() {
+            self.inline[i] = b;
+        } else if i < Self::MAX {
+            let long = self.long.get_or_insert_with(|| {
+                let mut all = Box::new([0u8; 64]);
+                all[..8].copy_from_slice(&self.inline);
+                all
+            });
+            long[i] = b;
+        } else {
+            return false;
         }
+        self.len += 1;
+        true
     }
 
     pub fn from_slice(data: &[u8]) -> Option<Payload> {
@@ -111,7 +125,11 @@ impl Payload {
     }
 
     pub fn as_slice(&self) -> &[u8] {
-        &self.bytes[..usize::from(self.len)]
+        let n = usize::from(self.len);
+        match &self.long {
+            Some(all) => &all[..n],
+            None => &self.inline[..n.min(8)],
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -236,14 +254,48 @@ pub trait LineParser: Send {
     /// any input.
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a>;
 
-    /// A copy in the current state, to parse later blocks on another thread.
-    fn fork(&self) -> Box<dyn LineParser>;
-
     /// The state later lines depend on, as a small exact value (below 256):
     /// a block parsed from a fork is valid only if the state it started from
     /// equals the state the previous block ended in. `None` when every line
     /// depends on the one before (ASC relative times): parse sequentially.
     fn context(&self) -> Option<u8>;
+}
+
+/// One parser of each text format, dispatched by `match`: the set is closed,
+/// and a match lets the hot path inline where a trait object would not.
+/// `Clone` is how a parser is forked for another thread.
+#[derive(Clone)]
+pub enum AnyParser {
+    CandumpLog(candump_log::CandumpLogParser),
+    CandumpScreen(candump_screen::CandumpScreenParser),
+    Asc(asc::AscParser),
+}
+
+impl LineParser for AnyParser {
+    fn format(&self) -> Format {
+        match self {
+            AnyParser::CandumpLog(p) => p.format(),
+            AnyParser::CandumpScreen(p) => p.format(),
+            AnyParser::Asc(p) => p.format(),
+        }
+    }
+
+    #[inline]
+    fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        match self {
+            AnyParser::CandumpLog(p) => p.parse(line, interest),
+            AnyParser::CandumpScreen(p) => p.parse(line, interest),
+            AnyParser::Asc(p) => p.parse(line, interest),
+        }
+    }
+
+    fn context(&self) -> Option<u8> {
+        match self {
+            AnyParser::CandumpLog(p) => p.context(),
+            AnyParser::CandumpScreen(p) => p.context(),
+            AnyParser::Asc(p) => p.context(),
+        }
+    }
 }
 
 /// Splits off leading spaces and tabs.
@@ -288,10 +340,24 @@ mod tests {
         let mut p = Payload::new();
         for i in 0..64 {
             assert!(p.push(i as u8));
+            assert_eq!(p.as_slice(), (0..=i).map(|b| b as u8).collect::<Vec<_>>());
         }
         assert!(!p.push(0));
         assert_eq!(p.len(), 64);
         assert!(Payload::from_slice(&[0; 65]).is_none());
+        assert_eq!(
+            Payload::from_slice(&[1, 2, 3]).unwrap().as_slice(),
+            [1, 2, 3]
+        );
+    }
+
+    #[test]
+    fn frames_stay_small_enough_to_move_in_registers() {
+        assert!(
+            std::mem::size_of::<Frame<'_>>() <= 96,
+            "{}",
+            std::mem::size_of::<Frame<'_>>()
+        );
     }
 
     #[test]

@@ -17,7 +17,11 @@ const ATTO_PER_SEC: u128 = 1_000_000_000_000_000_000;
 /// measurement start for ASC), exact to the digits the trace wrote.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Timestamp {
-    atto: u128,
+    // Two u64 rather than one u128: half the size (frames carrying a time
+    // are moved on the hot path), same exactness.
+    secs: u64,
+    /// Attoseconds within the second, < 10^18.
+    atto: u64,
     digits: u8,
 }
 
@@ -33,7 +37,24 @@ fn pow10(n: usize) -> u128 {
 }
 
 impl Timestamp {
-    pub const ZERO: Timestamp = Timestamp { atto: 0, digits: 0 };
+    pub const ZERO: Timestamp = Timestamp {
+        secs: 0,
+        atto: 0,
+        digits: 0,
+    };
+
+    fn total(self) -> u128 {
+        u128::from(self.secs) * ATTO_PER_SEC + u128::from(self.atto)
+    }
+
+    /// From total attoseconds; `None` beyond u64 seconds.
+    fn from_total(total: u128, digits: u8) -> Option<Timestamp> {
+        Some(Timestamp {
+            secs: u64::try_from(total / ATTO_PER_SEC).ok()?,
+            atto: (total % ATTO_PER_SEC) as u64,
+            digits,
+        })
+    }
 
     /// Parses `int` `.` `frac` where both are ASCII digit strings (the caller
     /// has split at the dot). `frac` may be empty (no dot). Leading zeros of the
@@ -53,16 +74,12 @@ impl Timestamp {
                 .and_then(|s| s.checked_add(u64::from(d)))
                 .ok_or("timestamp seconds overflow 64 bits")?;
         }
-        let mut f: u128 = 0;
+        let mut f: u64 = 0;
         for &b in frac {
             let d = digit(b).ok_or("timestamp is not a decimal number")?;
-            f = f * 10 + u128::from(d);
+            f = f * 10 + u64::from(d);
         }
-        let atto = u128::from(secs) * ATTO_PER_SEC + f * pow10(MAX_FRACTION_DIGITS - frac.len());
-        Ok(Timestamp {
-            atto,
-            digits: frac.len() as u8,
-        })
+        Ok(Timestamp::from_parts(secs, f, frac.len() as u8))
     }
 
     /// Parses `123`, `123.456` (the whole text must be the number).
@@ -80,11 +97,14 @@ impl Timestamp {
     }
 
     /// From whole seconds plus a fraction written with `digits` digits.
+    /// `frac` must have at most `digits` digits (larger values are reduced).
     pub fn from_parts(secs: u64, frac: u64, digits: u8) -> Timestamp {
         let digits = digits.min(MAX_FRACTION_DIGITS as u8);
-        let scale = pow10(MAX_FRACTION_DIGITS - usize::from(digits));
+        let scale = pow10(MAX_FRACTION_DIGITS - usize::from(digits)) as u64;
+        let limit = pow10(usize::from(digits)) as u64;
         Timestamp {
-            atto: u128::from(secs) * ATTO_PER_SEC + u128::from(frac) * scale,
+            secs,
+            atto: (frac % limit) * scale,
             digits,
         }
     }
@@ -92,27 +112,20 @@ impl Timestamp {
     /// Adds a delta (ASC `timestamps relative`, candump `-td`); the result
     /// keeps the finer of the two precisions. `None` on overflow.
     pub fn checked_add(self, delta: Timestamp) -> Option<Timestamp> {
-        let atto = self.atto.checked_add(delta.atto)?;
-        // Stay within what `from_decimal` can produce so printing never overflows u64 seconds.
-        if atto / ATTO_PER_SEC > u128::from(u64::MAX) {
-            return None;
-        }
-        Some(Timestamp {
-            atto,
-            digits: self.digits.max(delta.digits),
-        })
+        let total = self.total().checked_add(delta.total())?;
+        Timestamp::from_total(total, self.digits.max(delta.digits))
     }
 
     /// `self - earlier`, negative when the trace's clock went backwards.
     pub fn since(self, earlier: Timestamp) -> Span {
         Span {
-            atto: self.atto as i128 - earlier.atto as i128,
+            atto: self.total() as i128 - earlier.total() as i128,
             digits: self.digits.max(earlier.digits),
         }
     }
 
     pub fn secs(self) -> u64 {
-        (self.atto / ATTO_PER_SEC) as u64
+        self.secs
     }
 
     /// Fraction digits as written in the trace.
@@ -122,7 +135,7 @@ impl Timestamp {
 
     /// Seconds as `f64`, for layout only (never for output of values).
     pub fn as_f64(self) -> f64 {
-        self.atto as f64 / ATTO_PER_SEC as f64
+        self.secs as f64 + self.atto as f64 / ATTO_PER_SEC as f64
     }
 }
 
@@ -134,9 +147,7 @@ impl PartialOrd for Timestamp {
 
 impl Ord for Timestamp {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.atto
-            .cmp(&other.atto)
-            .then(self.digits.cmp(&other.digits))
+        (self.secs, self.atto, self.digits).cmp(&(other.secs, other.atto, other.digits))
     }
 }
 
@@ -165,7 +176,7 @@ fn write_decimal(f: &mut fmt::Formatter<'_>, atto: u128, digits: u8) -> fmt::Res
 /// Prints as a JSON-compatible decimal number with the trace's digit count.
 impl fmt::Display for Timestamp {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write_decimal(f, self.atto, self.digits)
+        write_decimal(f, self.total(), self.digits)
     }
 }
 
@@ -248,6 +259,17 @@ mod tests {
         assert_eq!(ts("2.5").since(ts("1.25")).to_string(), "1.25");
         assert_eq!(ts("1.0").since(ts("2.5")).to_string(), "-1.5");
         assert!(ts("1.0").since(ts("2.5")).is_negative());
+    }
+
+    #[test]
+    fn parts_keep_their_digits() {
+        assert_eq!(Timestamp::from_parts(12, 5, 3).to_string(), "12.005");
+        assert_eq!(Timestamp::from_parts(0, 0, 0).to_string(), "0");
+        assert_eq!(
+            Timestamp::from_parts(1, 123456789, 9).to_string(),
+            "1.123456789"
+        );
+        assert_eq!(std::mem::size_of::<Option<Timestamp>>(), 32);
     }
 
     #[test]
