@@ -17,11 +17,12 @@
 //! statistics, other buses, variables, markers) are skipped; anything else
 //! that does not parse is malformed with a reason.
 
-use super::hex;
+use super::time::MAX_FRACTION_DIGITS;
 use super::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp,
-    split_token, trim_start,
+    split_token, trim_end, trim_start,
 };
+use super::{hex, scan};
 
 const STANDARD_MAX: u32 = 0x7FF;
 const EXTENDED_MAX: u32 = 0x1FFF_FFFF;
@@ -100,13 +101,47 @@ impl LineParser for AscParser {
         }
     }
 
+    #[inline]
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        if let Some((frame, now)) = self.canonical(line, interest) {
+            self.now = now;
+            return Parsed::Frame(frame);
+        }
         match self.parse_line(line, interest) {
             Ok(Some(frame)) => Parsed::Frame(frame),
             Ok(None) => Parsed::Skipped,
             Err(reason) => Parsed::Malformed(reason),
         }
     }
+}
+
+/// Index after at least one blank following `at`; `None` when there is none.
+#[inline]
+fn blanks_after(line: &[u8], at: usize) -> Option<usize> {
+    let n = scan::blank_run(line, at);
+    (n > 0).then_some(at + n)
+}
+
+/// Nothing, or the bit-timing tail `Length = n BitCount = n ID = n[x]`.
+#[inline]
+fn canonical_tail(rest: &[u8]) -> bool {
+    let t = trim_end(rest);
+    if t.is_empty() {
+        return true;
+    }
+    let Some(t) = trim_start(t).strip_prefix(b"Length = ") else {
+        return false;
+    };
+    let n = scan::digit_run(t, 0);
+    let Some(t) = t.get(n..).and_then(|t| t.strip_prefix(b" BitCount = ")) else {
+        return false;
+    };
+    let m = scan::digit_run(t, 0);
+    let Some(t) = t.get(m..).and_then(|t| t.strip_prefix(b" ID = ")) else {
+        return false;
+    };
+    let k = scan::digit_run(t, 0);
+    n > 0 && m > 0 && k > 0 && matches!(t.get(k..), Some(b"" | b"x"))
 }
 
 /// Whitespace-separated tokens that can be cloned to look ahead and that
@@ -142,6 +177,114 @@ impl<'a> Iterator for Tokens<'a> {
 }
 
 impl AscParser {
+    /// The fast path for the classic frame line CANoe and log2asc write, by
+    /// far the most common line of an ASC trace:
+    /// `T CH ID[x] Rx|Tx d DLC HH... [Length = n BitCount = n ID = n[x]]`
+    /// with hex numbers, DLC 0-8 and two-digit bytes. Anything else returns
+    /// `None` and goes to the full parser (the one source of error messages);
+    /// what this accepts, the full parser reads identically. Returns the frame
+    /// and the new running time; the caller commits it.
+    #[inline]
+    fn canonical<'a>(&self, line: &'a [u8], interest: &Interest) -> Option<(Frame<'a>, Timestamp)> {
+        if self.base != Base::Hex {
+            return None;
+        }
+        let mut i = scan::blank_run(line, 0);
+        if i == 0 && line.first().is_some_and(|b| !b.is_ascii_digit()) {
+            return None;
+        }
+        // Time: digits '.' digits.
+        let int_len = scan::digit_run(line, i);
+        let dot = i + int_len;
+        if int_len == 0 || int_len > 19 || line.get(dot) != Some(&b'.') {
+            return None;
+        }
+        let frac_len = scan::digit_run(line, dot + 1);
+        let time_end = dot + 1 + frac_len;
+        if frac_len == 0 || frac_len > MAX_FRACTION_DIGITS {
+            return None;
+        }
+        let written = Timestamp::from_parts(
+            scan::decimal_u64(line.get(i..dot)?),
+            scan::decimal_u64(line.get(dot + 1..time_end)?),
+            frac_len as u8,
+        );
+        let time = if self.relative {
+            self.now.checked_add(written)?
+        } else {
+            written
+        };
+        // Channel: a small decimal number.
+        i = blanks_after(line, time_end)?;
+        let ch_len = scan::digit_run(line, i);
+        if ch_len == 0 || ch_len > 3 {
+            return None;
+        }
+        let channel = line.get(i..i + ch_len)?;
+        // Id, hex, `x` for extended.
+        i = blanks_after(line, i + ch_len)?;
+        let id_len = scan::hex_run(line, i);
+        if id_len == 0 || id_len > 8 {
+            return None;
+        }
+        let id = hex::parse_u32(line.get(i..i + id_len)?)?;
+        let mut j = i + id_len;
+        let extended = line.get(j) == Some(&b'x');
+        if extended {
+            j += 1;
+        }
+        if id > if extended { 0x1FFF_FFFF } else { 0x7FF } {
+            return None;
+        }
+        // Direction, `d`, DLC.
+        i = blanks_after(line, j)?;
+        match line.get(i..i + 2)? {
+            b"Rx" | b"Tx" => {}
+            _ => return None,
+        }
+        i = blanks_after(line, i + 2)?;
+        if line.get(i) != Some(&b'd') {
+            return None;
+        }
+        i = blanks_after(line, i + 1)?;
+        let dlc = match line.get(i) {
+            Some(d @ b'0'..=b'8') => d - b'0',
+            _ => return None,
+        };
+        i += 1;
+        // Bytes: a single blank, then two hex digits, DLC times.
+        let data_start = i;
+        for _ in 0..dlc {
+            if line.get(i) != Some(&b' ') {
+                return None;
+            }
+            let (&hi, &lo) = (line.get(i + 1)?, line.get(i + 2)?);
+            hex::parse_byte(hi, lo)?;
+            i += 3;
+        }
+        if !canonical_tail(line.get(i..)?) {
+            return None;
+        }
+        let mut frame = Frame {
+            time: Some(time),
+            channel,
+            id,
+            extended,
+            kind: FrameKind::Data,
+            len: dlc,
+            data: Payload::new(),
+        };
+        if interest.wants(id, extended) {
+            for k in 0..usize::from(dlc) {
+                let at = data_start + 3 * k;
+                frame
+                    .data
+                    .push(hex::parse_byte(*line.get(at + 1)?, *line.get(at + 2)?)?);
+            }
+        }
+        Some((frame, time))
+    }
+
     fn parse_line<'a>(
         &mut self,
         line: &'a [u8],
@@ -854,6 +997,54 @@ fn show(token: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
+    mod fast_path {
+        use super::super::*;
+        use proptest::prelude::*;
+
+        fn parser(relative: bool, now: u64) -> AscParser {
+            let mut p = AscParser::new();
+            p.relative = relative;
+            p.now = Timestamp::from_parts(now, 250, 3);
+            p
+        }
+
+        proptest! {
+            /// What the fast path accepts, the full parser reads identically,
+            /// including the running time it leaves behind.
+            #[test]
+            fn agrees_with_the_full_parser(
+                line in "[ \t]{0,3}[0-9]{0,20}\\.?[0-9]{0,19}[ ]{0,2}[0-9]{0,4}[ ]{1,3}[0-9a-fA-FxX]{0,10}[ ]{1,14}(Rx|Tx|rx|TxRq)[ ]{1,3}[dDr][ ]{1,2}[0-9a-fA-F]{1,2}( [0-9a-fA-F]{1,3}){0,9}( {1,4}Length = [0-9]{0,6} BitCount = [0-9]{1,3} ID = [0-9]{1,9}x?| x)?[ ]{0,2}",
+                relative in any::<bool>(),
+                now in 0u64..1000,
+                narrow in any::<bool>(),
+            ) {
+                let mut interest = if narrow { Interest::none() } else { Interest::all() };
+                interest.add_standard(0x81);
+                let fast = parser(relative, now);
+                if let Some((frame, time)) = fast.canonical(line.as_bytes(), &interest) {
+                    let mut full = parser(relative, now);
+                    prop_assert_eq!(full.parse_line(line.as_bytes(), &interest), Ok(Some(frame)));
+                    prop_assert_eq!(full.now, time);
+                }
+            }
+
+            /// The shape CANoe and log2asc write takes the fast path.
+            #[test]
+            fn takes_the_common_line(
+                line in "[ ]{1,3}[0-9]{1,6}\\.[0-9]{4,9} [1-9]  ([0-7][0-9A-F]{2}|1[0-9A-F]{7}x)[ ]{1,13} (Rx|Tx)   d (0|1 [0-9A-F]{2}|8( [0-9A-F]{2}){8})(  Length = [0-9]{1,6} BitCount = [0-9]{2,3} ID = [0-9]{1,9}x?)?",
+            ) {
+                for relative in [false, true] {
+                    let p = parser(relative, 7);
+                    let fast = p.canonical(line.as_bytes(), &Interest::all());
+                    prop_assert!(fast.is_some(), "declined {}", line);
+                    let mut full = parser(relative, 7);
+                    prop_assert_eq!(full.parse_line(line.as_bytes(), &Interest::all()), Ok(fast.clone().map(|f| f.0)));
+                    prop_assert_eq!(Some(full.now), fast.map(|f| f.1));
+                }
+            }
+        }
+    }
+
     use super::*;
 
     fn parse_with<'a>(p: &mut AscParser, line: &'a str) -> Parsed<'a> {

@@ -107,6 +107,35 @@ pub fn token_run(s: &[u8], from: usize) -> usize {
     i.saturating_sub(from)
 }
 
+/// Length of the run of spaces and tabs starting at `from`.
+#[inline]
+pub fn blank_run(s: &[u8], from: usize) -> usize {
+    let mut i = from;
+    // Most runs are one to three blanks: bytes first, words for the long ones.
+    for _ in 0..4 {
+        match s.get(i) {
+            Some(b' ' | b'\t') => i += 1,
+            _ => return i - from,
+        }
+    }
+    while let Some(x) = word(s, i) {
+        let spaces = zero_bytes(x ^ (LO * u64::from(b' ')));
+        let tabs = zero_bytes(x ^ (LO * u64::from(b'\t')));
+        let other = !(spaces | tabs) & HI;
+        if other != 0 {
+            return i + first_marked(other) - from;
+        }
+        i += 8;
+    }
+    while let Some(&b) = s.get(i) {
+        if b != b' ' && b != b'\t' {
+            break;
+        }
+        i += 1;
+    }
+    i.saturating_sub(from)
+}
+
 /// True when every byte of `s` is a hex digit. Whole words, the last one
 /// overlapping the previous, so no byte loop for lengths >= 8.
 #[inline]
@@ -161,6 +190,8 @@ mod tests {
                 "{b:#x}"
             );
             assert_eq!(token_run(&s, 0), if b > b' ' { 9 } else { 0 }, "{b:#x}");
+            let blank = b == b' ' || b == b'\t';
+            assert_eq!(blank_run(&s, 0), if blank { 9 } else { 0 }, "{b:#x}");
         }
     }
 
@@ -208,6 +239,7 @@ mod tests {
             prop_assert_eq!(hex_run(&s, from), naive_run(&s, from, |b| b.is_ascii_hexdigit()));
             prop_assert_eq!(token_run(&s, from), naive_run(&s, from, |b| b > b' '));
             prop_assert_eq!(all_hex(&s), s.iter().all(u8::is_ascii_hexdigit));
+            prop_assert_eq!(blank_run(&s, from), naive_run(&s, from, |b| b == b' ' || b == b'\t'));
         }
     }
 }

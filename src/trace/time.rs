@@ -32,8 +32,19 @@ pub struct Span {
     digits: u8,
 }
 
-fn pow10(n: usize) -> u128 {
-    10u128.pow(n as u32)
+/// 10^0 ..= 10^18.
+const POW10: [u64; MAX_FRACTION_DIGITS + 1] = {
+    let mut t = [1u64; MAX_FRACTION_DIGITS + 1];
+    let mut i = 1;
+    while i < t.len() {
+        t[i] = t[i - 1] * 10;
+        i += 1;
+    }
+    t
+};
+
+fn pow10(n: usize) -> u64 {
+    POW10[n.min(MAX_FRACTION_DIGITS)]
 }
 
 impl Timestamp {
@@ -100,8 +111,8 @@ impl Timestamp {
     /// `frac` must have at most `digits` digits (larger values are reduced).
     pub fn from_parts(secs: u64, frac: u64, digits: u8) -> Timestamp {
         let digits = digits.min(MAX_FRACTION_DIGITS as u8);
-        let scale = pow10(MAX_FRACTION_DIGITS - usize::from(digits)) as u64;
-        let limit = pow10(usize::from(digits)) as u64;
+        let scale = pow10(MAX_FRACTION_DIGITS - usize::from(digits));
+        let limit = pow10(usize::from(digits));
         Timestamp {
             secs,
             atto: (frac % limit) * scale,
@@ -169,7 +180,7 @@ fn write_decimal(f: &mut fmt::Formatter<'_>, atto: u128, digits: u8) -> fmt::Res
     if digits == 0 {
         return write!(f, "{secs}");
     }
-    let frac = (atto % ATTO_PER_SEC) / pow10(MAX_FRACTION_DIGITS - usize::from(digits));
+    let frac = (atto % ATTO_PER_SEC) / u128::from(pow10(MAX_FRACTION_DIGITS - usize::from(digits)));
     write!(f, "{secs}.{frac:0width$}", width = usize::from(digits))
 }
 
