@@ -112,7 +112,14 @@ pub struct BlockReader<R> {
     /// A too-long line that ended; goes in front of the next block.
     too_long: Option<u64>,
     bytes_read: u64,
+    /// Bytes to ask for next: doubles while reads come back full (files),
+    /// follows short reads down (pipes hand out 64 KiB), so buffers are not
+    /// grown and zeroed far beyond what a read fills.
+    read_size: usize,
 }
+
+/// First read size, and the floor for the adaptive size.
+const MIN_READ: usize = 64 * 1024;
 
 impl<R: Read> BlockReader<R> {
     pub fn new(inner: R, block: usize, max_line: usize) -> Self {
@@ -126,6 +133,7 @@ impl<R: Read> BlockReader<R> {
             skipping: None,
             too_long: None,
             bytes_read: 0,
+            read_size: MIN_READ,
         }
     }
 
@@ -191,7 +199,7 @@ impl<R: Read> BlockReader<R> {
     /// lines are not held back waiting for a full block).
     fn read_more(&mut self) -> io::Result<()> {
         let start = self.filled;
-        let end = start + self.block.max(self.max_line + 1);
+        let end = start + self.read_size.min(self.block).max(self.max_line + 1).max(1);
         if self.carry.len() < end {
             // Only the part never used before is zeroed.
             self.carry.resize(end, 0);
@@ -204,6 +212,11 @@ impl<R: Read> BlockReader<R> {
                     self.filled += n;
                     self.bytes_read += n as u64;
                     self.eof = n == 0;
+                    self.read_size = if n == end - start {
+                        self.read_size.saturating_mul(2)
+                    } else {
+                        n.max(MIN_READ)
+                    };
                     return Ok(());
                 }
             }

@@ -33,3 +33,4 @@ pub fn first_difference(expected: &str, actual: &str) -> String {
         }
     }
 }
+pub mod tracegen;

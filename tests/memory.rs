@@ -1,0 +1,71 @@
+//! Memory stays flat however long the trace: a 200 MB generated trace is
+//! streamed through the binary and its peak resident size is checked. Not a
+//! timing test: it passes on a slow machine too.
+
+mod common;
+
+use std::io::{BufWriter, Write};
+use std::process::{Command, Stdio};
+
+use common::tracegen::{TraceFormat, write_trace};
+
+const TRACE_BYTES: u64 = 200 * 1024 * 1024;
+const LIMIT_KIB: u64 = 32 * 1024;
+
+/// Peak resident set of a live process, from /proc (Linux only).
+fn peak_rss_kib(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+fn peak_while_streaming(args: &[&str], format: TraceFormat) -> Option<u64> {
+    let mut child = Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
+        .args(args)
+        .arg("-")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let pid = child.id();
+    let stdin = child.stdin.take().expect("stdin");
+    let mut writer = BufWriter::with_capacity(1 << 20, stdin);
+    let (lines, emcy) = write_trace(&mut writer, format, TRACE_BYTES, 2, 7).expect("write trace");
+    writer.flush().expect("flush");
+    assert!(
+        lines > 1_000_000 && emcy > 1_000,
+        "{lines} lines, {emcy} EMCY"
+    );
+    // Everything is written; the process is alive waiting for more input.
+    let peak = peak_rss_kib(pid);
+    drop(writer);
+    assert!(child.wait().expect("wait").success());
+    peak
+}
+
+#[test]
+fn a_200_mb_trace_is_read_in_bounded_memory() {
+    if !std::path::Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read peak memory from");
+        return;
+    }
+    for (args, format) in [
+        (
+            &["--format", "ndjson", "-j", "1"][..],
+            TraceFormat::CandumpLog,
+        ),
+        (
+            &["--format", "ndjson", "-j", "2"][..],
+            TraceFormat::CandumpLog,
+        ),
+        (&["--format", "table", "-j", "2"][..], TraceFormat::Asc),
+    ] {
+        let peak = peak_while_streaming(args, format).expect("VmHWM readable");
+        assert!(
+            peak < LIMIT_KIB,
+            "{args:?} {format:?}: peak RSS {peak} KiB exceeds {LIMIT_KIB} KiB"
+        );
+        eprintln!("{args:?} {format:?}: peak RSS {peak} KiB");
+    }
+}

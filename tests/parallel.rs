@@ -1,0 +1,168 @@
+//! Output never depends on how the input was split or how many threads read
+//! it: every trace below is decoded with one thread and with several, with
+//! blocks from 1 byte to 1 MiB, and stdout and stderr must be identical.
+
+use emcy_decode::analyze::{DiagnosticLog, Options, analyze};
+use emcy_decode::report::Renderer;
+use emcy_decode::report::ndjson::Ndjson;
+
+fn run(trace: &[u8], threads: usize, block_size: usize) -> (String, String) {
+    let opts = Options {
+        threads,
+        block_size,
+        max_line: 200,
+        max_diagnostics: 5,
+        ..Options::default()
+    };
+    let mut out = Vec::new();
+    let mut err = Vec::new();
+    {
+        let mut renderer = Ndjson::new(&mut out, false);
+        let mut log = DiagnosticLog::new(&mut err);
+        let analysis = analyze("trace", trace, false, &opts, &mut renderer, &mut log)
+            .expect("output to a Vec cannot fail");
+        let collected = std::mem::take(&mut log.collected);
+        renderer
+            .finish(&[analysis.report], &collected)
+            .expect("finish");
+    }
+    (
+        String::from_utf8(out).unwrap(),
+        String::from_utf8(err).unwrap(),
+    )
+}
+
+fn assert_split_independent(name: &str, trace: &[u8]) {
+    let reference = run(trace, 1, 1 << 20);
+    assert!(
+        reference.0.contains("\"type\":\"emcy\""),
+        "{name}: no EMCY decoded"
+    );
+    for threads in [1, 2, 3] {
+        for block in [1, 7, 64, 300, 4096, 1 << 20] {
+            let got = run(trace, threads, block);
+            assert_eq!(
+                got.0, reference.0,
+                "{name}: stdout, {threads} threads, {block}-byte blocks"
+            );
+            assert_eq!(
+                got.1, reference.1,
+                "{name}: stderr, {threads} threads, {block}-byte blocks"
+            );
+        }
+    }
+}
+
+fn candump_trace() -> Vec<u8> {
+    let mut t = Vec::new();
+    t.extend(b"# comment\n");
+    for i in 0..300u32 {
+        let node = 1 + i % 5;
+        match i % 11 {
+            0 => t.extend(
+                format!(
+                    "({}.000100) can0 {:03X}#1043090100000000\n",
+                    1000 + i,
+                    0x80 + node
+                )
+                .bytes(),
+            ),
+            1 => t.extend(
+                format!(
+                    "({}.000200) can0 {:03X}#0000000000000000\r\n",
+                    1000 + i,
+                    0x80 + node
+                )
+                .bytes(),
+            ),
+            2 => t.extend(b"garbage that is not a frame\n"),
+            3 => {
+                t.extend(vec![b'x'; 250 + i as usize]);
+                t.push(b'\n');
+            }
+            4 => t.extend(
+                format!(
+                    "  can0  {:03X}   [8]  10 23 03 00 00 00 00 00\n",
+                    0x80 + node
+                )
+                .bytes(),
+            ),
+            5 => t.extend(format!("({}.5) can0 70{node}#00\n", 1000 + i).bytes()),
+            6 => t.extend(format!("({}.5) can0 08{node}#10\n", 1000 + i).bytes()),
+            _ => t.extend(
+                format!(
+                    "({}.000300) can1 181#{:016X}\n",
+                    1000 + i,
+                    u64::from(i) * 7919
+                )
+                .bytes(),
+            ),
+        }
+    }
+    t.extend(b"(2000.0) can0 081#1043090100000000"); // no final newline
+    t
+}
+
+#[test]
+fn candump_log_with_garbage_long_lines_and_pasted_screen_lines() {
+    assert_split_independent("candump", &candump_trace());
+}
+
+fn asc_trace(relative: bool) -> Vec<u8> {
+    let mut t = Vec::new();
+    let mode = if relative { "relative" } else { "absolute" };
+    t.extend(format!("date Tue Nov 14 22:13:20.000 2023\nbase hex  timestamps {mode}\n").bytes());
+    for i in 0..400u32 {
+        if i == 200 {
+            // A second recording appended: decimal from here on.
+            t.extend(format!("base dec  timestamps {mode}\n").bytes());
+        }
+        let time = if relative {
+            "0.001000".to_string()
+        } else {
+            format!("{}.{:06}", i / 10, i % 10)
+        };
+        let dec = i >= 200;
+        let id = 0x81 + i % 3;
+        let id_text = if dec {
+            id.to_string()
+        } else {
+            format!("{id:X}")
+        };
+        let bytes = if i % 2 == 0 {
+            [0x10, 0x43, 0x09, 0x01]
+        } else {
+            [0, 0, 0, 0]
+        };
+        let data: Vec<String> = bytes
+            .iter()
+            .map(|b| {
+                if dec {
+                    b.to_string()
+                } else {
+                    format!("{b:02X}")
+                }
+            })
+            .collect();
+        t.extend(format!("{time:>11} 1  {id_text:<15} Rx   d 4 {}\n", data.join(" ")).bytes());
+        if i % 50 == 7 {
+            t.extend(b"   9.999 1  not an asc line at all\n");
+        }
+    }
+    t.extend(b"End TriggerBlock\n");
+    t
+}
+
+#[test]
+fn asc_with_a_base_change_in_the_middle() {
+    let trace = asc_trace(false);
+    // The decimal half must decode as decimal (ids 129.. are 0x81..).
+    let (out, _) = run(&trace, 1, 1 << 20);
+    assert_eq!(out.matches("\"type\":\"emcy\"").count(), 400);
+    assert_split_independent("asc absolute", &trace);
+}
+
+#[test]
+fn asc_with_relative_times() {
+    assert_split_independent("asc relative", &asc_trace(true));
+}
