@@ -120,6 +120,8 @@ type Foreign = Option<(Format, Format)>;
 
 /// Receives classified lines; `idx` is the line's 0-based index in its block.
 trait LineSink {
+    /// A valid frame the consumer has no use for: counted only.
+    fn plain_frame(&mut self);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     fn malformed(&mut self, idx: u64, reason: Reason);
@@ -142,6 +144,7 @@ fn classify_block(
     for raw in block.lines(max_line) {
         match raw {
             RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
+            RawLine::Text(text) if detector.quick(text, interest) => sink.plain_frame(),
             RawLine::Text(text) => match detector.parse(text, interest) {
                 Parsed::Frame(frame) => {
                     let foreign = detector.take_foreign().zip(detector.format());
@@ -282,6 +285,10 @@ impl<E: Write> Consumer<'_, '_, E> {
 }
 
 impl<E: Write> LineSink for Consumer<'_, '_, E> {
+    fn plain_frame(&mut self) {
+        self.counts.frames += 1;
+    }
+
     fn lines(&mut self, n: u64) {
         self.counts.lines += n;
         self.line_base += n;
@@ -431,6 +438,10 @@ struct Recorder<'i> {
 }
 
 impl LineSink for Recorder<'_> {
+    fn plain_frame(&mut self) {
+        self.result.plain_frames += 1;
+    }
+
     fn lines(&mut self, n: u64) {
         self.result.lines += n;
     }

@@ -41,6 +41,11 @@ impl LineParser for CandumpLogParser {
     }
 
     #[inline]
+    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+        shape(line).is_some_and(|s| !interest.wants(s.id, s.extended))
+    }
+
+    #[inline]
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         match parse_line(line, interest) {
             Ok(Some(frame)) => Parsed::Frame(frame),
@@ -115,6 +120,46 @@ fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Fra
 /// the fast path only accepts lines the full parser accepts identically.
 #[inline]
 fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
+    let shape = shape(line)?;
+    let mut frame = Frame {
+        time: None,
+        channel: line.get(shape.channel.clone())?,
+        id: shape.id,
+        extended: shape.extended,
+        kind: shape.kind,
+        len: (shape.data.len() / 2) as u8,
+        data: Payload::new(),
+    };
+    if interest.wants(shape.id, shape.extended) {
+        // At most 19 digits: always fits in u64.
+        let secs = scan::decimal_u64(line.get(1..shape.dot)?);
+        let frac = line.get(shape.dot + 1..shape.close)?;
+        frame.time = Some(Timestamp::from_parts(
+            secs,
+            scan::decimal_u64(frac),
+            frac.len() as u8,
+        ));
+        for pair in line.get(shape.data)?.chunks_exact(2) {
+            frame.data.push(hex::parse_byte(pair[0], pair[1])?);
+        }
+    }
+    Some(frame)
+}
+
+/// Where the fields of a canonical line are.
+struct Shape {
+    dot: usize,
+    close: usize,
+    channel: std::ops::Range<usize>,
+    id: u32,
+    extended: bool,
+    kind: FrameKind,
+    data: std::ops::Range<usize>,
+}
+
+/// Validates a canonical line (see [`canonical`]) without building a frame.
+#[inline]
+fn shape(line: &[u8]) -> Option<Shape> {
     if line.first() != Some(&b'(') {
         return None;
     }
@@ -142,8 +187,7 @@ fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
     if line.get(hash) != Some(&b'#') {
         return None;
     }
-    let id_text = line.get(id_start..hash)?;
-    let id = hex::parse_u32(id_text)?;
+    let id = hex::parse_u32(line.get(id_start..hash)?)?;
     let (extended, kind) = match id_len {
         3 if id <= 0x7FF => (false, FrameKind::Data),
         8 if id & !(EFF_MASK | ERROR_FLAG) != 0 => return None,
@@ -160,25 +204,15 @@ fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
     if data_len % 2 != 0 || data_len > 16 || !scan::all_hex(line.get(data_start..data_end)?) {
         return None;
     }
-    let mut frame = Frame {
-        time: None,
-        channel: line.get(dev_start..dev_start + dev_len)?,
+    Some(Shape {
+        dot,
+        close,
+        channel: dev_start..dev_start + dev_len,
         id,
         extended,
         kind,
-        len: (data_len / 2) as u8,
-        data: Payload::new(),
-    };
-    if interest.wants(id, extended) {
-        // At most 19 digits: always fits in u64.
-        let secs = scan::decimal_u64(line.get(1..dot)?);
-        let frac = scan::decimal_u64(line.get(dot + 1..close)?);
-        frame.time = Some(Timestamp::from_parts(secs, frac, frac_len as u8));
-        for pair in line.get(data_start..data_end)?.chunks_exact(2) {
-            frame.data.push(hex::parse_byte(pair[0], pair[1])?);
-        }
-    }
-    Some(frame)
+        data: data_start..data_end,
+    })
 }
 
 /// Parses `ID#DATA`, `ID#R[len]`, `ID##<flags>DATA` (the token after the
@@ -480,6 +514,20 @@ mod tests {
             proptest::prop_assert!(fast.is_some(), "declined {}", line);
             proptest::prop_assert_eq!(Ok(fast), parse_line_full(line.as_bytes(), &interest));
         }
+    }
+
+    #[test]
+    fn quick_counts_only_valid_unwanted_lines() {
+        let mut p = CandumpLogParser::new();
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        assert!(p.quick(b"(1.000000) can0 181#1122", &interest));
+        assert!(!p.quick(b"(1.000000) can0 081#1122", &interest), "wanted");
+        assert!(!p.quick(b"(1.000000) can0 181#112", &interest), "invalid");
+        assert!(
+            !p.quick(b"(1.000000)  can0 181#1122", &interest),
+            "not canonical"
+        );
     }
 
     #[test]

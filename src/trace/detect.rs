@@ -76,6 +76,16 @@ impl Detector {
         self.foreign.take()
     }
 
+    /// See [`LineParser::quick`]; only once the format is known, and only
+    /// for the detected format.
+    #[inline]
+    pub fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+        match self.primary.and_then(|i| self.parsers.get_mut(i)) {
+            Some(p) => p.quick(line, interest),
+            None => false,
+        }
+    }
+
     #[inline]
     pub fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         self.foreign = None;

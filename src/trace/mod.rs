@@ -254,6 +254,14 @@ pub trait LineParser: Send {
     /// any input.
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a>;
 
+    /// The id-first shortcut: `true` when `line` is certainly a valid frame
+    /// whose id `interest` does not want, so it only needs counting (state a
+    /// parser keeps is updated as by `parse`). `false` means "parse it".
+    #[inline]
+    fn quick(&mut self, _line: &[u8], _interest: &Interest) -> bool {
+        false
+    }
+
     /// The state later lines depend on, as a small exact value (below 256):
     /// a block parsed from a fork is valid only if the state it started from
     /// equals the state the previous block ended in. `None` when every line
@@ -294,6 +302,15 @@ impl LineParser for AnyParser {
             AnyParser::CandumpLog(p) => p.context(),
             AnyParser::CandumpScreen(p) => p.context(),
             AnyParser::Asc(p) => p.context(),
+        }
+    }
+
+    #[inline]
+    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+        match self {
+            AnyParser::CandumpLog(p) => p.quick(line, interest),
+            AnyParser::CandumpScreen(p) => p.quick(line, interest),
+            AnyParser::Asc(p) => p.quick(line, interest),
         }
     }
 }

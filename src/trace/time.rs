@@ -113,9 +113,11 @@ impl Timestamp {
         let digits = digits.min(MAX_FRACTION_DIGITS as u8);
         let scale = pow10(MAX_FRACTION_DIGITS - usize::from(digits));
         let limit = pow10(usize::from(digits));
+        // Callers pass at most `digits` digits; the check spares a division.
+        let frac = if frac >= limit { frac % limit } else { frac };
         Timestamp {
             secs,
-            atto: (frac % limit) * scale,
+            atto: frac * scale,
             digits,
         }
     }

@@ -1,0 +1,193 @@
+//! End-to-end throughput: `cargo bench --bench throughput`.
+//!
+//! Generates large traces deterministically (cached under the target dir),
+//! then times `wc -l` and `gzip -dc` (the ceilings) and emcy-decode on the same
+//! files in the same run, and prints MB/s, the ratio to the ceiling and the
+//! peak resident memory. Sizes: `BENCH_MB` (default 1024), `BENCH_GZ_MB`
+//! (default 256); best of `BENCH_RUNS` (default 3).
+
+#[path = "../tests/common/tracegen.rs"]
+#[allow(dead_code)]
+mod tracegen;
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use tracegen::{TraceFormat, write_trace};
+
+fn env_u64(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// Creates `path` with the generator unless it already exists.
+fn ensure(path: &Path, format: TraceFormat, mb: u64, emcy_per_mille: u64, gzip: bool) {
+    if path.exists() {
+        return;
+    }
+    eprintln!("generating {} ...", path.display());
+    let tmp = path.with_extension("tmp");
+    let file = File::create(&tmp).expect("create trace");
+    let bytes = mb * 1024 * 1024;
+    if gzip {
+        let enc = flate2::write::GzEncoder::new(
+            BufWriter::with_capacity(1 << 20, file),
+            flate2::Compression::default(),
+        );
+        let mut w = BufWriter::with_capacity(1 << 20, enc);
+        write_trace(&mut w, format, bytes, emcy_per_mille, 42).expect("write");
+        let enc = w.into_inner().ok().expect("flush");
+        enc.finish().expect("finish gzip").flush().expect("flush");
+    } else {
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        write_trace(&mut w, format, bytes, emcy_per_mille, 42).expect("write");
+        w.flush().expect("flush");
+    }
+    std::fs::rename(&tmp, path).expect("rename");
+}
+
+/// Best wall time of `runs` runs and the highest peak RSS (KiB) seen.
+fn measure(runs: u64, program: &str, args: &[&str]) -> (Duration, u64) {
+    let mut best = Duration::MAX;
+    let mut peak = 0;
+    for _ in 0..runs {
+        let start = Instant::now();
+        let mut child = Command::new(program)
+            .args(args)
+            .stdout(File::create("/dev/null").expect("/dev/null"))
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn");
+        let status_path = format!("/proc/{}/status", child.id());
+        loop {
+            if let Ok(Some(status)) = child.try_wait() {
+                assert!(
+                    status.success() || program == "wc",
+                    "{program} {args:?} failed"
+                );
+                break;
+            }
+            if let Ok(s) = std::fs::read_to_string(&status_path)
+                && let Some(kib) = s
+                    .lines()
+                    .find(|l| l.starts_with("VmHWM:"))
+                    .and_then(|l| l.split_whitespace().nth(1))
+                    .and_then(|v| v.parse::<u64>().ok())
+            {
+                peak = peak.max(kib);
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        best = best.min(start.elapsed());
+    }
+    (best, peak)
+}
+
+fn mb_per_s(bytes: u64, t: Duration) -> f64 {
+    bytes as f64 / 1e6 / t.as_secs_f64()
+}
+
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_string());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores")
+}
+
+fn main() {
+    // `cargo bench` passes --bench; `cargo test --benches` passes nothing
+    // useful either: only run the real thing under `cargo bench`.
+    if !std::env::args().any(|a| a == "--bench") {
+        eprintln!("throughput: run with `cargo bench --bench throughput`");
+        return;
+    }
+    let mb = env_u64("BENCH_MB", 1024);
+    let gz_mb = env_u64("BENCH_GZ_MB", 256);
+    let runs = env_u64("BENCH_RUNS", 3);
+    let bin = env!("CARGO_BIN_EXE_emcy-decode");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-data");
+    std::fs::create_dir_all(&dir).expect("bench dir");
+
+    let log = dir.join(format!("candump-{mb}MB.log"));
+    let asc = dir.join(format!("asc-{mb}MB.asc"));
+    let emcy30 = dir.join(format!("candump-emcy30-{mb}MB.log"));
+    let gz = dir.join(format!("candump-{gz_mb}MB.log.gz"));
+    ensure(&log, TraceFormat::CandumpLog, mb, 2, false);
+    ensure(&asc, TraceFormat::Asc, mb, 2, false);
+    ensure(&emcy30, TraceFormat::CandumpLog, mb, 300, false);
+    ensure(&gz, TraceFormat::CandumpLog, gz_mb, 2, true);
+
+    println!("machine: {}", machine());
+    println!("best of {runs} runs, output to /dev/null, warm page cache\n");
+    println!(
+        "{:<34} {:>9} {:>9} {:>10} {:>12} {:>9}",
+        "case", "MB", "seconds", "MB/s", "vs ceiling", "peak RSS"
+    );
+    let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
+    let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+
+    let mut row = |name: &str, bytes: u64, t: Duration, ceiling: Option<Duration>, peak: u64| {
+        let ratio = ceiling.map_or("ceiling".to_string(), |c| {
+            format!("{:.2}x time", t.as_secs_f64() / c.as_secs_f64())
+        });
+        println!(
+            "{name:<34} {:>9.0} {:>9.3} {:>10.0} {ratio:>12} {:>6} MiB",
+            bytes as f64 / 1e6,
+            t.as_secs_f64(),
+            mb_per_s(bytes, t),
+            peak / 1024
+        );
+    };
+
+    for (label, file) in [
+        ("candump log", &log),
+        ("Vector ASC", &asc),
+        ("candump log, 30% EMCY", &emcy30),
+    ] {
+        let bytes = size(file);
+        let f = path(file);
+        let (wc, wc_peak) = measure(runs, "wc", &["-l", &f]);
+        row(&format!("wc -l ({label})"), bytes, wc, None, wc_peak);
+        for (case, args) in [
+            ("ndjson", vec!["--format", "ndjson", &f]),
+            ("table", vec!["--format", "table", &f]),
+            ("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]),
+        ] {
+            let (t, peak) = measure(runs, bin, &args);
+            row(
+                &format!("emcy-decode {case} ({label})"),
+                bytes,
+                t,
+                Some(wc),
+                peak,
+            );
+        }
+        println!();
+    }
+
+    let bytes = size(&gz);
+    let g = path(&gz);
+    let (gunzip, gpeak) = measure(runs, "gzip", &["-dc", &g]);
+    row("gzip -dc (gzip candump)", bytes, gunzip, None, gpeak);
+    let (t, peak) = measure(runs, bin, &["--format", "ndjson", &g]);
+    row(
+        "emcy-decode ndjson (gzip candump)",
+        bytes,
+        t,
+        Some(gunzip),
+        peak,
+    );
+    println!("\n(MB/s of the gzip rows are compressed bytes.)");
+}
