@@ -7,7 +7,6 @@
 //! (default 256); best of `BENCH_RUNS` (default 3).
 
 #[path = "../tests/common/tracegen.rs"]
-#[allow(dead_code)]
 mod tracegen;
 
 use std::fs::File;
@@ -138,7 +137,7 @@ fn main() {
     let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
     let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
 
-    let mut row = |name: &str, bytes: u64, t: Duration, ceiling: Option<Duration>, peak: u64| {
+    let row = |name: &str, bytes: u64, t: Duration, ceiling: Option<Duration>, peak: u64| {
         let ratio = ceiling.map_or("ceiling".to_string(), |c| {
             format!("{:.2}x time", t.as_secs_f64() / c.as_secs_f64())
         });
