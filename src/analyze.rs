@@ -3,6 +3,7 @@
 //! at end of input, on an input I/O error (recorded in the report) or when the
 //! output is gone (returned as [`OutputError`]).
 
+use std::collections::HashMap;
 use std::io::{self, Read, Write};
 
 use crate::canopen::emcy::{self, Emcy, Warning};
@@ -97,34 +98,44 @@ fn interest() -> Interest {
     i
 }
 
-/// Per-channel node timelines. Channels are few; nodes are 1..=127.
+/// Per-channel node timelines. Channels are usually few, but every distinct
+/// interface name in the trace is one, so a hostile trace can name a million:
+/// lookup is hashed and a channel holds only the nodes it has seen, keeping
+/// time and memory linear in the input.
 #[derive(Default)]
 struct Nodes {
     channels: Vec<ChannelNodes>,
+    index: HashMap<Vec<u8>, usize>,
 }
 
 struct ChannelNodes {
-    raw: Vec<u8>,
     name: String,
-    nodes: Vec<Option<NodeTimeline>>,
+    /// Sorted by node id (1..=127).
+    nodes: Vec<(u8, NodeTimeline)>,
 }
 
 impl Nodes {
     fn get(&mut self, raw: &[u8], node: u8) -> (&str, &mut NodeTimeline) {
-        let idx = match self.channels.iter().position(|c| c.raw == raw) {
-            Some(i) => i,
+        let idx = match self.index.get(raw) {
+            Some(&i) => i,
             None => {
                 self.channels.push(ChannelNodes {
-                    raw: raw.to_vec(),
                     name: String::from_utf8_lossy(raw).into_owned(),
-                    nodes: vec![None; 128],
+                    nodes: Vec::new(),
                 });
+                self.index.insert(raw.to_vec(), self.channels.len() - 1);
                 self.channels.len() - 1
             }
         };
         let ch = &mut self.channels[idx];
-        let slot = &mut ch.nodes[usize::from(node & 0x7F)];
-        (&ch.name, slot.get_or_insert_with(NodeTimeline::new))
+        let slot = match ch.nodes.binary_search_by_key(&node, |(n, _)| *n) {
+            Ok(i) => i,
+            Err(i) => {
+                ch.nodes.insert(i, (node, NodeTimeline::new()));
+                i
+            }
+        };
+        (&ch.name, &mut ch.nodes[slot].1)
     }
 
     /// Node reports sorted by channel name, then node.
@@ -133,9 +144,7 @@ impl Nodes {
         let mut channels = self.channels;
         channels.sort_by(|a, b| a.name.cmp(&b.name));
         for ch in channels {
-            for (node, tl) in ch.nodes.into_iter().enumerate() {
-                let Some(tl) = tl else { continue };
-                let node = node as u8;
+            for (node, tl) in ch.nodes {
                 if !opts.selects(&ch.name, node) {
                     continue;
                 }
