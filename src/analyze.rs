@@ -11,7 +11,7 @@ use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeR
 use crate::timeline::{At, NodeTimeline};
 use crate::trace::detect::Detector;
 use crate::trace::lines::{LineReader, RawLine};
-use crate::trace::{Format, FrameKind, Interest, Parsed};
+use crate::trace::{Format, FrameKind, Interest, Parsed, Timestamp};
 
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
@@ -205,6 +205,33 @@ impl InputDiagnostics {
     }
 }
 
+/// A time earlier than the previous EMCY's or boot-up's (two logs
+/// concatenated, a clock reset) gets a diagnostic: durations across this line
+/// come out negative, and the user should know why.
+fn check_clock<E: Write>(
+    clock: &mut Option<(Timestamp, u64)>,
+    at: At,
+    diags: &mut InputDiagnostics,
+    log: &mut DiagnosticLog<E>,
+    decided: bool,
+) {
+    let Some(time) = at.time else { return };
+    if let Some((previous, line)) = *clock
+        && time.since(previous).is_negative()
+    {
+        diags.report(
+            log,
+            decided,
+            at.line,
+            format!(
+                "time {time} is earlier than {previous} at line {line}: the trace's clock \
+                 went backwards (durations across this line are negative)"
+            ),
+        );
+    }
+    *clock = Some((time, at.line));
+}
+
 /// Reads one input to the end and reports it.
 pub fn analyze<R: Read, E: Write>(
     file: &str,
@@ -235,6 +262,9 @@ pub fn analyze<R: Read, E: Write>(
     let mut active: Vec<u16> = Vec::new();
     let mut error = None;
     let mut decided = detector.format().is_some();
+    // Time and line of the last EMCY or boot-up: the trace's clock as far as
+    // the timelines see it.
+    let mut clock: Option<(Timestamp, u64)> = None;
 
     loop {
         let raw = match lines.next_line() {
@@ -303,6 +333,7 @@ pub fn analyze<R: Read, E: Write>(
                 }
             };
             counts.emcy += 1;
+            check_clock(&mut clock, at, &mut diags, log, decided);
             let info = emcy.info();
             warnings.clear();
             emcy.frame_warnings(&info, &mut warnings);
@@ -335,6 +366,7 @@ pub fn analyze<R: Read, E: Write>(
             renderer.emcy(&event).map_err(OutputError)?;
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             counts.boot += 1;
+            check_clock(&mut clock, at, &mut diags, log, decided);
             let (channel, timeline) = nodes.get(frame.channel, node);
             let cleared = timeline.boot(at);
             if opts.selects(channel, node) {
