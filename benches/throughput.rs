@@ -40,7 +40,7 @@ fn ensure(path: &Path, format: TraceFormat, mb: u64, emcy_per_mille: u64, gzip: 
         );
         let mut w = BufWriter::with_capacity(1 << 20, enc);
         write_trace(&mut w, format, bytes, emcy_per_mille, 42).expect("write");
-        let enc = w.into_inner().ok().expect("flush");
+        let enc = w.into_inner().map_err(|e| e.into_error()).expect("flush");
         enc.finish().expect("finish gzip").flush().expect("flush");
     } else {
         let mut w = BufWriter::with_capacity(1 << 20, file);

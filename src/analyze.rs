@@ -9,7 +9,7 @@
 //! that matter: EMCY/boot candidates and diagnostics) and the consumer
 //! replays them in order, so output is identical whatever the thread count.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::io::{self, Read, Write};
 use std::ops::Range;
 use std::sync::mpsc::{self, Receiver};
@@ -162,34 +162,44 @@ fn classify_block(
 
 // ---- the consumer: timelines, events, counts, diagnostics ---------------------------
 
-/// Per-channel node timelines. Channels are few; nodes are 1..=127.
+/// Per-channel node timelines. Channels are usually few, but every distinct
+/// interface name in the trace is one, so a hostile trace can name a million:
+/// lookup is hashed and a channel holds only the nodes it has seen, keeping
+/// time and memory linear in the input.
 #[derive(Default)]
 struct Nodes {
     channels: Vec<ChannelNodes>,
+    index: HashMap<Vec<u8>, usize>,
 }
 
 struct ChannelNodes {
-    raw: Vec<u8>,
     name: String,
-    nodes: Vec<Option<NodeTimeline>>,
+    /// Sorted by node id (1..=127).
+    nodes: Vec<(u8, NodeTimeline)>,
 }
 
 impl Nodes {
     fn get(&mut self, raw: &[u8], node: u8) -> (&str, &mut NodeTimeline) {
-        let idx = match self.channels.iter().position(|c| c.raw == raw) {
-            Some(i) => i,
+        let idx = match self.index.get(raw) {
+            Some(&i) => i,
             None => {
                 self.channels.push(ChannelNodes {
-                    raw: raw.to_vec(),
                     name: String::from_utf8_lossy(raw).into_owned(),
-                    nodes: vec![None; 128],
+                    nodes: Vec::new(),
                 });
+                self.index.insert(raw.to_vec(), self.channels.len() - 1);
                 self.channels.len() - 1
             }
         };
         let ch = &mut self.channels[idx];
-        let slot = &mut ch.nodes[usize::from(node & 0x7F)];
-        (&ch.name, slot.get_or_insert_with(NodeTimeline::new))
+        let slot = match ch.nodes.binary_search_by_key(&node, |(n, _)| *n) {
+            Ok(i) => i,
+            Err(i) => {
+                ch.nodes.insert(i, (node, NodeTimeline::new()));
+                i
+            }
+        };
+        (&ch.name, &mut ch.nodes[slot].1)
     }
 
     /// Node reports sorted by channel name, then node.
@@ -198,9 +208,7 @@ impl Nodes {
         let mut channels = self.channels;
         channels.sort_by(|a, b| a.name.cmp(&b.name));
         for ch in channels {
-            for (node, tl) in ch.nodes.into_iter().enumerate() {
-                let Some(tl) = tl else { continue };
-                let node = node as u8;
+            for (node, tl) in ch.nodes {
                 if !opts.selects(&ch.name, node) {
                     continue;
                 }
@@ -274,6 +282,9 @@ struct Consumer<'r, 'l, E: Write> {
     decided: bool,
     /// Lines before the current block.
     line_base: u64,
+    /// Time and line of the last EMCY or boot-up: the trace's clock as far
+    /// as the timelines see it.
+    clock: Option<(Timestamp, u64)>,
     warnings: Vec<Warning>,
     active: Vec<u16>,
 }
@@ -281,6 +292,27 @@ struct Consumer<'r, 'l, E: Write> {
 impl<E: Write> Consumer<'_, '_, E> {
     fn line_no(&self, idx: u64) -> u64 {
         self.line_base + idx + 1
+    }
+
+    /// A time earlier than the previous EMCY's or boot-up's (two logs
+    /// concatenated, a clock reset) gets a diagnostic: durations across this
+    /// line come out negative, and the user should know why.
+    fn check_clock(&mut self, at: At) {
+        let Some(time) = at.time else { return };
+        if let Some((previous, line)) = self.clock
+            && time.since(previous).is_negative()
+        {
+            self.diags.report(
+                self.log,
+                self.decided,
+                at.line,
+                format!(
+                    "time {time} is earlier than {previous} at line {line}: the trace's clock \
+                     went backwards (durations across this line are negative)"
+                ),
+            );
+        }
+        self.clock = Some((time, at.line));
     }
 }
 
@@ -340,6 +372,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 }
             };
             self.counts.emcy += 1;
+            self.check_clock(at);
             let info = emcy.info();
             self.warnings.clear();
             emcy.frame_warnings(&info, &mut self.warnings);
@@ -372,6 +405,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             self.renderer.emcy(&event).map_err(OutputError)?;
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             self.counts.boot += 1;
+            self.check_clock(at);
             let (channel, timeline) = self.nodes.get(frame.channel, node);
             let cleared = timeline.boot(at);
             if self.opts.selects(channel, node) {
@@ -560,6 +594,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         },
         errors_raised: 0,
         line_base: 0,
+        clock: None,
         warnings: Vec::new(),
         active: Vec::new(),
     };

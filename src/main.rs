@@ -1,5 +1,6 @@
 //! The `emcy-decode` binary: parse arguments, run, map errors to exit codes.
 //! Everything else lives in the library.
+#![forbid(unsafe_code)]
 
 use std::process::ExitCode;
 

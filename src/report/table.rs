@@ -2,6 +2,7 @@
 //! with fixed columns, so a trace with a million events prints without holding
 //! them), then the node states and error timeline; at the end the input counts.
 
+use std::borrow::Cow;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
@@ -57,7 +58,7 @@ impl<W: Write> TableReport<W> {
         }
         let l = Layout {
             time: time.map_or(1, |t| t.to_string().len()).max(4),
-            channel: channel.len().max(7),
+            channel: printable(channel).len().max(7),
         };
         self.layout = Some(l);
         let header = format!(
@@ -77,6 +78,7 @@ impl<W: Write> TableReport<W> {
 
     fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: u8) -> String {
         let time = time.map_or_else(|| "-".to_string(), |t| t.to_string());
+        let channel = printable(channel);
         format!(
             "{time:<tw$}  {channel:<cw$}  {node:>4}  ",
             tw = l.time,
@@ -94,6 +96,24 @@ impl<W: Write> TableReport<W> {
         }
         Ok(())
     }
+}
+
+/// A channel name as the trace wrote it, with control characters escaped: a
+/// hostile trace must not put terminal control sequences on the screen
+/// (`(1.0) \x1b]0;title\x07 081#...` is a valid candump log line).
+fn printable(s: &str) -> Cow<'_, str> {
+    if !s.chars().any(char::is_control) {
+        return Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    Cow::Owned(out)
 }
 
 fn codes_list(codes: &[u16]) -> String {
@@ -187,7 +207,7 @@ impl<W: Write> Renderer for TableReport<W> {
         let mut nodes = new_table(&["CHANNEL", "NODE", "EMCY", "STATE AT END", "ACTIVE"]);
         for n in &input.nodes {
             nodes.add_row(vec![
-                n.channel.clone(),
+                printable(&n.channel).into_owned(),
                 n.node.to_string(),
                 n.emcy_count.to_string(),
                 n.state.slug().to_string(),
@@ -223,7 +243,7 @@ impl<W: Write> Renderer for TableReport<W> {
                     (Some(e), _, _) => (format!("line {}", e.line), "-".to_string()),
                 };
                 errors.add_row(vec![
-                    n.channel.clone(),
+                    printable(&n.channel).into_owned(),
                     n.node.to_string(),
                     format!("0x{:04X}", iv.code),
                     codes::lookup(iv.code).description().to_string(),

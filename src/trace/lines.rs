@@ -186,6 +186,16 @@ impl<R: Read> BlockReader<R> {
                 }));
             }
             if self.filled > self.max_line {
+                // A too-long line still waiting to be handed out goes first,
+                // or the next one would overwrite it.
+                if let Some(n) = self.too_long.take() {
+                    buf.clear();
+                    return Ok(Some(Block {
+                        bytes: buf,
+                        too_long_before: Some(n),
+                        last: false,
+                    }));
+                }
                 // No newline within the cap: measure and skip the rest of the line.
                 self.skipping = Some(self.filled as u64);
                 self.filled = 0;
@@ -420,6 +430,50 @@ mod tests {
         assert!(want.iter().any(|l| l.starts_with("<too long")));
         for block in [1, 2, 7, 64, 65, 1000, 1 << 20] {
             assert_eq!(collect_blocks(&input[..], block, 64), want, "block {block}");
+        }
+    }
+
+    /// Reads of 1..=`max` bytes, varying.
+    struct Chunks<'a> {
+        data: &'a [u8],
+        step: usize,
+        max: usize,
+    }
+    impl Read for Chunks<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            self.step = self.step * 7 % 13 + 1;
+            let n = (self.step * self.max / 13)
+                .max(1)
+                .min(buf.len())
+                .min(self.data.len());
+            buf[..n].copy_from_slice(&self.data[..n]);
+            self.data = &self.data[n..];
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn consecutive_long_lines_are_each_reported() {
+        // Found by the conservation property test: the second long line's
+        // length overwrote the first's before a block carried it out.
+        let mut input = vec![b'a'; 1188];
+        input.push(b'\n');
+        input.extend(vec![b'b'; 2465]);
+        for max in [1, 100, 700, 5000] {
+            let got = collect_blocks(
+                Chunks {
+                    data: &input,
+                    step: 3,
+                    max,
+                },
+                DEFAULT_BLOCK,
+                1024,
+            );
+            assert_eq!(
+                got,
+                ["<too long 1188>", "<too long 2465>"],
+                "reads up to {max}"
+            );
         }
     }
 

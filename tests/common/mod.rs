@@ -1,6 +1,8 @@
 //! Shared helpers for the CLI tests.
 #![allow(dead_code)]
 
+pub mod frames;
+
 use assert_cmd::Command;
 
 /// The binary with a neutral terminal environment, so output never depends
