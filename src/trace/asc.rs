@@ -92,6 +92,17 @@ impl LineParser for AscParser {
         Format::Asc
     }
 
+    #[inline]
+    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+        match self.shape(line) {
+            Some(shape) if !interest.wants(shape.id, shape.extended) => {
+                self.now = shape.time;
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// The number base; relative timestamps chain every line to the last.
     fn context(&self) -> Option<u8> {
         match (self.relative, self.base) {
@@ -113,6 +124,16 @@ impl LineParser for AscParser {
             Err(reason) => Parsed::Malformed(reason),
         }
     }
+}
+
+/// Where the fields of a canonical classic line are.
+struct AscShape {
+    time: Timestamp,
+    channel: std::ops::Range<usize>,
+    id: u32,
+    extended: bool,
+    dlc: u8,
+    data_start: usize,
 }
 
 /// Index after at least one blank following `at`; `None` when there is none.
@@ -186,6 +207,31 @@ impl AscParser {
     /// and the new running time; the caller commits it.
     #[inline]
     fn canonical<'a>(&self, line: &'a [u8], interest: &Interest) -> Option<(Frame<'a>, Timestamp)> {
+        let shape = self.shape(line)?;
+        let mut frame = Frame {
+            time: Some(shape.time),
+            channel: line.get(shape.channel)?,
+            id: shape.id,
+            extended: shape.extended,
+            kind: FrameKind::Data,
+            len: shape.dlc,
+            data: Payload::new(),
+        };
+        if interest.wants(shape.id, shape.extended) {
+            for k in 0..usize::from(shape.dlc) {
+                let at = shape.data_start + 3 * k;
+                frame
+                    .data
+                    .push(hex::parse_byte(*line.get(at + 1)?, *line.get(at + 2)?)?);
+            }
+        }
+        Some((frame, shape.time))
+    }
+
+    /// Validates a canonical line (see [`AscParser::canonical`]) without
+    /// building a frame; computes the running time.
+    #[inline]
+    fn shape(&self, line: &[u8]) -> Option<AscShape> {
         if self.base != Base::Hex {
             return None;
         }
@@ -220,7 +266,7 @@ impl AscParser {
         if ch_len == 0 || ch_len > 3 {
             return None;
         }
-        let channel = line.get(i..i + ch_len)?;
+        let channel_start = i;
         // Id, hex, `x` for extended.
         i = blanks_after(line, i + ch_len)?;
         let id_len = scan::hex_run(line, i);
@@ -265,24 +311,14 @@ impl AscParser {
         if !canonical_tail(line.get(i..)?) {
             return None;
         }
-        let mut frame = Frame {
-            time: Some(time),
-            channel,
+        Some(AscShape {
+            time,
+            channel: channel_start..channel_start + ch_len,
             id,
             extended,
-            kind: FrameKind::Data,
-            len: dlc,
-            data: Payload::new(),
-        };
-        if interest.wants(id, extended) {
-            for k in 0..usize::from(dlc) {
-                let at = data_start + 3 * k;
-                frame
-                    .data
-                    .push(hex::parse_byte(*line.get(at + 1)?, *line.get(at + 2)?)?);
-            }
-        }
-        Some((frame, time))
+            dlc,
+            data_start,
+        })
     }
 
     fn parse_line<'a>(
@@ -1000,6 +1036,25 @@ mod tests {
     mod fast_path {
         use super::super::*;
         use proptest::prelude::*;
+
+        #[test]
+        fn quick_counts_valid_unwanted_lines_and_keeps_the_clock() {
+            let mut interest = Interest::none();
+            interest.add_standard(0x81);
+            let mut p = parser(true, 5);
+            assert!(p.quick(b"   0.5 1  181  Rx   d 1 00", &interest));
+            assert_eq!(p.now.to_string(), "5.750");
+            assert!(!p.quick(b"   0.5 1  81  Rx   d 1 00", &interest), "wanted");
+            assert!(
+                !p.quick(b"   0.5 1  181  Rx   d 2 00", &interest),
+                "invalid"
+            );
+            assert_eq!(
+                p.now.to_string(),
+                "5.750",
+                "a declined line leaves the clock"
+            );
+        }
 
         fn parser(relative: bool, now: u64) -> AscParser {
             let mut p = AscParser::new();
