@@ -170,9 +170,12 @@ fn classify_block(
 struct Nodes {
     channels: Vec<ChannelNodes>,
     index: HashMap<Vec<u8>, usize>,
+    /// The channel of the previous lookup: nearly every trace has one or two.
+    last: Option<usize>,
 }
 
 struct ChannelNodes {
+    raw: Vec<u8>,
     name: String,
     /// Sorted by node id (1..=127).
     nodes: Vec<(u8, NodeTimeline)>,
@@ -180,10 +183,16 @@ struct ChannelNodes {
 
 impl Nodes {
     fn get(&mut self, raw: &[u8], node: u8) -> (&str, &mut NodeTimeline) {
-        let idx = match self.index.get(raw) {
-            Some(&i) => i,
+        let cached = self.last.filter(|&i| {
+            self.channels
+                .get(i)
+                .is_some_and(|c| c.raw.as_slice() == raw)
+        });
+        let idx = match cached.or_else(|| self.index.get(raw).copied()) {
+            Some(i) => i,
             None => {
                 self.channels.push(ChannelNodes {
+                    raw: raw.to_vec(),
                     name: String::from_utf8_lossy(raw).into_owned(),
                     nodes: Vec::new(),
                 });
@@ -191,6 +200,7 @@ impl Nodes {
                 self.channels.len() - 1
             }
         };
+        self.last = Some(idx);
         let ch = &mut self.channels[idx];
         let slot = match ch.nodes.binary_search_by_key(&node, |(n, _)| *n) {
             Ok(i) => i,

@@ -141,7 +141,7 @@ impl NodeTimeline {
         } else if emcy.register.0 != 0 {
             let now = emcy.register;
             self.close_where(at, ClearedBy::PartialReset, &mut cleared, |iv| {
-                codes::lookup(iv.code)
+                codes::lookup_cached(iv.code)
                     .class
                     .register_bit()
                     .is_some_and(|bit| iv.raised_register.has(bit) && !now.has(bit))

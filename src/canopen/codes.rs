@@ -508,6 +508,26 @@ fn find(entries: &'static [Entry], value: u16) -> Option<&'static Entry> {
 }
 
 /// Looks `code` up level by level, broadest first, keeping each level's hit.
+/// [`lookup`] through a small per-thread direct-mapped cache: an EMCY-heavy
+/// trace looks up the same few codes millions of times.
+pub fn lookup_cached(code: u16) -> CodeInfo {
+    use std::cell::RefCell;
+    const SLOTS: usize = 64;
+    thread_local! {
+        static CACHE: RefCell<[Option<CodeInfo>; SLOTS]> = const { RefCell::new([None; SLOTS]) };
+    }
+    CACHE.with(|cache| {
+        let Ok(mut cache) = cache.try_borrow_mut() else {
+            return lookup(code);
+        };
+        let slot = &mut cache[usize::from(code) % SLOTS];
+        match *slot {
+            Some(info) if info.code == code => info,
+            _ => *slot.insert(lookup(code)),
+        }
+    })
+}
+
 pub fn lookup(code: u16) -> CodeInfo {
     let mut info = CodeInfo {
         code,

@@ -83,7 +83,7 @@ impl Emcy {
     }
 
     pub fn info(&self) -> CodeInfo {
-        codes::lookup(self.code)
+        codes::lookup_cached(self.code)
     }
 
     /// The checks of emcy.md §7 that the frame alone decides, in a fixed order.
@@ -122,7 +122,7 @@ impl Emcy {
 
 /// A protocol oddity worth flagging; never fatal (real devices break all of
 /// these). Printed as `tag: explanation`, the tag being stable for scripts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Warning {
     ShortFrame {
         len: u8,

@@ -3,43 +3,46 @@
 
 use std::io::{self, Write};
 
-use serde::Serialize;
-
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeJson, Renderer, to_io};
+use super::jsonw::{JsonWriter, pretty};
+use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 
 /// `{"events":[...],"nodes":[...],"inputs":[...],"diagnostics":[...]}`,
 /// pretty-printed, events streamed as they come.
 pub struct JsonDocument<W: Write> {
     out: W,
     events: usize,
+    json: JsonWriter,
+    compact: Vec<u8>,
+    text: Vec<u8>,
 }
 
 impl<W: Write> JsonDocument<W> {
     pub fn new(out: W) -> Self {
-        JsonDocument { out, events: 0 }
-    }
-
-    /// Writes one array element pretty-printed and indented one level under
-    /// its key. JSON strings cannot hold a raw newline, so indenting after
-    /// every newline byte is safe.
-    fn element<T: Serialize>(&mut self, first: bool, value: &T) -> io::Result<()> {
-        let text = serde_json::to_vec_pretty(value).map_err(to_io)?;
-        self.out
-            .write_all(if first { b"\n    " } else { b",\n    " })?;
-        for chunk in text.split_inclusive(|b| *b == b'\n') {
-            self.out.write_all(chunk)?;
-            if chunk.ends_with(b"\n") {
-                self.out.write_all(b"    ")?;
-            }
+        JsonDocument {
+            out,
+            events: 0,
+            json: JsonWriter::new(),
+            compact: Vec::new(),
+            text: Vec::new(),
         }
-        Ok(())
     }
 
-    fn event<T: Serialize>(&mut self, value: &T) -> io::Result<()> {
+    /// Writes the element built in `compact` as an array element two levels
+    /// deep (inside the document and its array).
+    fn element(&mut self, first: bool) -> io::Result<()> {
+        self.text.clear();
+        self.text
+            .extend_from_slice(if first { b"\n    " } else { b",\n    " });
+        pretty(&self.compact, 2, &mut self.text);
+        self.compact.clear();
+        self.out.write_all(&self.text)
+    }
+
+    fn event(&mut self) -> io::Result<()> {
         if self.events == 0 {
             self.out.write_all(b"{\n  \"events\": [")?;
         }
-        self.element(self.events == 0, value)?;
+        self.element(self.events == 0)?;
         self.events += 1;
         Ok(())
     }
@@ -51,11 +54,13 @@ impl<W: Write> JsonDocument<W> {
 
 impl<W: Write> Renderer for JsonDocument<W> {
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
-        self.event(event)
+        self.json.emcy(&mut self.compact, event);
+        self.event()
     }
 
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()> {
-        self.event(event)
+        self.json.boot(&mut self.compact, event);
+        self.event()
     }
 
     fn finish(&mut self, inputs: &[InputReport], diagnostics: &[Diagnostic]) -> io::Result<()> {
@@ -68,13 +73,9 @@ impl<W: Write> Renderer for JsonDocument<W> {
         let mut n = 0;
         for input in inputs {
             for node in &input.nodes {
-                self.element(
-                    n == 0,
-                    &NodeJson {
-                        file: &input.file,
-                        node,
-                    },
-                )?;
+                self.json
+                    .node(&mut self.compact, &input.file, node, &node.errors);
+                self.element(n == 0)?;
                 n += 1;
             }
         }
@@ -82,13 +83,15 @@ impl<W: Write> Renderer for JsonDocument<W> {
 
         self.out.write_all(b",\n  \"inputs\": [")?;
         for (i, input) in inputs.iter().enumerate() {
-            self.element(i == 0, input)?;
+            self.json.input(&mut self.compact, input);
+            self.element(i == 0)?;
         }
         self.close_array(inputs.len())?;
 
         self.out.write_all(b",\n  \"diagnostics\": [")?;
         for (i, d) in diagnostics.iter().enumerate() {
-            self.element(i == 0, d)?;
+            self.json.diagnostic(&mut self.compact, d);
+            self.element(i == 0)?;
         }
         self.close_array(diagnostics.len())?;
         self.out.write_all(b"\n}\n")?;

@@ -3,25 +3,32 @@
 
 use std::io::{self, Write};
 
-use serde::Serialize;
+use super::jsonw::JsonWriter;
+use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeJson, Renderer, to_io};
-
-/// Events in trace order, then node objects, then input objects.
 pub struct Ndjson<W: Write> {
     out: W,
     /// Flush after every event (live use: `candump -L can0 | emcy-decode -`).
     flush_each: bool,
+    json: JsonWriter,
+    buf: Vec<u8>,
 }
 
 impl<W: Write> Ndjson<W> {
     pub fn new(out: W, flush_each: bool) -> Self {
-        Ndjson { out, flush_each }
+        Ndjson {
+            out,
+            flush_each,
+            json: JsonWriter::new(),
+            buf: Vec::with_capacity(1024),
+        }
     }
 
-    fn line<T: Serialize>(&mut self, value: &T) -> io::Result<()> {
-        serde_json::to_writer(&mut self.out, value).map_err(to_io)?;
-        self.out.write_all(b"\n")?;
+    /// Writes the line built in `buf`.
+    fn line(&mut self) -> io::Result<()> {
+        self.buf.push(b'\n');
+        self.out.write_all(&self.buf)?;
+        self.buf.clear();
         if self.flush_each {
             self.out.flush()?;
         }
@@ -31,24 +38,26 @@ impl<W: Write> Ndjson<W> {
 
 impl<W: Write> Renderer for Ndjson<W> {
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
-        self.line(event)
+        self.json.emcy(&mut self.buf, event);
+        self.line()
     }
 
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()> {
-        self.line(event)
+        self.json.boot(&mut self.buf, event);
+        self.line()
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
         for input in inputs {
             for node in &input.nodes {
-                self.line(&NodeJson {
-                    file: &input.file,
-                    node,
-                })?;
+                self.json
+                    .node(&mut self.buf, &input.file, node, &node.errors);
+                self.line()?;
             }
         }
         for input in inputs {
-            self.line(input)?;
+            self.json.input(&mut self.buf, input);
+            self.line()?;
         }
         self.out.flush()
     }

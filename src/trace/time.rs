@@ -186,6 +186,42 @@ fn write_decimal(f: &mut fmt::Formatter<'_>, atto: u128, digits: u8) -> fmt::Res
     write!(f, "{secs}.{frac:0width$}", width = usize::from(digits))
 }
 
+/// Appends `secs.frac` (the trace's digit count) without `core::fmt`.
+fn push_decimal(out: &mut Vec<u8>, atto: u128, digits: u8) {
+    let secs = (atto / ATTO_PER_SEC) as u64;
+    let mut b = itoa::Buffer::new();
+    out.extend_from_slice(b.format(secs).as_bytes());
+    if digits == 0 {
+        return;
+    }
+    let frac = ((atto % ATTO_PER_SEC)
+        / u128::from(pow10(MAX_FRACTION_DIGITS - usize::from(digits)))) as u64;
+    out.push(b'.');
+    let text = b.format(frac).as_bytes();
+    out.extend(std::iter::repeat_n(
+        b'0',
+        usize::from(digits).saturating_sub(text.len()),
+    ));
+    out.extend_from_slice(text);
+}
+
+impl Timestamp {
+    /// Appends the same text as `Display`, faster (the JSON hot path).
+    pub fn push_decimal(self, out: &mut Vec<u8>) {
+        push_decimal(out, self.total(), self.digits);
+    }
+}
+
+impl Span {
+    /// Appends the same text as `Display`, faster (the JSON hot path).
+    pub fn push_decimal(self, out: &mut Vec<u8>) {
+        if self.atto < 0 {
+            out.push(b'-');
+        }
+        push_decimal(out, self.atto.unsigned_abs(), self.digits);
+    }
+}
+
 /// Prints as a JSON-compatible decimal number with the trace's digit count.
 impl fmt::Display for Timestamp {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -221,6 +257,27 @@ mod tests {
             "18446744073709551615.999999999999999999",
         ] {
             assert_eq!(ts(s).to_string(), s);
+        }
+    }
+
+    #[test]
+    fn push_decimal_equals_display() {
+        for s in [
+            "0",
+            "0.000100",
+            "1469439874.299654123",
+            "12.5",
+            "18446744073709551615.999999999999999999",
+        ] {
+            let mut v = Vec::new();
+            ts(s).push_decimal(&mut v);
+            assert_eq!(String::from_utf8(v).unwrap(), ts(s).to_string());
+        }
+        for (a, b) in [("2.5", "1.25"), ("1.0", "2.5"), ("3", "3")] {
+            let span = ts(a).since(ts(b));
+            let mut v = Vec::new();
+            span.push_decimal(&mut v);
+            assert_eq!(String::from_utf8(v).unwrap(), span.to_string());
         }
     }
 

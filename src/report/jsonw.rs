@@ -1,0 +1,516 @@
+//! The JSON objects of the public contract, written straight into a byte
+//! buffer. serde + `core::fmt` cost ~4,800 instructions per EMCY event (hex
+//! per byte through the formatter, times formatted and re-parsed to stay
+//! exact); a trace that is 30% EMCY is bound by this, so the hot path writes
+//! bytes. Escaping follows serde_json exactly (same golden output), and
+//! [`pretty`] re-indents compact output the way serde_json's pretty printer
+//! does, so both output formats come from this one module.
+
+use std::collections::HashMap;
+
+use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
+use crate::canopen::codes;
+use crate::canopen::emcy::Warning;
+use crate::canopen::register::Register;
+use crate::timeline::Interval;
+use crate::trace::{Format, Span, Timestamp};
+
+const HEX: &[u8; 16] = b"0123456789ABCDEF";
+
+/// A JSON string literal with serde_json's escaping: `"` `\` and control
+/// characters; everything else (UTF-8 included) as is.
+pub fn push_str(out: &mut Vec<u8>, s: &str) {
+    out.push(b'"');
+    let bytes = s.as_bytes();
+    let mut start = 0;
+    for (i, &b) in bytes.iter().enumerate() {
+        let escape: &[u8] = match b {
+            b'"' => b"\\\"",
+            b'\\' => b"\\\\",
+            b'\n' => b"\\n",
+            b'\r' => b"\\r",
+            b'\t' => b"\\t",
+            0x08 => b"\\b",
+            0x0C => b"\\f",
+            0x00..=0x1F => b"",
+            _ => continue,
+        };
+        out.extend_from_slice(&bytes[start..i]);
+        if escape.is_empty() {
+            out.extend_from_slice(b"\\u00");
+            out.push(b"0123456789abcdef"[usize::from(b >> 4)]);
+            out.push(b"0123456789abcdef"[usize::from(b & 15)]);
+        } else {
+            out.extend_from_slice(escape);
+        }
+        start = i + 1;
+    }
+    out.extend_from_slice(&bytes[start..]);
+    out.push(b'"');
+}
+
+fn push_u64(out: &mut Vec<u8>, v: u64) {
+    let mut b = itoa::Buffer::new();
+    out.extend_from_slice(b.format(v).as_bytes());
+}
+
+/// `"0x4310"`
+fn push_code(out: &mut Vec<u8>, code: u16) {
+    out.extend_from_slice(b"\"0x");
+    for shift in [12, 8, 4, 0] {
+        out.push(HEX[usize::from((code >> shift) & 15)]);
+    }
+    out.push(b'"');
+}
+
+fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
+    out.push(b'[');
+    for (i, c) in codes.iter().enumerate() {
+        if i > 0 {
+            out.push(b',');
+        }
+        push_code(out, *c);
+    }
+    out.push(b']');
+}
+
+/// `"1043080100000000"`
+fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
+    out.push(b'"');
+    for &b in bytes {
+        out.push(HEX[usize::from(b >> 4)]);
+        out.push(HEX[usize::from(b & 15)]);
+    }
+    out.push(b'"');
+}
+
+fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
+    match t {
+        Some(t) => t.push_decimal(out),
+        None => out.extend_from_slice(b"null"),
+    }
+}
+
+fn push_span(out: &mut Vec<u8>, s: Option<Span>) {
+    match s {
+        Some(s) => s.push_decimal(out),
+        None => out.extend_from_slice(b"null"),
+    }
+}
+
+/// Writes `"key":` (with the comma for every key but the first).
+struct Obj<'a> {
+    out: &'a mut Vec<u8>,
+    first: bool,
+}
+
+impl<'a> Obj<'a> {
+    fn new(out: &'a mut Vec<u8>) -> Self {
+        out.push(b'{');
+        Obj { out, first: true }
+    }
+
+    fn key(&mut self, key: &str) -> &mut Vec<u8> {
+        if !self.first {
+            self.out.push(b',');
+        }
+        self.first = false;
+        self.out.push(b'"');
+        self.out.extend_from_slice(key.as_bytes());
+        self.out.extend_from_slice(b"\":");
+        self.out
+    }
+
+    fn str(&mut self, key: &str, value: &str) {
+        push_str(self.key(key), value);
+    }
+
+    fn u64(&mut self, key: &str, value: u64) {
+        push_u64(self.key(key), value);
+    }
+
+    fn end(self) {
+        self.out.push(b'}');
+    }
+}
+
+/// A direct-mapped cache: the slot is chosen by the key's low bits; a miss
+/// recomputes and replaces. No hashing, bounded size.
+struct Cache<K, const N: usize> {
+    slots: Vec<Option<(K, Vec<u8>)>>,
+}
+
+impl<K: PartialEq + Copy, const N: usize> Default for Cache<K, N> {
+    fn default() -> Self {
+        Cache {
+            slots: (0..N).map(|_| None).collect(),
+        }
+    }
+}
+
+impl<K: PartialEq + Copy, const N: usize> Cache<K, N> {
+    fn get(&mut self, key: K, slot: usize, make: impl FnOnce() -> Vec<u8>) -> &[u8] {
+        let entry = &mut self.slots[slot % N];
+        if !matches!(entry, Some((k, _)) if *k == key) {
+            *entry = Some((key, make()));
+        }
+        entry.as_ref().map_or(&[], |(_, v)| v.as_slice())
+    }
+}
+
+/// The part of an EMCY event that depends only on its payload: `"code"` to
+/// `"manufacturer"`. Real traces repeat the same few error frames.
+#[derive(Clone, Copy, PartialEq)]
+struct PayloadKey {
+    bytes: [u8; 8],
+    len: u8,
+}
+
+/// Texts that repeat on every event, escaped once: descriptions, warnings,
+/// payload fragments, the per-file prefix and channel names.
+#[derive(Default)]
+pub struct JsonWriter {
+    descriptions: HashMap<u16, Vec<u8>>,
+    warnings: HashMap<Warning, Vec<u8>>,
+    payloads: Cache<PayloadKey, 256>,
+    /// `{"type":"emcy","file":"…","line":` for the last file seen.
+    emcy_prefix: (String, Vec<u8>),
+    /// `,"channel":"…","node":` for the last channel seen.
+    channel: (String, Vec<u8>),
+}
+
+impl JsonWriter {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn description(&mut self, out: &mut Vec<u8>, code: u16) {
+        let text = self.descriptions.entry(code).or_insert_with(|| {
+            let mut v = Vec::new();
+            push_str(&mut v, &codes::lookup(code).description().to_string());
+            v
+        });
+        out.extend_from_slice(text);
+    }
+
+    fn warning(&mut self, out: &mut Vec<u8>, w: Warning) {
+        let text = self.warnings.entry(w).or_insert_with(|| {
+            let mut v = Vec::new();
+            push_str(&mut v, &w.to_string());
+            v
+        });
+        out.extend_from_slice(text);
+    }
+
+    /// `"code":…,"manufacturer":"…"` for this payload, from the cache.
+    fn payload(&mut self, out: &mut Vec<u8>, ev: &EmcyEvent<'_>) {
+        let mut key = PayloadKey {
+            bytes: [0; 8],
+            len: ev.data.len().min(8) as u8,
+        };
+        key.bytes[..usize::from(key.len)].copy_from_slice(&ev.data[..usize::from(key.len)]);
+        let slot = usize::from(ev.emcy.code ^ (u16::from(ev.emcy.register.0) << 8))
+            ^ ev.data.get(3).map_or(0, |b| usize::from(*b) * 7);
+        let fragment = {
+            let descriptions = &mut self.descriptions;
+            self.payloads.get(key, slot, || {
+                let mut v = Vec::with_capacity(256);
+                v.extend_from_slice(b",\"code\":");
+                push_code(&mut v, ev.emcy.code);
+                v.extend_from_slice(b",\"class\":\"");
+                v.extend_from_slice(ev.info.class.slug().as_bytes());
+                v.extend_from_slice(b"\",\"description\":");
+                let d = descriptions.entry(ev.emcy.code).or_insert_with(|| {
+                    let mut d = Vec::new();
+                    push_str(&mut d, &ev.info.description().to_string());
+                    d
+                });
+                v.extend_from_slice(d);
+                v.extend_from_slice(b",\"register\":");
+                push_u64(&mut v, u64::from(ev.emcy.register.0));
+                v.extend_from_slice(b",\"register_bits\":[");
+                for (i, name) in Register(ev.emcy.register.0).names().enumerate() {
+                    if i > 0 {
+                        v.push(b',');
+                    }
+                    push_str(&mut v, name);
+                }
+                v.extend_from_slice(b"],\"manufacturer\":");
+                push_hex(&mut v, ev.emcy.manufacturer());
+                v
+            })
+        };
+        out.extend_from_slice(fragment);
+    }
+
+    fn emcy_prefix(&mut self, out: &mut Vec<u8>, file: &str) {
+        if self.emcy_prefix.0 != file || self.emcy_prefix.1.is_empty() {
+            let mut v = b"{\"type\":\"emcy\",\"file\":".to_vec();
+            push_str(&mut v, file);
+            v.extend_from_slice(b",\"line\":");
+            self.emcy_prefix = (file.to_string(), v);
+        }
+        out.extend_from_slice(&self.emcy_prefix.1);
+    }
+
+    fn channel(&mut self, out: &mut Vec<u8>, channel: &str) {
+        if self.channel.0 != channel || self.channel.1.is_empty() {
+            let mut v = b",\"channel\":".to_vec();
+            push_str(&mut v, channel);
+            v.extend_from_slice(b",\"node\":");
+            self.channel = (channel.to_string(), v);
+        }
+        out.extend_from_slice(&self.channel.1);
+    }
+
+    /// The hot path: one event, as fixed fragments between the values.
+    pub fn emcy(&mut self, out: &mut Vec<u8>, ev: &EmcyEvent<'_>) {
+        out.reserve(512);
+        self.emcy_prefix(out, ev.file);
+        push_u64(out, ev.line);
+        out.extend_from_slice(b",\"time\":");
+        push_time(out, ev.time);
+        self.channel(out, ev.channel);
+        push_u64(out, u64::from(ev.node));
+        out.extend_from_slice(b",\"cob_id\":");
+        push_u64(out, u64::from(ev.cob_id));
+        out.extend_from_slice(b",\"data\":");
+        push_hex(out, ev.data);
+        self.payload(out, ev);
+        out.extend_from_slice(b",\"transition\":");
+        match ev.transition {
+            Some(t) => push_u64(out, u64::from(t)),
+            None => out.extend_from_slice(b"null"),
+        }
+        out.extend_from_slice(b",\"state\":\"");
+        out.extend_from_slice(ev.state.slug().as_bytes());
+        out.extend_from_slice(b"\",\"active\":");
+        push_codes(out, ev.active);
+        out.extend_from_slice(b",\"cleared\":");
+        push_codes(out, ev.cleared);
+        out.extend_from_slice(b",\"warnings\":[");
+        for (i, warning) in ev.warnings.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            self.warning(out, *warning);
+        }
+        out.extend_from_slice(b"]}");
+    }
+
+    pub fn boot(&mut self, out: &mut Vec<u8>, ev: &BootEvent<'_>) {
+        let mut o = Obj::new(out);
+        o.str("type", "boot");
+        o.str("file", ev.file);
+        o.u64("line", ev.line);
+        push_time(o.key("time"), ev.time);
+        o.str("channel", ev.channel);
+        o.u64("node", u64::from(ev.node));
+        push_codes(o.key("cleared"), ev.cleared);
+        o.end();
+    }
+
+    /// A node object; `errors` in the order they were raised.
+    pub fn node<'i>(
+        &mut self,
+        out: &mut Vec<u8>,
+        file: &str,
+        node: &NodeReport,
+        errors: impl IntoIterator<Item = &'i Interval>,
+    ) {
+        let mut o = Obj::new(out);
+        o.str("type", "node");
+        o.str("file", file);
+        o.str("channel", &node.channel);
+        o.u64("node", u64::from(node.node));
+        o.str("state", node.state.slug());
+        push_codes(o.key("active"), &node.active);
+        o.u64("emcy_count", node.emcy_count);
+        let e = o.key("errors");
+        e.push(b'[');
+        for (i, iv) in errors.into_iter().enumerate() {
+            if i > 0 {
+                e.push(b',');
+            }
+            self.interval(e, iv);
+        }
+        e.push(b']');
+        o.end();
+    }
+
+    fn interval(&mut self, out: &mut Vec<u8>, iv: &Interval) {
+        let end_time = iv.end.and_then(|e| e.time);
+        let duration = match (iv.start.time, end_time) {
+            (Some(start), Some(end)) => Some(end.since(start)),
+            _ => None,
+        };
+        let mut o = Obj::new(out);
+        push_code(o.key("code"), iv.code);
+        self.description(o.key("description"), iv.code);
+        push_time(o.key("start"), iv.start.time);
+        push_time(o.key("end"), end_time);
+        push_span(o.key("duration"), duration);
+        match iv.cleared_by {
+            Some(c) => o.str("cleared_by", c.slug()),
+            None => o.key("cleared_by").extend_from_slice(b"null"),
+        }
+        o.u64("start_line", iv.start.line);
+        match iv.end {
+            Some(e) => o.u64("end_line", e.line),
+            None => o.key("end_line").extend_from_slice(b"null"),
+        }
+        o.end();
+    }
+
+    pub fn input(&mut self, out: &mut Vec<u8>, input: &InputReport) {
+        let mut o = Obj::new(out);
+        o.str("type", "input");
+        o.str("file", &input.file);
+        match input.format {
+            Some(f) => o.str("format", Format::name(f)),
+            None => o.key("format").extend_from_slice(b"null"),
+        }
+        o.key("gzip")
+            .extend_from_slice(if input.gzip { b"true" } else { b"false" });
+        let Counts {
+            lines,
+            frames,
+            emcy,
+            skipped,
+            malformed,
+            boot,
+            emcy_invalid,
+            other_format,
+        } = input.counts;
+        o.u64("lines", lines);
+        o.u64("frames", frames);
+        o.u64("emcy", emcy);
+        o.u64("skipped", skipped);
+        o.u64("malformed", malformed);
+        o.u64("boot", boot);
+        o.u64("emcy_invalid", emcy_invalid);
+        o.u64("other_format", other_format);
+        match &input.error {
+            Some(e) => o.str("error", e),
+            None => o.key("error").extend_from_slice(b"null"),
+        }
+        o.end();
+    }
+
+    pub fn diagnostic(&mut self, out: &mut Vec<u8>, d: &Diagnostic) {
+        let mut o = Obj::new(out);
+        o.str("file", &d.file);
+        o.u64("line", d.line);
+        o.str("message", &d.message);
+        o.end();
+    }
+}
+
+/// Re-indents compact JSON exactly as serde_json's pretty printer (two
+/// spaces, `"key": value`, empty `[]`/`{}` kept on one line), starting at
+/// `level` levels of indentation. Bytes inside strings are copied as they are.
+pub fn pretty(compact: &[u8], level: usize, out: &mut Vec<u8>) {
+    let mut depth = level;
+    let mut in_string = false;
+    let mut escaped = false;
+    let mut i = 0;
+    let newline = |out: &mut Vec<u8>, depth: usize| {
+        out.push(b'\n');
+        out.extend(std::iter::repeat_n(b' ', 2 * depth));
+    };
+    while let Some(&b) = compact.get(i) {
+        i += 1;
+        if in_string {
+            out.push(b);
+            if escaped {
+                escaped = false;
+            } else if b == b'\\' {
+                escaped = true;
+            } else if b == b'"' {
+                in_string = false;
+            }
+            continue;
+        }
+        match b {
+            b'"' => {
+                in_string = true;
+                out.push(b);
+            }
+            b'{' | b'[' => {
+                let close = if b == b'{' { b'}' } else { b']' };
+                if compact.get(i) == Some(&close) {
+                    out.push(b);
+                    out.push(close);
+                    i += 1;
+                } else {
+                    out.push(b);
+                    depth += 1;
+                    newline(out, depth);
+                }
+            }
+            b'}' | b']' => {
+                depth = depth.saturating_sub(1);
+                newline(out, depth);
+                out.push(b);
+            }
+            b',' => {
+                out.push(b);
+                newline(out, depth);
+            }
+            b':' => out.extend_from_slice(b": "),
+            _ => out.push(b),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn json_str(s: &str) -> String {
+        let mut v = Vec::new();
+        push_str(&mut v, s);
+        String::from_utf8(v).unwrap()
+    }
+
+    #[test]
+    fn escaping_matches_serde_json_for_every_byte_below_128() {
+        for b in 0u8..128 {
+            let s = (b as char).to_string();
+            assert_eq!(
+                json_str(&s),
+                serde_json::to_string(&s).unwrap(),
+                "byte {b:#x}"
+            );
+        }
+        let s = "Temperature · drive \"q\" \\ \u{1b}[31m ok";
+        assert_eq!(json_str(s), serde_json::to_string(s).unwrap());
+    }
+
+    #[test]
+    fn pretty_matches_serde_json_pretty() {
+        let v = serde_json::json!({
+            "a": [1, 2, {"b": [], "c": {}}],
+            "s": "x,y:{[\"]}",
+            "n": null,
+            "e": [],
+            "o": {"k": [true, false]}
+        });
+        let compact = serde_json::to_vec(&v).unwrap();
+        let mut got = Vec::new();
+        pretty(&compact, 0, &mut got);
+        assert_eq!(
+            String::from_utf8(got).unwrap(),
+            serde_json::to_string_pretty(&v).unwrap()
+        );
+    }
+
+    #[test]
+    fn codes_and_hex() {
+        let mut v = Vec::new();
+        push_code(&mut v, 0x4310);
+        push_codes(&mut v, &[0xFF01, 0x0001]);
+        push_hex(&mut v, &[0x10, 0xAB]);
+        assert_eq!(v, b"\"0x4310\"[\"0xFF01\",\"0x0001\"]\"10AB\"");
+    }
+}
