@@ -16,6 +16,7 @@ use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex};
 
 use crate::canopen::emcy::{self, Emcy, Warning};
+use crate::history::{DEFAULT_SPILL_AT, ErrorHistory, History, Record};
 use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::timeline::{At, NodeTimeline};
 use crate::trace::detect::Detector;
@@ -39,6 +40,8 @@ pub struct Options {
     pub threads: usize,
     /// Bytes per read / per block handed to a thread.
     pub block_size: usize,
+    /// Closed error intervals kept in memory before they go to a temporary file.
+    pub spill_at: usize,
 }
 
 impl Default for Options {
@@ -51,6 +54,7 @@ impl Default for Options {
             max_line: crate::trace::lines::DEFAULT_MAX_LINE,
             threads: 1,
             block_size: DEFAULT_BLOCK,
+            spill_at: DEFAULT_SPILL_AT,
         }
     }
 }
@@ -166,23 +170,43 @@ fn classify_block(
 /// interface name in the trace is one, so a hostile trace can name a million:
 /// lookup is hashed and a channel holds only the nodes it has seen, keeping
 /// time and memory linear in the input.
-#[derive(Default)]
 struct Nodes {
     channels: Vec<ChannelNodes>,
     index: HashMap<Vec<u8>, usize>,
     /// The channel of the previous lookup: nearly every trace has one or two.
     last: Option<usize>,
+    /// Closed intervals of every node (timelines keep only active ones).
+    history: History,
 }
 
 struct ChannelNodes {
     raw: Vec<u8>,
     name: String,
+    /// The channel's index in the history.
+    id: u32,
     /// Sorted by node id (1..=127).
     nodes: Vec<(u8, NodeTimeline)>,
 }
 
+/// A node's timeline, borrowed with what an event needs around it.
+struct NodeSlot<'n> {
+    channel: &'n str,
+    channel_id: u32,
+    timeline: &'n mut NodeTimeline,
+    history: &'n mut History,
+}
+
 impl Nodes {
-    fn get(&mut self, raw: &[u8], node: u8) -> (&str, &mut NodeTimeline) {
+    fn new(spill_at: usize) -> Self {
+        Nodes {
+            channels: Vec::new(),
+            index: HashMap::new(),
+            last: None,
+            history: History::new(spill_at),
+        }
+    }
+
+    fn get(&mut self, raw: &[u8], node: u8) -> NodeSlot<'_> {
         let cached = self.last.filter(|&i| {
             self.channels
                 .get(i)
@@ -191,9 +215,12 @@ impl Nodes {
         let idx = match cached.or_else(|| self.index.get(raw).copied()) {
             Some(i) => i,
             None => {
+                let name = String::from_utf8_lossy(raw).into_owned();
+                let id = self.history.add_channel(&name);
                 self.channels.push(ChannelNodes {
                     raw: raw.to_vec(),
-                    name: String::from_utf8_lossy(raw).into_owned(),
+                    name,
+                    id,
                     nodes: Vec::new(),
                 });
                 self.index.insert(raw.to_vec(), self.channels.len() - 1);
@@ -201,7 +228,10 @@ impl Nodes {
             }
         };
         self.last = Some(idx);
-        let ch = &mut self.channels[idx];
+        let Nodes {
+            channels, history, ..
+        } = self;
+        let ch = &mut channels[idx];
         let slot = match ch.nodes.binary_search_by_key(&node, |(n, _)| *n) {
             Ok(i) => i,
             Err(i) => {
@@ -209,16 +239,28 @@ impl Nodes {
                 i
             }
         };
-        (&ch.name, &mut ch.nodes[slot].1)
+        NodeSlot {
+            channel: &ch.name,
+            channel_id: ch.id,
+            timeline: &mut ch.nodes[slot].1,
+            history,
+        }
     }
 
-    /// Node reports sorted by channel name, then node.
-    fn into_reports(self, opts: &Options) -> Vec<NodeReport> {
+    /// Node reports sorted by channel name, then node, and the history with
+    /// the still-active intervals added.
+    fn into_reports(self, opts: &Options) -> (Vec<NodeReport>, ErrorHistory) {
         let mut out = Vec::new();
+        let mut open = Vec::new();
         let mut channels = self.channels;
         channels.sort_by(|a, b| a.name.cmp(&b.name));
         for ch in channels {
             for (node, tl) in ch.nodes {
+                open.extend(tl.active().iter().map(|iv| Record {
+                    channel: ch.id,
+                    node,
+                    interval: iv.clone(),
+                }));
                 if !opts.selects(&ch.name, node) {
                     continue;
                 }
@@ -228,11 +270,10 @@ impl Nodes {
                     state: tl.state(),
                     active: tl.active_codes().collect(),
                     emcy_count: tl.emcy_count(),
-                    errors: tl.intervals().to_vec(),
                 });
             }
         }
-        out
+        (out, self.history.finish(open))
     }
 }
 
@@ -386,8 +427,16 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             let info = emcy.info();
             self.warnings.clear();
             emcy.frame_warnings(&info, &mut self.warnings);
-            let (channel, timeline) = self.nodes.get(frame.channel, node);
+            let NodeSlot {
+                channel,
+                channel_id,
+                timeline,
+                history,
+            } = self.nodes.get(frame.channel, node);
             let step = timeline.emcy(&emcy, at, &mut self.warnings);
+            for iv in &step.closed {
+                history.push(channel_id, node, iv.clone());
+            }
             if !self.opts.selects(channel, node) {
                 return Ok(());
             }
@@ -416,8 +465,17 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             self.counts.boot += 1;
             self.check_clock(at);
-            let (channel, timeline) = self.nodes.get(frame.channel, node);
-            let cleared = timeline.boot(at);
+            let NodeSlot {
+                channel,
+                channel_id,
+                timeline,
+                history,
+            } = self.nodes.get(frame.channel, node);
+            let closed = timeline.boot(at);
+            let cleared: Vec<u16> = closed.iter().map(|iv| iv.code).collect();
+            for iv in closed {
+                history.push(channel_id, node, iv);
+            }
             if self.opts.selects(channel, node) {
                 let event = BootEvent {
                     file: self.file,
@@ -437,7 +495,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 // ---- worker records -------------------------------------------------------------
 
 /// What a worker keeps of a line for the consumer.
-enum Record {
+enum BlockRecord {
     Frame {
         idx: u64,
         time: Option<Timestamp>,
@@ -468,7 +526,7 @@ struct BlockResult {
     skipped: u64,
     /// Malformed lines beyond the diagnostics limit: counted, not reported.
     unreported: u64,
-    records: Vec<Record>,
+    records: Vec<BlockRecord>,
     /// Channel names of the frame records, back to back.
     channels: Vec<u8>,
 }
@@ -499,7 +557,9 @@ impl LineSink for Recorder<'_> {
         // block needs to keep more than that.
         if self.malformed_kept < self.limit {
             self.malformed_kept += 1;
-            self.result.records.push(Record::Malformed { idx, reason });
+            self.result
+                .records
+                .push(BlockRecord::Malformed { idx, reason });
         } else {
             self.result.unreported += 1;
         }
@@ -515,7 +575,7 @@ impl LineSink for Recorder<'_> {
         }
         let start = self.result.channels.len();
         self.result.channels.extend_from_slice(frame.channel);
-        self.result.records.push(Record::Frame {
+        self.result.records.push(BlockRecord::Frame {
             idx,
             time: frame.time,
             channel: start..self.result.channels.len(),
@@ -539,8 +599,8 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.diags.suppressed += r.unreported;
         for record in r.records {
             match record {
-                Record::Malformed { idx, reason } => self.malformed(idx, reason),
-                Record::Frame {
+                BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
+                BlockRecord::Frame {
                     idx,
                     time,
                     channel,
@@ -594,7 +654,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         decided: detector.format().is_some(),
         log,
         counts: Counts::default(),
-        nodes: Nodes::default(),
+        nodes: Nodes::new(opts.spill_at),
         diags: InputDiagnostics {
             file: file.to_string(),
             limit: opts.max_diagnostics,
@@ -662,12 +722,20 @@ fn finish<E: Write>(
             ));
         }
     }
+    let nodes_taken = std::mem::replace(&mut consumer.nodes, Nodes::new(1));
+    let (nodes, history) = nodes_taken.into_reports(consumer.opts);
+    if let Some(e) = history.spill_error() {
+        consumer.log.note(&format!(
+            "{file}: could not move the error history to a temporary file ({e}); kept in memory"
+        ));
+    }
     let report = InputReport {
         file: file.to_string(),
         format,
         gzip,
         counts: consumer.counts,
-        nodes: std::mem::take(&mut consumer.nodes).into_reports(consumer.opts),
+        nodes,
+        history,
         error,
     };
     consumer.renderer.end_input(&report).map_err(OutputError)?;
@@ -705,16 +773,39 @@ fn parallel<R: Read + Send, E: Write>(
         let (recycle_tx, recycle_rx) = mpsc::channel::<Vec<u8>>();
 
         let reader_tx = result_tx.clone();
+        // Blocks out at once: queued, in workers, or waiting to be consumed.
+        // A block comes back (recycled) once consumed; waiting for one when
+        // the limit is reached keeps a slow consumer (30% EMCY) from letting
+        // parsed blocks pile up in memory.
+        let max_in_flight = threads * 3 + 2;
         scope.spawn(move || {
             let mut seq = 0;
+            let mut in_flight = 0usize;
             loop {
-                let buf = recycle_rx.try_recv().unwrap_or_default();
+                let buf = if in_flight >= max_in_flight {
+                    match recycle_rx.recv() {
+                        Ok(b) => {
+                            in_flight -= 1;
+                            b
+                        }
+                        Err(_) => return,
+                    }
+                } else {
+                    match recycle_rx.try_recv() {
+                        Ok(b) => {
+                            in_flight -= 1;
+                            b
+                        }
+                        Err(_) => Vec::new(),
+                    }
+                };
                 match blocks.next_block(buf) {
                     Ok(Some(block)) => {
                         if block_tx.send((seq, block)).is_err() {
                             return;
                         }
                         seq += 1;
+                        in_flight += 1;
                     }
                     Ok(None) => return,
                     Err(e) => {

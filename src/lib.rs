@@ -10,6 +10,7 @@ pub mod analyze;
 pub mod canopen;
 pub mod cli;
 pub mod explain;
+pub mod history;
 pub mod report;
 pub mod run;
 pub mod timeline;

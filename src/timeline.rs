@@ -65,6 +65,8 @@ pub struct At {
 /// One error from the EMCY that raised it to the frame that cleared it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Interval {
+    /// Raise order within the node (0, 1, 2, ...): the order reports list errors in.
+    pub seq: u64,
     pub code: u16,
     pub start: At,
     pub end: Option<At>,
@@ -82,15 +84,18 @@ pub struct Step {
     pub state: State,
     /// Codes closed by this frame.
     pub cleared: Vec<u16>,
+    /// The intervals it closed; the caller keeps the history (the timeline
+    /// holds only what is active, so its memory is bounded by active errors).
+    pub closed: Vec<Interval>,
 }
 
-/// The error history of one node.
+/// The error state of one node.
 #[derive(Clone, Debug, Default)]
 pub struct NodeTimeline {
     state: State,
-    intervals: Vec<Interval>,
-    /// Indices into `intervals` of the open ones, in the order they were raised.
-    active: Vec<usize>,
+    /// Open intervals, in the order they were raised.
+    active: Vec<Interval>,
+    next_seq: u64,
     emcy_count: u64,
 }
 
@@ -107,16 +112,14 @@ impl NodeTimeline {
         self.emcy_count
     }
 
-    /// Every error seen, in the order raised; open ones have `end: None`.
-    pub fn intervals(&self) -> &[Interval] {
-        &self.intervals
+    /// The open intervals, in the order they were raised (`end: None`).
+    pub fn active(&self) -> &[Interval] {
+        &self.active
     }
 
     /// Codes active now, in the order they were raised.
     pub fn active_codes(&self) -> impl Iterator<Item = u16> + '_ {
-        self.active
-            .iter()
-            .filter_map(|&i| self.intervals.get(i).map(|iv| iv.code))
+        self.active.iter().map(|iv| iv.code)
     }
 
     /// Applies one EMCY. Warnings that depend on the node's history are
@@ -124,23 +127,24 @@ impl NodeTimeline {
     pub fn emcy(&mut self, emcy: &Emcy, at: At, warnings: &mut Vec<Warning>) -> Step {
         self.emcy_count += 1;
         let was = self.state;
-        let mut cleared = Vec::new();
+        let mut closed = Vec::new();
         let transition = if !emcy.is_reset() {
             if !self.active_codes().any(|c| c == emcy.code) {
-                self.active.push(self.intervals.len());
-                self.intervals.push(Interval {
+                self.active.push(Interval {
+                    seq: self.next_seq,
                     code: emcy.code,
                     start: at,
                     end: None,
                     cleared_by: None,
                     raised_register: emcy.register,
                 });
+                self.next_seq += 1;
             }
             self.state = State::ErrorOccurred;
             Some(if was == State::ErrorFree { 1 } else { 3 })
         } else if emcy.register.0 != 0 {
             let now = emcy.register;
-            self.close_where(at, ClearedBy::PartialReset, &mut cleared, |iv| {
+            self.close_where(at, ClearedBy::PartialReset, &mut closed, |iv| {
                 codes::lookup_cached(iv.code)
                     .class
                     .register_bit()
@@ -151,13 +155,13 @@ impl NodeTimeline {
                 warnings.push(Warning::PartialResetWhileErrorFree);
                 None
             } else {
-                if cleared.is_empty() {
+                if closed.is_empty() {
                     warnings.push(Warning::PartialResetUnattributed { register: now.0 });
                 }
                 Some(2)
             }
         } else {
-            self.close_where(at, ClearedBy::Reset, &mut cleared, |_| true);
+            self.close_where(at, ClearedBy::Reset, &mut closed, |_| true);
             self.state = State::ErrorFree;
             if was == State::ErrorFree {
                 warnings.push(Warning::ResetWhileErrorFree);
@@ -169,38 +173,37 @@ impl NodeTimeline {
         Step {
             transition,
             state: self.state,
-            cleared,
+            cleared: closed.iter().map(|iv| iv.code).collect(),
+            closed,
         }
     }
 
-    /// Applies an NMT boot-up; returns the codes it closed.
-    pub fn boot(&mut self, at: At) -> Vec<u16> {
-        let mut cleared = Vec::new();
-        self.close_where(at, ClearedBy::Boot, &mut cleared, |_| true);
+    /// Applies an NMT boot-up; returns the intervals it closed.
+    pub fn boot(&mut self, at: At) -> Vec<Interval> {
+        let mut closed = Vec::new();
+        self.close_where(at, ClearedBy::Boot, &mut closed, |_| true);
         self.state = State::ErrorFree;
-        cleared
+        closed
     }
 
     fn close_where(
         &mut self,
         at: At,
         by: ClearedBy,
-        cleared: &mut Vec<u16>,
+        closed: &mut Vec<Interval>,
         mut closes: impl FnMut(&Interval) -> bool,
     ) {
-        let intervals = &mut self.intervals;
-        self.active.retain(|&i| {
-            let Some(iv) = intervals.get_mut(i) else {
-                return false;
-            };
-            if !closes(iv) {
-                return true;
+        let mut i = 0;
+        while i < self.active.len() {
+            if closes(&self.active[i]) {
+                let mut iv = self.active.remove(i);
+                iv.end = Some(at);
+                iv.cleared_by = Some(by);
+                closed.push(iv);
+            } else {
+                i += 1;
             }
-            iv.end = Some(at);
-            iv.cleared_by = Some(by);
-            cleared.push(iv.code);
-            false
-        });
+        }
     }
 }
 
@@ -223,9 +226,45 @@ mod tests {
     /// Per frame: the transition and the warning tags.
     type Steps = Vec<(Option<u8>, Vec<&'static str>)>;
 
+    /// A timeline and every interval it handed out, as a caller keeps them.
+    struct Kept {
+        t: NodeTimeline,
+        closed: Vec<Interval>,
+    }
+
+    impl Kept {
+        /// Closed and open intervals in raise order.
+        fn intervals(&self) -> Vec<Interval> {
+            let mut all: Vec<Interval> =
+                self.closed.iter().chain(self.t.active()).cloned().collect();
+            all.sort_by_key(|iv| iv.seq);
+            all
+        }
+        fn state(&self) -> State {
+            self.t.state()
+        }
+        fn active_codes(&self) -> Vec<u16> {
+            self.t.active_codes().collect()
+        }
+        fn boot(&mut self, at: At) -> Vec<u16> {
+            let closed = self.t.boot(at);
+            let codes = closed.iter().map(|iv| iv.code).collect();
+            self.closed.extend(closed);
+            codes
+        }
+        fn emcy(&mut self, e: &Emcy, at: At, w: &mut Vec<Warning>) -> Step {
+            let step = self.t.emcy(e, at, w);
+            self.closed.extend(step.closed.iter().cloned());
+            step
+        }
+    }
+
     /// Applies frames (code, register) in order.
-    fn run(frames: &[(u16, u8)]) -> (NodeTimeline, Steps) {
-        let mut t = NodeTimeline::new();
+    fn run(frames: &[(u16, u8)]) -> (Kept, Steps) {
+        let mut t = Kept {
+            t: NodeTimeline::new(),
+            closed: Vec::new(),
+        };
         let mut steps = Vec::new();
         for (i, &(code, reg)) in frames.iter().enumerate() {
             let mut w = Vec::new();
@@ -235,7 +274,7 @@ mod tests {
         (t, steps)
     }
 
-    fn summary(t: &NodeTimeline) -> Vec<(u16, Option<u64>, Option<&'static str>)> {
+    fn summary(t: &Kept) -> Vec<(u16, Option<u64>, Option<&'static str>)> {
         t.intervals()
             .iter()
             .map(|iv| {
@@ -256,18 +295,32 @@ mod tests {
     }
 
     #[test]
+    fn memory_holds_only_active_errors() {
+        let mut t = NodeTimeline::new();
+        let mut w = Vec::new();
+        for i in 0..1000 {
+            t.emcy(&emcy(0x4310, 0x09), at(2 * i + 1), &mut w);
+            t.emcy(&emcy(0, 0), at(2 * i + 2), &mut w);
+        }
+        assert!(t.active().is_empty());
+        t.emcy(&emcy(0x4310, 0x09), at(5000), &mut w);
+        assert_eq!(t.active().len(), 1);
+        assert_eq!(t.active()[0].seq, 1000);
+    }
+
+    #[test]
     fn transition_1_error_free_to_error_occurred() {
         let (t, steps) = run(&[(0x4310, 0x09)]);
         assert_eq!(steps[0].0, Some(1));
         assert_eq!(t.state(), State::ErrorOccurred);
-        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310]);
+        assert_eq!(t.active_codes(), [0x4310]);
     }
 
     #[test]
     fn transition_3_new_error_while_in_error() {
         let (t, steps) = run(&[(0x4310, 0x09), (0x2310, 0x0B)]);
         assert_eq!(steps[1].0, Some(3));
-        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310, 0x2310]);
+        assert_eq!(t.active_codes(), [0x4310, 0x2310]);
     }
 
     #[test]
@@ -275,7 +328,7 @@ mod tests {
         let (t, steps) = run(&[(0x4310, 0x09), (0x4310, 0x09)]);
         assert_eq!(steps[1].0, Some(3));
         assert_eq!(t.intervals().len(), 1);
-        assert_eq!(t.emcy_count(), 2);
+        assert_eq!(t.t.emcy_count(), 2);
     }
 
     #[test]
@@ -305,7 +358,7 @@ mod tests {
                 (0x2310, Some(3), Some("partial_reset"))
             ]
         );
-        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310]);
+        assert_eq!(t.active_codes(), [0x4310]);
     }
 
     #[test]
@@ -313,14 +366,14 @@ mod tests {
         // The S300 manual's example: the register still shows the temperature bit.
         let (t, steps) = run(&[(0x4310, 0x08), (0x0000, 0x08)]);
         assert_eq!(steps[1], (Some(2), vec!["partial_reset_unattributed"]));
-        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x4310]);
+        assert_eq!(t.active_codes(), [0x4310]);
     }
 
     #[test]
     fn errors_without_a_class_bit_are_never_inferred_closed() {
         // 0x5530 (hardware) has no register bit; 0x8611 (monitoring) neither.
         let (t, _) = run(&[(0x5530, 0x01), (0x8611, 0x21), (0x0000, 0x01)]);
-        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x5530, 0x8611]);
+        assert_eq!(t.active_codes(), [0x5530, 0x8611]);
     }
 
     #[test]
@@ -396,7 +449,7 @@ mod tests {
     fn odd_reset_codes_are_errors() {
         let (t, steps) = run(&[(0x0012, 0x01)]);
         assert_eq!(steps[0].0, Some(1));
-        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x0012]);
+        assert_eq!(t.active_codes(), [0x0012]);
     }
 
     #[test]
@@ -406,6 +459,9 @@ mod tests {
         t.emcy(&emcy(0x4310, 0x09), at(1), &mut w);
         let step = t.emcy(&emcy(0, 0), at(2), &mut w);
         assert_eq!(step.cleared, [0x4310]);
+        assert_eq!(step.closed.len(), 1);
+        assert_eq!(step.closed[0].cleared_by, Some(ClearedBy::Reset));
         assert_eq!(step.state, State::ErrorFree);
+        assert!(t.active().is_empty());
     }
 }

@@ -20,6 +20,15 @@ fn peak_rss_kib(pid: u32) -> Option<u64> {
 }
 
 fn peak_while_streaming(args: &[&str], format: TraceFormat) -> Option<u64> {
+    peak_with_emcy(args, format, TRACE_BYTES, 2)
+}
+
+fn peak_with_emcy(
+    args: &[&str],
+    format: TraceFormat,
+    bytes: u64,
+    emcy_per_mille: u64,
+) -> Option<u64> {
     let mut child = Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
         .args(args)
         .arg("-")
@@ -31,7 +40,8 @@ fn peak_while_streaming(args: &[&str], format: TraceFormat) -> Option<u64> {
     let pid = child.id();
     let stdin = child.stdin.take().expect("stdin");
     let mut writer = BufWriter::with_capacity(1 << 20, stdin);
-    let (lines, emcy) = write_trace(&mut writer, format, TRACE_BYTES, 2, 7).expect("write trace");
+    let (lines, emcy) =
+        write_trace(&mut writer, format, bytes, emcy_per_mille, 7).expect("write trace");
     writer.flush().expect("flush");
     assert!(
         lines > 1_000_000 && emcy > 1_000,
@@ -67,5 +77,25 @@ fn a_200_mb_trace_is_read_in_bounded_memory() {
             "{args:?} {format:?}: peak RSS {peak} KiB exceeds {LIMIT_KIB} KiB"
         );
         eprintln!("{args:?} {format:?}: peak RSS {peak} KiB");
+    }
+}
+
+/// A trace where 30% of the frames are EMCY closes an error on every other
+/// one: the history of closed errors grows with the trace, memory must not.
+#[test]
+fn an_emcy_heavy_trace_keeps_its_error_history_out_of_memory() {
+    if !std::path::Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read peak memory from");
+        return;
+    }
+    for format in ["ndjson", "table", "json"] {
+        let args = ["--format", format, "-j", "2"];
+        let peak = peak_with_emcy(&args, TraceFormat::CandumpLog, 60 * 1024 * 1024, 300)
+            .expect("VmHWM readable");
+        eprintln!("{format}, 30% EMCY: peak RSS {peak} KiB");
+        assert!(
+            peak < LIMIT_KIB,
+            "{format}: peak RSS {peak} KiB exceeds {LIMIT_KIB} KiB"
+        );
     }
 }

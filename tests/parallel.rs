@@ -7,13 +7,25 @@ use emcy_decode::report::Renderer;
 use emcy_decode::report::ndjson::Ndjson;
 
 fn run(trace: &[u8], threads: usize, block_size: usize) -> (String, String) {
-    let opts = Options {
-        threads,
-        block_size,
+    run_with(
+        trace,
+        Options {
+            threads,
+            block_size,
+            ..base_options()
+        },
+    )
+}
+
+fn base_options() -> Options {
+    Options {
         max_line: 200,
         max_diagnostics: 5,
         ..Options::default()
-    };
+    }
+}
+
+fn run_with(trace: &[u8], opts: Options) -> (String, String) {
     let mut out = Vec::new();
     let mut err = Vec::new();
     {
@@ -165,4 +177,60 @@ fn asc_with_a_base_change_in_the_middle() {
 #[test]
 fn asc_with_relative_times() {
     assert_split_independent("asc relative", &asc_trace(true));
+}
+
+/// The error history goes to a temporary file past a threshold; what is
+/// reported must not change. Table and ndjson both read it back.
+#[test]
+fn error_history_on_disk_reads_back_identically() {
+    let mut trace = Vec::new();
+    for i in 0..2000u32 {
+        let node = 1 + i % 7;
+        let ch = if i % 3 == 0 { "can1" } else { "can0" };
+        let data = match i % 4 {
+            0 => "1043090100000000",
+            1 => "1023030000000000",
+            2 => "0000090000000000",
+            _ => "0000000000000000",
+        };
+        trace.extend(
+            format!(
+                "({}.{:06}) {ch} {:03X}#{data}\n",
+                1000 + i / 10,
+                i,
+                0x80 + node
+            )
+            .bytes(),
+        );
+    }
+    let reference = run_with(&trace, base_options());
+    let closed = reference.0.matches("\"cleared_by\":\"").count();
+    assert!(closed > 300, "only {closed} closed errors");
+    for spill_at in [1, 3, 100] {
+        let got = run_with(
+            &trace,
+            Options {
+                spill_at,
+                ..base_options()
+            },
+        );
+        assert_eq!(got, reference, "spill every {spill_at}");
+    }
+    // The table reads the history twice (widths, then rows).
+    let table = |spill_at| {
+        let opts = Options {
+            spill_at,
+            ..base_options()
+        };
+        let mut out = Vec::new();
+        let mut err = Vec::new();
+        {
+            let mut r = emcy_decode::report::table::TableReport::new(&mut out, false, false);
+            let mut log = DiagnosticLog::new(&mut err);
+            let a = analyze("trace", &trace[..], false, &opts, &mut r, &mut log).unwrap();
+            r.finish(&[a.report], &[]).unwrap();
+        }
+        String::from_utf8(out).unwrap()
+    };
+    assert_eq!(table(2), table(usize::MAX));
 }

@@ -72,11 +72,15 @@ impl<W: Write> Renderer for JsonDocument<W> {
         self.out.write_all(b",\n  \"nodes\": [")?;
         let mut n = 0;
         for input in inputs {
+            let mut merge = input.history.merge();
             for node in &input.nodes {
-                self.json
-                    .node(&mut self.compact, &input.file, node, &node.errors);
+                let errors = merge.node_errors(&node.channel, node.node);
+                self.json.node(&mut self.compact, &input.file, node, errors);
                 self.element(n == 0)?;
                 n += 1;
+            }
+            if let Some(e) = merge.take_error() {
+                return Err(e);
             }
         }
         self.close_array(n)?;

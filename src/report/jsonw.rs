@@ -311,12 +311,12 @@ impl JsonWriter {
     }
 
     /// A node object; `errors` in the order they were raised.
-    pub fn node<'i>(
+    pub fn node(
         &mut self,
         out: &mut Vec<u8>,
         file: &str,
         node: &NodeReport,
-        errors: impl IntoIterator<Item = &'i Interval>,
+        errors: impl IntoIterator<Item = Interval>,
     ) {
         let mut o = Obj::new(out);
         o.str("type", "node");
@@ -332,7 +332,7 @@ impl JsonWriter {
             if i > 0 {
                 e.push(b',');
             }
-            self.interval(e, iv);
+            self.interval(e, &iv);
         }
         e.push(b']');
         o.end();

@@ -10,7 +10,8 @@ use std::io;
 
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
-use crate::timeline::{Interval, State};
+use crate::history::ErrorHistory;
+use crate::timeline::State;
 use crate::trace::{Format, Timestamp};
 
 /// One decoded EMCY frame, borrowed from the pipeline (no allocation per event).
@@ -41,7 +42,8 @@ pub struct BootEvent<'a> {
     pub cleared: &'a [u16],
 }
 
-/// A node's state at the end of an input and its error history.
+/// A node's state at the end of an input; its errors are in the input's
+/// [`ErrorHistory`] (read with `history.merge().node_errors(..)`).
 #[derive(Clone, Debug)]
 pub struct NodeReport {
     pub channel: String,
@@ -49,7 +51,6 @@ pub struct NodeReport {
     pub state: State,
     pub active: Vec<u16>,
     pub emcy_count: u64,
-    pub errors: Vec<Interval>,
 }
 
 /// Line counts of one input. Every line is exactly one of frame, skipped, malformed.
@@ -76,6 +77,8 @@ pub struct InputReport {
     pub gzip: bool,
     pub counts: Counts,
     pub nodes: Vec<NodeReport>,
+    /// Every error interval of every node, in report order.
+    pub history: ErrorHistory,
     /// Why reading stopped early (I/O error, corrupt gzip, unknown format).
     pub error: Option<String>,
 }

@@ -49,10 +49,14 @@ impl<W: Write> Renderer for Ndjson<W> {
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
         for input in inputs {
+            let mut merge = input.history.merge();
             for node in &input.nodes {
-                self.json
-                    .node(&mut self.buf, &input.file, node, &node.errors);
+                let errors = merge.node_errors(&node.channel, node.node);
+                self.json.node(&mut self.buf, &input.file, node, errors);
                 self.line()?;
+            }
+            if let Some(e) = merge.take_error() {
+                return Err(e);
             }
         }
         for input in inputs {

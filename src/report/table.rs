@@ -10,7 +10,9 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 use crate::canopen::codes;
+use crate::timeline::Interval;
 use crate::trace::Timestamp;
+use unicode_width::UnicodeWidthStr;
 
 const RED: Style = AnsiColor::Red.on_default().bold();
 const YELLOW: Style = AnsiColor::Yellow.on_default();
@@ -88,6 +90,30 @@ impl<W: Write> TableReport<W> {
 
     fn description_indent(l: Layout) -> usize {
         l.time + 2 + l.channel + 2 + 6 + 8 + 4 + REGISTER_WIDTH + 2 + MANUFACTURER_WIDTH + 2
+    }
+
+    /// The error timeline, in two passes over the history (column widths,
+    /// then rows): a trace with millions of errors needs no stored rows.
+    fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
+        let mut widths = TIMELINE_HEADER.map(str::len);
+        let mut rows = 0u64;
+        for_each_timeline_row(input, |cells| {
+            rows += 1;
+            for (w, c) in widths.iter_mut().zip(cells) {
+                *w = (*w).max(UnicodeWidthStr::width(c.as_str()));
+            }
+            Ok(())
+        })?;
+        if rows == 0 {
+            return Ok(());
+        }
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
+        write_row(&mut self.out, &TIMELINE_HEADER, &widths, &TIMELINE_RIGHT)?;
+        let out = &mut self.out;
+        for_each_timeline_row(input, |cells| {
+            write_row(out, cells, &widths, &TIMELINE_RIGHT)
+        })
     }
 
     fn end_event(&mut self) -> io::Result<()> {
@@ -222,46 +248,7 @@ impl<W: Write> Renderer for TableReport<W> {
         writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
         write_table(&mut self.out, &nodes)?;
 
-        let mut errors = new_table(&[
-            "CHANNEL",
-            "NODE",
-            "CODE",
-            "DESCRIPTION",
-            "START",
-            "END",
-            "DURATION",
-            "CLEARED BY",
-        ]);
-        let mut any = false;
-        for n in &input.nodes {
-            for iv in &n.errors {
-                any = true;
-                let end_time = iv.end.and_then(|e| e.time);
-                let (end, duration) = match (iv.end, iv.start.time, end_time) {
-                    (None, _, _) => ("active".to_string(), "-".to_string()),
-                    (Some(_), Some(s), Some(e)) => (e.to_string(), e.since(s).to_string()),
-                    (Some(e), _, _) => (format!("line {}", e.line), "-".to_string()),
-                };
-                errors.add_row(vec![
-                    printable(&n.channel).into_owned(),
-                    n.node.to_string(),
-                    format!("0x{:04X}", iv.code),
-                    codes::lookup(iv.code).description().to_string(),
-                    iv.start
-                        .time
-                        .map_or_else(|| format!("line {}", iv.start.line), |t| t.to_string()),
-                    end,
-                    duration,
-                    iv.cleared_by.map_or("-", |c| c.slug()).to_string(),
-                ]);
-            }
-        }
-        if any {
-            right_align(&mut errors, &[1, 6]);
-            writeln!(self.out)?;
-            writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
-            write_table(&mut self.out, &errors)?;
-        }
+        self.write_timeline(input)?;
         writeln!(self.out)
     }
 
@@ -294,6 +281,87 @@ impl<W: Write> Renderer for TableReport<W> {
         write_table(&mut self.out, &t)?;
         self.out.flush()
     }
+}
+
+const TIMELINE_HEADER: [&str; 8] = [
+    "CHANNEL",
+    "NODE",
+    "CODE",
+    "DESCRIPTION",
+    "START",
+    "END",
+    "DURATION",
+    "CLEARED BY",
+];
+const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
+
+/// Fills the cells of one error timeline row.
+fn timeline_cells(cells: &mut [String; 8], channel: &str, node: u8, iv: &Interval) {
+    use std::fmt::Write as _;
+    for c in cells.iter_mut() {
+        c.clear();
+    }
+    let end_time = iv.end.and_then(|e| e.time);
+    cells[0].push_str(&printable(channel));
+    let _ = write!(cells[1], "{node}");
+    let _ = write!(cells[2], "0x{:04X}", iv.code);
+    let _ = write!(cells[3], "{}", codes::lookup_cached(iv.code).description());
+    let _ = match iv.start.time {
+        Some(t) => write!(cells[4], "{t}"),
+        None => write!(cells[4], "line {}", iv.start.line),
+    };
+    let _ = match (iv.end, iv.start.time, end_time) {
+        (None, _, _) => write!(cells[5], "active").and_then(|_| write!(cells[6], "-")),
+        (Some(_), Some(s), Some(e)) => {
+            write!(cells[5], "{e}").and_then(|_| write!(cells[6], "{}", e.since(s)))
+        }
+        (Some(e), _, _) => write!(cells[5], "line {}", e.line).and_then(|_| write!(cells[6], "-")),
+    };
+    cells[7].push_str(iv.cleared_by.map_or("-", |c| c.slug()));
+}
+
+/// Calls `row` for every error of the selected nodes, in report order.
+fn for_each_timeline_row(
+    input: &InputReport,
+    mut row: impl FnMut(&[String; 8]) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut cells: [String; 8] = Default::default();
+    let mut merge = input.history.merge();
+    for n in &input.nodes {
+        for iv in merge.node_errors(&n.channel, n.node) {
+            timeline_cells(&mut cells, &n.channel, n.node, &iv);
+            row(&cells)?;
+        }
+    }
+    merge.take_error().map_or(Ok(()), Err)
+}
+
+/// One aligned row: cells padded to their column, two blanks between
+/// columns, no trailing blanks (the same layout as the comfy-table tables).
+fn write_row(
+    out: &mut impl Write,
+    cells: &[impl AsRef<str>],
+    widths: &[usize],
+    right: &[bool],
+) -> io::Result<()> {
+    let mut line = String::new();
+    for (i, cell) in cells.iter().enumerate() {
+        let cell = cell.as_ref();
+        let pad = widths
+            .get(i)
+            .copied()
+            .unwrap_or(0)
+            .saturating_sub(UnicodeWidthStr::width(cell));
+        if right.get(i).copied().unwrap_or(false) {
+            line.extend(std::iter::repeat_n(' ', pad));
+            line.push_str(cell);
+        } else {
+            line.push_str(cell);
+            line.extend(std::iter::repeat_n(' ', pad));
+        }
+        line.push_str("  ");
+    }
+    writeln!(out, "{}", line.trim_end())
 }
 
 fn new_table(header: &[&str]) -> Table {

@@ -141,6 +141,17 @@ impl Timestamp {
         self.secs
     }
 
+    /// The parts as stored: (seconds, attoseconds within the second, digits).
+    pub fn to_raw(self) -> (u64, u64, u8) {
+        (self.secs, self.atto, self.digits)
+    }
+
+    /// Inverse of [`Timestamp::to_raw`]; `None` if the parts are out of range.
+    pub fn from_raw(secs: u64, atto: u64, digits: u8) -> Option<Timestamp> {
+        (u128::from(atto) < ATTO_PER_SEC && usize::from(digits) <= MAX_FRACTION_DIGITS)
+            .then_some(Timestamp { secs, atto, digits })
+    }
+
     /// Fraction digits as written in the trace.
     pub fn digits(self) -> u8 {
         self.digits

@@ -1,0 +1,578 @@
+//! The error history of one input: every closed interval, kept out of
+//! memory once there are many.
+//!
+//! Node reports list every error a node ever raised, and a trace can raise
+//! millions; memory must stay bounded by the number of nodes and active
+//! errors. Closed intervals are buffered; past a threshold the buffer is
+//! sorted in report order (channel name, node, raise order) and appended to an
+//! anonymous temporary file as one sorted run. Reports read the runs back with
+//! a k-way merge, node by node, so no renderer ever holds the whole history.
+
+use std::cmp::Ordering;
+use std::fs::File;
+use std::io::{self, Write};
+use std::sync::Arc;
+
+use crate::canopen::register::Register;
+use crate::timeline::{At, ClearedBy, Interval};
+use crate::trace::Timestamp;
+
+/// Closed intervals kept in memory before they go to disk (~100 bytes each).
+pub const DEFAULT_SPILL_AT: usize = 16 * 1024;
+
+/// One interval with the node it belongs to.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Record {
+    pub channel: u32,
+    pub node: u8,
+    pub interval: Interval,
+}
+
+/// Collects an input's intervals while it is read.
+pub struct History {
+    /// Channel names by index; the sort key uses the name (report order).
+    names: Vec<String>,
+    buffer: Vec<Record>,
+    spill_at: usize,
+    file: Option<File>,
+    runs: Vec<Run>,
+    len: u64,
+    /// Why spilling failed, if it did (the history then stays in memory).
+    spill_error: Option<String>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    offset: u64,
+    records: u64,
+}
+
+impl History {
+    pub fn new(spill_at: usize) -> Self {
+        History {
+            names: Vec::new(),
+            buffer: Vec::new(),
+            spill_at: spill_at.max(1),
+            file: None,
+            runs: Vec::new(),
+            len: 0,
+            spill_error: None,
+        }
+    }
+
+    /// Registers a channel name; returns its index for [`History::push`].
+    pub fn add_channel(&mut self, name: &str) -> u32 {
+        self.names.push(name.to_string());
+        (self.names.len() - 1) as u32
+    }
+
+    pub fn push(&mut self, channel: u32, node: u8, interval: Interval) {
+        self.buffer.push(Record {
+            channel,
+            node,
+            interval,
+        });
+        self.len += 1;
+        if self.buffer.len() >= self.spill_at && self.spill_error.is_none() {
+            if let Err(e) = self.spill() {
+                self.spill_error = Some(e.to_string());
+            }
+        }
+    }
+
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    fn sort(names: &[String], records: &mut [Record]) {
+        records.sort_by(|a, b| order(names, a, b));
+    }
+
+    /// Writes the buffer as one sorted run.
+    fn spill(&mut self) -> io::Result<()> {
+        if self.buffer.is_empty() {
+            return Ok(());
+        }
+        Self::sort(&self.names, &mut self.buffer);
+        let file = match &mut self.file {
+            Some(f) => f,
+            None => self.file.insert(tempfile::tempfile()?),
+        };
+        let offset = self
+            .runs
+            .last()
+            .map_or(0, |r| r.offset + r.records * RECORD as u64);
+        let mut out = io::BufWriter::with_capacity(64 * 1024, &*file);
+        let mut bytes = [0u8; RECORD];
+        for r in &self.buffer {
+            encode(r, &mut bytes);
+            out.write_all(&bytes)?;
+        }
+        out.flush()?;
+        self.runs.push(Run {
+            offset,
+            records: self.buffer.len() as u64,
+        });
+        self.buffer.clear();
+        Ok(())
+    }
+
+    /// Ends collection; `open` are the intervals still active at the end.
+    pub fn finish(mut self, open: impl IntoIterator<Item = Record>) -> ErrorHistory {
+        self.buffer.extend(open);
+        // A small remainder stays in memory; a large one goes to disk too,
+        // so many inputs do not each keep a full buffer.
+        if self.file.is_some() && self.buffer.len() > 1024 && self.spill_error.is_none() {
+            if let Err(e) = self.spill() {
+                self.spill_error = Some(e.to_string());
+            }
+        }
+        Self::sort(&self.names, &mut self.buffer);
+        ErrorHistory {
+            names: Arc::new(self.names),
+            memory: self.buffer,
+            file: self.file.map(Arc::new),
+            runs: self.runs,
+            spill_error: self.spill_error,
+        }
+    }
+}
+
+/// Report order: channel name, node, raise order.
+fn order(names: &[String], a: &Record, b: &Record) -> Ordering {
+    let name = |r: &Record| names.get(r.channel as usize).map_or("", String::as_str);
+    name(a)
+        .cmp(name(b))
+        .then(a.node.cmp(&b.node))
+        .then(a.interval.seq.cmp(&b.interval.seq))
+}
+
+/// A finished history: sorted runs on disk plus a sorted rest in memory.
+#[derive(Clone, Debug)]
+pub struct ErrorHistory {
+    names: Arc<Vec<String>>,
+    memory: Vec<Record>,
+    file: Option<Arc<File>>,
+    runs: Vec<Run>,
+    spill_error: Option<String>,
+}
+
+impl Default for ErrorHistory {
+    fn default() -> Self {
+        History::new(DEFAULT_SPILL_AT).finish([])
+    }
+}
+
+impl ErrorHistory {
+    /// Every interval in report order.
+    pub fn merge(&self) -> Merge<'_> {
+        let sources = self
+            .runs
+            .iter()
+            .map(|run| RunReader::new(self.file.clone(), *run))
+            .collect();
+        let mut m = Merge {
+            history: self,
+            sources,
+            memory: 0,
+            heads: Vec::new(),
+            pending: None,
+            error: None,
+        };
+        m.heads = (0..m.sources.len()).map(|i| m.pull(i)).collect();
+        m
+    }
+
+    /// Why the history could not go to disk (it was kept in memory).
+    pub fn spill_error(&self) -> Option<&str> {
+        self.spill_error.as_deref()
+    }
+
+    pub fn channel_name(&self, channel: u32) -> &str {
+        self.names.get(channel as usize).map_or("", String::as_str)
+    }
+}
+
+/// Reads one run back in chunks with positional reads (the file is shared).
+struct RunReader {
+    file: Option<Arc<File>>,
+    next: u64,
+    end: u64,
+    buf: Vec<u8>,
+    pos: usize,
+}
+
+const CHUNK_RECORDS: usize = 128;
+
+impl RunReader {
+    fn new(file: Option<Arc<File>>, run: Run) -> Self {
+        RunReader {
+            file,
+            next: run.offset,
+            end: run.offset + run.records * RECORD as u64,
+            buf: Vec::new(),
+            pos: 0,
+        }
+    }
+
+    fn next(&mut self) -> io::Result<Option<Record>> {
+        if self.pos >= self.buf.len() {
+            let left = self.end.saturating_sub(self.next);
+            if left == 0 {
+                return Ok(None);
+            }
+            let n = left.min((CHUNK_RECORDS * RECORD) as u64) as usize;
+            self.buf.resize(n, 0);
+            let Some(file) = &self.file else {
+                return Ok(None);
+            };
+            read_exact_at(file, &mut self.buf, self.next)?;
+            self.next += n as u64;
+            self.pos = 0;
+        }
+        let bytes = self.buf.get(self.pos..self.pos + RECORD).ok_or_else(|| {
+            io::Error::new(io::ErrorKind::InvalidData, "short record in error history")
+        })?;
+        self.pos += RECORD;
+        decode(bytes).map(Some)
+    }
+}
+
+#[cfg(unix)]
+fn read_exact_at(file: &File, buf: &mut [u8], offset: u64) -> io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(file, buf, offset)
+}
+
+#[cfg(windows)]
+fn read_exact_at(file: &File, mut buf: &mut [u8], mut offset: u64) -> io::Result<()> {
+    use std::os::windows::fs::FileExt;
+    while !buf.is_empty() {
+        match file.seek_read(buf, offset)? {
+            0 => return Err(io::ErrorKind::UnexpectedEof.into()),
+            n => {
+                buf = &mut buf[n..];
+                offset += n as u64;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The k-way merge of a history's runs and its in-memory rest.
+pub struct Merge<'h> {
+    history: &'h ErrorHistory,
+    sources: Vec<RunReader>,
+    memory: usize,
+    heads: Vec<Option<Record>>,
+    /// A record read one too far by [`NodeErrors`] (the next node's first).
+    pending: Option<Record>,
+    error: Option<io::Error>,
+}
+
+impl<'h> Merge<'h> {
+    fn pull(&mut self, i: usize) -> Option<Record> {
+        match self.sources.get_mut(i).map(RunReader::next) {
+            Some(Ok(r)) => r,
+            Some(Err(e)) => {
+                self.error.get_or_insert(e);
+                None
+            }
+            None => None,
+        }
+    }
+
+    /// A read error of the temporary file, once the merge is done.
+    pub fn take_error(&mut self) -> Option<io::Error> {
+        self.error.take()
+    }
+
+    /// The next record in report order.
+    pub fn next_record(&mut self) -> Option<Record> {
+        if let Some(r) = self.pending.take() {
+            return Some(r);
+        }
+        let names = &self.history.names;
+        let mut best: Option<usize> = None;
+        for (i, head) in self.heads.iter().enumerate() {
+            let Some(h) = head else { continue };
+            let better = match best.and_then(|b| self.heads[b].as_ref()) {
+                Some(current) => order(names, h, current) == Ordering::Less,
+                None => true,
+            };
+            if better {
+                best = Some(i);
+            }
+        }
+        let from_memory = self.history.memory.get(self.memory);
+        let take_memory = match (from_memory, best.and_then(|b| self.heads[b].as_ref())) {
+            (Some(m), Some(h)) => order(names, m, h) != Ordering::Greater,
+            (Some(_), None) => true,
+            (None, _) => false,
+        };
+        if take_memory {
+            self.memory += 1;
+            return from_memory.cloned();
+        }
+        let i = best?;
+        let record = self.heads[i].take();
+        self.heads[i] = self.pull(i);
+        record
+    }
+
+    /// The intervals of one node, skipping any before it (unselected nodes).
+    pub fn node_errors<'m>(&'m mut self, channel: &'m str, node: u8) -> NodeErrors<'m, 'h> {
+        NodeErrors {
+            merge: self,
+            channel,
+            node,
+        }
+    }
+}
+
+/// Iterator over one node's intervals from a [`Merge`].
+pub struct NodeErrors<'m, 'h> {
+    merge: &'m mut Merge<'h>,
+    channel: &'m str,
+    node: u8,
+}
+
+impl Iterator for NodeErrors<'_, '_> {
+    type Item = Interval;
+
+    fn next(&mut self) -> Option<Interval> {
+        loop {
+            let r = self.merge.next_record()?;
+            let name = self.merge.history.channel_name(r.channel);
+            match (name, r.node).cmp(&(self.channel, self.node)) {
+                Ordering::Less => continue,
+                Ordering::Equal => return Some(r.interval),
+                Ordering::Greater => {
+                    self.merge.pending = Some(r);
+                    return None;
+                }
+            }
+        }
+    }
+}
+
+// ---- the record encoding ------------------------------------------------------
+
+/// channel u32, node u8, code u16, cleared_by u8, register u8, seq u64,
+/// start line u64, end line u64 (+ flag u8), start time and end time
+/// (flag u8, digits u8, secs u64, atto u64 each).
+const RECORD: usize = 4 + 1 + 2 + 1 + 1 + 8 + 8 + 9 + 18 + 18;
+
+fn put_time(out: &mut [u8], t: Option<Timestamp>) {
+    match t {
+        Some(t) => {
+            let (secs, atto, digits) = t.to_raw();
+            out[0] = 1;
+            out[1] = digits;
+            out[2..10].copy_from_slice(&secs.to_le_bytes());
+            out[10..18].copy_from_slice(&atto.to_le_bytes());
+        }
+        None => out[..18].fill(0),
+    }
+}
+
+fn encode(r: &Record, out: &mut [u8; RECORD]) {
+    let iv = &r.interval;
+    out[0..4].copy_from_slice(&r.channel.to_le_bytes());
+    out[4] = r.node;
+    out[5..7].copy_from_slice(&iv.code.to_le_bytes());
+    out[7] = match iv.cleared_by {
+        None => 0,
+        Some(ClearedBy::Reset) => 1,
+        Some(ClearedBy::PartialReset) => 2,
+        Some(ClearedBy::Boot) => 3,
+    };
+    out[8] = iv.raised_register.0;
+    out[9..17].copy_from_slice(&iv.seq.to_le_bytes());
+    out[17..25].copy_from_slice(&iv.start.line.to_le_bytes());
+    out[25] = u8::from(iv.end.is_some());
+    out[26..34].copy_from_slice(&iv.end.map_or(0, |e| e.line).to_le_bytes());
+    put_time(&mut out[34..52], iv.start.time);
+    put_time(&mut out[52..70], iv.end.and_then(|e| e.time));
+}
+
+fn corrupt() -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        "corrupt record in error history",
+    )
+}
+
+fn get_u64(b: &[u8], at: usize) -> io::Result<u64> {
+    let bytes: [u8; 8] = b
+        .get(at..at + 8)
+        .and_then(|s| s.try_into().ok())
+        .ok_or_else(corrupt)?;
+    Ok(u64::from_le_bytes(bytes))
+}
+
+fn get_time(b: &[u8], at: usize) -> io::Result<Option<Timestamp>> {
+    match b.get(at) {
+        Some(0) => Ok(None),
+        Some(1) => {
+            let digits = *b.get(at + 1).ok_or_else(corrupt)?;
+            Timestamp::from_raw(get_u64(b, at + 2)?, get_u64(b, at + 10)?, digits)
+                .map(Some)
+                .ok_or_else(corrupt)
+        }
+        _ => Err(corrupt()),
+    }
+}
+
+fn decode(b: &[u8]) -> io::Result<Record> {
+    let channel = u32::from_le_bytes(
+        b.get(0..4)
+            .and_then(|s| s.try_into().ok())
+            .ok_or_else(corrupt)?,
+    );
+    let byte = |i: usize| b.get(i).copied().ok_or_else(corrupt);
+    let code = u16::from_le_bytes([byte(5)?, byte(6)?]);
+    let cleared_by = match byte(7)? {
+        0 => None,
+        1 => Some(ClearedBy::Reset),
+        2 => Some(ClearedBy::PartialReset),
+        3 => Some(ClearedBy::Boot),
+        _ => return Err(corrupt()),
+    };
+    let end = match byte(25)? {
+        0 => None,
+        _ => Some(At {
+            time: get_time(b, 52)?,
+            line: get_u64(b, 26)?,
+        }),
+    };
+    Ok(Record {
+        channel,
+        node: byte(4)?,
+        interval: Interval {
+            seq: get_u64(b, 9)?,
+            code,
+            start: At {
+                time: get_time(b, 34)?,
+                line: get_u64(b, 17)?,
+            },
+            end,
+            cleared_by,
+            raised_register: Register(byte(8)?),
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn interval(seq: u64, code: u16, closed: bool) -> Interval {
+        Interval {
+            seq,
+            code,
+            start: At {
+                time: Timestamp::from_raw(
+                    seq.wrapping_add(1_700_000_000),
+                    123_000_000_000_000_000,
+                    6,
+                ),
+                line: seq.wrapping_mul(10).wrapping_add(1),
+            },
+            end: closed.then_some(At {
+                time: None,
+                line: seq.wrapping_mul(10).wrapping_add(5),
+            }),
+            cleared_by: closed.then_some(ClearedBy::PartialReset),
+            raised_register: Register(0x09),
+        }
+    }
+
+    #[test]
+    fn records_survive_the_encoding() {
+        for closed in [false, true] {
+            let r = Record {
+                channel: 7,
+                node: 127,
+                interval: interval(u64::MAX - 1, 0xFF01, closed),
+            };
+            let mut b = [0u8; RECORD];
+            encode(&r, &mut b);
+            assert_eq!(decode(&b).unwrap(), r);
+        }
+        assert!(decode(&[0xFF; RECORD]).is_err());
+        assert!(decode(&[0; 3]).is_err());
+    }
+
+    /// Pushes intervals of three nodes on two channels in close order and
+    /// reads them back; the order must be the report order whatever spilled.
+    fn roundtrip(spill_at: usize) -> Vec<(String, u8, u64)> {
+        let mut h = History::new(spill_at);
+        let b = h.add_channel("can1");
+        let a = h.add_channel("can0");
+        let mut open = Vec::new();
+        for seq in (0..300u64).rev() {
+            for (ch, node) in [(b, 5u8), (a, 9), (a, 2)] {
+                let rec = Record {
+                    channel: ch,
+                    node,
+                    interval: interval(seq, 0x4310, seq % 50 != 0),
+                };
+                if seq % 50 == 0 {
+                    open.push(rec);
+                } else {
+                    h.push(ch, node, rec.interval);
+                }
+            }
+        }
+        let hist = h.finish(open);
+        let mut m = hist.merge();
+        let mut out = Vec::new();
+        while let Some(r) = m.next_record() {
+            out.push((
+                hist.channel_name(r.channel).to_string(),
+                r.node,
+                r.interval.seq,
+            ));
+        }
+        assert!(m.take_error().is_none());
+        out
+    }
+
+    #[test]
+    fn merge_gives_report_order_whether_or_not_it_spilled() {
+        let in_memory = roundtrip(usize::MAX);
+        assert_eq!(in_memory.len(), 900);
+        assert_eq!(in_memory[0], ("can0".to_string(), 2, 0));
+        assert_eq!(in_memory[300], ("can0".to_string(), 9, 0));
+        assert_eq!(in_memory[899], ("can1".to_string(), 5, 299));
+        let mut sorted = in_memory.clone();
+        sorted.sort();
+        assert_eq!(in_memory, sorted);
+        for spill_at in [1, 7, 100, 1000] {
+            assert_eq!(roundtrip(spill_at), in_memory, "spill every {spill_at}");
+        }
+    }
+
+    #[test]
+    fn node_errors_walk_node_by_node_and_skip_unselected_nodes() {
+        let mut h = History::new(5);
+        let ch = h.add_channel("can0");
+        for seq in 0..20 {
+            for node in [1u8, 2, 3] {
+                h.push(ch, node, interval(seq, 0x2310, true));
+            }
+        }
+        let hist = h.finish([]);
+        let mut m = hist.merge();
+        // Node 1 is not selected: node 2 and 3 are read, node 1 is skipped.
+        let two: Vec<u64> = m.node_errors("can0", 2).map(|iv| iv.seq).collect();
+        assert_eq!(two, (0..20).collect::<Vec<_>>());
+        let three = m.node_errors("can0", 3).count();
+        assert_eq!(three, 20);
+        assert_eq!(m.node_errors("can0", 4).count(), 0);
+    }
+}
