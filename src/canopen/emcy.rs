@@ -148,6 +148,15 @@ pub enum Warning {
     PartialResetUnattributed {
         register: u8,
     },
+    /// Bytes the node's profile says are zero are not (first..=last, 3-7).
+    ManufacturerBytesNonZero {
+        first: u8,
+        last: u8,
+    },
+    /// A register bit the node's profile reserves (must be 0) is set.
+    ProfileReservedBit {
+        bit: u8,
+    },
 }
 
 impl Warning {
@@ -164,6 +173,8 @@ impl Warning {
             Warning::ResetWhileErrorFree => "reset_while_error_free",
             Warning::PartialResetWhileErrorFree => "partial_reset_while_error_free",
             Warning::PartialResetUnattributed { .. } => "partial_reset_unattributed",
+            Warning::ManufacturerBytesNonZero { .. } => "manufacturer_bytes_nonzero",
+            Warning::ProfileReservedBit { .. } => "profile_reserved_bit",
         }
     }
 }
@@ -203,6 +214,14 @@ impl fmt::Display for Warning {
             Warning::PartialResetUnattributed { register } => write!(
                 f,
                 "partial reset with register 0x{register:02X} clears no active error by its class bit; which error ended is unknown"
+            ),
+            Warning::ManufacturerBytesNonZero { first, last } => write!(
+                f,
+                "bytes {first}-{last} should be zero for this node's profile but are not"
+            ),
+            Warning::ProfileReservedBit { bit } => write!(
+                f,
+                "error register bit {bit} is reserved (0) in this node's profile but is set"
             ),
         }
     }
@@ -315,6 +334,8 @@ mod tests {
             Warning::ResetWhileErrorFree,
             Warning::PartialResetWhileErrorFree,
             Warning::PartialResetUnattributed { register: 8 },
+            Warning::ManufacturerBytesNonZero { first: 4, last: 7 },
+            Warning::ProfileReservedBit { bit: 7 },
         ];
         for w in all {
             let text = w.to_string();
