@@ -13,9 +13,10 @@ use std::collections::{BTreeMap, HashMap};
 use std::io::{self, Read, Write};
 use std::ops::Range;
 use std::sync::mpsc::{self, Receiver};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, RwLock};
 
 use crate::canopen::emcy::{self, Emcy, Warning};
+use crate::canopen::sdo;
 use crate::history::{DEFAULT_SPILL_AT, ErrorHistory, History, Record};
 use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::timeline::{At, NodeTimeline};
@@ -42,6 +43,16 @@ pub struct Options {
     pub block_size: usize,
     /// Closed error intervals kept in memory before they go to a temporary file.
     pub spill_at: usize,
+    /// `--emcy-id`: EMCY COB-IDs moved by object 0x1014, to the node they belong to.
+    pub emcy_ids: Vec<EmcyId>,
+}
+
+/// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct EmcyId {
+    pub id: u32,
+    pub extended: bool,
+    pub node: u8,
 }
 
 impl Default for Options {
@@ -55,6 +66,7 @@ impl Default for Options {
             threads: 1,
             block_size: DEFAULT_BLOCK,
             spill_at: DEFAULT_SPILL_AT,
+            emcy_ids: Vec::new(),
         }
     }
 }
@@ -109,13 +121,42 @@ impl<E: Write> DiagnosticLog<E> {
     }
 }
 
-/// The ids whose frames are decoded; everything else is only counted.
-fn interest() -> Interest {
+/// The ids whose frames are decoded; everything else is only counted:
+/// EMCY, NMT error control (boot-up), SDO (identity, moved EMCY ids) and
+/// EMCY ids given on the command line.
+fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard_range(emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127);
+    i.add_standard_range(SDO_RESPONSE_BASE + 1..=SDO_RESPONSE_BASE + 127);
+    i.add_standard_range(SDO_REQUEST_BASE + 1..=SDO_REQUEST_BASE + 127);
+    for e in &opts.emcy_ids {
+        add_id(&mut i, e.id, e.extended);
+    }
     i
 }
+
+const SDO_RESPONSE_BASE: u32 = sdo::RESPONSE_BASE;
+const SDO_REQUEST_BASE: u32 = sdo::REQUEST_BASE;
+
+fn add_id(interest: &mut Interest, id: u32, extended: bool) {
+    if extended {
+        interest.add_extended(id);
+    } else {
+        interest.add_standard(id);
+    }
+}
+
+/// An SDO request or response naming object 0x1014 (COB-ID EMCY).
+fn is_cob_id_emcy_access(frame: &Frame<'_>) -> bool {
+    let sdo = (SDO_RESPONSE_BASE + 1..=SDO_RESPONSE_BASE + 127).contains(&frame.id)
+        || (SDO_REQUEST_BASE + 1..=SDO_REQUEST_BASE + 127).contains(&frame.id);
+    sdo && !frame.extended && frame.data.as_slice().get(1..3) == Some(&[0x14, 0x10])
+}
+
+/// The current interest and its generation, shared with workers: a block
+/// parsed with an older generation is parsed again in order.
+type SharedInterest = Arc<RwLock<(u64, Interest)>>;
 
 // ---- classification -----------------------------------------------------------
 
@@ -124,6 +165,8 @@ type Foreign = Option<(Format, Format)>;
 
 /// Receives classified lines; `idx` is the line's 0-based index in its block.
 trait LineSink {
+    /// The ids to decode now (the consumer's can change mid-input).
+    fn interest(&self) -> &Interest;
     /// A valid frame the consumer has no use for: counted only.
     fn plain_frame(&mut self);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
@@ -141,15 +184,14 @@ fn classify_block(
     block: &Block,
     max_line: usize,
     detector: &mut Detector,
-    interest: &Interest,
     sink: &mut impl LineSink,
 ) -> Result<(), OutputError> {
     let mut idx = 0u64;
     for raw in block.lines(max_line) {
         match raw {
             RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
-            RawLine::Text(text) if detector.quick(text, interest) => sink.plain_frame(),
-            RawLine::Text(text) => match detector.parse(text, interest) {
+            RawLine::Text(text) if detector.quick(text, sink.interest()) => sink.plain_frame(),
+            RawLine::Text(text) => match detector.parse(text, sink.interest()) {
                 Parsed::Frame(frame) => {
                     let foreign = detector.take_foreign().zip(detector.format());
                     sink.frame(idx, &frame, foreign)?;
@@ -270,6 +312,7 @@ impl Nodes {
                     state: tl.state(),
                     active: tl.active_codes().collect(),
                     emcy_count: tl.emcy_count(),
+                    stats: tl.stats().clone(),
                 });
             }
         }
@@ -336,13 +379,57 @@ struct Consumer<'r, 'l, E: Write> {
     /// Time and line of the last EMCY or boot-up: the trace's clock as far
     /// as the timelines see it.
     clock: Option<(Timestamp, u64)>,
+    /// EMCY ids other than 0x80 + node, to their node.
+    emcy_ids: HashMap<(u32, bool), u8>,
+    /// First and last time of a decoded frame.
+    first_time: Option<Timestamp>,
+    last_time: Option<Timestamp>,
+    interest: Interest,
+    interest_gen: u64,
+    /// Set while workers run: where they read the interest from.
+    shared_interest: Option<SharedInterest>,
     warnings: Vec<Warning>,
     active: Vec<u16>,
+    sdo: sdo::Tracker,
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
     fn line_no(&self, idx: u64) -> u64 {
         self.line_base + idx + 1
+    }
+
+    /// The node a data frame's EMCY id belongs to: a moved id first, then
+    /// the pre-defined set (standard ids 0x081-0x0FF).
+    fn emcy_node(&self, id: u32, extended: bool) -> Option<u8> {
+        self.emcy_ids
+            .get(&(id, extended))
+            .copied()
+            .or_else(|| if extended { None } else { emcy::emcy_node(id) })
+    }
+
+    /// A node holds `value` in `object` (SDO upload or confirmed download).
+    fn object_value(&mut self, node: u8, object: sdo::Object, value: u32) {
+        if object.index == sdo::COB_ID_EMCY
+            && object.sub == 0
+            && let Some((id, extended)) = sdo::cob_id_emcy(value)
+        {
+            self.map_emcy_id(id, extended, node);
+        }
+    }
+
+    /// A node's EMCY id moved (object 0x1014 seen in the trace): decode
+    /// frames on it from here on.
+    fn map_emcy_id(&mut self, id: u32, extended: bool, node: u8) {
+        if self.emcy_ids.insert((id, extended), node) == Some(node) {
+            return;
+        }
+        add_id(&mut self.interest, id, extended);
+        self.interest_gen += 1;
+        if let Some(shared) = &self.shared_interest
+            && let Ok(mut w) = shared.write()
+        {
+            *w = (self.interest_gen, self.interest.clone());
+        }
     }
 
     /// A time earlier than the previous EMCY's or boot-up's (two logs
@@ -368,6 +455,10 @@ impl<E: Write> Consumer<'_, '_, E> {
 }
 
 impl<E: Write> LineSink for Consumer<'_, '_, E> {
+    fn interest(&self) -> &Interest {
+        &self.interest
+    }
+
     fn plain_frame(&mut self) {
         self.counts.frames += 1;
     }
@@ -404,15 +495,19 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             );
             self.diags.report(self.log, true, line_no, msg);
         }
-        if frame.kind != FrameKind::Data || frame.extended {
+        if frame.kind != FrameKind::Data {
             return Ok(());
+        }
+        if let Some(t) = frame.time {
+            self.first_time.get_or_insert(t);
+            self.last_time = Some(t);
         }
         let at = At {
             time: frame.time,
             line: line_no,
         };
         let data = frame.data.as_slice();
-        if let Some(node) = emcy::emcy_node(frame.id) {
+        if let Some(node) = self.emcy_node(frame.id, frame.extended) {
             let emcy = match Emcy::decode(data) {
                 Ok(e) => e,
                 Err(short) => {
@@ -462,6 +557,12 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 warnings: &self.warnings,
             };
             self.renderer.emcy(&event).map_err(OutputError)?;
+        } else if frame.extended {
+            return Ok(());
+        } else if let Some(access) = sdo::parse(frame.id, data) {
+            if let Some((node, object, value)) = self.sdo.feed(access) {
+                self.object_value(node, object, value);
+            }
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             self.counts.boot += 1;
             self.check_clock(at);
@@ -519,6 +620,11 @@ struct BlockResult {
     block: Block,
     /// The detector state the block was parsed from, and the one after it.
     start_context: Option<u64>,
+    /// The interest generation it was parsed with.
+    interest_gen: u64,
+    /// The block holds an SDO access to 0x1014 (COB-ID EMCY): the wanted ids
+    /// may change inside it, so it is classified again in order.
+    moves_emcy_id: bool,
     end: Detector,
     lines: u64,
     /// Frames the consumer would ignore (not EMCY/boot candidates), counted only.
@@ -532,14 +638,18 @@ struct BlockResult {
 }
 
 /// The worker-side sink: keeps only what the consumer needs.
-struct Recorder<'i> {
-    interest: &'i Interest,
+struct Recorder {
+    interest: Interest,
     limit: usize,
     result: BlockResult,
     malformed_kept: usize,
 }
 
-impl LineSink for Recorder<'_> {
+impl LineSink for Recorder {
+    fn interest(&self) -> &Interest {
+        &self.interest
+    }
+
     fn plain_frame(&mut self) {
         self.result.plain_frames += 1;
     }
@@ -566,12 +676,14 @@ impl LineSink for Recorder<'_> {
     }
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
-        let candidate = frame.kind == FrameKind::Data
-            && !frame.extended
-            && self.interest.wants(frame.id, false);
+        let candidate =
+            frame.kind == FrameKind::Data && self.interest.wants(frame.id, frame.extended);
         if !candidate && foreign.is_none() {
             self.result.plain_frames += 1;
             return Ok(());
+        }
+        if is_cob_id_emcy_access(frame) {
+            self.result.moves_emcy_id = true;
         }
         let start = self.result.channels.len();
         self.result.channels.extend_from_slice(frame.channel);
@@ -641,7 +753,6 @@ pub fn analyze<R: Read + Send, E: Write>(
     log: &mut DiagnosticLog<E>,
 ) -> Result<Analysis, OutputError> {
     renderer.begin_input(file).map_err(OutputError)?;
-    let interest = interest();
     let mut detector = match opts.input_format {
         Some(f) => Detector::forced(f),
         None => Detector::auto(),
@@ -665,8 +776,19 @@ pub fn analyze<R: Read + Send, E: Write>(
         errors_raised: 0,
         line_base: 0,
         clock: None,
+        first_time: None,
+        last_time: None,
+        emcy_ids: opts
+            .emcy_ids
+            .iter()
+            .map(|e| ((e.id, e.extended), e.node))
+            .collect(),
+        interest: interest(opts),
+        interest_gen: 0,
+        shared_interest: None,
         warnings: Vec::new(),
         active: Vec::new(),
+        sdo: sdo::Tracker::default(),
     };
 
     // Sequential until the format is known (and for inputs whose lines chain,
@@ -675,19 +797,13 @@ pub fn analyze<R: Read + Send, E: Write>(
     let mut buf = Vec::new();
     let format = loop {
         if opts.threads > 1 && detector.format().is_some() && detector.context().is_some() {
-            let (read_error, detector) = parallel(blocks, detector, &interest, &mut consumer)?;
+            let (read_error, detector) = parallel(blocks, detector, &mut consumer)?;
             error = read_error;
             break detector.format();
         }
         match blocks.next_block(buf) {
             Ok(Some(block)) => {
-                classify_block(
-                    &block,
-                    opts.max_line,
-                    &mut detector,
-                    &interest,
-                    &mut consumer,
-                )?;
+                classify_block(&block, opts.max_line, &mut detector, &mut consumer)?;
                 buf = block.bytes;
             }
             Ok(None) => break detector.format(),
@@ -730,6 +846,8 @@ fn finish<E: Write>(
         ));
     }
     let report = InputReport {
+        first_time: consumer.first_time,
+        last_time: consumer.last_time,
         file: file.to_string(),
         format,
         gzip,
@@ -753,20 +871,25 @@ enum Message {
 
 /// Workers classify blocks; the calling thread consumes their results in
 /// order. A block whose start state differs from the state the previous
-/// block ended in (an ASC header changed the base mid-file) is classified
-/// again here, so the result never depends on the split. Returns the read
-/// error, if any, and the detector's final state.
+/// block ended in (an ASC header changed the base mid-file), or that was
+/// parsed for an older set of wanted ids (an EMCY id moved by 0x1014), is
+/// classified again here, so the result never depends on the split. Returns
+/// the read error, if any, and the detector's final state.
 fn parallel<R: Read + Send, E: Write>(
     mut blocks: BlockReader<R>,
     detector: Detector,
-    interest: &Interest,
     consumer: &mut Consumer<'_, '_, E>,
 ) -> Result<(Option<String>, Detector), OutputError> {
     let threads = consumer.opts.threads.max(1);
     let max_line = consumer.opts.max_line;
     let limit = consumer.opts.max_diagnostics;
     let mut current = detector;
-    std::thread::scope(|scope| {
+    let shared: SharedInterest = Arc::new(RwLock::new((
+        consumer.interest_gen,
+        consumer.interest.clone(),
+    )));
+    consumer.shared_interest = Some(Arc::clone(&shared));
+    let outcome = std::thread::scope(|scope| {
         let (block_tx, block_rx) = mpsc::sync_channel::<(u64, Block)>(threads * 2);
         let block_rx = Arc::new(Mutex::new(block_rx));
         let (result_tx, result_rx) = mpsc::channel::<Message>();
@@ -820,18 +943,23 @@ fn parallel<R: Read + Send, E: Write>(
             let mut det = current.fork();
             let rx = Arc::clone(&block_rx);
             let tx = result_tx.clone();
-            let interest = interest.clone();
+            let shared = Arc::clone(&shared);
             scope.spawn(move || {
                 while let Some((seq, block)) = next_job(&rx) {
                     let start_context = det.context();
+                    let Ok((interest_gen, interest)) = shared.read().map(|g| g.clone()) else {
+                        return;
+                    };
                     let mut rec = Recorder {
-                        interest: &interest,
+                        interest,
                         limit,
                         malformed_kept: 0,
                         result: BlockResult {
                             seq,
                             block: Block::default(),
                             start_context,
+                            interest_gen,
+                            moves_emcy_id: false,
                             end: det.fork(),
                             lines: 0,
                             plain_frames: 0,
@@ -842,7 +970,7 @@ fn parallel<R: Read + Send, E: Write>(
                         },
                     };
                     // A recorder never fails: it only collects.
-                    let _ = classify_block(&block, max_line, &mut det, &interest, &mut rec);
+                    let _ = classify_block(&block, max_line, &mut det, &mut rec);
                     let mut result = rec.result;
                     result.end = det.fork();
                     result.block = block;
@@ -854,16 +982,10 @@ fn parallel<R: Read + Send, E: Write>(
         }
         drop(result_tx);
 
-        consume_in_order(
-            result_rx,
-            &recycle_tx,
-            &mut current,
-            interest,
-            consumer,
-            max_line,
-        )
-    })
-    .map(|error| (error, current))
+        consume_in_order(result_rx, &recycle_tx, &mut current, consumer, max_line)
+    });
+    consumer.shared_interest = None;
+    outcome.map(|error| (error, current))
 }
 
 fn next_job(rx: &Mutex<Receiver<(u64, Block)>>) -> Option<(u64, Block)> {
@@ -874,7 +996,6 @@ fn consume_in_order<E: Write>(
     results: Receiver<Message>,
     recycle: &mpsc::Sender<Vec<u8>>,
     current: &mut Detector,
-    interest: &Interest,
     consumer: &mut Consumer<'_, '_, E>,
     max_line: usize,
 ) -> Result<Option<String>, OutputError> {
@@ -889,12 +1010,16 @@ fn consume_in_order<E: Write>(
             Message::ReadError(seq, e) => read_error = Some((seq, e)),
         }
         while let Some(r) = pending.remove(&next) {
-            let block = if r.start_context.is_some() && r.start_context == current.context() {
+            let valid = r.start_context.is_some()
+                && r.start_context == current.context()
+                && r.interest_gen == consumer.interest_gen
+                && !r.moves_emcy_id;
+            let block = if valid {
                 let mut r = r;
                 std::mem::swap(current, &mut r.end);
                 consumer.replay(r)?
             } else {
-                classify_block(&r.block, max_line, current, interest, consumer)?;
+                classify_block(&r.block, max_line, current, consumer)?;
                 r.block
             };
             let _ = recycle.send(block.bytes);

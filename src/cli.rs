@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use crate::analyze::EmcyId;
 use crate::report::table::ColorChoice;
 use crate::trace::Format;
 
@@ -69,6 +70,11 @@ pub struct DecodeArgs {
     /// Report only this channel (candump interface or ASC channel number; repeatable)
     #[arg(long, value_name = "NAME")]
     pub channel: Vec<String>,
+
+    /// A node's EMCY id moved by object 0x1014: COBID=NODE, hex COB-ID (29-bit when over
+    /// 0x7FF, 8 digits or with an x suffix), e.g. 0x1A5=5 (repeatable)
+    #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
+    pub emcy_id: Vec<EmcyId>,
 
     /// Exit 1 when any error EMCY was seen (any) or a node ends with an active error (active)
     #[arg(long, value_enum, default_value_t = FailOn::Never, value_name = "WHEN")]
@@ -153,6 +159,28 @@ pub enum FailOn {
     Active,
 }
 
+/// `0x1A5=5`, `000001A5=5` (29-bit by digit count), `1A5x=5` (29-bit).
+fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
+    let err = || format!("'{s}' is not COBID=NODE (e.g. 0x1A5=5 or 18FF0105x=5)");
+    let (cob, node) = s.split_once('=').ok_or_else(err)?;
+    let node = parse_node(node)?;
+    let cob = cob.trim();
+    let digits = cob
+        .strip_prefix("0x")
+        .or_else(|| cob.strip_prefix("0X"))
+        .unwrap_or(cob);
+    let (digits, x) = match digits.strip_suffix(['x', 'X']) {
+        Some(d) => (d, true),
+        None => (digits, false),
+    };
+    let id = u32::from_str_radix(digits, 16).map_err(|_| err())?;
+    let extended = x || digits.len() == 8 || id > 0x7FF;
+    if id > 0x1FFF_FFFF {
+        return Err(format!("'{cob}' is more than 29 bits"));
+    }
+    Ok(EmcyId { id, extended, node })
+}
+
 /// A CANopen node id, 1..=127, decimal or 0x hex.
 fn parse_node(s: &str) -> Result<u8, String> {
     let t = s.trim();
@@ -174,6 +202,20 @@ mod tests {
     #[test]
     fn definition_is_consistent() {
         Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn emcy_ids() {
+        let e = |s: &str| parse_emcy_id(s).map(|e| (e.id, e.extended, e.node));
+        assert_eq!(e("0x1A5=5"), Ok((0x1A5, false, 5)));
+        assert_eq!(e("1a5=0x05"), Ok((0x1A5, false, 5)));
+        assert_eq!(e("000001A5=5"), Ok((0x1A5, true, 5)));
+        assert_eq!(e("1A5x=5"), Ok((0x1A5, true, 5)));
+        assert_eq!(e("18FF0105=7"), Ok((0x18FF_0105, true, 7)));
+        assert!(e("0x1A5").is_err());
+        assert!(e("0x1A5=0").is_err());
+        assert!(e("zz=5").is_err());
+        assert!(e("3FFFFFFF=5").is_err());
     }
 
     #[test]

@@ -363,8 +363,8 @@ impl Iterator for NodeErrors<'_, '_> {
 
 /// channel u32, node u8, code u16, cleared_by u8, register u8, seq u64,
 /// start line u64, end line u64 (+ flag u8), start time and end time
-/// (flag u8, digits u8, secs u64, atto u64 each).
-const RECORD: usize = 4 + 1 + 2 + 1 + 1 + 8 + 8 + 9 + 18 + 18;
+/// (flag u8, digits u8, secs u64, atto u64 each), status bit (flag u8, u8).
+const RECORD: usize = 4 + 1 + 2 + 1 + 1 + 8 + 8 + 9 + 18 + 18 + 2;
 
 fn put_time(out: &mut [u8], t: Option<Timestamp>) {
     match t {
@@ -389,6 +389,7 @@ fn encode(r: &Record, out: &mut [u8; RECORD]) {
         Some(ClearedBy::Reset) => 1,
         Some(ClearedBy::PartialReset) => 2,
         Some(ClearedBy::Boot) => 3,
+        Some(ClearedBy::StatusBit) => 4,
     };
     out[8] = iv.raised_register.0;
     out[9..17].copy_from_slice(&iv.seq.to_le_bytes());
@@ -397,6 +398,8 @@ fn encode(r: &Record, out: &mut [u8; RECORD]) {
     out[26..34].copy_from_slice(&iv.end.map_or(0, |e| e.line).to_le_bytes());
     put_time(&mut out[34..52], iv.start.time);
     put_time(&mut out[52..70], iv.end.and_then(|e| e.time));
+    out[70] = u8::from(iv.status_bit.is_some());
+    out[71] = iv.status_bit.unwrap_or(0);
 }
 
 fn corrupt() -> io::Error {
@@ -440,6 +443,7 @@ fn decode(b: &[u8]) -> io::Result<Record> {
         1 => Some(ClearedBy::Reset),
         2 => Some(ClearedBy::PartialReset),
         3 => Some(ClearedBy::Boot),
+        4 => Some(ClearedBy::StatusBit),
         _ => return Err(corrupt()),
     };
     let end = match byte(25)? {
@@ -462,6 +466,10 @@ fn decode(b: &[u8]) -> io::Result<Record> {
             end,
             cleared_by,
             raised_register: Register(byte(8)?),
+            status_bit: match byte(70)? {
+                0 => None,
+                _ => Some(byte(71)?),
+            },
         },
     })
 }
@@ -486,8 +494,9 @@ mod tests {
                 time: None,
                 line: seq.wrapping_mul(10).wrapping_add(5),
             }),
-            cleared_by: closed.then_some(ClearedBy::PartialReset),
+            cleared_by: closed.then_some(ClearedBy::StatusBit),
             raised_register: Register(0x09),
+            status_bit: closed.then_some(0x1B),
         }
     }
 

@@ -58,6 +58,7 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         nodes: args.node.clone(),
         channels: args.channel.clone(),
         max_diagnostics: args.max_diagnostics,
+        emcy_ids: args.emcy_id.clone(),
         ..Options::default()
     };
     let sources: Vec<Source> = if args.files.is_empty() {

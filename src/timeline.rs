@@ -16,7 +16,7 @@
 use crate::canopen::codes;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::register::Register;
-use crate::trace::Timestamp;
+use crate::trace::{Span, Timestamp};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum State {
@@ -43,6 +43,9 @@ pub enum ClearedBy {
     PartialReset,
     /// The node sent an NMT boot-up: it restarted.
     Boot,
+    /// A reset frame named the error status bit the error was raised with
+    /// (CANopenNode: exact, where register inference cannot be).
+    StatusBit,
 }
 
 impl ClearedBy {
@@ -51,6 +54,7 @@ impl ClearedBy {
             ClearedBy::Reset => "reset",
             ClearedBy::PartialReset => "partial_reset",
             ClearedBy::Boot => "boot",
+            ClearedBy::StatusBit => "status_bit",
         }
     }
 }
@@ -74,6 +78,8 @@ pub struct Interval {
     /// The error register sent with the raising EMCY: the class bit that must
     /// later drop for a partial reset to be attributed to this error.
     pub raised_register: Register,
+    /// The error status bit it was raised with, under a profile that tracks them.
+    pub status_bit: Option<u8>,
 }
 
 /// What one EMCY did to its node.
@@ -97,6 +103,23 @@ pub struct NodeTimeline {
     active: Vec<Interval>,
     next_seq: u64,
     emcy_count: u64,
+    stats: NodeStats,
+}
+
+/// Running totals for the summary view, kept as the trace goes (bounded
+/// memory whatever its length).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct NodeStats {
+    /// Errors raised, per code (a repeat of an active code is not a raise).
+    pub raised: std::collections::BTreeMap<u16, u64>,
+    pub first_emcy: Option<At>,
+    pub last_emcy: Option<At>,
+    /// Time spent in error-occurred, over periods that ended.
+    pub time_in_error: Span,
+    /// When the current error period began (the node is in error now).
+    pub in_error_since: Option<Timestamp>,
+    /// The longest error that ended: its code and duration.
+    pub longest: Option<(u16, Span)>,
 }
 
 impl NodeTimeline {
@@ -110,6 +133,40 @@ impl NodeTimeline {
 
     pub fn emcy_count(&self) -> u64 {
         self.emcy_count
+    }
+
+    pub fn stats(&self) -> &NodeStats {
+        &self.stats
+    }
+
+    /// Bookkeeping after every frame: counts, first/last EMCY, time in error,
+    /// longest error.
+    fn account(&mut self, was: State, at: At, emcy: bool, closed: &[Interval]) {
+        let st = &mut self.stats;
+        if emcy {
+            st.first_emcy.get_or_insert(at);
+            st.last_emcy = Some(at);
+        }
+        for iv in closed {
+            if let (Some(start), Some(end)) = (iv.start.time, iv.end.and_then(|e| e.time)) {
+                let d = end.since(start);
+                if st.longest.is_none_or(|(_, l)| d > l) {
+                    st.longest = Some((iv.code, d));
+                }
+            }
+        }
+        match (was, self.state) {
+            (State::ErrorFree, State::ErrorOccurred) => st.in_error_since = at.time,
+            (State::ErrorOccurred, State::ErrorFree) => {
+                if let (Some(since), Some(now)) = (st.in_error_since.take(), at.time) {
+                    st.time_in_error = st
+                        .time_in_error
+                        .checked_add(now.since(since))
+                        .unwrap_or(st.time_in_error);
+                }
+            }
+            _ => {}
+        }
     }
 
     /// The open intervals, in the order they were raised (`end: None`).
@@ -137,8 +194,10 @@ impl NodeTimeline {
                     end: None,
                     cleared_by: None,
                     raised_register: emcy.register,
+                    status_bit: None,
                 });
                 self.next_seq += 1;
+                *self.stats.raised.entry(emcy.code).or_insert(0) += 1;
             }
             self.state = State::ErrorOccurred;
             Some(if was == State::ErrorFree { 1 } else { 3 })
@@ -170,6 +229,51 @@ impl NodeTimeline {
                 Some(4)
             }
         };
+        self.account(was, at, true, &closed);
+        Step {
+            transition,
+            state: self.state,
+            cleared: closed.iter().map(|iv| iv.code).collect(),
+            closed,
+        }
+    }
+
+    /// Applies one EMCY from a node whose profile names an error status bit in
+    /// every frame (CANopenNode sends a frame when a bit is set and when it is
+    /// cleared, and says which): an error is raised as usual and remembers its
+    /// bit; a code-0x0000 frame closes exactly the error raised with its bit
+    /// (transition 2, or 4 when nothing is left). A code-0x0000 frame whose
+    /// bit is not active is an information report (the CAN bus warning):
+    /// not a reset, no transition, state unchanged.
+    pub fn emcy_with_status_bit(
+        &mut self,
+        emcy: &Emcy,
+        at: At,
+        bit: u8,
+        warnings: &mut Vec<Warning>,
+    ) -> Step {
+        if !emcy.is_reset() {
+            let step = self.emcy(emcy, at, warnings);
+            if let Some(iv) = self.active.iter_mut().find(|iv| iv.code == emcy.code) {
+                iv.status_bit.get_or_insert(bit);
+            }
+            return step;
+        }
+        self.emcy_count += 1;
+        let was = self.state;
+        let mut closed = Vec::new();
+        self.close_where(at, ClearedBy::StatusBit, &mut closed, |iv| {
+            iv.status_bit == Some(bit)
+        });
+        let transition = if closed.is_empty() {
+            None
+        } else if self.active.is_empty() {
+            self.state = State::ErrorFree;
+            Some(4)
+        } else {
+            Some(2)
+        };
+        self.account(was, at, true, &closed);
         Step {
             transition,
             state: self.state,
@@ -180,9 +284,11 @@ impl NodeTimeline {
 
     /// Applies an NMT boot-up; returns the intervals it closed.
     pub fn boot(&mut self, at: At) -> Vec<Interval> {
+        let was = self.state;
         let mut closed = Vec::new();
         self.close_where(at, ClearedBy::Boot, &mut closed, |_| true);
         self.state = State::ErrorFree;
+        self.account(was, at, false, &closed);
         closed
     }
 
@@ -292,6 +398,79 @@ mod tests {
         let t = NodeTimeline::new();
         assert_eq!(t.state(), State::ErrorFree);
         assert_eq!(t.active_codes().count(), 0);
+    }
+
+    #[test]
+    fn status_bit_reset_closes_exactly_its_error() {
+        let mut t = NodeTimeline::new();
+        let mut w = Vec::new();
+        // Heartbeat timeout (bit 0x1B) and a PDO length error (bit 0x04), both communication.
+        t.emcy_with_status_bit(&emcy(0x8130, 0x11), at(1), 0x1B, &mut w);
+        let s2 = t.emcy_with_status_bit(&emcy(0x8210, 0x11), at(2), 0x04, &mut w);
+        assert_eq!(s2.transition, Some(3));
+        // The register cannot say which ended; the bit can.
+        let s3 = t.emcy_with_status_bit(&emcy(0x0000, 0x11), at(3), 0x04, &mut w);
+        assert_eq!((s3.transition, s3.state), (Some(2), State::ErrorOccurred));
+        assert_eq!(s3.cleared, [0x8210]);
+        assert_eq!(s3.closed[0].cleared_by, Some(ClearedBy::StatusBit));
+        let s4 = t.emcy_with_status_bit(&emcy(0x0000, 0x00), at(4), 0x1B, &mut w);
+        assert_eq!((s4.transition, s4.state), (Some(4), State::ErrorFree));
+        assert_eq!(s4.cleared, [0x8130]);
+        assert!(w.is_empty(), "{w:?}");
+    }
+
+    #[test]
+    fn status_bit_report_of_an_inactive_bit_is_information() {
+        let mut t = NodeTimeline::new();
+        let mut w = Vec::new();
+        // CANopenNode's CAN bus warning: code 0x0000, bit 0x01, never raised as an error.
+        let s = t.emcy_with_status_bit(&emcy(0x0000, 0x11), at(1), 0x01, &mut w);
+        assert_eq!((s.transition, s.state), (None, State::ErrorFree));
+        assert!(s.cleared.is_empty() && w.is_empty());
+        // With an error active, an unrelated bit still closes nothing.
+        t.emcy_with_status_bit(&emcy(0x8130, 0x11), at(2), 0x1B, &mut w);
+        let s = t.emcy_with_status_bit(&emcy(0x0000, 0x11), at(3), 0x01, &mut w);
+        assert_eq!((s.transition, s.state), (None, State::ErrorOccurred));
+        assert_eq!(t.active_codes().collect::<Vec<_>>(), [0x8130]);
+        assert_eq!(t.emcy_count(), 3);
+    }
+
+    #[test]
+    fn stats_follow_the_trace() {
+        let (t, _) = run(&[
+            (0x4310, 0x09), // line 1: error period starts
+            (0x4310, 0x09), // repeat: not a raise
+            (0x2310, 0x0B),
+            (0x0000, 0x09), // line 4: 0x2310 closes after 1 s
+            (0x0000, 0x00), // line 5: 0x4310 closes after 4 s; period ends (4 s)
+            (0x4310, 0x09), // line 6: a new period, still open at the end
+        ]);
+        let st = t.t.stats();
+        assert_eq!(
+            st.raised.iter().map(|(c, n)| (*c, *n)).collect::<Vec<_>>(),
+            [(0x2310, 1), (0x4310, 2)]
+        );
+        assert_eq!(st.first_emcy.map(|a| a.line), Some(1));
+        assert_eq!(st.last_emcy.map(|a| a.line), Some(6));
+        assert_eq!(st.time_in_error.to_string(), "4.0");
+        assert_eq!(
+            st.longest.map(|(c, d)| (c, d.to_string())),
+            Some((0x4310, "4.0".to_string()))
+        );
+        assert_eq!(
+            st.in_error_since.map(|t| t.to_string()),
+            Some("6.0".to_string())
+        );
+    }
+
+    #[test]
+    fn a_boot_ends_an_error_period() {
+        let (mut t, _) = run(&[(0x4310, 0x09)]);
+        t.boot(at(3));
+        let st = t.t.stats();
+        assert_eq!(st.time_in_error.to_string(), "2.0");
+        assert_eq!(st.in_error_since, None);
+        assert_eq!(st.longest.map(|(c, _)| c), Some(0x4310));
     }
 
     #[test]

@@ -440,3 +440,47 @@ fn events_from_a_pipe_arrive_before_the_writer_finishes() {
     drop(stdin);
     assert!(child.wait().unwrap().success());
 }
+
+// ---- EMCY ids other than 0x80 + node ---------------------------------------------
+
+#[test]
+fn emcy_id_flag_decodes_a_moved_id_from_the_first_line() {
+    // Without the flag, the frame on 0x3F5 before the SDO write is a plain frame.
+    let plain = emcy_decode()
+        .args(["--format", "ndjson", "fixtures/sdo-emcy-id.log"])
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&plain.stdout);
+    assert_eq!(of_type(&objects, "emcy").len(), 3);
+
+    let mapped = emcy_decode()
+        .args([
+            "--format",
+            "ndjson",
+            "--emcy-id",
+            "0x3F5=5",
+            "--emcy-id",
+            "00000106=6",
+            "fixtures/sdo-emcy-id.log",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(mapped.status.code(), Some(0));
+    let objects = ndjson_objects(&mapped.stdout);
+    let emcy = of_type(&objects, "emcy");
+    let lines: Vec<(i64, i64)> = emcy
+        .iter()
+        .map(|e| (e["line"].as_i64().unwrap(), e["node"].as_i64().unwrap()))
+        .collect();
+    // Line 2 (before the write) and line 10 (the extended id of node 6) now count.
+    assert_eq!(lines, [(2, 5), (7, 5), (10, 6), (11, 5), (12, 5)]);
+}
+
+#[test]
+fn emcy_id_flag_rejects_nonsense_with_exit_2() {
+    emcy_decode()
+        .args(["--emcy-id", "0x3F5", "fixtures/s300.log"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--emcy-id"));
+}

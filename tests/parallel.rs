@@ -234,3 +234,34 @@ fn error_history_on_disk_reads_back_identically() {
     };
     assert_eq!(table(2), table(usize::MAX));
 }
+
+/// An SDO write to 0x1014 moves node 5's EMCY id mid-trace: frames on the new
+/// id before the confirmation are plain frames, after it EMCYs, however the
+/// blocks fall (workers parse with the old set of wanted ids and the block
+/// holding the write is classified again in order).
+#[test]
+fn emcy_id_moved_by_sdo_mid_trace() {
+    let mut trace = Vec::new();
+    for i in 0..600u32 {
+        let t = 1000 + i;
+        match i {
+            300 => trace.extend(format!("({t}.0) can0 605#23141000F5030000\n").bytes()),
+            301 => trace.extend(format!("({t}.0) can0 585#6014100000000000\n").bytes()),
+            _ => {
+                let data = if i % 2 == 0 {
+                    "1043090000000000"
+                } else {
+                    "0000000000000000"
+                };
+                trace.extend(format!("({t}.0) can0 3F5#{data}\n").bytes());
+                if i % 10 == 0 {
+                    trace.extend(format!("({t}.5) can0 085#{data}\n").bytes());
+                }
+            }
+        }
+    }
+    let (out, _) = run(&trace, 1, 1 << 20);
+    let on_moved = out.matches("\"cob_id\":1013").count();
+    assert_eq!(on_moved, 298, "EMCYs on 0x3F5 after the write");
+    assert_split_independent("moved emcy id", &trace);
+}

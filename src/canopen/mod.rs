@@ -3,3 +3,4 @@
 pub mod codes;
 pub mod emcy;
 pub mod register;
+pub mod sdo;

@@ -11,7 +11,7 @@ use std::io;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::history::ErrorHistory;
-use crate::timeline::State;
+use crate::timeline::{NodeStats, State};
 use crate::trace::{Format, Timestamp};
 
 /// One decoded EMCY frame, borrowed from the pipeline (no allocation per event).
@@ -51,6 +51,7 @@ pub struct NodeReport {
     pub state: State,
     pub active: Vec<u16>,
     pub emcy_count: u64,
+    pub stats: NodeStats,
 }
 
 /// Line counts of one input. Every line is exactly one of frame, skipped, malformed.
@@ -79,6 +80,10 @@ pub struct InputReport {
     pub nodes: Vec<NodeReport>,
     /// Every error interval of every node, in report order.
     pub history: ErrorHistory,
+    /// Times of the first and last decoded frame (EMCY, NMT, SDO): the span
+    /// the summary measures rates and open errors against.
+    pub first_time: Option<Timestamp>,
+    pub last_time: Option<Timestamp>,
     /// Why reading stopped early (I/O error, corrupt gzip, unknown format).
     pub error: Option<String>,
 }

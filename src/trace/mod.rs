@@ -187,10 +187,13 @@ pub struct Frame<'a> {
 
 /// Which identifiers the caller wants decoded. Parsers read the id first and
 /// skip decoding time and data for everything else.
-#[derive(Clone)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Interest {
     standard: [u64; 32],
-    extended: bool,
+    /// Every extended id (tests, conversions).
+    all_extended: bool,
+    /// Single extended ids (a node whose 0x1014 moved its EMCY to 29 bits).
+    extended: Vec<u32>,
 }
 
 impl Interest {
@@ -198,14 +201,22 @@ impl Interest {
     pub fn all() -> Interest {
         Interest {
             standard: [u64::MAX; 32],
-            extended: true,
+            all_extended: true,
+            extended: Vec::new(),
         }
     }
 
     pub fn none() -> Interest {
         Interest {
             standard: [0; 32],
-            extended: false,
+            all_extended: false,
+            extended: Vec::new(),
+        }
+    }
+
+    pub fn add_extended(&mut self, id: u32) {
+        if let Err(i) = self.extended.binary_search(&id) {
+            self.extended.insert(i, id);
         }
     }
 
@@ -224,7 +235,7 @@ impl Interest {
     #[inline]
     pub fn wants(&self, id: u32, extended: bool) -> bool {
         if extended {
-            return self.extended;
+            return self.all_extended || self.extended.binary_search(&id).is_ok();
         }
         match self.standard.get((id >> 6) as usize) {
             Some(word) => word & (1 << (id & 63)) != 0,
@@ -389,6 +400,10 @@ mod tests {
         assert!(!i.wants(u32::MAX, false));
         i.add_standard(5000); // out of range: ignored, no panic
         assert!(Interest::all().wants(0x1234_5678, true));
+        i.add_extended(0x1234_5678);
+        assert!(i.wants(0x1234_5678, true));
+        assert!(!i.wants(0x1234_5679, true));
+        assert!(!i.wants(0x78, false));
     }
 
     #[test]

@@ -26,7 +26,7 @@ pub struct Timestamp {
 }
 
 /// A signed difference of two timestamps (an error's duration).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Span {
     atto: i128,
     digits: u8,
@@ -176,6 +176,16 @@ impl Ord for Timestamp {
 }
 
 impl Span {
+    pub const ZERO: Span = Span { atto: 0, digits: 0 };
+
+    /// The sum, with the finer precision; `None` on overflow.
+    pub fn checked_add(self, other: Span) -> Option<Span> {
+        Some(Span {
+            atto: self.atto.checked_add(other.atto)?,
+            digits: self.digits.max(other.digits),
+        })
+    }
+
     pub fn is_negative(self) -> bool {
         self.atto < 0
     }
