@@ -88,6 +88,10 @@ pub struct Analysis {
     pub report: InputReport,
     /// Selected EMCY frames with an error code (not a reset).
     pub errors_raised: u64,
+    /// Selected EMCY frames that carried a protocol warning.
+    pub frames_with_warnings: u64,
+    /// The lowest (most severe) profile category of a selected error EMCY.
+    pub worst_category: Option<u8>,
 }
 
 /// Where diagnostics go: stderr as they happen (bounded per input) and a
@@ -116,7 +120,7 @@ impl<E: Write> DiagnosticLog<E> {
         let _ = writeln!(self.stderr, "error: {message}");
     }
 
-    fn note(&mut self, message: &str) {
+    pub fn note(&mut self, message: &str) {
         let _ = writeln!(self.stderr, "{message}");
     }
 }
@@ -373,6 +377,8 @@ struct Consumer<'r, 'l, E: Write> {
     nodes: Nodes,
     diags: InputDiagnostics,
     errors_raised: u64,
+    frames_with_warnings: u64,
+    worst_category: Option<u8>,
     decided: bool,
     /// Lines before the current block.
     line_base: u64,
@@ -537,6 +543,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             }
             if !emcy.is_reset() {
                 self.errors_raised += 1;
+            }
+            if !self.warnings.is_empty() {
+                self.frames_with_warnings += 1;
             }
             self.active.clear();
             self.active.extend(timeline.active_codes());
@@ -774,6 +783,8 @@ pub fn analyze<R: Read + Send, E: Write>(
             pending: Vec::new(),
         },
         errors_raised: 0,
+        frames_with_warnings: 0,
+        worst_category: None,
         line_base: 0,
         clock: None,
         first_time: None,
@@ -860,6 +871,8 @@ fn finish<E: Write>(
     Ok(Analysis {
         report,
         errors_raised: consumer.errors_raised,
+        frames_with_warnings: consumer.frames_with_warnings,
+        worst_category: consumer.worst_category,
     })
 }
 

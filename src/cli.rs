@@ -76,9 +76,16 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
     pub emcy_id: Vec<EmcyId>,
 
-    /// Exit 1 when any error EMCY was seen (any) or a node ends with an active error (active)
-    #[arg(long, value_enum, default_value_t = FailOn::Never, value_name = "WHEN")]
-    pub fail_on: FailOn,
+    /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
+    /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
+    /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), `never`
+    #[arg(long, value_parser = parse_fail_on, value_name = "WHEN")]
+    pub fail_on: Vec<FailOn>,
+
+    /// What to print: every event and the timeline (full), or one line per node
+    /// and per bus (summary)
+    #[arg(long, value_enum, default_value_t = View::Full, value_name = "VIEW")]
+    pub view: View,
 
     /// Exit 2 when any line is malformed
     #[arg(long)]
@@ -150,13 +157,107 @@ impl From<InputFormat> for Format {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum FailOn {
-    /// Never fail because of what the trace contains
-    Never,
-    /// Fail when any EMCY with an error code (not a reset) was seen
-    Any,
-    /// Fail when any node ends the trace with an active error
-    Active,
+pub enum View {
+    /// Events as decoded, node states, the error timeline, input counts
+    Full,
+    /// One line per node (state, errors seen, time in error, longest error,
+    /// first/last EMCY) and a bus line per input
+    Summary,
+}
+
+/// The `--fail-on` conditions of one or more flags, combined: any met fails.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FailOn {
+    /// Any EMCY with an error code (not a reset).
+    pub any: bool,
+    /// A node ends the trace with an active error.
+    pub active: bool,
+    /// Any protocol warning on a reported EMCY.
+    pub warning: bool,
+    /// Any of these codes raised.
+    pub codes: Vec<u16>,
+    /// An error whose profile category is at most this (1 = most severe).
+    pub category_at_most: Option<u8>,
+}
+
+impl FailOn {
+    /// All flags given, merged.
+    pub fn combine(flags: &[FailOn]) -> FailOn {
+        let mut all = FailOn::default();
+        for f in flags {
+            all.any |= f.any;
+            all.active |= f.active;
+            all.warning |= f.warning;
+            all.codes.extend(&f.codes);
+            all.category_at_most = match (all.category_at_most, f.category_at_most) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            };
+        }
+        all.codes.sort_unstable();
+        all.codes.dedup();
+        all
+    }
+
+    pub fn is_never(&self) -> bool {
+        *self == FailOn::default()
+    }
+}
+
+/// `any`, `active`, `warning`, `never`, `code=0x4310,0x8611` (the codes run
+/// to the next word), `category<=2`; comma-separated.
+fn parse_fail_on(s: &str) -> Result<FailOn, String> {
+    let mut f = FailOn::default();
+    let mut in_codes = false;
+    for item in s.split(',').map(str::trim) {
+        let lower = item.to_ascii_lowercase();
+        if let Some(code) = lower.strip_prefix("code=") {
+            f.codes.push(parse_code(code)?);
+            in_codes = true;
+            continue;
+        }
+        if let Some(n) = lower.strip_prefix("category<=") {
+            let n: u8 = n
+                .trim()
+                .parse()
+                .map_err(|_| format!("'{item}': category<=N needs a number 0-255"))?;
+            f.category_at_most = Some(n);
+            in_codes = false;
+            continue;
+        }
+        match lower.as_str() {
+            // The default, kept so `--fail-on never` in scripts stays valid.
+            "never" => {}
+            "any" => f.any = true,
+            "active" => f.active = true,
+            "warning" | "warnings" => f.warning = true,
+            _ if in_codes => {
+                f.codes.push(parse_code(item)?);
+                continue;
+            }
+            _ => {
+                return Err(format!(
+                    "'{item}' is not a condition: never, any, active, warning, \
+                     code=CODE[,CODE...], category<=N"
+                ));
+            }
+        }
+        in_codes = false;
+    }
+    Ok(f)
+}
+
+/// An error code in hex, with or without 0x.
+fn parse_code(s: &str) -> Result<u16, String> {
+    let t = s.trim();
+    let hex = t
+        .strip_prefix("0x")
+        .or_else(|| t.strip_prefix("0X"))
+        .unwrap_or(t);
+    if hex.is_empty() || hex.len() > 4 {
+        return Err(format!("'{s}' is not an error code (1-4 hex digits)"));
+    }
+    u16::from_str_radix(hex, 16).map_err(|_| format!("'{s}' is not an error code (hex)"))
 }
 
 /// `0x1A5=5`, `000001A5=5` (29-bit by digit count), `1A5x=5` (29-bit).
@@ -216,6 +317,64 @@ mod tests {
         assert!(e("0x1A5=0").is_err());
         assert!(e("zz=5").is_err());
         assert!(e("3FFFFFFF=5").is_err());
+    }
+
+    #[test]
+    fn fail_on_conditions() {
+        let f = |s: &str| parse_fail_on(s);
+        assert_eq!(f("never"), Ok(FailOn::default()));
+        assert_eq!(
+            f("any"),
+            Ok(FailOn {
+                any: true,
+                ..FailOn::default()
+            })
+        );
+        assert_eq!(
+            f("active,warning"),
+            Ok(FailOn {
+                active: true,
+                warning: true,
+                ..FailOn::default()
+            })
+        );
+        // Codes run to the next condition word.
+        assert_eq!(
+            f("code=0x4310,8611,active"),
+            Ok(FailOn {
+                active: true,
+                codes: vec![0x4310, 0x8611],
+                ..FailOn::default()
+            })
+        );
+        assert_eq!(
+            f("category<=2"),
+            Ok(FailOn {
+                category_at_most: Some(2),
+                ..FailOn::default()
+            })
+        );
+        assert!(
+            f("8611").is_err(),
+            "a code outside code= is not a condition"
+        );
+        assert!(f("code=0x12345").is_err());
+        assert!(f("code=").is_err());
+        assert!(f("category<=x").is_err());
+        assert!(f("sometimes").is_err());
+    }
+
+    #[test]
+    fn fail_on_flags_combine() {
+        let a = parse_fail_on("code=4310,any").unwrap();
+        let b = parse_fail_on("code=0x2310,0x4310,category<=1").unwrap();
+        let c = parse_fail_on("category<=3").unwrap();
+        let all = FailOn::combine(&[a, b, c]);
+        assert!(all.any);
+        assert!(!all.active);
+        assert_eq!(all.codes, [0x2310, 0x4310]);
+        assert_eq!(all.category_at_most, Some(3), "the widest bound wins");
+        assert!(FailOn::combine(&[]).is_never());
     }
 
     #[test]

@@ -7,12 +7,14 @@ use std::process::ExitCode;
 use anyhow::Result;
 
 use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
-use crate::cli::{Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat};
+use crate::cli::{
+    Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat, View,
+};
 use crate::explain;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::table::{TableReport, use_color};
-use crate::report::{InputReport, Renderer};
+use crate::report::{InputReport, Renderer, WithoutEvents};
 use crate::trace::input::{self, Source};
 
 /// The exit codes of the contract in `--help`.
@@ -74,13 +76,17 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
     // must show up when its line arrives, not when a buffer fills.
     let live = sources == [Source::Stdin] && input::stdin_is_stream();
     let out = io::BufWriter::with_capacity(64 * 1024, stdout.lock());
+    let summary = args.view == View::Summary;
     let mut renderer: Box<dyn Renderer> = match args.format {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
             let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
-            Box::new(TableReport::new(out, color, live))
+            let table = TableReport::new(out, color, live);
+            Box::new(if summary { table.summary_only() } else { table })
         }
+        OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
         OutputFormat::Json => Box::new(JsonDocument::new(out)),
+        OutputFormat::Ndjson if summary => Box::new(WithoutEvents(Ndjson::new(out, live))),
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
     };
     let mut log = DiagnosticLog::new(io::stderr());
@@ -90,7 +96,7 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
     };
 
     match decode_all(&sources, &opts, threads, renderer.as_mut(), &mut log) {
-        Ok(outcome) => Ok(ExitCode::from(exit_code(args, &outcome))),
+        Ok(outcome) => Ok(ExitCode::from(exit_code(args, &outcome, &mut log))),
         // The reader of our output went away (`| head -1`): not an error.
         Err(OutputError(e)) if e.kind() == io::ErrorKind::BrokenPipe => Ok(ExitCode::from(EXIT_OK)),
         Err(OutputError(e)) => {
@@ -188,7 +194,7 @@ fn describe_io(e: &io::Error) -> String {
     }
 }
 
-fn exit_code(args: &DecodeArgs, outcome: &Outcome) -> u8 {
+fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::Stderr>) -> u8 {
     let reports = outcome.analyses.iter().map(|a| &a.report);
     let input_failed = outcome.open_failures > 0 || reports.clone().any(|r| r.error.is_some());
     let strict_failed = args.strict
@@ -198,10 +204,61 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome) -> u8 {
     if input_failed || strict_failed {
         return EXIT_ERROR;
     }
-    let failed = match args.fail_on {
-        FailOn::Never => false,
-        FailOn::Any => outcome.analyses.iter().any(|a| a.errors_raised > 0),
-        FailOn::Active => reports.flat_map(|r| &r.nodes).any(|n| !n.active.is_empty()),
-    };
-    if failed { EXIT_FAIL_ON } else { EXIT_OK }
+    let met = fail_on_met(&FailOn::combine(&args.fail_on), &outcome.analyses);
+    for reason in &met {
+        log.note(&format!("fail-on: {reason}"));
+    }
+    if met.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_FAIL_ON
+    }
+}
+
+/// The `--fail-on` conditions the inputs met, each with what met it.
+pub fn fail_on_met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
+    let mut met = Vec::new();
+    let nodes = || analyses.iter().flat_map(|a| &a.report.nodes);
+    if fail_on.any {
+        let n: u64 = analyses.iter().map(|a| a.errors_raised).sum();
+        if n > 0 {
+            met.push(format!("any: {n} error EMCY frame{}", plural(n)));
+        }
+    }
+    if fail_on.active {
+        let n = nodes().filter(|n| !n.active.is_empty()).count() as u64;
+        if n > 0 {
+            met.push(format!(
+                "active: {n} node{} end{} with an active error",
+                plural(n),
+                if n == 1 { "s" } else { "" }
+            ));
+        }
+    }
+    if fail_on.warning {
+        let n: u64 = analyses.iter().map(|a| a.frames_with_warnings).sum();
+        if n > 0 {
+            met.push(format!(
+                "warning: {n} EMCY frame{} with warnings",
+                plural(n)
+            ));
+        }
+    }
+    for &code in &fail_on.codes {
+        let n: u64 = nodes().filter_map(|n| n.stats.raised.get(&code)).sum();
+        if n > 0 {
+            met.push(format!("code=0x{code:04X}: raised {n} time{}", plural(n)));
+        }
+    }
+    if let Some(bound) = fail_on.category_at_most {
+        let worst = analyses.iter().filter_map(|a| a.worst_category).min();
+        if let Some(worst) = worst.filter(|&w| w <= bound) {
+            met.push(format!("category<={bound}: an error of category {worst}"));
+        }
+    }
+    met
+}
+
+fn plural(n: u64) -> &'static str {
+    if n == 1 { "" } else { "s" }
 }

@@ -124,6 +124,114 @@ fn strict_makes_malformed_lines_exit_2() {
 }
 
 #[test]
+fn fail_on_code_fails_only_for_the_listed_codes() {
+    // stoeber raises 0x4310 only.
+    emcy_decode()
+        .args(["--fail-on", "code=0x4310", "fixtures/stoeber.log"])
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains(
+            "fail-on: code=0x4310: raised 1 time",
+        ));
+    emcy_decode()
+        .args(["--fail-on", "code=0x2310,8611", "fixtures/stoeber.log"])
+        .assert()
+        .code(0)
+        .stderr("");
+}
+
+#[test]
+fn fail_on_warning_needs_a_warned_frame_of_a_selected_node() {
+    // festo's node 5 sends 0x4310 with a non-zero byte 6: no CiA warning;
+    // edge.log's nodes warn (short frame, reserved bit, ...).
+    emcy_decode()
+        .args(["--fail-on", "warning", "fixtures/festo.log"])
+        .assert()
+        .code(0);
+    emcy_decode()
+        .args(["--fail-on", "warning", "fixtures/edge.log"])
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains("fail-on: warning: "));
+    // Node 1 on can0 warns about nothing.
+    emcy_decode()
+        .args(["--fail-on", "warning", "--node", "1", "--channel", "can0"])
+        .arg("fixtures/edge.log")
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn fail_on_conditions_combine_and_each_met_one_is_named() {
+    let out = emcy_decode()
+        .args(["--fail-on", "active,code=0x5111", "--fail-on", "any"])
+        .arg("fixtures/s300.log")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(
+        stderr,
+        "fail-on: any: 4 error EMCY frames\n\
+         fail-on: active: 1 node ends with an active error\n\
+         fail-on: code=0x5111: raised 1 time\n"
+    );
+}
+
+#[test]
+fn fail_on_rejects_unknown_conditions_with_exit_2() {
+    emcy_decode()
+        .args(["--fail-on", "sometimes", "fixtures/s300.log"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("not a condition"));
+}
+
+#[test]
+fn summary_view_prints_no_events_in_any_format() {
+    let table = emcy_decode()
+        .args(["--view", "summary", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(table.stdout).unwrap();
+    assert!(!text.contains("TR = transition"), "{text}");
+    assert!(!text.contains("Error timeline"), "{text}");
+    assert!(
+        text.contains("0x3120 x1, 0x4210 x1, 0x4310 x1, 0x5111 x1"),
+        "{text}"
+    );
+    assert!(text.contains("bus: 15 frames, 7 EMCY"), "{text}");
+
+    let nd = emcy_decode()
+        .args([
+            "--view",
+            "summary",
+            "--format",
+            "ndjson",
+            "fixtures/s300.log",
+        ])
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&nd.stdout);
+    assert!(of_type(&objects, "emcy").is_empty());
+    assert!(of_type(&objects, "boot").is_empty());
+    let node = of_type(&objects, "node")[0];
+    assert_eq!(node["errors_seen"]["0x4310"], 1);
+    assert_eq!(node["longest_error"]["code"], "0x4310");
+    // In error 1.25-4.0, 5.0-6.0 (boot) and from 7.0 to the last decoded
+    // frame (7.0; the PDO at 7.1 is only counted, its time never parsed).
+    assert_eq!(node["time_in_error"].as_f64(), Some(3.75));
+
+    let json = emcy_decode()
+        .args(["--view", "summary", "--format", "json", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    let doc: Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(doc["events"].as_array().map(Vec::len), Some(0));
+    assert_eq!(doc["nodes"].as_array().map(Vec::len), Some(1));
+}
+
+#[test]
 fn errors_outrank_fail_on() {
     emcy_decode()
         .args(["--strict", "--fail-on", "any", "fixtures/edge.log"])

@@ -10,7 +10,13 @@ use std::path::{Path, PathBuf};
 use common::emcy_decode;
 use serde_json::Value;
 
-const OUTPUT_FORMATS: [&str; 3] = ["table", "ndjson", "json"];
+/// Golden file suffix and the flags that produce it.
+const OUTPUTS: [(&str, &[&str]); 4] = [
+    ("table", &["--format", "table"]),
+    ("ndjson", &["--format", "ndjson"]),
+    ("json", &["--format", "json"]),
+    ("summary", &["--view", "summary"]),
+];
 
 fn fixtures() -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = fs::read_dir("fixtures")
@@ -65,9 +71,9 @@ fn check(path: &Path, actual: &str, failures: &mut Vec<String>) {
 fn every_fixture_in_every_output_format_matches_its_golden_file() {
     let mut failures = Vec::new();
     for fixture in fixtures() {
-        for format in OUTPUT_FORMATS {
+        for (format, flags) in OUTPUTS {
             let out = emcy_decode()
-                .args(["--format", format])
+                .args(flags)
                 .arg(&fixture)
                 .output()
                 .expect("runs");
@@ -97,6 +103,10 @@ fn semantic(v: &Value) -> Value {
             "duration",
             "start_line",
             "end_line",
+            "time_in_error",
+            "longest_error",
+            "first_emcy",
+            "last_emcy",
         ] {
             o.remove(key);
         }

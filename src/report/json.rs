@@ -75,7 +75,7 @@ impl<W: Write> Renderer for JsonDocument<W> {
             let mut merge = input.history.merge();
             for node in &input.nodes {
                 let errors = merge.node_errors(&node.channel, node.node);
-                self.json.node(&mut self.compact, &input.file, node, errors);
+                self.json.node(&mut self.compact, input, node, errors);
                 self.element(n == 0)?;
                 n += 1;
             }

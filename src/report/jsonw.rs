@@ -314,10 +314,11 @@ impl JsonWriter {
     pub fn node(
         &mut self,
         out: &mut Vec<u8>,
-        file: &str,
+        input: &InputReport,
         node: &NodeReport,
         errors: impl IntoIterator<Item = Interval>,
     ) {
+        let file = input.file.as_str();
         let mut o = Obj::new(out);
         o.str("type", "node");
         o.str("file", file);
@@ -326,6 +327,36 @@ impl JsonWriter {
         o.str("state", node.state.slug());
         push_codes(o.key("active"), &node.active);
         o.u64("emcy_count", node.emcy_count);
+        let seen = o.key("errors_seen");
+        seen.push(b'{');
+        for (i, (&code, &count)) in node.stats.raised.iter().enumerate() {
+            if i > 0 {
+                seen.push(b',');
+            }
+            push_code(seen, code);
+            seen.push(b':');
+            seen.extend_from_slice(itoa::Buffer::new().format(count).as_bytes());
+        }
+        seen.push(b'}');
+        push_span(o.key("time_in_error"), node.time_in_error(input.last_time));
+        match node.stats.longest {
+            Some((code, duration)) => {
+                let l = o.key("longest_error");
+                let mut lo = Obj::new(l);
+                push_code(lo.key("code"), code);
+                push_span(lo.key("duration"), Some(duration));
+                lo.end();
+            }
+            None => o.key("longest_error").extend_from_slice(b"null"),
+        }
+        push_time(
+            o.key("first_emcy"),
+            node.stats.first_emcy.and_then(|a| a.time),
+        );
+        push_time(
+            o.key("last_emcy"),
+            node.stats.last_emcy.and_then(|a| a.time),
+        );
         let e = o.key("errors");
         e.push(b'[');
         for (i, iv) in errors.into_iter().enumerate() {
@@ -390,6 +421,8 @@ impl JsonWriter {
         o.u64("boot", boot);
         o.u64("emcy_invalid", emcy_invalid);
         o.u64("other_format", other_format);
+        push_time(o.key("first_time"), input.first_time);
+        push_time(o.key("last_time"), input.last_time);
         match &input.error {
             Some(e) => o.str("error", e),
             None => o.key("error").extend_from_slice(b"null"),

@@ -12,7 +12,7 @@ use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::history::ErrorHistory;
 use crate::timeline::{NodeStats, State};
-use crate::trace::{Format, Timestamp};
+use crate::trace::{Format, Span, Timestamp};
 
 /// One decoded EMCY frame, borrowed from the pipeline (no allocation per event).
 pub struct EmcyEvent<'a> {
@@ -54,6 +54,27 @@ pub struct NodeReport {
     pub stats: NodeStats,
 }
 
+impl NodeReport {
+    /// Time spent in error: periods that ended, plus the current one up to
+    /// `trace_end` when the node is still in error. `None` without times.
+    pub fn time_in_error(&self, trace_end: Option<Timestamp>) -> Option<Span> {
+        let first = self.stats.first_emcy?.time?;
+        // Zero at the trace's precision: "0.000000", not "0".
+        let zero = first.since(first);
+        let open = match (self.stats.in_error_since, trace_end) {
+            (Some(since), Some(end)) => end.since(since),
+            _ => zero,
+        };
+        zero.checked_add(self.stats.time_in_error)?
+            .checked_add(open)
+    }
+
+    /// Whether the node raised any error (a reset alone does not count).
+    pub fn had_errors(&self) -> bool {
+        !self.stats.raised.is_empty()
+    }
+}
+
 /// Line counts of one input. Every line is exactly one of frame, skipped, malformed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
@@ -88,6 +109,20 @@ pub struct InputReport {
     pub error: Option<String>,
 }
 
+impl InputReport {
+    /// EMCY frames per second between the first and last decoded frame;
+    /// `None` without times or over an empty span.
+    pub fn emcy_rate(&self) -> Option<f64> {
+        let span = self.last_time?.since(self.first_time?).as_f64();
+        (span > 0.0).then(|| self.counts.emcy as f64 / span)
+    }
+
+    /// How many reported nodes raised an error.
+    pub fn nodes_with_errors(&self) -> usize {
+        self.nodes.iter().filter(|n| n.had_errors()).count()
+    }
+}
+
 /// A line that could not be read, or an EMCY that could not be decoded.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
@@ -114,4 +149,25 @@ pub trait Renderer {
         Ok(())
     }
     fn finish(&mut self, inputs: &[InputReport], diagnostics: &[Diagnostic]) -> io::Result<()>;
+}
+
+/// `--view summary` for the JSON formats: node and input objects only.
+pub struct WithoutEvents<R>(pub R);
+
+impl<R: Renderer> Renderer for WithoutEvents<R> {
+    fn begin_input(&mut self, file: &str) -> io::Result<()> {
+        self.0.begin_input(file)
+    }
+    fn emcy(&mut self, _event: &EmcyEvent<'_>) -> io::Result<()> {
+        Ok(())
+    }
+    fn boot(&mut self, _event: &BootEvent<'_>) -> io::Result<()> {
+        Ok(())
+    }
+    fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
+        self.0.end_input(input)
+    }
+    fn finish(&mut self, inputs: &[InputReport], diagnostics: &[Diagnostic]) -> io::Result<()> {
+        self.0.finish(inputs, diagnostics)
+    }
 }

@@ -52,7 +52,7 @@ impl<W: Write> Renderer for Ndjson<W> {
             let mut merge = input.history.merge();
             for node in &input.nodes {
                 let errors = merge.node_errors(&node.channel, node.node);
-                self.json.node(&mut self.buf, &input.file, node, errors);
+                self.json.node(&mut self.buf, input, node, errors);
                 self.line()?;
             }
             if let Some(e) = merge.take_error() {

@@ -25,6 +25,8 @@ pub struct TableReport<W: Write> {
     /// Column widths fixed by the first event of an input.
     layout: Option<Layout>,
     flush_each: bool,
+    /// `--view summary`: no events, no timeline; one line per node and bus.
+    summary_only: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -43,7 +45,87 @@ impl<W: Write> TableReport<W> {
             color,
             layout: None,
             flush_each,
+            summary_only: false,
         }
+    }
+
+    /// The summary view: what a CI log should show.
+    pub fn summary_only(mut self) -> Self {
+        self.summary_only = true;
+        self
+    }
+
+    /// One line per node: state, errors seen with counts, time in error,
+    /// longest error, first and last EMCY.
+    fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
+        let time = |t: Option<Timestamp>| t.map_or_else(|| "-".to_string(), |t| t.to_string());
+        let mut nodes = new_table(&[
+            "CHANNEL",
+            "NODE",
+            "EMCY",
+            "STATE AT END",
+            "ACTIVE",
+            "ERRORS SEEN",
+            "IN ERROR",
+            "LONGEST",
+            "FIRST EMCY",
+            "LAST EMCY",
+        ]);
+        for n in &input.nodes {
+            let seen: Vec<String> = n
+                .stats
+                .raised
+                .iter()
+                .map(|(code, count)| format!("0x{code:04X} x{count}"))
+                .collect();
+            nodes.add_row(vec![
+                printable(&n.channel).into_owned(),
+                n.node.to_string(),
+                n.emcy_count.to_string(),
+                n.state.slug().to_string(),
+                if n.active.is_empty() {
+                    "-".to_string()
+                } else {
+                    codes_list(&n.active)
+                },
+                if seen.is_empty() {
+                    "-".to_string()
+                } else {
+                    seen.join(", ")
+                },
+                n.time_in_error(input.last_time)
+                    .map_or_else(|| "-".to_string(), |s| s.to_string()),
+                n.stats
+                    .longest
+                    .map_or_else(|| "-".to_string(), |(c, d)| format!("0x{c:04X} {d}")),
+                time(n.stats.first_emcy.and_then(|a| a.time)),
+                time(n.stats.last_emcy.and_then(|a| a.time)),
+            ]);
+        }
+        right_align(&mut nodes, &[1, 2, 6]);
+        writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
+        write_table(&mut self.out, &nodes)
+    }
+
+    /// The bus-level line: frames, EMCY rate, nodes with errors.
+    fn write_bus_line(&mut self, input: &InputReport) -> io::Result<()> {
+        let c = &input.counts;
+        let span = match (input.first_time, input.last_time) {
+            (Some(first), Some(last)) => format!(" over {} s", last.since(first)),
+            _ => String::new(),
+        };
+        let rate = input
+            .emcy_rate()
+            .map_or_else(String::new, |r| format!(" ({r:.2}/s)"));
+        writeln!(
+            self.out,
+            "bus: {} frames, {} EMCY{rate}{span}, {} of {} nodes with errors, {} malformed",
+            c.frames,
+            c.emcy,
+            input.nodes_with_errors(),
+            input.nodes.len(),
+            c.malformed,
+        )
     }
 
     fn paint(&self, style: Style, text: &str) -> String {
@@ -165,6 +247,9 @@ impl<W: Write> Renderer for TableReport<W> {
     }
 
     fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
         let l = self.layout_for(ev.time, ev.channel)?;
         let code = format!("0x{:04X}", ev.emcy.code);
         let style = match ev.transition {
@@ -199,6 +284,9 @@ impl<W: Write> Renderer for TableReport<W> {
     }
 
     fn boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
         let l = self.layout_for(ev.time, ev.channel)?;
         let what = if ev.cleared.is_empty() {
             "NMT boot-up".to_string()
@@ -218,6 +306,13 @@ impl<W: Write> Renderer for TableReport<W> {
     }
 
     fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
+        if self.summary_only {
+            if !input.nodes.is_empty() {
+                self.write_nodes(input)?;
+            }
+            self.write_bus_line(input)?;
+            return writeln!(self.out);
+        }
         if self.layout.is_none() {
             writeln!(self.out, "no EMCY frames")?;
         } else {
@@ -227,28 +322,14 @@ impl<W: Write> Renderer for TableReport<W> {
             )?;
         }
         if input.nodes.is_empty() {
+            self.write_bus_line(input)?;
             return writeln!(self.out);
         }
         writeln!(self.out)?;
-        let mut nodes = new_table(&["CHANNEL", "NODE", "EMCY", "STATE AT END", "ACTIVE"]);
-        for n in &input.nodes {
-            nodes.add_row(vec![
-                printable(&n.channel).into_owned(),
-                n.node.to_string(),
-                n.emcy_count.to_string(),
-                n.state.slug().to_string(),
-                if n.active.is_empty() {
-                    "-".to_string()
-                } else {
-                    codes_list(&n.active)
-                },
-            ]);
-        }
-        right_align(&mut nodes, &[1, 2]);
-        writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
-        write_table(&mut self.out, &nodes)?;
+        self.write_nodes(input)?;
 
         self.write_timeline(input)?;
+        self.write_bus_line(input)?;
         writeln!(self.out)
     }
 
