@@ -99,6 +99,8 @@ pub struct Analysis {
 pub struct DiagnosticLog<E: Write> {
     stderr: E,
     pub collected: Vec<Diagnostic>,
+    /// `--quiet`: diagnostics and notes are collected, not printed.
+    pub quiet: bool,
 }
 
 impl<E: Write> DiagnosticLog<E> {
@@ -106,13 +108,28 @@ impl<E: Write> DiagnosticLog<E> {
         DiagnosticLog {
             stderr,
             collected: Vec::new(),
+            quiet: false,
         }
     }
 
     fn emit(&mut self, d: Diagnostic) {
         // A failing stderr must not stop decoding; the counts still record it.
-        let _ = writeln!(self.stderr, "{d}");
+        if !self.quiet {
+            let _ = writeln!(self.stderr, "{d}");
+        }
         self.collected.push(d);
+    }
+
+    /// Passes on what another log (an input read on another thread) wrote
+    /// and collected.
+    pub fn replay(&mut self, written: &[u8], collected: Vec<Diagnostic>) {
+        let _ = self.stderr.write_all(written);
+        self.collected.extend(collected);
+    }
+
+    /// The stderr this log wrote to.
+    pub fn into_inner(self) -> E {
+        self.stderr
     }
 
     /// A one-line `error:` message (not kept in the JSON diagnostics).
@@ -121,7 +138,9 @@ impl<E: Write> DiagnosticLog<E> {
     }
 
     pub fn note(&mut self, message: &str) {
-        let _ = writeln!(self.stderr, "{message}");
+        if !self.quiet {
+            let _ = writeln!(self.stderr, "{message}");
+        }
     }
 }
 

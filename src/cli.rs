@@ -7,6 +7,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::analyze::EmcyId;
 use crate::report::table::ColorChoice;
+use crate::report::timefmt::TimeStyle;
 use crate::trace::Format;
 
 const EXAMPLES_AND_EXIT_CODES: &str = "\
@@ -25,7 +26,8 @@ Exit status:
   0  success (also when the reader of stdout goes away, e.g. `| head -1`)
   1  the --fail-on condition was met
   2  usage error, unreadable input, unknown format, corrupt gzip,
-     or malformed lines with --strict";
+     or malformed lines with --strict
+  130  stopped by Ctrl-C (what was read is still reported)";
 
 #[derive(Parser, Debug)]
 #[command(
@@ -47,6 +49,13 @@ pub struct Cli {
 pub enum Command {
     /// Explain an error code, or decode one raw 8-byte EMCY payload
     Explain(ExplainArgs),
+    /// Print a shell completion script (bash, zsh, fish, powershell, elvish)
+    Completions {
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff) to stdout
+    Man,
 }
 
 #[derive(Args, Debug)]
@@ -103,6 +112,22 @@ pub struct DecodeArgs {
     /// When to colour the table
     #[arg(long, value_enum, default_value_t = ColorChoice::Auto, value_name = "WHEN")]
     pub color: ColorChoice,
+
+    /// How the table shows times
+    #[arg(long, value_enum, default_value_t = TimeStyle::Auto, value_name = "STYLE")]
+    pub time: TimeStyle,
+
+    /// Keep reading FILE as it grows (like tail -f); Ctrl-C prints the summary
+    #[arg(long, requires = "files")]
+    pub follow: bool,
+
+    /// Read directories given as FILE recursively (files in name order)
+    #[arg(long, short = 'r')]
+    pub recursive: bool,
+
+    /// No progress bar and no per-line diagnostics on stderr (counts stay exact)
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
 }
 
 #[derive(Args, Debug)]

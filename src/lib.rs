@@ -7,10 +7,12 @@
 #![forbid(unsafe_code)]
 
 pub mod analyze;
+pub mod batch;
 pub mod canopen;
 pub mod cli;
 pub mod explain;
 pub mod history;
+pub mod interrupt;
 pub mod report;
 pub mod run;
 pub mod timeline;

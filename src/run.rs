@@ -5,17 +5,20 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
+use clap::CommandFactory;
 
 use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
+use crate::batch;
 use crate::cli::{
     Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat, View,
 };
 use crate::explain;
+use crate::interrupt;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::table::{TableReport, use_color};
 use crate::report::{InputReport, Renderer, WithoutEvents};
-use crate::trace::input::{self, Source};
+use crate::trace::input::{self, ReadMode, Source};
 
 /// The exit codes of the contract in `--help`.
 pub const EXIT_OK: u8 = 0;
@@ -25,6 +28,16 @@ pub const EXIT_ERROR: u8 = 2;
 pub fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Some(Command::Explain(args)) => explain_command(&args),
+        Some(Command::Completions { shell }) => {
+            let mut out = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "emcy-decode", &mut out);
+            write_stdout(&String::from_utf8_lossy(&out))
+        }
+        Some(Command::Man) => {
+            let mut out = Vec::new();
+            clap_mangen::Man::new(Cli::command()).render(&mut out)?;
+            write_stdout(&String::from_utf8_lossy(&out))
+        }
         None => decode_command(&cli.decode),
     }
 }
@@ -46,6 +59,11 @@ fn explain_command(args: &ExplainArgs) -> Result<ExitCode> {
         }
         (None, None, _) => anyhow::bail!("give a CODE or --data"),
     };
+    write_stdout(&text)
+}
+
+/// Writes a whole short output; a reader that went away is not an error.
+fn write_stdout(text: &str) -> Result<ExitCode> {
     let mut out = io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Err(e) if e.kind() != io::ErrorKind::BrokenPipe => return Err(e.into()),
@@ -63,25 +81,30 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         emcy_ids: args.emcy_id.clone(),
         ..Options::default()
     };
-    let sources: Vec<Source> = if args.files.is_empty() {
-        vec![Source::Stdin]
+    let sources = expand_sources(&args.files, args.recursive)?;
+    if args.follow && !matches!(sources.as_slice(), [Source::Path(_)]) {
+        anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
+    }
+    interrupt::catch();
+    // Reading a live stream (`candump -L can0 | emcy-decode -`, a followed
+    // file): each event must show up when its line arrives, not when a
+    // buffer fills.
+    let live = args.follow || (sources == [Source::Stdin] && input::stdin_is_stream());
+    let mode = if args.follow {
+        ReadMode::Follow
+    } else if live {
+        ReadMode::Live
     } else {
-        args.files
-            .iter()
-            .map(|p: &PathBuf| Source::from_arg(p))
-            .collect()
+        ReadMode::Finite
     };
     let stdout = io::stdout();
-    // Reading a live stream (`candump -L can0 | emcy-decode -`): each event
-    // must show up when its line arrives, not when a buffer fills.
-    let live = sources == [Source::Stdin] && input::stdin_is_stream();
     let out = io::BufWriter::with_capacity(64 * 1024, stdout.lock());
     let summary = args.view == View::Summary;
     let mut renderer: Box<dyn Renderer> = match args.format {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
             let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
-            let table = TableReport::new(out, color, live);
+            let table = TableReport::new(out, color, live).time_style(args.time);
             Box::new(if summary { table.summary_only() } else { table })
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
@@ -90,20 +113,54 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
     };
     let mut log = DiagnosticLog::new(io::stderr());
-    let threads = Threads {
-        requested: args.threads,
+    log.quiet = args.quiet;
+    let how = HowToRead {
+        threads: args.threads,
         live,
+        mode,
+        progress: !args.quiet
+            && io::stderr().is_terminal()
+            && std::env::var_os("CI").is_none_or(|v| v.is_empty()),
     };
 
-    match decode_all(&sources, &opts, threads, renderer.as_mut(), &mut log) {
-        Ok(outcome) => Ok(ExitCode::from(exit_code(args, &outcome, &mut log))),
+    let result = decode_all(&sources, &opts, how, renderer.as_mut(), &mut log);
+    let code = match result {
+        Ok(outcome) => exit_code(args, &outcome, &mut log),
         // The reader of our output went away (`| head -1`): not an error.
-        Err(OutputError(e)) if e.kind() == io::ErrorKind::BrokenPipe => Ok(ExitCode::from(EXIT_OK)),
+        Err(OutputError(e)) if e.kind() == io::ErrorKind::BrokenPipe => EXIT_OK,
         Err(OutputError(e)) => {
             log.error(&format!("writing output: {e}"));
-            Ok(ExitCode::from(EXIT_ERROR))
+            EXIT_ERROR
+        }
+    };
+    if interrupt::interrupted() {
+        log.note("interrupted: the report covers what was read before Ctrl-C");
+        return Ok(ExitCode::from(interrupt::EXIT_INTERRUPTED));
+    }
+    Ok(ExitCode::from(code))
+}
+
+/// FILE arguments to sources: `-` is stdin, none is stdin; a directory is
+/// walked with `--recursive` (its files in name order) and otherwise left to
+/// fail as "is a directory" like any unreadable input.
+fn expand_sources(files: &[PathBuf], recursive: bool) -> Result<Vec<Source>> {
+    if files.is_empty() {
+        return Ok(vec![Source::Stdin]);
+    }
+    let mut sources = Vec::new();
+    for f in files {
+        if recursive && f.is_dir() {
+            for entry in walkdir::WalkDir::new(f).sort_by_file_name() {
+                let entry = entry.map_err(|e| anyhow::anyhow!("{}: {e}", f.display()))?;
+                if entry.file_type().is_file() {
+                    sources.push(Source::Path(entry.into_path()));
+                }
+            }
+        } else {
+            sources.push(Source::from_arg(f));
         }
     }
+    Ok(sources)
 }
 
 /// What all inputs amounted to.
@@ -113,63 +170,112 @@ pub struct Outcome {
     pub open_failures: usize,
 }
 
-/// How many threads an input gets.
+/// How inputs are read.
 #[derive(Clone, Copy)]
-struct Threads {
+struct HowToRead {
     /// `-j N`; 0 = automatic.
-    requested: usize,
+    threads: usize,
     /// A live stream: events must not wait for a block to fill.
     live: bool,
+    mode: ReadMode,
+    /// A progress bar for big files is allowed (stderr is a terminal, not
+    /// CI, not --quiet).
+    progress: bool,
 }
 
 /// Inputs below this size are read on one thread: starting workers costs
-/// more than it saves.
+/// more than it saves. Several of them are read side by side instead.
 const PARALLEL_MIN_BYTES: u64 = 16 * 1024 * 1024;
 
-impl Threads {
-    fn for_input(self, opened: &input::Opened) -> usize {
-        if self.requested > 0 {
-            return self.requested;
+/// Files from this size get a progress bar (when allowed).
+const PROGRESS_MIN_BYTES: u64 = 50 * 1024 * 1024;
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get().min(8))
+}
+
+impl HowToRead {
+    fn threads_for(self, opened: &input::Opened) -> usize {
+        if self.threads > 0 {
+            return self.threads;
         }
         let big = opened.gzip || opened.size.is_some_and(|s| s >= PARALLEL_MIN_BYTES);
         if self.live || !big {
             return 1;
         }
-        std::thread::available_parallelism().map_or(1, |n| n.get().min(8))
+        cores()
+    }
+
+    /// Whether a source is small enough to be read beside others.
+    fn side_by_side(self, source: &Source) -> bool {
+        match source {
+            Source::Stdin => false,
+            Source::Path(p) => {
+                !self.live
+                    && std::fs::metadata(p)
+                        .is_ok_and(|m| m.is_file() && m.len() < PARALLEL_MIN_BYTES)
+            }
+        }
     }
 }
 
 fn decode_all(
     sources: &[Source],
     opts: &Options,
-    threads: Threads,
+    how: HowToRead,
     renderer: &mut dyn Renderer,
     log: &mut DiagnosticLog<io::Stderr>,
 ) -> Result<Outcome, OutputError> {
     let mut analyses = Vec::new();
     let mut open_failures = 0;
-    for source in sources {
+    let workers = if how.threads > 0 {
+        how.threads
+    } else {
+        cores()
+    };
+    let mut i = 0;
+    while i < sources.len() && !interrupt::interrupted() {
+        // A run of small files: side by side, replayed in order.
+        let run = sources[i..]
+            .iter()
+            .take_while(|s| how.side_by_side(s))
+            .count();
+        if run >= 2 && workers >= 2 {
+            batch::run_parallel(&sources[i..i + run], opts, workers, |result| {
+                match result.replay(renderer, log)? {
+                    Some(a) => analyses.push(a),
+                    None => open_failures += 1,
+                }
+                Ok(())
+            })?;
+            i += run;
+            continue;
+        }
+        let source = &sources[i];
+        i += 1;
         let name = source.display_name();
-        let opened = match input::open(source) {
+        let opened = match input::open_as(source, how.mode) {
             Ok(o) => o,
             Err(e) => {
-                log.error(&format!("{name}: {}", describe_io(&e)));
+                log.error(&format!("{name}: {}", batch::describe_io(&e)));
                 open_failures += 1;
                 continue;
             }
         };
         let input_opts = Options {
-            threads: threads.for_input(&opened),
+            threads: how.threads_for(&opened),
             ..opts.clone()
         };
-        let analysis = analyze::analyze(
-            &name,
-            opened.reader,
-            opened.gzip,
-            &input_opts,
-            renderer,
-            log,
-        )?;
+        let bar = progress_bar(how, opened.size.filter(|_| !opened.gzip));
+        let reader: Box<dyn io::Read + Send> = match &bar {
+            Some(bar) => Box::new(bar.wrap_read(opened.reader)),
+            None => opened.reader,
+        };
+        let analysis = analyze::analyze(&name, reader, opened.gzip, &input_opts, renderer, log);
+        if let Some(bar) = bar {
+            bar.finish_and_clear();
+        }
+        let analysis = analysis?;
         if let Some(err) = &analysis.report.error {
             log.error(&format!("{name}: {err}"));
         }
@@ -185,13 +291,23 @@ fn decode_all(
     })
 }
 
-/// `No such file or directory` without Rust's `(os error 2)` suffix.
-fn describe_io(e: &io::Error) -> String {
-    let text = e.to_string();
-    match text.find(" (os error") {
-        Some(i) => text[..i].to_string(),
-        None => text,
+/// A bar on stderr for a big regular file, counting the bytes read (after
+/// gzip: the uncompressed size is unknown, so gzip files get none).
+fn progress_bar(how: HowToRead, size: Option<u64>) -> Option<indicatif::ProgressBar> {
+    let size = size.filter(|&s| wants_progress(how.progress, s))?;
+    let bar = indicatif::ProgressBar::new(size);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{bar:40} {bytes}/{total_bytes} {bytes_per_sec} eta {eta}",
+    ) {
+        bar.set_style(style);
     }
+    Some(bar)
+}
+
+/// A progress bar only where someone watches: allowed (terminal, not CI,
+/// not --quiet) and a file big enough to wait for.
+fn wants_progress(allowed: bool, size: u64) -> bool {
+    allowed && size >= PROGRESS_MIN_BYTES
 }
 
 fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::Stderr>) -> u8 {

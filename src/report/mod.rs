@@ -5,6 +5,7 @@ pub mod json;
 pub mod jsonw;
 pub mod ndjson;
 pub mod table;
+pub mod timefmt;
 
 use std::io;
 

@@ -8,6 +8,7 @@ use std::io::{self, Write};
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
+use super::timefmt::{TimeFormat, TimeStyle};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 use crate::canopen::codes;
 use crate::timeline::Interval;
@@ -27,6 +28,7 @@ pub struct TableReport<W: Write> {
     flush_each: bool,
     /// `--view summary`: no events, no timeline; one line per node and bus.
     summary_only: bool,
+    times: TimeFormat,
 }
 
 #[derive(Clone, Copy)]
@@ -46,7 +48,14 @@ impl<W: Write> TableReport<W> {
             layout: None,
             flush_each,
             summary_only: false,
+            times: TimeFormat::default(),
         }
+    }
+
+    /// `--time`.
+    pub fn time_style(mut self, style: TimeStyle) -> Self {
+        self.times = TimeFormat::new(style);
+        self
     }
 
     /// The summary view: what a CI log should show.
@@ -58,7 +67,9 @@ impl<W: Write> TableReport<W> {
     /// One line per node: state, errors seen with counts, time in error,
     /// longest error, first and last EMCY.
     fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
-        let time = |t: Option<Timestamp>| t.map_or_else(|| "-".to_string(), |t| t.to_string());
+        self.times.set_origin(input.first_time);
+        let times = self.times;
+        let time = |t: Option<Timestamp>| times.show_opt(t);
         let mut nodes = new_table(&[
             "CHANNEL",
             "NODE",
@@ -141,7 +152,7 @@ impl<W: Write> TableReport<W> {
             return Ok(l);
         }
         let l = Layout {
-            time: time.map_or(1, |t| t.to_string().len()).max(4),
+            time: time.map_or(1, |t| self.times.show(t).len()).max(4),
             channel: printable(channel).len().max(7),
         };
         self.layout = Some(l);
@@ -161,7 +172,7 @@ impl<W: Write> TableReport<W> {
     }
 
     fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: u8) -> String {
-        let time = time.map_or_else(|| "-".to_string(), |t| t.to_string());
+        let time = self.times.show_opt(time);
         let channel = printable(channel);
         format!(
             "{time:<tw$}  {channel:<cw$}  {node:>4}  ",
@@ -179,7 +190,8 @@ impl<W: Write> TableReport<W> {
     fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
         let mut widths = TIMELINE_HEADER.map(str::len);
         let mut rows = 0u64;
-        for_each_timeline_row(input, |cells| {
+        let times = self.times;
+        for_each_timeline_row(input, &times, |cells| {
             rows += 1;
             for (w, c) in widths.iter_mut().zip(cells) {
                 *w = (*w).max(UnicodeWidthStr::width(c.as_str()));
@@ -193,7 +205,7 @@ impl<W: Write> TableReport<W> {
         writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
         write_row(&mut self.out, &TIMELINE_HEADER, &widths, &TIMELINE_RIGHT)?;
         let out = &mut self.out;
-        for_each_timeline_row(input, |cells| {
+        for_each_timeline_row(input, &times, |cells| {
             write_row(out, cells, &widths, &TIMELINE_RIGHT)
         })
     }
@@ -243,6 +255,7 @@ fn spaced_hex(bytes: &[u8]) -> String {
 impl<W: Write> Renderer for TableReport<W> {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
         self.layout = None;
+        self.times.origin = None;
         writeln!(self.out, "{}", self.paint(BOLD, &format!("== {file}")))
     }
 
@@ -250,6 +263,7 @@ impl<W: Write> Renderer for TableReport<W> {
         if self.summary_only {
             return Ok(());
         }
+        self.times.set_origin(ev.time);
         let l = self.layout_for(ev.time, ev.channel)?;
         let code = format!("0x{:04X}", ev.emcy.code);
         let style = match ev.transition {
@@ -287,6 +301,7 @@ impl<W: Write> Renderer for TableReport<W> {
         if self.summary_only {
             return Ok(());
         }
+        self.times.set_origin(ev.time);
         let l = self.layout_for(ev.time, ev.channel)?;
         let what = if ev.cleared.is_empty() {
             "NMT boot-up".to_string()
@@ -377,7 +392,13 @@ const TIMELINE_HEADER: [&str; 8] = [
 const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
 
 /// Fills the cells of one error timeline row.
-fn timeline_cells(cells: &mut [String; 8], channel: &str, node: u8, iv: &Interval) {
+fn timeline_cells(
+    cells: &mut [String; 8],
+    times: &TimeFormat,
+    channel: &str,
+    node: u8,
+    iv: &Interval,
+) {
     use std::fmt::Write as _;
     for c in cells.iter_mut() {
         c.clear();
@@ -388,13 +409,13 @@ fn timeline_cells(cells: &mut [String; 8], channel: &str, node: u8, iv: &Interva
     let _ = write!(cells[2], "0x{:04X}", iv.code);
     let _ = write!(cells[3], "{}", codes::lookup_cached(iv.code).description());
     let _ = match iv.start.time {
-        Some(t) => write!(cells[4], "{t}"),
+        Some(t) => write!(cells[4], "{}", times.show(t)),
         None => write!(cells[4], "line {}", iv.start.line),
     };
     let _ = match (iv.end, iv.start.time, end_time) {
         (None, _, _) => write!(cells[5], "active").and_then(|_| write!(cells[6], "-")),
         (Some(_), Some(s), Some(e)) => {
-            write!(cells[5], "{e}").and_then(|_| write!(cells[6], "{}", e.since(s)))
+            write!(cells[5], "{}", times.show(e)).and_then(|_| write!(cells[6], "{}", e.since(s)))
         }
         (Some(e), _, _) => write!(cells[5], "line {}", e.line).and_then(|_| write!(cells[6], "-")),
     };
@@ -404,13 +425,14 @@ fn timeline_cells(cells: &mut [String; 8], channel: &str, node: u8, iv: &Interva
 /// Calls `row` for every error of the selected nodes, in report order.
 fn for_each_timeline_row(
     input: &InputReport,
+    times: &TimeFormat,
     mut row: impl FnMut(&[String; 8]) -> io::Result<()>,
 ) -> io::Result<()> {
     let mut cells: [String; 8] = Default::default();
     let mut merge = input.history.merge();
     for n in &input.nodes {
         for iv in merge.node_errors(&n.channel, n.node) {
-            timeline_cells(&mut cells, &n.channel, n.node, &iv);
+            timeline_cells(&mut cells, times, &n.channel, n.node, &iv);
             row(&cells)?;
         }
     }

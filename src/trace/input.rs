@@ -5,6 +5,8 @@ use std::fs::File;
 use std::io::{self, BufReader, Read};
 use std::path::{Path, PathBuf};
 
+use crate::interrupt::{Follow, Interruptible, StopOnInterrupt};
+
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
 /// Where an input comes from.
@@ -41,10 +43,28 @@ pub struct Opened {
     pub size: Option<u64>,
 }
 
+/// How a source is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReadMode {
+    /// To its end; Ctrl-C stops at the next read.
+    Finite,
+    /// A stream that may block (stdin from candump): Ctrl-C ends it even
+    /// while it waits.
+    Live,
+    /// `--follow`: a growing file; its end is waited past until Ctrl-C.
+    Follow,
+}
+
 /// Opens a source. Errors carry a message fit for `error: NAME: message`.
 pub fn open(source: &Source) -> io::Result<Opened> {
+    open_as(source, ReadMode::Finite)
+}
+
+/// Opens a source to be read the given way.
+pub fn open_as(source: &Source, mode: ReadMode) -> io::Result<Opened> {
     let (raw, size): (Box<dyn Read + Send>, Option<u64>) = match source {
-        Source::Stdin => (Box::new(io::stdin()), None),
+        Source::Stdin if mode == ReadMode::Finite => (Box::new(StopOnInterrupt(io::stdin())), None),
+        Source::Stdin => (Box::new(Interruptible::new(Box::new(io::stdin()))), None),
         Source::Path(path) => {
             let file = File::open(path)?;
             let meta = file.metadata()?;
@@ -54,8 +74,14 @@ pub fn open(source: &Source) -> io::Result<Opened> {
                     "is a directory",
                 ));
             }
-            let size = meta.is_file().then_some(meta.len());
-            (Box::new(file), size)
+            match mode {
+                ReadMode::Follow => (Box::new(Follow::new(file)), None),
+                ReadMode::Live => (Box::new(Interruptible::new(Box::new(file))), None),
+                ReadMode::Finite => {
+                    let size = meta.is_file().then_some(meta.len());
+                    (Box::new(StopOnInterrupt(file)), size)
+                }
+            }
         }
     };
     let mut opened = sniff_gzip(raw)?;

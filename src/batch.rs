@@ -1,0 +1,274 @@
+//! Many small files (`emcy-decode logs/*.log`): each is analysed on its own
+//! thread into a recording, and the recordings are replayed into the one
+//! renderer in argument order, so the output is byte for byte what reading
+//! them one after another gives. Only small files go this way (a recording
+//! holds a file's events); big ones are read in order with block
+//! parallelism instead.
+
+use std::collections::BTreeMap;
+use std::io;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc;
+
+use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
+use crate::canopen::codes::CodeInfo;
+use crate::canopen::emcy::{Emcy, Warning};
+use crate::report::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::timeline::State;
+use crate::trace::Timestamp;
+use crate::trace::input::{self, Source};
+
+/// One event, owned.
+enum Recorded {
+    Begin(String),
+    Emcy(Box<OwnedEmcy>),
+    Boot {
+        file: String,
+        line: u64,
+        time: Option<Timestamp>,
+        channel: String,
+        node: u8,
+        cleared: Vec<u16>,
+    },
+    End,
+}
+
+struct OwnedEmcy {
+    file: String,
+    line: u64,
+    time: Option<Timestamp>,
+    channel: String,
+    node: u8,
+    cob_id: u32,
+    data: Vec<u8>,
+    emcy: Emcy,
+    info: CodeInfo,
+    transition: Option<u8>,
+    state: State,
+    active: Vec<u16>,
+    cleared: Vec<u16>,
+    warnings: Vec<Warning>,
+}
+
+/// A renderer that keeps everything for a later replay.
+#[derive(Default)]
+struct Recorder {
+    events: Vec<Recorded>,
+}
+
+impl Renderer for Recorder {
+    fn begin_input(&mut self, file: &str) -> io::Result<()> {
+        self.events.push(Recorded::Begin(file.to_string()));
+        Ok(())
+    }
+
+    fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
+        self.events.push(Recorded::Emcy(Box::new(OwnedEmcy {
+            file: ev.file.to_string(),
+            line: ev.line,
+            time: ev.time,
+            channel: ev.channel.to_string(),
+            node: ev.node,
+            cob_id: ev.cob_id,
+            data: ev.data.to_vec(),
+            emcy: *ev.emcy,
+            info: *ev.info,
+            transition: ev.transition,
+            state: ev.state,
+            active: ev.active.to_vec(),
+            cleared: ev.cleared.to_vec(),
+            warnings: ev.warnings.to_vec(),
+        })));
+        Ok(())
+    }
+
+    fn boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
+        self.events.push(Recorded::Boot {
+            file: ev.file.to_string(),
+            line: ev.line,
+            time: ev.time,
+            channel: ev.channel.to_string(),
+            node: ev.node,
+            cleared: ev.cleared.to_vec(),
+        });
+        Ok(())
+    }
+
+    fn end_input(&mut self, _input: &InputReport) -> io::Result<()> {
+        self.events.push(Recorded::End);
+        Ok(())
+    }
+
+    fn finish(&mut self, _inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// What one file's analysis left for the replay.
+pub struct FileResult {
+    events: Vec<Recorded>,
+    /// What the analysis wrote to stderr.
+    stderr: Vec<u8>,
+    diagnostics: Vec<Diagnostic>,
+    /// `None` when the file could not be opened (the message is in stderr).
+    pub analysis: Option<Analysis>,
+}
+
+impl FileResult {
+    /// Replays the file into the real renderer and stderr.
+    pub fn replay<E: io::Write>(
+        self,
+        renderer: &mut dyn Renderer,
+        log: &mut DiagnosticLog<E>,
+    ) -> Result<Option<Analysis>, OutputError> {
+        log.replay(&self.stderr, self.diagnostics);
+        for ev in self.events {
+            match ev {
+                Recorded::Begin(file) => renderer.begin_input(&file),
+                Recorded::Emcy(e) => renderer.emcy(&EmcyEvent {
+                    file: &e.file,
+                    line: e.line,
+                    time: e.time,
+                    channel: &e.channel,
+                    node: e.node,
+                    cob_id: e.cob_id,
+                    data: &e.data,
+                    emcy: &e.emcy,
+                    info: &e.info,
+                    transition: e.transition,
+                    state: e.state,
+                    active: &e.active,
+                    cleared: &e.cleared,
+                    warnings: &e.warnings,
+                }),
+                Recorded::Boot {
+                    file,
+                    line,
+                    time,
+                    channel,
+                    node,
+                    cleared,
+                } => renderer.boot(&BootEvent {
+                    file: &file,
+                    line,
+                    time,
+                    channel: &channel,
+                    node,
+                    cleared: &cleared,
+                }),
+                Recorded::End => match &self.analysis {
+                    Some(a) => renderer.end_input(&a.report),
+                    None => Ok(()),
+                },
+            }
+            .map_err(OutputError)?;
+        }
+        Ok(self.analysis)
+    }
+}
+
+/// Analyses one file completely, recording its output.
+fn record(source: &Source, opts: &Options) -> FileResult {
+    let name = source.display_name();
+    let mut log = DiagnosticLog::new(Vec::new());
+    let mut recorder = Recorder::default();
+    let analysis = match input::open(source) {
+        Err(e) => {
+            log.error(&format!("{name}: {}", describe_io(&e)));
+            None
+        }
+        Ok(opened) => {
+            let opts = Options {
+                threads: 1,
+                ..opts.clone()
+            };
+            // A Recorder never fails to write.
+            analyze::analyze(
+                &name,
+                opened.reader,
+                opened.gzip,
+                &opts,
+                &mut recorder,
+                &mut log,
+            )
+            .ok()
+        }
+    };
+    if let Some(Some(err)) = analysis.as_ref().map(|a| a.report.error.as_ref()) {
+        log.error(&format!("{name}: {err}"));
+    }
+    let diagnostics = std::mem::take(&mut log.collected);
+    FileResult {
+        events: recorder.events,
+        stderr: log.into_inner(),
+        diagnostics,
+        analysis,
+    }
+}
+
+/// Analyses `sources` on up to `threads` threads and hands each result to
+/// `emit` in order, as soon as it and all before it are done. At most
+/// `2 * threads` results wait for their turn, so memory stays bounded.
+pub fn run_parallel(
+    sources: &[Source],
+    opts: &Options,
+    threads: usize,
+    mut emit: impl FnMut(FileResult) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    let next = AtomicUsize::new(0);
+    let window = 2 * threads.max(1);
+    // Tickets bound how far workers run ahead of the emitter.
+    let (ticket_tx, ticket_rx) = mpsc::sync_channel::<()>(window);
+    for _ in 0..window {
+        let _ = ticket_tx.send(());
+    }
+    let ticket_rx = std::sync::Mutex::new(ticket_rx);
+    let (tx, rx) = mpsc::channel::<(usize, FileResult)>();
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            let tx = tx.clone();
+            let (next, ticket_rx) = (&next, &ticket_rx);
+            scope.spawn(move || {
+                loop {
+                    let got_ticket = ticket_rx.lock().map(|r| r.recv().is_ok()).unwrap_or(false);
+                    if !got_ticket || crate::interrupt::interrupted() {
+                        return;
+                    }
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(source) = sources.get(i) else {
+                        return;
+                    };
+                    if tx.send((i, record(source, opts))).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut waiting = BTreeMap::new();
+        let mut turn = 0;
+        let result = (|| {
+            for (i, res) in rx.iter() {
+                waiting.insert(i, res);
+                while let Some(res) = waiting.remove(&turn) {
+                    emit(res)?;
+                    turn += 1;
+                    let _ = ticket_tx.send(());
+                }
+            }
+            Ok(())
+        })();
+        // On an output error, let the workers stop: no more tickets.
+        drop(ticket_tx);
+        result
+    })
+}
+
+/// `No such file or directory` without Rust's `(os error 2)` suffix.
+pub fn describe_io(e: &io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    }
+}

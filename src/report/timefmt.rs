@@ -1,0 +1,125 @@
+//! How the table shows times (`--time`): candump's Unix times as UTC
+//! ISO-8601 by default, ASC's seconds since measurement start as written.
+
+use time::OffsetDateTime;
+
+use crate::trace::Timestamp;
+
+/// `--time`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TimeStyle {
+    /// ISO-8601 UTC for Unix times (after 2001-09-09), else seconds as written
+    #[default]
+    Auto,
+    /// Seconds exactly as the trace wrote them
+    Absolute,
+    /// Seconds since the input's first reported event
+    Relative,
+    /// ISO-8601 UTC, every time taken as Unix time
+    Iso,
+}
+
+/// Times from 10^9 s (2001-09-09) on are taken for Unix time: no relative
+/// trace clock (ASC, candump -td/-tz) runs for 31 years.
+const UNIX_FROM: u64 = 1_000_000_000;
+
+/// A style and, for `relative`, the origin of the current input.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TimeFormat {
+    pub style: TimeStyle,
+    pub origin: Option<Timestamp>,
+}
+
+impl TimeFormat {
+    pub fn new(style: TimeStyle) -> Self {
+        TimeFormat {
+            style,
+            origin: None,
+        }
+    }
+
+    /// The first time of an input (relative times count from it).
+    pub fn set_origin(&mut self, t: Option<Timestamp>) {
+        if self.origin.is_none() {
+            self.origin = t;
+        }
+    }
+
+    pub fn show(&self, t: Timestamp) -> String {
+        match self.style {
+            TimeStyle::Absolute => t.to_string(),
+            TimeStyle::Auto if t.secs() < UNIX_FROM => t.to_string(),
+            TimeStyle::Auto | TimeStyle::Iso => iso(t).unwrap_or_else(|| t.to_string()),
+            TimeStyle::Relative => match self.origin {
+                Some(o) => t.since(o).to_string(),
+                None => t.to_string(),
+            },
+        }
+    }
+
+    pub fn show_opt(&self, t: Option<Timestamp>) -> String {
+        t.map_or_else(|| "-".to_string(), |t| self.show(t))
+    }
+}
+
+/// `2023-11-14T22:13:21.250000Z`, with the trace's fraction digits.
+fn iso(t: Timestamp) -> Option<String> {
+    let d = OffsetDateTime::from_unix_timestamp(i64::try_from(t.secs()).ok()?).ok()?;
+    let text = t.to_string();
+    let frac = text.find('.').map_or("", |i| &text[i..]);
+    Some(format!(
+        "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}{frac}Z",
+        d.year(),
+        u8::from(d.month()),
+        d.day(),
+        d.hour(),
+        d.minute(),
+        d.second()
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ts(s: &str) -> Timestamp {
+        Timestamp::parse(s.as_bytes()).unwrap()
+    }
+
+    #[test]
+    fn auto_shows_unix_times_as_iso_and_others_as_written() {
+        let f = TimeFormat::new(TimeStyle::Auto);
+        assert_eq!(
+            f.show(ts("1700000001.250000")),
+            "2023-11-14T22:13:21.250000Z"
+        );
+        assert_eq!(f.show(ts("1700000001")), "2023-11-14T22:13:21Z");
+        assert_eq!(f.show(ts("12.500")), "12.500");
+        assert_eq!(f.show(ts("999999999.9")), "999999999.9");
+    }
+
+    #[test]
+    fn iso_and_absolute_are_forced() {
+        assert_eq!(
+            TimeFormat::new(TimeStyle::Iso).show(ts("0.5")),
+            "1970-01-01T00:00:00.5Z"
+        );
+        assert_eq!(
+            TimeFormat::new(TimeStyle::Absolute).show(ts("1700000001.250000")),
+            "1700000001.250000"
+        );
+        // Beyond the calendar's range: the seconds as written.
+        let huge = Timestamp::from_parts(10u64.pow(15), 1, 1);
+        assert_eq!(TimeFormat::new(TimeStyle::Iso).show(huge), huge.to_string());
+    }
+
+    #[test]
+    fn relative_counts_from_the_first_origin() {
+        let mut f = TimeFormat::new(TimeStyle::Relative);
+        assert_eq!(f.show(ts("5.0")), "5.0", "no origin yet");
+        f.set_origin(Some(ts("1700000001.250000")));
+        f.set_origin(Some(ts("1700000009.000000")));
+        assert_eq!(f.show(ts("1700000003.000000")), "1.750000");
+        assert_eq!(f.show_opt(None), "-");
+    }
+}
