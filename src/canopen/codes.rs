@@ -4,8 +4,10 @@
 //! devices send many codes the tables only know up to some level, so a lookup
 //! walks the hierarchy broadest first and keeps every level it finds: an
 //! unlisted 0x4315 still reads "Temperature · drive · excess temperature
-//! drive" up to where the tables stop. The tables assume the CiA 402 drive
-//! profile; CiA 401 (I/O) reuses a few codes with other meanings.
+//! drive" up to where the tables stop. The full tables are CiA 301 plus the
+//! CiA 402 drive profile; [`Tables::Cia301`] restricts a lookup to what CiA
+//! 301 itself defines, for devices that are not drives (CiA 401 I/O reuses a
+//! few drive codes with other meanings).
 //!
 //! Everything is `static` and sorted so a lookup is a handful of binary
 //! searches with no allocation: it runs once per EMCY frame on multi-GB traces.
@@ -100,10 +102,39 @@ impl Class {
     }
 }
 
+/// Which code tables a lookup uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Tables {
+    /// CiA 301 only: classes, the 21xx-63xx subgroups and the 81xx/82xx codes.
+    Cia301,
+    /// CiA 301 plus the CiA 402 drive codes (the default).
+    #[default]
+    Cia402,
+}
+
+impl Tables {
+    pub fn slug(self) -> &'static str {
+        match self {
+            Tables::Cia301 => "cia301",
+            Tables::Cia402 => "cia402",
+        }
+    }
+
+    pub fn from_slug(slug: &str) -> Option<Tables> {
+        match slug {
+            "cia301" => Some(Tables::Cia301),
+            "cia402" => Some(Tables::Cia402),
+            _ => None,
+        }
+    }
+}
+
 /// What the tables say about one code.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CodeInfo {
     pub code: u16,
+    /// The tables the lookup used.
+    pub tables: Tables,
     pub class: Class,
     /// The code itself has a table entry (not only its class or group).
     pub listed: bool,
@@ -138,7 +169,10 @@ impl fmt::Display for Description {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let info = &self.0;
         if info.class == Class::Undefined {
-            return f.write_str("undefined code (not in CiA 301 or CiA 402)");
+            return f.write_str(match info.tables {
+                Tables::Cia301 => "undefined code (not in CiA 301)",
+                Tables::Cia402 => "undefined code (not in CiA 301 or CiA 402)",
+            });
         }
         for (i, part) in info.parts().iter().enumerate() {
             if i > 0 {
@@ -500,6 +534,31 @@ fn class_row(code: u16) -> Option<&'static ClassRow> {
     (code <= row.last).then_some(row)
 }
 
+/// [`class_row`] as CiA 301 alone has it: device hardware (5000) and
+/// additional modules (7000) are only mask FF00 there; the 51xx-55xx and
+/// 71xx-76xx groups are CiA 402's.
+fn class_row_in(code: u16, tables: Tables) -> Option<&'static ClassRow> {
+    let row = class_row(code)?;
+    let narrow = tables == Tables::Cia301
+        && matches!(row.class, Class::Hardware | Class::Modules)
+        && code & 0xFF00 != row.first;
+    (!narrow).then_some(row)
+}
+
+/// Whether a row below the class level is CiA 301's own (emcy.md §4): the
+/// current, voltage, temperature and software subgroups and the
+/// communication (81xx) and protocol (82xx) codes. The per-PDO 8211-8254
+/// variants are not CiA 301's but come from CANopen stacks, not from the
+/// drive profile, so they stay with the communication codes.
+fn in_cia301(value: u16) -> bool {
+    match value & 0xFF00 {
+        0x2100 | 0x2200 | 0x2300 | 0x3100 | 0x3200 | 0x3300 | 0x4100 | 0x4200 | 0x6100 | 0x6200
+        | 0x6300 => value & 0x00FF == 0,
+        0x8100 | 0x8200 => true,
+        _ => false,
+    }
+}
+
 fn find(entries: &'static [Entry], value: u16) -> Option<&'static Entry> {
     let i = entries
         .binary_search_by_key(&value, |entry| entry.value)
@@ -507,10 +566,14 @@ fn find(entries: &'static [Entry], value: u16) -> Option<&'static Entry> {
     entries.get(i)
 }
 
-/// Looks `code` up level by level, broadest first, keeping each level's hit.
 /// [`lookup`] through a small per-thread direct-mapped cache: an EMCY-heavy
 /// trace looks up the same few codes millions of times.
 pub fn lookup_cached(code: u16) -> CodeInfo {
+    lookup_in_cached(code, Tables::Cia402)
+}
+
+/// [`lookup_in`] through the per-thread cache.
+pub fn lookup_in_cached(code: u16, tables: Tables) -> CodeInfo {
     use std::cell::RefCell;
     const SLOTS: usize = 64;
     thread_local! {
@@ -518,25 +581,32 @@ pub fn lookup_cached(code: u16) -> CodeInfo {
     }
     CACHE.with(|cache| {
         let Ok(mut cache) = cache.try_borrow_mut() else {
-            return lookup(code);
+            return lookup_in(code, tables);
         };
         let slot = &mut cache[usize::from(code) % SLOTS];
         match *slot {
-            Some(info) if info.code == code => info,
-            _ => *slot.insert(lookup(code)),
+            Some(info) if info.code == code && info.tables == tables => info,
+            _ => *slot.insert(lookup_in(code, tables)),
         }
     })
 }
 
+/// Looks `code` up in the full (CiA 301 + CiA 402) tables.
 pub fn lookup(code: u16) -> CodeInfo {
+    lookup_in(code, Tables::Cia402)
+}
+
+/// Looks `code` up level by level, broadest first, keeping each level's hit.
+pub fn lookup_in(code: u16, tables: Tables) -> CodeInfo {
     let mut info = CodeInfo {
         code,
+        tables,
         class: Class::Undefined,
         listed: false,
         parts: [""; 4],
         len: 0,
     };
-    let Some(row) = class_row(code) else {
+    let Some(row) = class_row_in(code, tables) else {
         return info;
     };
     info.class = if COMMUNICATION_GROUPS.contains(&(code & 0xFF00)) {
@@ -552,7 +622,9 @@ pub fn lookup(code: u16) -> CodeInfo {
     }
     info.listed = code == row.first;
     for level in &LEVELS {
-        if let Some(entry) = find(level.entries, code & level.mask) {
+        let hit = find(level.entries, code & level.mask)
+            .filter(|entry| tables == Tables::Cia402 || in_cia301(entry.value));
+        if let Some(entry) = hit {
             if entry.value == code {
                 info.push(entry.text);
                 info.listed = true;
@@ -825,6 +897,78 @@ mod tests {
                 !info.listed && info.class != Class::Undefined
             );
         }
+    }
+
+    /// Whether CiA 301 alone defines `code` at all: its class code/mask
+    /// pairs decide (every lower row sits inside one of them).
+    fn covered_301(code: u16) -> bool {
+        CIA301_CLASSES
+            .iter()
+            .any(|&(value, mask)| code & mask == value)
+    }
+
+    #[test]
+    fn cia301_tables_know_only_cia301() {
+        for code in 0..=u16::MAX {
+            let info = lookup_in(code, Tables::Cia301);
+            assert_eq!(info.tables, Tables::Cia301);
+            assert_eq!(
+                info.class == Class::Undefined,
+                !covered_301(code),
+                "{code:#06x}"
+            );
+            // Never more text than the full tables, and the same class
+            // wherever CiA 301 defines the code at all.
+            let full = lookup(code);
+            assert!(info.parts().len() <= full.parts().len(), "{code:#06x}");
+            if info.class != Class::Undefined {
+                assert_eq!(info.class, full.class, "{code:#06x}");
+                assert!(full.parts().starts_with(info.parts()), "{code:#06x}");
+            }
+        }
+        let d = |code| lookup_in(code, Tables::Cia301).description().to_string();
+        assert_eq!(d(0x4310), "Temperature (0x4310 not listed)");
+        assert_eq!(d(0x4210), "Temperature · device (0x4210 not listed)");
+        assert_eq!(d(0x2310), "Current · output side (0x2310 not listed)");
+        assert_eq!(
+            d(0x8130),
+            "Monitoring · communication · life guard or heartbeat error"
+        );
+        assert_eq!(
+            d(0x8252),
+            "Monitoring · protocol error · RPDO timeout · RPDO 2 timeout"
+        );
+        assert_eq!(d(0x5000), "Device hardware");
+        assert_eq!(d(0x5100), "undefined code (not in CiA 301)");
+        assert_eq!(d(0x7120), "undefined code (not in CiA 301)");
+        assert_eq!(d(0x70FF), "Additional modules (0x70FF not listed)");
+        assert_eq!(d(0x8611), "Monitoring (0x8611 not listed)");
+        assert_eq!(d(0xFF01), "Device specific · manufacturer-specific");
+        assert!(lookup_in(0x5530, Tables::Cia402).listed);
+        assert!(!lookup_in(0x5530, Tables::Cia301).listed);
+    }
+
+    #[test]
+    fn the_cache_keeps_the_tables_apart() {
+        assert_eq!(
+            lookup_in_cached(0x5100, Tables::Cia402).class,
+            Class::Hardware
+        );
+        assert_eq!(
+            lookup_in_cached(0x5100, Tables::Cia301).class,
+            Class::Undefined
+        );
+        assert_eq!(
+            lookup_in_cached(0x5100, Tables::Cia402).class,
+            Class::Hardware
+        );
+        assert_eq!(lookup_cached(0x5100), lookup(0x5100));
+        assert_eq!(Tables::from_slug("cia301"), Some(Tables::Cia301));
+        assert_eq!(
+            Tables::from_slug(Tables::Cia402.slug()),
+            Some(Tables::Cia402)
+        );
+        assert_eq!(Tables::from_slug("cia401"), None);
     }
 
     #[test]
