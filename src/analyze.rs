@@ -18,6 +18,7 @@ use std::sync::{Arc, Mutex, RwLock};
 use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::canopen::sdo;
 use crate::history::{DEFAULT_SPILL_AT, ErrorHistory, History, Record};
+use crate::profile_choice::{NodeProfiles, ProfileChoice, ProfileSource, default_profile};
 use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::timeline::{At, NodeTimeline};
 use crate::trace::detect::Detector;
@@ -45,6 +46,8 @@ pub struct Options {
     pub spill_at: usize,
     /// `--emcy-id`: EMCY COB-IDs moved by object 0x1014, to the node they belong to.
     pub emcy_ids: Vec<EmcyId>,
+    /// `--profile`, `--profile-file`: which profile decodes which node.
+    pub profiles: ProfileChoice,
 }
 
 /// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
@@ -67,6 +70,7 @@ impl Default for Options {
             block_size: DEFAULT_BLOCK,
             spill_at: DEFAULT_SPILL_AT,
             emcy_ids: Vec::new(),
+            profiles: ProfileChoice::default(),
         }
     }
 }
@@ -336,6 +340,9 @@ impl Nodes {
                     active: tl.active_codes().collect(),
                     emcy_count: tl.emcy_count(),
                     stats: tl.stats().clone(),
+                    profile: default_profile(),
+                    profile_source: ProfileSource::Default,
+                    profile_reason: None,
                 });
             }
         }
@@ -416,6 +423,7 @@ struct Consumer<'r, 'l, E: Write> {
     warnings: Vec<Warning>,
     active: Vec<u16>,
     sdo: sdo::Tracker,
+    profiles: NodeProfiles<'r>,
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
@@ -434,6 +442,7 @@ impl<E: Write> Consumer<'_, '_, E> {
 
     /// A node holds `value` in `object` (SDO upload or confirmed download).
     fn object_value(&mut self, node: u8, object: sdo::Object, value: u32) {
+        self.profiles.object_value(node, object, value);
         if object.index == sdo::COB_ID_EMCY
             && object.sub == 0
             && let Some((id, extended)) = sdo::cob_id_emcy(value)
@@ -544,16 +553,22 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             };
             self.counts.emcy += 1;
             self.check_clock(at);
-            let info = emcy.info();
+            let chosen = self.profiles.get(node);
+            let profile = chosen.profile;
+            let info = profile.info(emcy.code);
             self.warnings.clear();
             emcy.frame_warnings(&info, &mut self.warnings);
+            profile.frame_warnings(&emcy, &mut self.warnings);
             let NodeSlot {
                 channel,
                 channel_id,
                 timeline,
                 history,
             } = self.nodes.get(frame.channel, node);
-            let step = timeline.emcy(&emcy, at, &mut self.warnings);
+            let step = match profile.status_bit(&emcy) {
+                Some(bit) => timeline.emcy_with_status_bit(&emcy, at, bit, &mut self.warnings),
+                None => timeline.emcy(&emcy, at, &mut self.warnings),
+            };
             for iv in &step.closed {
                 history.push(channel_id, node, iv.clone());
             }
@@ -562,12 +577,16 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             }
             if !emcy.is_reset() {
                 self.errors_raised += 1;
+                if let Some(c) = profile.category(&emcy) {
+                    self.worst_category = Some(self.worst_category.map_or(c, |w| w.min(c)));
+                }
             }
             if !self.warnings.is_empty() {
                 self.frames_with_warnings += 1;
             }
             self.active.clear();
             self.active.extend(timeline.active_codes());
+            let decoded = profile.decode_manufacturer(&emcy);
             let event = EmcyEvent {
                 file: self.file,
                 line: line_no,
@@ -583,6 +602,8 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 active: &self.active,
                 cleared: &step.cleared,
                 warnings: &self.warnings,
+                profile: chosen,
+                decoded: decoded.as_ref(),
             };
             self.renderer.emcy(&event).map_err(OutputError)?;
         } else if frame.extended {
@@ -819,6 +840,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         warnings: Vec::new(),
         active: Vec::new(),
         sdo: sdo::Tracker::default(),
+        profiles: NodeProfiles::new(&opts.profiles),
     };
 
     // Sequential until the format is known (and for inputs whose lines chain,
@@ -869,7 +891,13 @@ fn finish<E: Write>(
         }
     }
     let nodes_taken = std::mem::replace(&mut consumer.nodes, Nodes::new(1));
-    let (nodes, history) = nodes_taken.into_reports(consumer.opts);
+    let (mut nodes, history) = nodes_taken.into_reports(consumer.opts);
+    for n in &mut nodes {
+        let chosen = consumer.profiles.get(n.node);
+        n.profile = chosen.profile;
+        n.profile_source = chosen.source;
+        n.profile_reason = consumer.profiles.reason(n.node).map(str::to_string);
+    }
     if let Some(e) = history.spill_error() {
         consumer.log.note(&format!(
             "{file}: could not move the error history to a temporary file ({e}); kept in memory"

@@ -13,6 +13,8 @@ use std::sync::mpsc;
 use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
+use crate::canopen::profile::Decoded;
+use crate::profile_choice::Chosen;
 use crate::report::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 use crate::timeline::State;
 use crate::trace::Timestamp;
@@ -48,6 +50,8 @@ struct OwnedEmcy {
     active: Vec<u16>,
     cleared: Vec<u16>,
     warnings: Vec<Warning>,
+    profile: Chosen,
+    decoded: Option<Decoded>,
 }
 
 /// A renderer that keeps everything for a later replay.
@@ -78,6 +82,8 @@ impl Renderer for Recorder {
             active: ev.active.to_vec(),
             cleared: ev.cleared.to_vec(),
             warnings: ev.warnings.to_vec(),
+            profile: ev.profile,
+            decoded: ev.decoded.cloned(),
         })));
         Ok(())
     }
@@ -140,6 +146,8 @@ impl FileResult {
                     active: &e.active,
                     cleared: &e.cleared,
                     warnings: &e.warnings,
+                    profile: e.profile,
+                    decoded: e.decoded.as_ref(),
                 }),
                 Recorded::Boot {
                     file,

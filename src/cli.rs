@@ -56,6 +56,8 @@ pub enum Command {
     },
     /// Print the man page (roff) to stdout
     Man,
+    /// List the built-in vendor profiles, one line each
+    Profiles,
 }
 
 #[derive(Args, Debug)]
@@ -84,6 +86,17 @@ pub struct DecodeArgs {
     /// 0x7FF, 8 digits or with an x suffix), e.g. 0x1A5=5 (repeatable)
     #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
     pub emcy_id: Vec<EmcyId>,
+
+    /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable, a node's
+    /// own wins. Without one, the trace's SDO identity answers choose, else cia402.
+    /// `emcy-decode profiles` lists them
+    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME")]
+    pub profile: Vec<ProfileArg>,
+
+    /// A user profile (TOML, see README): used for every node not chosen by --profile,
+    /// or only where --profile names it (repeatable)
+    #[arg(long, value_name = "FILE.toml")]
+    pub profile_file: Vec<PathBuf>,
 
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
@@ -143,6 +156,14 @@ pub struct ExplainArgs {
     /// Output format
     #[arg(long, short = 'f', value_enum, default_value_t = ExplainFormat::Text)]
     pub format: ExplainFormat,
+
+    /// Read the code and payload with this profile (default cia402)
+    #[arg(long, value_name = "NAME")]
+    pub profile: Option<String>,
+
+    /// A user profile (TOML); --profile defaults to its name
+    #[arg(long, value_name = "FILE.toml")]
+    pub profile_file: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -285,6 +306,27 @@ fn parse_code(s: &str) -> Result<u16, String> {
     u16::from_str_radix(hex, 16).map_err(|_| format!("'{s}' is not an error code (hex)"))
 }
 
+/// `--profile NAME` or `--profile NODE=NAME`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProfileArg {
+    pub node: Option<u8>,
+    pub name: String,
+}
+
+fn parse_profile_arg(s: &str) -> Result<ProfileArg, String> {
+    let (node, name) = match s.split_once('=') {
+        Some((node, name)) => (Some(parse_node(node)?), name.trim()),
+        None => (None, s.trim()),
+    };
+    if name.is_empty() {
+        return Err(format!("'{s}' names no profile"));
+    }
+    Ok(ProfileArg {
+        node,
+        name: name.to_string(),
+    })
+}
+
 /// `0x1A5=5`, `000001A5=5` (29-bit by digit count), `1A5x=5` (29-bit).
 fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
     let err = || format!("'{s}' is not COBID=NODE (e.g. 0x1A5=5 or 18FF0105x=5)");
@@ -400,6 +442,17 @@ mod tests {
         assert_eq!(all.codes, [0x2310, 0x4310]);
         assert_eq!(all.category_at_most, Some(3), "the widest bound wins");
         assert!(FailOn::combine(&[]).is_never());
+    }
+
+    #[test]
+    fn profile_args() {
+        let p = |s: &str| parse_profile_arg(s).map(|a| (a.node, a.name));
+        assert_eq!(p("kollmorgen"), Ok((None, "kollmorgen".into())));
+        assert_eq!(p("5=festo-cmmp"), Ok((Some(5), "festo-cmmp".into())));
+        assert_eq!(p("0x14=canopennode"), Ok((Some(20), "canopennode".into())));
+        assert!(p("0=cia402").is_err());
+        assert!(p("5=").is_err());
+        assert!(p("").is_err());
     }
 
     #[test]

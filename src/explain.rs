@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 use anyhow::{Result, bail};
 use serde_json::json;
 
-use crate::canopen::codes;
 use crate::canopen::emcy::Emcy;
+use crate::canopen::profile::{FieldValue, Profile};
 use crate::canopen::register::{self, Register};
 use crate::trace::hex;
 
@@ -61,12 +61,21 @@ fn register_bit_text(bit: Option<u8>) -> String {
 }
 
 /// `explain CODE` as text.
-pub fn code_text(code: u16) -> String {
-    let info = codes::lookup(code);
+pub fn code_text(profile: &Profile, code: u16) -> String {
+    let info = profile.info(code);
     let mut s = String::new();
     let _ = writeln!(s, "code         0x{code:04X}");
+    let _ = writeln!(s, "profile      {}", profile.name());
     let _ = writeln!(s, "class        {}", info.class.slug());
-    let _ = writeln!(s, "description  {}", info.description());
+    let _ = writeln!(s, "description  {}", profile.describe(code));
+    if let Some(v) = profile.vendor_code(code) {
+        if let Some(c) = v.category {
+            let _ = writeln!(s, "category     {c}");
+        }
+        if let Some(f) = &v.fault {
+            let _ = writeln!(s, "fault        {f}");
+        }
+    }
     let _ = writeln!(
         s,
         "register     {}",
@@ -76,29 +85,35 @@ pub fn code_text(code: u16) -> String {
     s
 }
 
-pub fn code_json(code: u16) -> serde_json::Value {
-    let info = codes::lookup(code);
+pub fn code_json(profile: &Profile, code: u16) -> serde_json::Value {
+    let info = profile.info(code);
+    let vendor = profile.vendor_code(code);
     json!({
         "code": format!("0x{code:04X}"),
+        "profile": profile.name(),
         "class": info.class.slug(),
-        "description": info.description().to_string(),
+        "description": profile.describe(code),
+        "category": vendor.and_then(|v| v.category),
+        "fault": vendor.and_then(|v| v.fault.clone()),
         "register_bit": info.class.register_bit(),
         "listed": info.listed,
     })
 }
 
 /// `explain --data` as text.
-pub fn payload_text(data: &[u8]) -> Result<String> {
+pub fn payload_text(profile: &Profile, data: &[u8]) -> Result<String> {
     let emcy = decode(data)?;
-    let info = emcy.info();
+    let info = profile.info(emcy.code);
     let mut warnings = Vec::new();
     emcy.frame_warnings(&info, &mut warnings);
+    profile.frame_warnings(&emcy, &mut warnings);
     let mut s = String::new();
     let hex: Vec<String> = data.iter().map(|b| format!("{b:02X}")).collect();
     let _ = writeln!(s, "data          {}", hex.join(" "));
+    let _ = writeln!(s, "profile       {}", profile.name());
     let _ = writeln!(s, "code          0x{:04X}", emcy.code);
     let _ = writeln!(s, "class         {}", info.class.slug());
-    let _ = writeln!(s, "description   {}", info.description());
+    let _ = writeln!(s, "description   {}", profile.describe(emcy.code));
     let names: Vec<&str> = emcy.register.names().collect();
     let _ = writeln!(
         s,
@@ -124,6 +139,15 @@ pub fn payload_text(data: &[u8]) -> Result<String> {
             mfr.join(" ")
         }
     );
+    if let Some(d) = profile.decode_manufacturer(&emcy) {
+        for (key, value) in &d.fields {
+            let value = match value {
+                FieldValue::Int(n) => n.to_string(),
+                FieldValue::Text(t) => t.clone(),
+            };
+            let _ = writeln!(s, "  {key:<12}{value}");
+        }
+    }
     if warnings.is_empty() {
         let _ = writeln!(s, "warnings      none");
     }
@@ -133,19 +157,34 @@ pub fn payload_text(data: &[u8]) -> Result<String> {
     Ok(s)
 }
 
-pub fn payload_json(data: &[u8]) -> Result<serde_json::Value> {
+pub fn payload_json(profile: &Profile, data: &[u8]) -> Result<serde_json::Value> {
     let emcy = decode(data)?;
-    let info = emcy.info();
+    let info = profile.info(emcy.code);
     let mut warnings = Vec::new();
     emcy.frame_warnings(&info, &mut warnings);
+    profile.frame_warnings(&emcy, &mut warnings);
+    let decoded = profile.decode_manufacturer(&emcy).map(|d| {
+        d.fields
+            .into_iter()
+            .map(|(k, v)| {
+                let v = match v {
+                    FieldValue::Int(n) => json!(n),
+                    FieldValue::Text(t) => json!(t),
+                };
+                (k, v)
+            })
+            .collect::<serde_json::Map<_, _>>()
+    });
     Ok(json!({
         "data": crate::trace::HexBytes(data).to_string(),
+        "profile": profile.name(),
         "code": format!("0x{:04X}", emcy.code),
         "class": info.class.slug(),
-        "description": info.description().to_string(),
+        "description": profile.describe(emcy.code),
         "register": emcy.register.0,
         "register_bits": Register(emcy.register.0).names().collect::<Vec<_>>(),
         "manufacturer": crate::trace::HexBytes(emcy.manufacturer()).to_string(),
+        "manufacturer_decoded": decoded,
         "warnings": warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>(),
     }))
 }
@@ -176,9 +215,15 @@ mod tests {
         assert!(parse_payload("00 00 00 00 00 00 00 00 00").is_err());
     }
 
+    fn cia402() -> &'static Profile {
+        crate::profile_choice::default_profile()
+    }
+
     #[test]
     fn payload_needs_three_bytes() {
-        let err = payload_text(&[0x10, 0x43]).unwrap_err().to_string();
+        let err = payload_text(cia402(), &[0x10, 0x43])
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("need 3"), "{err}");
     }
 
@@ -186,7 +231,7 @@ mod tests {
     fn codes() {
         assert_eq!(parse_code("4310").unwrap(), 0x4310);
         assert!(parse_code("43100").is_err());
-        assert!(code_text(0x4310).contains("bit 3 (temperature)"));
-        assert_eq!(code_json(0x4310)["register_bit"], 3);
+        assert!(code_text(cia402(), 0x4310).contains("bit 3 (temperature)"));
+        assert_eq!(code_json(cia402(), 0x4310)["register_bit"], 3);
     }
 }

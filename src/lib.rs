@@ -13,6 +13,7 @@ pub mod cli;
 pub mod explain;
 pub mod history;
 pub mod interrupt;
+pub mod profile_choice;
 pub mod report;
 pub mod run;
 pub mod timeline;

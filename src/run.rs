@@ -9,11 +9,13 @@ use clap::CommandFactory;
 
 use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
 use crate::batch;
+use crate::canopen::profile::{self, Profile};
 use crate::cli::{
     Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat, View,
 };
 use crate::explain;
 use crate::interrupt;
+use crate::profile_choice;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::table::{TableReport, use_color};
@@ -38,24 +40,61 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             clap_mangen::Man::new(Cli::command()).render(&mut out)?;
             write_stdout(&String::from_utf8_lossy(&out))
         }
+        Some(Command::Profiles) => profiles_command(),
         None => decode_command(&cli.decode),
     }
 }
 
+fn profiles_command() -> Result<ExitCode> {
+    let mut text = String::new();
+    let width = profile::builtins()
+        .iter()
+        .map(|p| p.name().len())
+        .max()
+        .unwrap_or(0);
+    for p in profile::builtins() {
+        let default = if p.name() == profile::DEFAULT_PROFILE {
+            " (default)"
+        } else {
+            ""
+        };
+        text.push_str(&format!("{:<width$}  {}{default}\n", p.name(), p.summary()));
+    }
+    write_stdout(&text)
+}
+
 fn explain_command(args: &ExplainArgs) -> Result<ExitCode> {
+    let user = args
+        .profile_file
+        .as_deref()
+        .map(profile::load_file)
+        .transpose()?;
+    let profile: &Profile = match (&args.profile, &user) {
+        (Some(name), Some(u)) if u.name() == name => u,
+        (Some(name), _) => profile::builtin(name).ok_or_else(|| {
+            anyhow::anyhow!("unknown profile '{name}' (`emcy-decode profiles` lists them)")
+        })?,
+        (None, Some(u)) => u,
+        (None, None) => profile_choice::default_profile(),
+    };
     let text = match (&args.data, &args.code, args.format) {
         (Some(data), _, ExplainFormat::Text) => {
-            explain::payload_text(&explain::parse_payload(data)?)?
+            explain::payload_text(profile, &explain::parse_payload(data)?)?
         }
         (Some(data), _, ExplainFormat::Json) => {
             format!(
                 "{:#}\n",
-                explain::payload_json(&explain::parse_payload(data)?)?
+                explain::payload_json(profile, &explain::parse_payload(data)?)?
             )
         }
-        (None, Some(code), ExplainFormat::Text) => explain::code_text(explain::parse_code(code)?),
+        (None, Some(code), ExplainFormat::Text) => {
+            explain::code_text(profile, explain::parse_code(code)?)
+        }
         (None, Some(code), ExplainFormat::Json) => {
-            format!("{:#}\n", explain::code_json(explain::parse_code(code)?))
+            format!(
+                "{:#}\n",
+                explain::code_json(profile, explain::parse_code(code)?)
+            )
         }
         (None, None, _) => anyhow::bail!("give a CODE or --data"),
     };
@@ -79,6 +118,7 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         channels: args.channel.clone(),
         max_diagnostics: args.max_diagnostics,
         emcy_ids: args.emcy_id.clone(),
+        profiles: profile_choice::resolve(&args.profile, &args.profile_file)?,
         ..Options::default()
     };
     let sources = expand_sources(&args.files, args.recursive)?;

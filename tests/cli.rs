@@ -142,12 +142,27 @@ fn fail_on_code_fails_only_for_the_listed_codes() {
 
 #[test]
 fn fail_on_warning_needs_a_warned_frame_of_a_selected_node() {
-    // festo's node 5 sends 0x4310 with a non-zero byte 6: no CiA warning;
-    // edge.log's nodes warn (short frame, reserved bit, ...).
+    // festo's node 5 sends 0x4310 with a non-zero byte 6: no CiA 402
+    // warning, but the Festo profile (chosen by the trace's vendor id) says
+    // bytes 3-7 are zero.
+    emcy_decode()
+        .args([
+            "--fail-on",
+            "warning",
+            "--profile",
+            "cia402",
+            "fixtures/festo.log",
+        ])
+        .assert()
+        .code(0);
     emcy_decode()
         .args(["--fail-on", "warning", "fixtures/festo.log"])
         .assert()
-        .code(0);
+        .code(1)
+        .stderr(predicates::str::contains(
+            "fail-on: warning: 1 EMCY frame with warnings",
+        ));
+    // edge.log's nodes warn (short frame, reserved bit, ...).
     emcy_decode()
         .args(["--fail-on", "warning", "fixtures/edge.log"])
         .assert()
@@ -200,7 +215,7 @@ fn summary_view_prints_no_events_in_any_format() {
         text.contains("0x3120 x1, 0x4210 x1, 0x4310 x1, 0x5111 x1"),
         "{text}"
     );
-    assert!(text.contains("bus: 15 frames, 7 EMCY"), "{text}");
+    assert!(text.contains("bus: 19 frames, 7 EMCY"), "{text}");
 
     let nd = emcy_decode()
         .args([
@@ -491,6 +506,7 @@ fn explain_data() {
         .code(0)
         .stdout(predicate::eq(
             "data          10 43 09 01 00 00 00 00\n\
+             profile       cia402\n\
              code          0x4310\n\
              class         temperature\n\
              description   Temperature · drive · excess temperature drive\n\
@@ -591,4 +607,164 @@ fn emcy_id_flag_rejects_nonsense_with_exit_2() {
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--emcy-id"));
+}
+
+// ---- vendor profiles ----------------------------------------------------------------
+
+fn node_object(args: &[&str]) -> Value {
+    let out = emcy_decode()
+        .args(["--format", "ndjson"])
+        .args(args)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{args:?}");
+    let objects = ndjson_objects(&out.stdout);
+    of_type(&objects, "node")[0].clone()
+}
+
+#[test]
+fn profiles_lists_every_builtin_once_with_the_default_marked() {
+    let out = emcy_decode().arg("profiles").output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let names: Vec<&str> = text
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap_or_default())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "cia301",
+            "cia402",
+            "kollmorgen",
+            "beckhoff-ax2000",
+            "stoeber",
+            "festo-cmmp",
+            "canopennode"
+        ]
+    );
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("cia402") && l.ends_with("(default)"))
+    );
+}
+
+#[test]
+fn the_trace_identity_chooses_the_profile_and_says_why() {
+    let node = node_object(&["fixtures/s300.log"]);
+    assert_eq!(node["profile"], "kollmorgen");
+    assert_eq!(node["profile_source"], "trace");
+    assert!(
+        node["profile_reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("0x0000006A")),
+        "{node}"
+    );
+    // The same trace without its SDO answers: the default.
+    let no_sdo: String = std::fs::read_to_string("fixtures/s300.log")
+        .unwrap()
+        .lines()
+        .filter(|l| !l.contains(" 58") && !l.contains(" 60"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin(no_sdo)
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&out.stdout);
+    let node = of_type(&objects, "node")[0];
+    assert_eq!(node["profile"], "cia402");
+    assert_eq!(node["profile_source"], "default");
+    assert_eq!(node["profile_reason"], Value::Null);
+}
+
+#[test]
+fn profile_flags_override_the_trace_node_flag_first() {
+    let node = node_object(&["--profile", "cia301", "fixtures/s300.log"]);
+    assert_eq!(
+        (node["profile"].clone(), node["profile_source"].clone()),
+        ("cia301".into(), "flag".into())
+    );
+    let node = node_object(&[
+        "--profile",
+        "cia301",
+        "--profile",
+        "1=stoeber",
+        "fixtures/s300.log",
+    ]);
+    assert_eq!(node["profile"], "stoeber");
+}
+
+#[test]
+fn kollmorgen_category_is_decoded_and_fails_category_bounds() {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&out.stdout);
+    let first = of_type(&objects, "emcy")[0];
+    assert_eq!(first["code"], "0x4310");
+    assert_eq!(first["manufacturer_decoded"]["category"], 1);
+    assert_eq!(first["profile_source"], "trace");
+    emcy_decode()
+        .args(["--fail-on", "category<=1", "fixtures/s300.log"])
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains(
+            "category<=1: an error of category 1",
+        ));
+    emcy_decode()
+        .args(["--fail-on", "category<=0", "fixtures/s300.log"])
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn unknown_profiles_and_broken_profile_files_exit_2_with_one_line() {
+    emcy_decode()
+        .args(["--profile", "5=nope", "fixtures/s300.log"])
+        .assert()
+        .code(2)
+        .stdout("")
+        .stderr(predicate::str::starts_with("error: unknown profile 'nope'"));
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "name = \"x\"\nbase = \"cia402\"\n[codes\n").unwrap();
+    let out = emcy_decode()
+        .arg("--profile-file")
+        .arg(&bad)
+        .arg("fixtures/s300.log")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    assert!(
+        stderr.contains("bad.toml:3"),
+        "names file and line: {stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+}
+
+#[test]
+fn explain_reads_a_payload_with_a_profile() {
+    let out = emcy_decode()
+        .args(["explain", "--profile", "stoeber", "--format", "json"])
+        .args(["--data", "10 43 01 29 00 00 00 00"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["profile"], "stoeber");
+    assert_eq!(v["manufacturer_decoded"]["event"], 41);
+    emcy_decode()
+        .args(["explain", "--profile", "kollmorgen", "4310"])
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("F06"));
+    emcy_decode()
+        .args(["explain", "--profile", "nope", "4310"])
+        .assert()
+        .code(2);
 }

@@ -215,6 +215,10 @@ impl fmt::Display for Warning {
                 f,
                 "partial reset with register 0x{register:02X} clears no active error by its class bit; which error ended is unknown"
             ),
+            Warning::ManufacturerBytesNonZero { first, last } if first == last => write!(
+                f,
+                "byte {first} should be zero for this node's profile but is not"
+            ),
             Warning::ManufacturerBytesNonZero { first, last } => write!(
                 f,
                 "bytes {first}-{last} should be zero for this node's profile but are not"

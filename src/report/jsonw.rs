@@ -9,8 +9,8 @@
 use std::collections::HashMap;
 
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
-use crate::canopen::codes;
 use crate::canopen::emcy::Warning;
+use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
 use crate::trace::{Format, Span, Timestamp};
@@ -91,6 +91,27 @@ fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
     }
 }
 
+/// A profile's identity for caches: profiles live for the whole run.
+fn profile_key(profile: &Profile) -> usize {
+    std::ptr::from_ref(profile) as usize
+}
+
+/// `{"category":1,"category_text":"..."}` or `null`.
+fn push_decoded(out: &mut Vec<u8>, decoded: Option<&Decoded>) {
+    let Some(d) = decoded else {
+        out.extend_from_slice(b"null");
+        return;
+    };
+    let mut o = Obj::new(out);
+    for (key, value) in &d.fields {
+        match value {
+            FieldValue::Int(n) => o.u64(key, *n),
+            FieldValue::Text(t) => o.str(key, t),
+        }
+    }
+    o.end();
+}
+
 fn push_span(out: &mut Vec<u8>, s: Option<Span>) {
     match s {
         Some(s) => s.push_decimal(out),
@@ -164,13 +185,16 @@ impl<K: PartialEq + Copy, const N: usize> Cache<K, N> {
 struct PayloadKey {
     bytes: [u8; 8],
     len: u8,
+    /// The profile's address: it gives class, description and the decoded field.
+    profile: usize,
 }
 
 /// Texts that repeat on every event, escaped once: descriptions, warnings,
 /// payload fragments, the per-file prefix and channel names.
 #[derive(Default)]
 pub struct JsonWriter {
-    descriptions: HashMap<u16, Vec<u8>>,
+    /// Per (profile address, code).
+    descriptions: HashMap<(usize, u16), Vec<u8>>,
     warnings: HashMap<Warning, Vec<u8>>,
     payloads: Cache<PayloadKey, 256>,
     /// `{"type":"emcy","file":"…","line":` for the last file seen.
@@ -184,10 +208,11 @@ impl JsonWriter {
         Self::default()
     }
 
-    fn description(&mut self, out: &mut Vec<u8>, code: u16) {
-        let text = self.descriptions.entry(code).or_insert_with(|| {
+    fn description(&mut self, out: &mut Vec<u8>, profile: &Profile, code: u16) {
+        let key = (profile_key(profile), code);
+        let text = self.descriptions.entry(key).or_insert_with(|| {
             let mut v = Vec::new();
-            push_str(&mut v, &codes::lookup(code).description().to_string());
+            push_str(&mut v, &profile.describe(code));
             v
         });
         out.extend_from_slice(text);
@@ -204,9 +229,11 @@ impl JsonWriter {
 
     /// `"code":…,"manufacturer":"…"` for this payload, from the cache.
     fn payload(&mut self, out: &mut Vec<u8>, ev: &EmcyEvent<'_>) {
+        let profile = ev.profile.profile;
         let mut key = PayloadKey {
             bytes: [0; 8],
             len: ev.data.len().min(8) as u8,
+            profile: profile_key(profile),
         };
         key.bytes[..usize::from(key.len)].copy_from_slice(&ev.data[..usize::from(key.len)]);
         let slot = usize::from(ev.emcy.code ^ (u16::from(ev.emcy.register.0) << 8))
@@ -220,11 +247,13 @@ impl JsonWriter {
                 v.extend_from_slice(b",\"class\":\"");
                 v.extend_from_slice(ev.info.class.slug().as_bytes());
                 v.extend_from_slice(b"\",\"description\":");
-                let d = descriptions.entry(ev.emcy.code).or_insert_with(|| {
-                    let mut d = Vec::new();
-                    push_str(&mut d, &ev.info.description().to_string());
-                    d
-                });
+                let d = descriptions
+                    .entry((key.profile, ev.emcy.code))
+                    .or_insert_with(|| {
+                        let mut d = Vec::new();
+                        push_str(&mut d, &profile.describe(ev.emcy.code));
+                        d
+                    });
                 v.extend_from_slice(d);
                 v.extend_from_slice(b",\"register\":");
                 push_u64(&mut v, u64::from(ev.emcy.register.0));
@@ -237,6 +266,10 @@ impl JsonWriter {
                 }
                 v.extend_from_slice(b"],\"manufacturer\":");
                 push_hex(&mut v, ev.emcy.manufacturer());
+                v.extend_from_slice(b",\"manufacturer_decoded\":");
+                push_decoded(&mut v, ev.decoded);
+                v.extend_from_slice(b",\"profile\":");
+                push_str(&mut v, profile.name());
                 v
             })
         };
@@ -277,6 +310,9 @@ impl JsonWriter {
         out.extend_from_slice(b",\"data\":");
         push_hex(out, ev.data);
         self.payload(out, ev);
+        out.extend_from_slice(b",\"profile_source\":\"");
+        out.extend_from_slice(ev.profile.source.slug().as_bytes());
+        out.push(b'"');
         out.extend_from_slice(b",\"transition\":");
         match ev.transition {
             Some(t) => push_u64(out, u64::from(t)),
@@ -327,6 +363,12 @@ impl JsonWriter {
         o.str("state", node.state.slug());
         push_codes(o.key("active"), &node.active);
         o.u64("emcy_count", node.emcy_count);
+        o.str("profile", node.profile.name());
+        o.str("profile_source", node.profile_source.slug());
+        match &node.profile_reason {
+            Some(r) => o.str("profile_reason", r),
+            None => o.key("profile_reason").extend_from_slice(b"null"),
+        }
         let seen = o.key("errors_seen");
         seen.push(b'{');
         for (i, (&code, &count)) in node.stats.raised.iter().enumerate() {
@@ -363,13 +405,13 @@ impl JsonWriter {
             if i > 0 {
                 e.push(b',');
             }
-            self.interval(e, &iv);
+            self.interval(e, node.profile, &iv);
         }
         e.push(b']');
         o.end();
     }
 
-    fn interval(&mut self, out: &mut Vec<u8>, iv: &Interval) {
+    fn interval(&mut self, out: &mut Vec<u8>, profile: &Profile, iv: &Interval) {
         let end_time = iv.end.and_then(|e| e.time);
         let duration = match (iv.start.time, end_time) {
             (Some(start), Some(end)) => Some(end.since(start)),
@@ -377,7 +419,7 @@ impl JsonWriter {
         };
         let mut o = Obj::new(out);
         push_code(o.key("code"), iv.code);
-        self.description(o.key("description"), iv.code);
+        self.description(o.key("description"), profile, iv.code);
         push_time(o.key("start"), iv.start.time);
         push_time(o.key("end"), end_time);
         push_span(o.key("duration"), duration);

@@ -11,7 +11,9 @@ use std::io;
 
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
+use crate::canopen::profile::{Decoded, Profile};
 use crate::history::ErrorHistory;
+use crate::profile_choice::{Chosen, ProfileSource};
 use crate::timeline::{NodeStats, State};
 use crate::trace::{Format, Span, Timestamp};
 
@@ -31,6 +33,10 @@ pub struct EmcyEvent<'a> {
     pub active: &'a [u16],
     pub cleared: &'a [u16],
     pub warnings: &'a [Warning],
+    /// The node's profile (it gave `info`) and why.
+    pub profile: Chosen,
+    /// The manufacturer bytes as the profile reads them.
+    pub decoded: Option<&'a Decoded>,
 }
 
 /// An NMT boot-up: the node restarted, its errors are gone.
@@ -53,6 +59,10 @@ pub struct NodeReport {
     pub active: Vec<u16>,
     pub emcy_count: u64,
     pub stats: NodeStats,
+    pub profile: &'static Profile,
+    pub profile_source: ProfileSource,
+    /// Why the trace chose the profile (vendor id, device type).
+    pub profile_reason: Option<String>,
 }
 
 impl NodeReport {

@@ -9,8 +9,8 @@ use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
-use crate::canopen::codes;
+use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
+use crate::canopen::profile::{Decoded, FieldValue};
 use crate::timeline::Interval;
 use crate::trace::Timestamp;
 use unicode_width::UnicodeWidthStr;
@@ -77,6 +77,7 @@ impl<W: Write> TableReport<W> {
             "STATE AT END",
             "ACTIVE",
             "ERRORS SEEN",
+            "PROFILE",
             "IN ERROR",
             "LONGEST",
             "FIRST EMCY",
@@ -104,6 +105,7 @@ impl<W: Write> TableReport<W> {
                 } else {
                     seen.join(", ")
                 },
+                format!("{} ({})", n.profile.name(), n.profile_source.slug()),
                 n.time_in_error(input.last_time)
                     .map_or_else(|| "-".to_string(), |s| s.to_string()),
                 n.stats
@@ -113,7 +115,7 @@ impl<W: Write> TableReport<W> {
                 time(n.stats.last_emcy.and_then(|a| a.time)),
             ]);
         }
-        right_align(&mut nodes, &[1, 2, 6]);
+        right_align(&mut nodes, &[1, 2, 7]);
         writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
         write_table(&mut self.out, &nodes)
     }
@@ -236,6 +238,19 @@ fn printable(s: &str) -> Cow<'_, str> {
     Cow::Owned(out)
 }
 
+/// The manufacturer bytes as the profile reads them: `key: value; ...`.
+fn decoded_text(d: &Decoded) -> String {
+    let fields: Vec<String> = d
+        .fields
+        .iter()
+        .map(|(k, v)| match v {
+            FieldValue::Int(n) => format!("{k}: {n}"),
+            FieldValue::Text(t) => format!("{k}: {}", printable(t)),
+        })
+        .collect();
+    format!("manufacturer: {}", fields.join("; "))
+}
+
 fn codes_list(codes: &[u16]) -> String {
     codes
         .iter()
@@ -276,7 +291,7 @@ impl<W: Write> Renderer for TableReport<W> {
             .transition
             .map_or_else(|| "-".to_string(), |t| t.to_string());
         let register = format!("{:02X} {}", ev.emcy.register.0, ev.emcy.register.short());
-        let mut description = ev.info.description().to_string();
+        let mut description = ev.profile.profile.describe(ev.emcy.code);
         if !ev.cleared.is_empty() {
             description.push_str(&format!(" (cleared {})", codes_list(ev.cleared)));
         }
@@ -290,6 +305,9 @@ impl<W: Write> Renderer for TableReport<W> {
         );
         writeln!(self.out, "{}", line.trim_end())?;
         let indent = Self::description_indent(l);
+        if let Some(decoded) = ev.decoded {
+            writeln!(self.out, "{:indent$}{}", "", decoded_text(decoded))?;
+        }
         for w in ev.warnings {
             let text = self.paint(YELLOW, &format!("warning: {w}"));
             writeln!(self.out, "{:indent$}{text}", "")?;
@@ -344,6 +362,7 @@ impl<W: Write> Renderer for TableReport<W> {
         self.write_nodes(input)?;
 
         self.write_timeline(input)?;
+        writeln!(self.out)?;
         self.write_bus_line(input)?;
         writeln!(self.out)
     }
@@ -392,13 +411,8 @@ const TIMELINE_HEADER: [&str; 8] = [
 const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
 
 /// Fills the cells of one error timeline row.
-fn timeline_cells(
-    cells: &mut [String; 8],
-    times: &TimeFormat,
-    channel: &str,
-    node: u8,
-    iv: &Interval,
-) {
+fn timeline_cells(cells: &mut [String; 8], times: &TimeFormat, n: &NodeReport, iv: &Interval) {
+    let (channel, node) = (n.channel.as_str(), n.node);
     use std::fmt::Write as _;
     for c in cells.iter_mut() {
         c.clear();
@@ -407,7 +421,7 @@ fn timeline_cells(
     cells[0].push_str(&printable(channel));
     let _ = write!(cells[1], "{node}");
     let _ = write!(cells[2], "0x{:04X}", iv.code);
-    let _ = write!(cells[3], "{}", codes::lookup_cached(iv.code).description());
+    cells[3].push_str(&n.profile.describe(iv.code));
     let _ = match iv.start.time {
         Some(t) => write!(cells[4], "{}", times.show(t)),
         None => write!(cells[4], "line {}", iv.start.line),
@@ -432,7 +446,7 @@ fn for_each_timeline_row(
     let mut merge = input.history.merge();
     for n in &input.nodes {
         for iv in merge.node_errors(&n.channel, n.node) {
-            timeline_cells(&mut cells, times, &n.channel, n.node, &iv);
+            timeline_cells(&mut cells, times, n, &iv);
             row(&cells)?;
         }
     }
