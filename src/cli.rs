@@ -47,6 +47,10 @@ pub struct Cli {
 pub enum Command {
     /// Explain an error code, or decode one raw 8-byte EMCY payload
     Explain(ExplainArgs),
+    /// Record what traces contain (errors per node, line counts) for `check`
+    Baseline(crate::baseline::BaselineArgs),
+    /// Compare traces with a baseline: exit 1 on a regression
+    Check(crate::baseline::CheckArgs),
 }
 
 #[derive(Args, Debug)]
@@ -160,7 +164,7 @@ pub enum FailOn {
 }
 
 /// `0x1A5=5`, `000001A5=5` (29-bit by digit count), `1A5x=5` (29-bit).
-fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
+pub(crate) fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
     let err = || format!("'{s}' is not COBID=NODE (e.g. 0x1A5=5 or 18FF0105x=5)");
     let (cob, node) = s.split_once('=').ok_or_else(err)?;
     let node = parse_node(node)?;
@@ -182,7 +186,7 @@ fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
 }
 
 /// A CANopen node id, 1..=127, decimal or 0x hex.
-fn parse_node(s: &str) -> Result<u8, String> {
+pub(crate) fn parse_node(s: &str) -> Result<u8, String> {
     let t = s.trim();
     let value = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(hex) => u8::from_str_radix(hex, 16),

@@ -7,6 +7,7 @@
 #![forbid(unsafe_code)]
 
 pub mod analyze;
+pub mod baseline;
 pub mod canopen;
 pub mod cli;
 pub mod explain;

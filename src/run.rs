@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 
 use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
+use crate::baseline;
 use crate::cli::{Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat};
 use crate::explain;
 use crate::report::json::JsonDocument;
@@ -23,6 +24,8 @@ pub const EXIT_ERROR: u8 = 2;
 pub fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Some(Command::Explain(args)) => explain_command(&args),
+        Some(Command::Baseline(args)) => baseline::baseline_command(&args),
+        Some(Command::Check(args)) => baseline::check_command(&args),
         None => decode_command(&cli.decode),
     }
 }
