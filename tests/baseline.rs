@@ -476,7 +476,91 @@ fn the_json_diff_parses_and_every_finding_has_the_same_keys() {
     assert_eq!(json["summary"]["allowed"], 1);
 }
 
-// ---- other inputs ----------------------------------------------------------------------
+// ---- the README's CI example --------------------------------------------------------------
+
+/// The lines of the README's code block between `<!-- NAME:start -->` and
+/// `<!-- NAME:end -->`, without the fences.
+fn readme_block(name: &str) -> Vec<String> {
+    let readme = fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README.md");
+    let start = format!("<!-- {name}:start -->");
+    let end = format!("<!-- {name}:end -->");
+    let from = readme.find(&start).expect("start marker") + start.len();
+    let to = readme[from..].find(&end).expect("end marker") + from;
+    readme[from..to]
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with("```"))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Runs a README command line with `sh` in `dir`, the built binary first on
+/// PATH (so `emcy-decode` and shell globs work as in CI).
+#[cfg(unix)]
+fn sh(dir: &Path, line: &str) -> std::process::Output {
+    let bin = assert_cmd::cargo::cargo_bin("emcy-decode");
+    let bin_dir = bin.parent().expect("binary dir");
+    let path = std::env::join_paths(std::iter::once(bin_dir.to_path_buf()).chain(
+        std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()),
+    ))
+    .expect("PATH");
+    std::process::Command::new("sh")
+        .args(["-c", line])
+        .current_dir(dir)
+        .env("PATH", path)
+        .env_remove("NO_COLOR")
+        .env_remove("COLUMNS")
+        .output()
+        .expect("sh runs")
+}
+
+#[cfg(unix)]
+#[test]
+fn the_readme_ci_example_works() {
+    let lines = readme_block("ci-example");
+    let commands: Vec<&String> = lines.iter().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(commands.len(), 2, "a two-line CI step: {lines:?}");
+    let (make, check) = (commands[0], commands[1]);
+    assert!(make.starts_with("emcy-decode baseline "), "{make}");
+    assert!(check.starts_with("emcy-decode check "), "{check}");
+
+    let dir = tempfile::tempdir().expect("temp dir");
+    let traces = dir.path().join("traces");
+    fs::create_dir(&traces).expect("mkdir");
+    fs::copy(fixture("rig.log"), traces.join("rig.log")).expect("copy");
+    fs::copy(fixture("node-gone.log"), traces.join("bench.log")).expect("copy");
+
+    let out = sh(dir.path(), make);
+    assert_eq!(out.status.code(), Some(0), "{make}: {out:?}");
+    // A run like the recorded one passes...
+    let out = sh(dir.path(), check);
+    assert_eq!(out.status.code(), Some(0), "{check}: {out:?}");
+    assert!(String::from_utf8_lossy(&out.stdout).ends_with("2 of 2 traces matched\n"));
+    // ...a run with a new error fails the job.
+    fs::copy(fixture("new-error.log"), traces.join("rig.log")).expect("copy");
+    let out = sh(dir.path(), check);
+    assert_eq!(out.status.code(), Some(1), "{check}: {out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stdout)
+            .starts_with("regression: traces/rig.log can0 node 1: new error 0x2310")
+    );
+}
+
+#[test]
+fn the_readme_baseline_example_is_what_baseline_writes() {
+    let lines = readme_block("baseline-example");
+    let (command, json) = lines.split_first().expect("a command, then the file");
+    let command = command.strip_prefix("$ ").expect("`$ command` line");
+    let args: Vec<&str> = command.split_whitespace().skip(1).collect();
+    let out = emcy_decode().args(&args).assert().code(0);
+    let expected = json.join("\n") + "\n";
+    let actual = String::from_utf8_lossy(&out.get_output().stdout);
+    assert!(
+        actual == expected,
+        "README baseline example is stale:\n{}",
+        common::first_difference(&expected, &actual)
+    );
+}
 
 #[test]
 fn stdin_is_recorded_as_stdin() {
