@@ -17,6 +17,7 @@ Examples:
   candump -L can0 | emcy-decode -               decode live from a bus
   emcy-decode --fail-on active traces/*.log     fail a CI job when a node ends in error
   emcy-decode explain 4310                      what does code 0x4310 mean?
+  emcy-decode check --baseline baseline.json traces/*.log   fail CI on a new error
   emcy-decode explain --data \"10 43 09 01 00 00 00 00\"
 
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
@@ -24,7 +25,7 @@ candump screen output (with or without -t/-x/-a), Vector ASC.
 
 Exit status:
   0  success (also when the reader of stdout goes away, e.g. `| head -1`)
-  1  the --fail-on condition was met
+  1  the --fail-on condition was met (check: a regression against the baseline)
   2  usage error, unreadable input, unknown format, corrupt gzip,
      or malformed lines with --strict
   130  stopped by Ctrl-C (what was read is still reported)";
@@ -58,6 +59,10 @@ pub enum Command {
     Man,
     /// List the built-in vendor profiles, one line each
     Profiles,
+    /// Record what traces contain (errors per node, line counts) for `check`
+    Baseline(crate::baseline::BaselineArgs),
+    /// Compare traces with a baseline: exit 1 on a regression
+    Check(crate::baseline::CheckArgs),
 }
 
 #[derive(Args, Debug)]
@@ -313,7 +318,7 @@ pub struct ProfileArg {
     pub name: String,
 }
 
-fn parse_profile_arg(s: &str) -> Result<ProfileArg, String> {
+pub(crate) fn parse_profile_arg(s: &str) -> Result<ProfileArg, String> {
     let (node, name) = match s.split_once('=') {
         Some((node, name)) => (Some(parse_node(node)?), name.trim()),
         None => (None, s.trim()),
@@ -328,7 +333,7 @@ fn parse_profile_arg(s: &str) -> Result<ProfileArg, String> {
 }
 
 /// `0x1A5=5`, `000001A5=5` (29-bit by digit count), `1A5x=5` (29-bit).
-fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
+pub(crate) fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
     let err = || format!("'{s}' is not COBID=NODE (e.g. 0x1A5=5 or 18FF0105x=5)");
     let (cob, node) = s.split_once('=').ok_or_else(err)?;
     let node = parse_node(node)?;
@@ -350,7 +355,7 @@ fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
 }
 
 /// A CANopen node id, 1..=127, decimal or 0x hex.
-fn parse_node(s: &str) -> Result<u8, String> {
+pub(crate) fn parse_node(s: &str) -> Result<u8, String> {
     let t = s.trim();
     let value = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(hex) => u8::from_str_radix(hex, 16),

@@ -8,6 +8,7 @@ use anyhow::Result;
 use clap::CommandFactory;
 
 use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
+use crate::baseline;
 use crate::batch;
 use crate::canopen::profile::{self, Profile};
 use crate::cli::{
@@ -41,6 +42,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             write_stdout(&String::from_utf8_lossy(&out))
         }
         Some(Command::Profiles) => profiles_command(),
+        Some(Command::Baseline(args)) => baseline::baseline_command(&args),
+        Some(Command::Check(args)) => baseline::check_command(&args),
         None => decode_command(&cli.decode),
     }
 }
@@ -102,7 +105,7 @@ fn explain_command(args: &ExplainArgs) -> Result<ExitCode> {
 }
 
 /// Writes a whole short output; a reader that went away is not an error.
-fn write_stdout(text: &str) -> Result<ExitCode> {
+pub(crate) fn write_stdout(text: &str) -> Result<ExitCode> {
     let mut out = io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Err(e) if e.kind() != io::ErrorKind::BrokenPipe => return Err(e.into()),
@@ -230,6 +233,13 @@ const PARALLEL_MIN_BYTES: u64 = 16 * 1024 * 1024;
 /// Files from this size get a progress bar (when allowed).
 const PROGRESS_MIN_BYTES: u64 = 50 * 1024 * 1024;
 
+/// Threads for one input by its size: all cores for big files and gzip (its
+/// decompression runs beside the parsing), one for small ones.
+pub(crate) fn auto_threads(opened: &input::Opened) -> usize {
+    let big = opened.gzip || opened.size.is_some_and(|s| s >= PARALLEL_MIN_BYTES);
+    if big { cores() } else { 1 }
+}
+
 fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get().min(8))
 }
@@ -239,11 +249,10 @@ impl HowToRead {
         if self.threads > 0 {
             return self.threads;
         }
-        let big = opened.gzip || opened.size.is_some_and(|s| s >= PARALLEL_MIN_BYTES);
-        if self.live || !big {
+        if self.live {
             return 1;
         }
-        cores()
+        auto_threads(opened)
     }
 
     /// Whether a source is small enough to be read beside others.

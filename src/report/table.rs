@@ -223,7 +223,7 @@ impl<W: Write> TableReport<W> {
 /// A channel name as the trace wrote it, with control characters escaped: a
 /// hostile trace must not put terminal control sequences on the screen
 /// (`(1.0) \x1b]0;title\x07 081#...` is a valid candump log line).
-fn printable(s: &str) -> Cow<'_, str> {
+pub(crate) fn printable(s: &str) -> Cow<'_, str> {
     if !s.chars().any(char::is_control) {
         return Cow::Borrowed(s);
     }

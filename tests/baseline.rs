@@ -1,0 +1,584 @@
+//! `baseline` and `check`: the CI regression contract. Each test works in its
+//! own temporary directory holding `traces/rig.log`; a baseline is made from
+//! the reference run (`fixtures/baseline/rig.log`), then the trace is replaced
+//! by a variant from `fixtures/baseline/` and checked.
+
+mod common;
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use common::emcy_decode;
+use predicates::prelude::*;
+use serde_json::Value;
+use tempfile::TempDir;
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/baseline")
+        .join(name)
+}
+
+/// A temporary directory with `traces/rig.log` = the fixture `name`.
+fn workspace(name: &str) -> TempDir {
+    let dir = tempfile::tempdir().expect("temp dir");
+    fs::create_dir(dir.path().join("traces")).expect("mkdir traces");
+    put(&dir, name);
+    dir
+}
+
+/// Replaces `traces/rig.log` with the fixture `name`.
+fn put(dir: &TempDir, name: &str) {
+    fs::copy(fixture(name), dir.path().join("traces/rig.log")).expect("copy fixture");
+}
+
+fn cmd_in(dir: &TempDir) -> Command {
+    let mut cmd = emcy_decode();
+    cmd.current_dir(dir.path());
+    cmd
+}
+
+/// `baseline traces/rig.log -o baseline.json` in `dir`.
+fn make_baseline(dir: &TempDir) {
+    cmd_in(dir)
+        .args(["baseline", "traces/rig.log", "-o", "baseline.json"])
+        .assert()
+        .code(0)
+        .stdout("")
+        .stderr("");
+}
+
+fn check(dir: &TempDir, extra: &[&str]) -> assert_cmd::assert::Assert {
+    cmd_in(dir)
+        .args(["check", "--baseline", "baseline.json", "traces/rig.log"])
+        .args(extra)
+        .assert()
+}
+
+/// A baseline of the reference run, then the trace replaced by `variant`.
+fn checked_against_rig(variant: &str) -> TempDir {
+    let dir = workspace("rig.log");
+    make_baseline(&dir);
+    put(&dir, variant);
+    dir
+}
+
+// ---- clean match ---------------------------------------------------------------
+
+#[test]
+fn an_unchanged_trace_matches_with_exit_0() {
+    let dir = checked_against_rig("rig.log");
+    check(&dir, &[])
+        .code(0)
+        .stdout("check: 0 regressions, 0 improvements, 0 changes; 1 of 1 trace matched\n")
+        .stderr("");
+}
+
+// ---- regressions: exit 1 ---------------------------------------------------------
+
+#[test]
+fn a_new_error_code_is_a_regression() {
+    let dir = checked_against_rig("new-error.log");
+    check(&dir, &[]).code(1).stdout(
+        "regression: traces/rig.log can0 node 1: new error 0x2310 (1x): \
+         Current · output side · continuous over current\n\
+         check: 1 regression, 0 improvements, 0 changes; 0 of 1 trace matched\n",
+    );
+}
+
+#[test]
+fn an_error_that_stays_active_but_was_cleared_is_a_regression() {
+    let dir = checked_against_rig("stays-active.log");
+    check(&dir, &[])
+        .code(1)
+        .stdout(predicate::str::contains(
+            "regression: traces/rig.log can0 node 1: error 0x4310 still active at end, \
+             cleared in the baseline: Temperature · drive · excess temperature drive\n",
+        ))
+        .stdout(
+            predicate::str::contains(
+                "change: traces/rig.log can0 node 1: error 0x4310 raised 1x, baseline 2x",
+            )
+            .not(),
+        )
+        .stdout(predicate::str::ends_with(
+            "check: 1 regression, 0 improvements, 0 changes; 0 of 1 trace matched\n",
+        ));
+}
+
+#[test]
+fn a_new_node_with_errors_is_a_regression() {
+    let dir = checked_against_rig("new-node.log");
+    check(&dir, &[]).code(1).stdout(predicate::str::starts_with(
+        "regression: traces/rig.log can0 node 3: new node with errors \
+         0x8130 (1x, still active at end)\n",
+    ));
+}
+
+#[test]
+fn more_malformed_lines_are_a_regression() {
+    let dir = checked_against_rig("malformed.log");
+    check(&dir, &["--max-diagnostics", "0"]).code(1).stdout(
+        "regression: traces/rig.log: malformed lines 2, baseline 0\n\
+         check: 1 regression, 0 improvements, 0 changes; 0 of 1 trace matched\n",
+    );
+}
+
+#[test]
+fn a_trace_not_in_the_baseline_and_a_baseline_trace_not_given_are_regressions() {
+    let dir = checked_against_rig("rig.log");
+    fs::copy(fixture("rig.log"), dir.path().join("traces/other.log")).expect("copy");
+    cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "traces/other.log"])
+        .assert()
+        .code(1)
+        .stdout(
+            "regression: traces/other.log: not in the baseline\n\
+             regression: traces/rig.log: in the baseline but not given\n\
+             check: 2 regressions, 0 improvements, 0 changes; 0 of 2 traces matched\n",
+        );
+}
+
+// ---- reported, exit 0 ---------------------------------------------------------------
+
+#[test]
+fn errors_that_no_longer_appear_or_no_longer_stay_active_are_improvements() {
+    let dir = checked_against_rig("improved.log");
+    check(&dir, &[]).code(0).stdout(
+        "improvement: traces/rig.log can0 node 1: error 0x4310 no longer appears \
+         (baseline 2x): Temperature · drive · excess temperature drive\n\
+         improvement: traces/rig.log can0 node 2: error 0x3120 cleared by the end, \
+         active in the baseline: Voltage · mains · mains under-voltage\n\
+         check: 0 regressions, 2 improvements, 0 changes; 1 of 1 trace matched\n",
+    );
+}
+
+#[test]
+fn a_node_that_disappeared_is_reported() {
+    let dir = checked_against_rig("node-gone.log");
+    check(&dir, &[]).code(0).stdout(
+        "change: traces/rig.log can0 node 2: node no longer appears \
+         (baseline: errors 0x3120 (1x, still active at end))\n\
+         check: 0 regressions, 0 improvements, 1 change; 1 of 1 trace matched\n",
+    );
+}
+
+#[test]
+fn a_known_error_raised_more_often_is_a_change() {
+    let dir = checked_against_rig("more-often.log");
+    check(&dir, &[]).code(0).stdout(
+        "change: traces/rig.log can0 node 1: error 0x4310 raised 3x, baseline 2x: \
+         Temperature · drive · excess temperature drive\n\
+         check: 0 regressions, 0 improvements, 1 change; 1 of 1 trace matched\n",
+    );
+}
+
+// ---- accepting known differences -----------------------------------------------------
+
+#[test]
+fn allow_code_accepts_a_new_error() {
+    let dir = checked_against_rig("new-error.log");
+    check(&dir, &["--allow", "2310"]).code(0).stdout(
+        "allowed: traces/rig.log can0 node 1: new error 0x2310 (1x): \
+         Current · output side · continuous over current\n\
+         check: 0 regressions (1 allowed), 0 improvements, 0 changes; 1 of 1 trace matched\n",
+    );
+    // Another code does not.
+    check(&dir, &["--allow", "0x4310"]).code(1);
+}
+
+#[test]
+fn allow_code_accepts_an_error_that_stays_active() {
+    let dir = checked_against_rig("stays-active.log");
+    check(&dir, &["--allow", "0x4310"]).code(0);
+}
+
+#[test]
+fn allow_node_accepts_a_new_node_and_its_errors() {
+    let dir = checked_against_rig("new-node.log");
+    check(&dir, &["--allow-node", "3"])
+        .code(0)
+        .stdout(predicate::str::starts_with(
+            "allowed: traces/rig.log can0 node 3: new node with errors",
+        ));
+    // Allowing every code of the new node accepts it too.
+    check(&dir, &["--allow", "8130"]).code(0);
+    check(&dir, &["--allow-node", "1,2"]).code(1);
+}
+
+#[test]
+fn allow_does_not_accept_malformed_lines() {
+    let dir = checked_against_rig("malformed.log");
+    check(
+        &dir,
+        &[
+            "--allow-node",
+            "1,2",
+            "--allow",
+            "4310",
+            "--max-diagnostics",
+            "0",
+        ],
+    )
+    .code(1);
+}
+
+// ---- --update ------------------------------------------------------------------------
+
+#[test]
+fn update_rewrites_the_baseline_and_the_next_check_passes() {
+    let dir = checked_against_rig("new-error.log");
+    check(&dir, &["--update"])
+        .code(0)
+        .stdout(predicate::str::starts_with(
+            "regression: traces/rig.log can0 node 1: new error 0x2310",
+        ))
+        .stderr("check: wrote baseline.json\n");
+    check(&dir, &[]).code(0);
+    // The rewritten baseline is exactly what `baseline` writes.
+    let updated = fs::read(dir.path().join("baseline.json")).expect("read");
+    make_baseline(&dir);
+    let fresh = fs::read(dir.path().join("baseline.json")).expect("read");
+    assert_eq!(updated, fresh);
+}
+
+// ---- the baseline file -----------------------------------------------------------------
+
+#[test]
+fn the_baseline_is_byte_identical_across_runs_and_holds_no_absolute_path() {
+    let a = workspace("new-node.log");
+    let b = workspace("new-node.log");
+    make_baseline(&a);
+    // An absolute path inside the current directory is stored relative to it.
+    let abs = b.path().join("traces/rig.log");
+    cmd_in(&b)
+        .args(["baseline", "-o", "baseline.json"])
+        .arg(&abs)
+        .assert()
+        .code(0);
+    let first = fs::read_to_string(a.path().join("baseline.json")).expect("read");
+    let second = fs::read_to_string(b.path().join("baseline.json")).expect("read");
+    assert_eq!(first, second);
+    for dir in [&a, &b] {
+        let root = dir.path().to_string_lossy().into_owned();
+        assert!(!first.contains(&root), "absolute path in {first}");
+    }
+    assert!(first.ends_with("}\n") && !first.ends_with("\n\n"));
+    // Stdout gives the same bytes.
+    cmd_in(&a)
+        .args(["baseline", "traces/rig.log"])
+        .assert()
+        .code(0)
+        .stdout(first.clone());
+}
+
+#[test]
+fn an_absolute_path_outside_the_current_directory_is_stored_as_its_file_name() {
+    let dir = workspace("rig.log");
+    let elsewhere = tempfile::tempdir().expect("temp dir");
+    let out = cmd_in(&dir)
+        .args(["baseline"])
+        .arg(dir.path().join("traces/rig.log"))
+        .current_dir(elsewhere.path())
+        .assert()
+        .code(0);
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("JSON");
+    let keys: Vec<&String> = json["traces"].as_object().expect("traces").keys().collect();
+    assert_eq!(keys, ["rig.log"]);
+}
+
+#[test]
+fn the_baseline_records_codes_active_codes_counts_and_input_counts() {
+    let out = emcy_decode()
+        .args(["baseline", "fixtures/baseline/rig.log"])
+        .assert()
+        .code(0);
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("JSON");
+    assert_eq!(json["baseline_version"], 1);
+    let trace = &json["traces"]["fixtures/baseline/rig.log"];
+    assert_eq!(trace["format"], "candump");
+    assert_eq!(trace["counts"]["lines"], 9);
+    assert_eq!(trace["counts"]["malformed"], 0);
+    let node1 = &trace["nodes"]["can0"]["1"];
+    assert_eq!(node1["errors"]["0x4310"]["raised"], 2);
+    assert_eq!(node1["errors"]["0x4310"]["active_at_end"], false);
+    let node2 = &trace["nodes"]["can0"]["2"];
+    assert_eq!(node2["errors"]["0x3120"]["active_at_end"], true);
+}
+
+#[test]
+fn the_same_trace_twice_is_a_usage_error() {
+    emcy_decode()
+        .args([
+            "baseline",
+            "fixtures/baseline/rig.log",
+            "./fixtures/baseline/rig.log",
+        ])
+        .assert()
+        .code(2)
+        .stdout("")
+        .stderr(
+            predicate::str::starts_with("error: ").and(predicate::str::contains(
+                "would both be recorded as 'fixtures/baseline/rig.log'",
+            )),
+        );
+}
+
+// ---- errors: exit 2 with one `error:` line -----------------------------------------------
+
+fn one_error_line(stderr: &[u8]) -> String {
+    let text = String::from_utf8_lossy(stderr).into_owned();
+    assert_eq!(text.lines().count(), 1, "one line expected: {text}");
+    assert!(text.starts_with("error: "), "{text}");
+    text
+}
+
+#[test]
+fn a_baseline_of_another_version_is_exit_2() {
+    let dir = checked_against_rig("rig.log");
+    let path = dir.path().join("baseline.json");
+    let text = fs::read_to_string(&path).expect("read");
+    fs::write(
+        &path,
+        text.replace("\"baseline_version\": 1", "\"baseline_version\": 2"),
+    )
+    .expect("write");
+    let out = check(&dir, &[]).code(2).stdout("");
+    let err = one_error_line(&out.get_output().stderr);
+    assert!(
+        err.contains("baseline.json: baseline version 2 is not supported"),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_unreadable_or_invalid_baseline_is_exit_2() {
+    let dir = workspace("rig.log");
+    let out = check(&dir, &[]).code(2).stdout("");
+    let err = one_error_line(&out.get_output().stderr);
+    assert_eq!(err, "error: baseline.json: No such file or directory\n");
+
+    fs::write(
+        dir.path().join("baseline.json"),
+        "{\"baseline_version\": 1, \"traces\": [",
+    )
+    .expect("write");
+    let out = check(&dir, &[]).code(2).stdout("");
+    let err = one_error_line(&out.get_output().stderr);
+    assert!(
+        err.starts_with("error: baseline.json: not a baseline"),
+        "{err}"
+    );
+
+    fs::write(dir.path().join("baseline.json"), "{\"traces\": {}}").expect("write");
+    let out = check(&dir, &[]).code(2);
+    one_error_line(&out.get_output().stderr);
+}
+
+#[test]
+fn a_missing_trace_is_exit_2_and_nothing_is_written() {
+    let dir = checked_against_rig("rig.log");
+    let before = fs::read(dir.path().join("baseline.json")).expect("read");
+    for cmd in [
+        vec![
+            "check",
+            "--baseline",
+            "baseline.json",
+            "traces/nope.log",
+            "--update",
+        ],
+        vec!["baseline", "traces/nope.log", "-o", "baseline.json"],
+    ] {
+        let out = cmd_in(&dir).args(&cmd).assert().code(2).stdout("");
+        let err = one_error_line(&out.get_output().stderr);
+        assert_eq!(err, "error: traces/nope.log: No such file or directory\n");
+    }
+    let after = fs::read(dir.path().join("baseline.json")).expect("read");
+    assert_eq!(before, after);
+}
+
+#[test]
+fn usage_errors_are_exit_2() {
+    emcy_decode()
+        .args(["check", "fixtures/baseline/rig.log"])
+        .assert()
+        .code(2);
+    emcy_decode().args(["baseline"]).assert().code(2);
+    emcy_decode()
+        .args([
+            "check",
+            "-b",
+            "x.json",
+            "--allow",
+            "zz",
+            "fixtures/baseline/rig.log",
+        ])
+        .assert()
+        .code(2);
+}
+
+// ---- --format json -----------------------------------------------------------------------
+
+#[test]
+fn the_json_diff_parses_and_every_finding_has_the_same_keys() {
+    let dir = checked_against_rig("new-node.log");
+    let out = check(&dir, &["--format", "json"]).code(1);
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("JSON");
+    let keys =
+        |v: &Value| -> Vec<String> { v.as_object().expect("object").keys().cloned().collect() };
+    assert_eq!(keys(&json), ["findings", "summary"]);
+    assert_eq!(
+        keys(&json["summary"]),
+        [
+            "allowed",
+            "changes",
+            "improvements",
+            "matched",
+            "regressions",
+            "traces"
+        ]
+    );
+    let findings = json["findings"].as_array().expect("findings");
+    assert_eq!(findings.len(), 1);
+    let f = &findings[0];
+    let mut expected = vec![
+        "allowed",
+        "baseline_count",
+        "channel",
+        "code",
+        "count",
+        "file",
+        "kind",
+        "message",
+        "node",
+        "severity",
+    ];
+    expected.sort_unstable();
+    assert_eq!(keys(f), expected);
+    assert_eq!(f["severity"], "regression");
+    assert_eq!(f["kind"], "new_node");
+    assert_eq!(f["file"], "traces/rig.log");
+    assert_eq!(f["channel"], "can0");
+    assert_eq!(f["node"], 3);
+    assert_eq!(f["code"], Value::Null);
+    assert_eq!(json["summary"]["regressions"], 1);
+
+    let dir = checked_against_rig("new-error.log");
+    let out = check(&dir, &["-f", "json", "--allow", "2310"]).code(0);
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("JSON");
+    let f = &json["findings"][0];
+    assert_eq!(f["kind"], "new_error");
+    assert_eq!(f["code"], "0x2310");
+    assert_eq!(f["count"], 1);
+    assert_eq!(f["baseline_count"], Value::Null);
+    assert_eq!(f["allowed"], true);
+    assert_eq!(json["summary"]["allowed"], 1);
+}
+
+// ---- the README's CI example --------------------------------------------------------------
+
+/// The lines of the README's code block between `<!-- NAME:start -->` and
+/// `<!-- NAME:end -->`, without the fences.
+fn readme_block(name: &str) -> Vec<String> {
+    let readme = fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README.md");
+    let start = format!("<!-- {name}:start -->");
+    let end = format!("<!-- {name}:end -->");
+    let from = readme.find(&start).expect("start marker") + start.len();
+    let to = readme[from..].find(&end).expect("end marker") + from;
+    readme[from..to]
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with("```"))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Runs a README command line with `sh` in `dir`, the built binary first on
+/// PATH (so `emcy-decode` and shell globs work as in CI).
+#[cfg(unix)]
+fn sh(dir: &Path, line: &str) -> std::process::Output {
+    let bin = assert_cmd::cargo::cargo_bin("emcy-decode");
+    let bin_dir = bin.parent().expect("binary dir");
+    let path = std::env::join_paths(std::iter::once(bin_dir.to_path_buf()).chain(
+        std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()),
+    ))
+    .expect("PATH");
+    std::process::Command::new("sh")
+        .args(["-c", line])
+        .current_dir(dir)
+        .env("PATH", path)
+        .env_remove("NO_COLOR")
+        .env_remove("COLUMNS")
+        .output()
+        .expect("sh runs")
+}
+
+#[cfg(unix)]
+#[test]
+fn the_readme_ci_example_works() {
+    let lines = readme_block("ci-example");
+    let commands: Vec<&String> = lines.iter().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(commands.len(), 2, "a two-line CI step: {lines:?}");
+    let (make, check) = (commands[0], commands[1]);
+    assert!(make.starts_with("emcy-decode baseline "), "{make}");
+    assert!(check.starts_with("emcy-decode check "), "{check}");
+
+    let dir = tempfile::tempdir().expect("temp dir");
+    let traces = dir.path().join("traces");
+    fs::create_dir(&traces).expect("mkdir");
+    fs::copy(fixture("rig.log"), traces.join("rig.log")).expect("copy");
+    fs::copy(fixture("node-gone.log"), traces.join("bench.log")).expect("copy");
+
+    let out = sh(dir.path(), make);
+    assert_eq!(out.status.code(), Some(0), "{make}: {out:?}");
+    // A run like the recorded one passes...
+    let out = sh(dir.path(), check);
+    assert_eq!(out.status.code(), Some(0), "{check}: {out:?}");
+    assert!(String::from_utf8_lossy(&out.stdout).ends_with("2 of 2 traces matched\n"));
+    // ...a run with a new error fails the job.
+    fs::copy(fixture("new-error.log"), traces.join("rig.log")).expect("copy");
+    let out = sh(dir.path(), check);
+    assert_eq!(out.status.code(), Some(1), "{check}: {out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stdout)
+            .starts_with("regression: traces/rig.log can0 node 1: new error 0x2310")
+    );
+}
+
+#[test]
+fn the_readme_baseline_example_is_what_baseline_writes() {
+    let lines = readme_block("baseline-example");
+    let (command, json) = lines.split_first().expect("a command, then the file");
+    let command = command.strip_prefix("$ ").expect("`$ command` line");
+    let args: Vec<&str> = command.split_whitespace().skip(1).collect();
+    let out = emcy_decode().args(&args).assert().code(0);
+    let expected = json.join("\n") + "\n";
+    let actual = String::from_utf8_lossy(&out.get_output().stdout);
+    assert!(
+        actual == expected,
+        "README baseline example is stale:\n{}",
+        common::first_difference(&expected, &actual)
+    );
+}
+
+#[test]
+fn stdin_is_recorded_as_stdin() {
+    let trace = fs::read_to_string(fixture("rig.log")).expect("read");
+    let out = emcy_decode()
+        .args(["baseline", "-"])
+        .write_stdin(trace)
+        .assert()
+        .code(0);
+    let json: Value = serde_json::from_slice(&out.get_output().stdout).expect("JSON");
+    assert!(json["traces"]["<stdin>"].is_object());
+}
+
+#[test]
+fn help_lists_both_commands() {
+    emcy_decode()
+        .arg("--help")
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("baseline").and(predicate::str::contains("check")));
+}
