@@ -300,15 +300,8 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
 
 /// An error code in hex, with or without 0x.
 fn parse_code(s: &str) -> Result<u16, String> {
-    let t = s.trim();
-    let hex = t
-        .strip_prefix("0x")
-        .or_else(|| t.strip_prefix("0X"))
-        .unwrap_or(t);
-    if hex.is_empty() || hex.len() > 4 {
-        return Err(format!("'{s}' is not an error code (1-4 hex digits)"));
-    }
-    u16::from_str_radix(hex, 16).map_err(|_| format!("'{s}' is not an error code (hex)"))
+    crate::trace::hex::parse_code(s)
+        .ok_or_else(|| format!("'{s}' is not an error code (1-4 hex digits)"))
 }
 
 /// `--profile NAME` or `--profile NODE=NAME`.
