@@ -21,6 +21,7 @@ use crate::history::{DEFAULT_SPILL_AT, ErrorHistory, History, Record};
 use crate::profile_choice::{NodeProfiles, ProfileChoice, ProfileSource, default_profile};
 use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::timeline::{At, NodeTimeline};
+use crate::trace::blf;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader, DEFAULT_BLOCK, RawLine};
 use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Timestamp};
@@ -806,7 +807,6 @@ pub fn analyze<R: Read + Send, E: Write>(
         Some(f) => Detector::forced(f),
         None => Detector::auto(),
     };
-    let mut blocks = BlockReader::new(reader, opts.block_size, opts.max_line);
     let mut consumer = Consumer {
         file,
         opts,
@@ -843,6 +843,19 @@ pub fn analyze<R: Read + Send, E: Write>(
         profiles: NodeProfiles::new(&opts.profiles),
     };
 
+    // BLF is binary: known by its magic (or forced), read object by object.
+    let (reader, magic) = blf::sniff(reader);
+    match magic {
+        Err(e) => return finish(consumer, None, gzip, Some(e.to_string())),
+        Ok(magic) if opts.input_format.map_or(magic, |f| f == Format::Blf) => {
+            consumer.decided = true;
+            let error = read_blf(reader, &mut consumer)?;
+            return finish(consumer, Some(Format::Blf), gzip, error);
+        }
+        Ok(_) => {}
+    }
+    let mut blocks = BlockReader::new(reader, opts.block_size, opts.max_line);
+
     // Sequential until the format is known (and for inputs whose lines chain,
     // or when one thread was asked for); then, if allowed, in parallel.
     let mut error = None;
@@ -868,6 +881,37 @@ pub fn analyze<R: Read + Send, E: Write>(
     finish(consumer, format, gzip, error)
 }
 
+/// Vector BLF into the same consumer: each object counts as a line, its
+/// index in reading order is its line number.
+fn read_blf<R: Read, E: Write>(
+    reader: R,
+    consumer: &mut Consumer<'_, '_, E>,
+) -> Result<Option<String>, OutputError> {
+    let mut reader = match blf::BlfReader::new(reader) {
+        Ok(r) => r,
+        Err(e) => return Ok(Some(e.to_string())),
+    };
+    if let Some(note) = reader.take_note() {
+        consumer.log.note(&format!("{}: {note}", consumer.file));
+    }
+    loop {
+        match reader.next_object() {
+            Ok(Some(Parsed::Frame(f))) => {
+                if f.kind == FrameKind::Data && !consumer.interest.wants(f.id, f.extended) {
+                    consumer.plain_frame();
+                } else {
+                    consumer.frame(0, &f, None)?;
+                }
+            }
+            Ok(Some(Parsed::Skipped)) => consumer.skipped(),
+            Ok(Some(Parsed::Malformed(reason))) => consumer.malformed(0, reason),
+            Ok(None) => return Ok(None),
+            Err(e) => return Ok(Some(e.to_string())),
+        }
+        consumer.lines(1);
+    }
+}
+
 fn finish<E: Write>(
     mut consumer: Consumer<'_, '_, E>,
     format: Option<Format>,
@@ -877,8 +921,9 @@ fn finish<E: Write>(
     let file = consumer.file;
     if format.is_none() && consumer.counts.malformed > 0 && error.is_none() {
         error = Some(
-            "cannot detect the trace format: no line is a candump log, candump screen or \
-             Vector ASC frame (force one with --input-format candump|candump-screen|asc)"
+            "cannot detect the trace format: no line is a candump log, candump screen, \
+             Vector ASC or PEAK TRC frame and the input is not BLF (force one with \
+             --input-format candump|candump-screen|asc|trc|blf)"
                 .to_string(),
         );
     } else {

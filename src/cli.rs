@@ -21,7 +21,8 @@ Examples:
   emcy-decode explain --data \"10 43 09 01 00 00 00 00\"
 
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
-candump screen output (with or without -t/-x/-a), Vector ASC.
+candump screen output (with or without -t/-x/-a), Vector ASC, PEAK TRC
+(1.0-2.1), Vector BLF.
 
 Exit status:
   0  success (also when the reader of stdout goes away, e.g. `| head -1`)
@@ -195,6 +196,10 @@ pub enum InputFormat {
     CandumpScreen,
     /// Vector ASC
     Asc,
+    /// PEAK TRC, versions 1.0 to 2.1
+    Trc,
+    /// Vector BLF (binary)
+    Blf,
 }
 
 impl From<InputFormat> for Format {
@@ -203,6 +208,8 @@ impl From<InputFormat> for Format {
             InputFormat::Candump => Format::CandumpLog,
             InputFormat::CandumpScreen => Format::CandumpScreen,
             InputFormat::Asc => Format::Asc,
+            InputFormat::Trc => Format::Trc,
+            InputFormat::Blf => Format::Blf,
         }
     }
 }

@@ -188,6 +188,8 @@ fn style(format: Format) -> BoxedStrategy<Style> {
         Format::CandumpLog => log_style().prop_map(Style::Log).boxed(),
         Format::CandumpScreen => screen_style().prop_map(Style::Screen).boxed(),
         Format::Asc => asc_style().prop_map(Style::Asc).boxed(),
+        // TRC and BLF have their own property tests (tests/trc.rs, tests/blf.rs).
+        other => unreachable!("{other:?} is not generated here"),
     }
 }
 

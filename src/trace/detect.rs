@@ -131,7 +131,8 @@ impl Detector {
             Parsed::Skipped
         } else {
             Parsed::Malformed(
-                "not a line of any format read (candump log, candump screen, Vector ASC)".into(),
+                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC)"
+                    .into(),
             )
         }
     }

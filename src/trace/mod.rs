@@ -5,6 +5,7 @@
 //! reason. Parsers never panic and never stop: the caller counts and reports.
 
 pub mod asc;
+pub mod blf;
 pub mod candump_log;
 pub mod candump_screen;
 pub mod detect;
@@ -13,6 +14,7 @@ pub mod input;
 pub mod lines;
 pub mod scan;
 pub mod time;
+pub mod trc;
 
 use std::borrow::Cow;
 use std::fmt;
@@ -28,10 +30,21 @@ pub enum Format {
     CandumpScreen,
     /// Vector ASC (CANalyzer/CANoe, log2asc).
     Asc,
+    /// PEAK TRC (PCAN-View, PCAN-Explorer), versions 1.0 to 2.1.
+    Trc,
+    /// Vector BLF, binary: read by [`blf::BlfReader`], not line by line, and
+    /// detected by its `LOGG` magic, so it is not in [`Format::ALL`].
+    Blf,
 }
 
 impl Format {
-    pub const ALL: [Format; 3] = [Format::CandumpLog, Format::CandumpScreen, Format::Asc];
+    /// The text formats, read line by line and detected from their lines.
+    pub const ALL: [Format; 4] = [
+        Format::CandumpLog,
+        Format::CandumpScreen,
+        Format::Asc,
+        Format::Trc,
+    ];
 
     /// The name used on the command line and in the `format` JSON key.
     pub fn name(self) -> &'static str {
@@ -39,6 +52,8 @@ impl Format {
             Format::CandumpLog => "candump",
             Format::CandumpScreen => "candump-screen",
             Format::Asc => "asc",
+            Format::Trc => "trc",
+            Format::Blf => "blf",
         }
     }
 
@@ -49,6 +64,8 @@ impl Format {
                 AnyParser::CandumpScreen(candump_screen::CandumpScreenParser::new())
             }
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
+            Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
+            Format::Blf => AnyParser::Blf(blf::BinaryParser),
         }
     }
 }
@@ -288,6 +305,8 @@ pub enum AnyParser {
     CandumpLog(candump_log::CandumpLogParser),
     CandumpScreen(candump_screen::CandumpScreenParser),
     Asc(asc::AscParser),
+    Trc(trc::TrcParser),
+    Blf(blf::BinaryParser),
 }
 
 impl LineParser for AnyParser {
@@ -296,6 +315,8 @@ impl LineParser for AnyParser {
             AnyParser::CandumpLog(p) => p.format(),
             AnyParser::CandumpScreen(p) => p.format(),
             AnyParser::Asc(p) => p.format(),
+            AnyParser::Trc(p) => p.format(),
+            AnyParser::Blf(p) => p.format(),
         }
     }
 
@@ -305,6 +326,8 @@ impl LineParser for AnyParser {
             AnyParser::CandumpLog(p) => p.parse(line, interest),
             AnyParser::CandumpScreen(p) => p.parse(line, interest),
             AnyParser::Asc(p) => p.parse(line, interest),
+            AnyParser::Trc(p) => p.parse(line, interest),
+            AnyParser::Blf(p) => p.parse(line, interest),
         }
     }
 
@@ -313,6 +336,8 @@ impl LineParser for AnyParser {
             AnyParser::CandumpLog(p) => p.context(),
             AnyParser::CandumpScreen(p) => p.context(),
             AnyParser::Asc(p) => p.context(),
+            AnyParser::Trc(p) => p.context(),
+            AnyParser::Blf(p) => p.context(),
         }
     }
 
@@ -322,6 +347,8 @@ impl LineParser for AnyParser {
             AnyParser::CandumpLog(p) => p.quick(line, interest),
             AnyParser::CandumpScreen(p) => p.quick(line, interest),
             AnyParser::Asc(p) => p.quick(line, interest),
+            AnyParser::Trc(p) => p.quick(line, interest),
+            AnyParser::Blf(p) => p.quick(line, interest),
         }
     }
 }

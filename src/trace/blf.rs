@@ -1,0 +1,771 @@
+//! Vector BLF (binary logging format), read as a stream.
+//!
+//! A file is a 144-byte `LOGG` header, then `LOBJ` objects. Most objects sit
+//! in log containers (object type 10) whose data, plain or zlib-compressed,
+//! is a stream of further objects; an object may start in one container and
+//! end in the next. Every object is padded to a multiple of 4 bytes by
+//! `size % 4` bytes.
+//!
+//! What is read: CAN messages (types 1 and 86), CAN error frames (2 and 73),
+//! CAN FD messages (100 and 101; one without the EDL flag carries a classic
+//! frame and can be an EMCY), with object header version 1 or 2 and
+//! timestamps in 10 us or 1 ns units, added to the header's start time
+//! (a SYSTEMTIME, taken as UTC: the file does not say; all zero means
+//! unknown, and times are then seconds since the measurement start). Every
+//! other object type is skipped and counted.
+//!
+//! Counting: each object is one "line": log containers (skipped), the
+//! objects inside them, and each run of bytes that is not an object (a
+//! malformed "object"). A diagnostic's line number is the object's index
+//! in reading order, from 1. An object with a sane declared size whose
+//! content is wrong is reported and skipped by its size; a bad signature or
+//! an insane size makes the reader look for the next `LOBJ` signature.
+//!
+//! Memory is bounded by one log container plus one object (each at most
+//! [`MAX_OBJECT`] bytes), whatever the file's size.
+
+use std::io::{self, Read};
+
+use super::{Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp};
+
+/// The file's magic bytes.
+pub const MAGIC: &[u8; 4] = b"LOGG";
+const OBJ_MAGIC: &[u8; 4] = b"LOBJ";
+/// Largest object (and log container, compressed or not) read: real
+/// containers hold 128 KiB; anything over this is taken as corruption.
+pub const MAX_OBJECT: usize = 16 * 1024 * 1024;
+/// Bytes of the file header read: up to the end of the start time.
+const HEADER_PREFIX: usize = 72;
+const BASE_HEADER: usize = 16;
+
+const LOG_CONTAINER: u32 = 10;
+const CAN_MESSAGE: u32 = 1;
+const CAN_ERROR: u32 = 2;
+const CAN_ERROR_EXT: u32 = 73;
+const CAN_MESSAGE2: u32 = 86;
+const CAN_FD_MESSAGE: u32 = 100;
+const CAN_FD_MESSAGE_64: u32 = 101;
+
+const ATTO: u128 = 1_000_000_000_000_000_000;
+
+fn u16_at(b: &[u8], at: usize) -> Option<u16> {
+    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
+}
+
+fn u32_at(b: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+}
+
+fn u64_at(b: &[u8], at: usize) -> Option<u64> {
+    Some(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?))
+}
+
+/// The 16 bytes every object starts with.
+#[derive(Clone, Copy, Debug)]
+struct Base {
+    header_size: usize,
+    header_version: u16,
+    size: usize,
+    kind: u32,
+}
+
+impl Base {
+    /// `None` when the signature is not `LOBJ`.
+    fn read(b: &[u8]) -> Option<Base> {
+        if b.get(..4)? != OBJ_MAGIC {
+            return None;
+        }
+        Some(Base {
+            header_size: usize::from(u16_at(b, 4)?),
+            header_version: u16_at(b, 6)?,
+            size: u32_at(b, 8)? as usize,
+            kind: u32_at(b, 12)?,
+        })
+    }
+
+    /// Sizes a reader can trust enough to skip by.
+    fn sane(&self) -> bool {
+        self.size >= BASE_HEADER
+            && self.size <= MAX_OBJECT
+            && self.header_size >= BASE_HEADER
+            && self.header_size <= self.size
+    }
+
+    /// Bytes from this object's start to the next one's.
+    fn stride(&self) -> usize {
+        self.size + self.size % 4
+    }
+}
+
+/// A decoded frame object, owning everything but the channel text.
+struct Decoded {
+    time: Timestamp,
+    channel: u16,
+    id: u32,
+    extended: bool,
+    kind: FrameKind,
+    len: u8,
+    data: Payload,
+}
+
+/// What one object is.
+enum Object {
+    Frame(Decoded),
+    Skipped,
+    Malformed(Reason),
+}
+
+/// Reads a BLF stream object by object.
+pub struct BlfReader<R> {
+    input: R,
+    /// Bytes read from `input` so far (for messages).
+    offset: u64,
+    /// Bytes put back in front of `input` (after a search for `LOBJ`).
+    back: Vec<u8>,
+    /// Measurement start, attoseconds since the Unix epoch, and its digits.
+    start: (u128, u8),
+    note: Option<String>,
+    /// The object stream of the log containers read so far.
+    buf: Vec<u8>,
+    pos: usize,
+    /// Padding bytes still to skip at the start of the next container.
+    skip: usize,
+    /// Where a broken container's data ends: objects may not cross it.
+    cut: Option<usize>,
+    /// Look for the next `LOBJ` instead of expecting one at `pos`.
+    resync: bool,
+    eof: bool,
+    channel: [u8; 5],
+    channel_len: usize,
+}
+
+impl<R: Read> BlfReader<R> {
+    /// Reads the file header. An error means this is not a readable BLF file.
+    pub fn new(mut input: R) -> io::Result<BlfReader<R>> {
+        let mut head = [0u8; HEADER_PREFIX];
+        let got = read_full(&mut input, &mut head)?;
+        let invalid = |m: String| io::Error::new(io::ErrorKind::InvalidData, m);
+        if head.get(..4) != Some(MAGIC.as_slice()) {
+            return Err(invalid(
+                "not a BLF file: it does not start with LOGG".into(),
+            ));
+        }
+        if got < HEADER_PREFIX {
+            return Err(invalid(format!(
+                "BLF file header cut off after {got} bytes"
+            )));
+        }
+        let header_size = u32_at(&head, 4).unwrap_or(0) as usize;
+        if !(HEADER_PREFIX..=64 * 1024).contains(&header_size) {
+            return Err(invalid(format!(
+                "BLF file header size {header_size} is not sane (144 expected)"
+            )));
+        }
+        let rest = (header_size - HEADER_PREFIX) as u64;
+        let skipped = io::copy(&mut (&mut input).take(rest), &mut io::sink())?;
+        if skipped < rest {
+            return Err(invalid("BLF file header cut off".into()));
+        }
+        let mut note = None;
+        let start = match system_time(head.get(40..56).unwrap_or_default()) {
+            Ok(Some(t)) => t,
+            Ok(None) => (0, 0),
+            Err(date) => {
+                note = Some(format!(
+                    "the BLF start time {date} is not a date; times are since the measurement start"
+                ));
+                (0, 0)
+            }
+        };
+        Ok(BlfReader {
+            input,
+            offset: header_size as u64,
+            back: Vec::new(),
+            start,
+            note,
+            buf: Vec::new(),
+            pos: 0,
+            skip: 0,
+            cut: None,
+            resync: false,
+            eof: false,
+            channel: [0; 5],
+            channel_len: 0,
+        })
+    }
+
+    /// Something about the header worth telling the user, once.
+    pub fn take_note(&mut self) -> Option<String> {
+        self.note.take()
+    }
+
+    /// The next object, classified; `Ok(None)` at the end. An error is an
+    /// I/O error of the input (a corrupt gzip stream): reading stops.
+    pub fn next_object(&mut self) -> io::Result<Option<Parsed<'_>>> {
+        loop {
+            let object = match self.inner() {
+                Some(o) => o,
+                None if self.eof => match self.leftover() {
+                    Some(o) => o,
+                    None => return Ok(None),
+                },
+                None => match self.top()? {
+                    Some(o) => o,
+                    None => continue,
+                },
+            };
+            return Ok(Some(match object {
+                Object::Frame(d) => Parsed::Frame(self.frame(d)),
+                Object::Skipped => Parsed::Skipped,
+                Object::Malformed(r) => Parsed::Malformed(r),
+            }));
+        }
+    }
+
+    fn frame(&mut self, d: Decoded) -> Frame<'_> {
+        let mut b = itoa::Buffer::new();
+        let text = b.format(d.channel).as_bytes();
+        let n = text.len().min(self.channel.len());
+        if let (Some(dst), Some(src)) = (self.channel.get_mut(..n), text.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+        self.channel_len = n;
+        Frame {
+            time: Some(d.time),
+            channel: self.channel.get(..self.channel_len).unwrap_or_default(),
+            id: d.id,
+            extended: d.extended,
+            kind: d.kind,
+            len: d.len,
+            data: d.data,
+        }
+    }
+
+    /// The next object of the container stream, `None` when it needs more.
+    fn inner(&mut self) -> Option<Object> {
+        if let Some(c) = self.cut
+            && self.pos >= c
+        {
+            // After a broken container, the next one may start mid-object.
+            self.cut = None;
+            self.resync = true;
+        }
+        let limit = self.cut.unwrap_or(self.buf.len());
+        let avail = self.buf.get(self.pos..limit).unwrap_or_default();
+        if self.resync {
+            match memchr::memmem::find(avail, OBJ_MAGIC) {
+                Some(k) => {
+                    self.pos += k;
+                    self.resync = false;
+                }
+                None => {
+                    // Keep a possible partial signature at the end.
+                    let keep = if self.cut.is_some() { 0 } else { 3 };
+                    self.pos += avail.len().saturating_sub(keep);
+                    if let Some(c) = self.cut {
+                        self.pos = c;
+                    }
+                    return None;
+                }
+            }
+        }
+        let avail = self.buf.get(self.pos..limit).unwrap_or_default();
+        let complete = match Base::read(avail) {
+            _ if avail.len() < BASE_HEADER => None,
+            None => {
+                self.resync = true;
+                self.pos += 1;
+                return Some(Object::Malformed(
+                    "no LOBJ signature where an object should start; skipped to the next object"
+                        .into(),
+                ));
+            }
+            Some(base) if !base.sane() => {
+                self.resync = true;
+                self.pos += 4;
+                return Some(Object::Malformed(
+                    format!(
+                        "object of type {} declares {} bytes with a {}-byte header: not sane; \
+                         skipped to the next object",
+                        base.kind, base.size, base.header_size
+                    )
+                    .into(),
+                ));
+            }
+            Some(base) if avail.len() >= base.size => Some(base),
+            Some(_) => None,
+        };
+        let Some(base) = complete else {
+            if self.cut.is_some() && !avail.is_empty() {
+                let n = avail.len();
+                self.pos = limit;
+                return Some(Object::Malformed(
+                    format!("object cut off after {n} bytes by a broken log container").into(),
+                ));
+            }
+            return None;
+        };
+        let body = avail.get(BASE_HEADER..base.size).unwrap_or_default();
+        let object = if base.kind == LOG_CONTAINER {
+            Object::Malformed("log container inside a log container".into())
+        } else {
+            decode(base, body, self.start)
+        };
+        let next = self.pos + base.stride();
+        self.pos = next.min(self.buf.len());
+        self.skip = next - self.pos;
+        Some(object)
+    }
+
+    /// At the end of the file: bytes of an unfinished object.
+    fn leftover(&mut self) -> Option<Object> {
+        let rest = self.buf.len().saturating_sub(self.pos);
+        self.buf.clear();
+        self.pos = 0;
+        self.cut = None;
+        if rest == 0 || self.resync {
+            return None;
+        }
+        Some(Object::Malformed(
+            format!("the file ends inside an object ({rest} bytes of it read)").into(),
+        ))
+    }
+
+    /// Reads the next top-level object: a log container's data goes to the
+    /// stream (and the container is returned as skipped), any other object
+    /// is decoded. `Ok(None)` at the end of the file.
+    fn top(&mut self) -> io::Result<Option<Object>> {
+        let at = self.offset;
+        let mut head = [0u8; BASE_HEADER];
+        let got = self.read(&mut head)?;
+        if got == 0 {
+            self.eof = true;
+            return Ok(None);
+        }
+        if got < BASE_HEADER {
+            self.eof = true;
+            return Ok(Some(Object::Malformed(
+                format!("the file ends inside an object header at byte {at}").into(),
+            )));
+        }
+        let base = match Base::read(&head) {
+            Some(b) if b.sane() => b,
+            found => {
+                let what = match found {
+                    Some(b) => format!("an object of type {} with a size of {}", b.kind, b.size),
+                    None => "no LOBJ signature".to_string(),
+                };
+                self.back
+                    .extend_from_slice(head.get(1..).unwrap_or_default());
+                self.offset -= (BASE_HEADER - 1) as u64;
+                let skipped = 1 + self.find_object()?;
+                return Ok(Some(Object::Malformed(
+                    format!("{what} at byte {at}: {skipped} bytes skipped to the next object")
+                        .into(),
+                )));
+            }
+        };
+        let mut body = vec![0u8; base.size - BASE_HEADER];
+        let got = self.read(&mut body)?;
+        if got < body.len() {
+            self.eof = true;
+            return Ok(Some(Object::Malformed(
+                format!(
+                    "the file ends inside the object at byte {at} ({} of {} bytes read)",
+                    got + BASE_HEADER,
+                    base.size
+                )
+                .into(),
+            )));
+        }
+        let mut pad = [0u8; 3];
+        let pad_len = base.size % 4;
+        self.read(pad.get_mut(..pad_len).unwrap_or_default())?;
+        if base.kind != LOG_CONTAINER {
+            return Ok(Some(decode(base, &body, self.start)));
+        }
+        Ok(Some(self.container(at, &body)))
+    }
+
+    /// Appends a log container's data to the stream.
+    fn container(&mut self, at: u64, body: &[u8]) -> Object {
+        // Drop what was consumed; keep an unfinished object.
+        let consumed = self.pos.min(self.buf.len());
+        self.buf.drain(..consumed);
+        self.cut = self.cut.map(|c| c.saturating_sub(consumed));
+        self.pos = 0;
+        let method = u16_at(body, 0);
+        // The declared inflated size (bytes 8..12) is not needed: zlib ends itself.
+        let data = body.get(BASE_HEADER..).unwrap_or_default();
+        let before = self.buf.len();
+        let problem = match method {
+            Some(0) => {
+                self.buf.extend_from_slice(data);
+                None
+            }
+            Some(2) => {
+                let mut z = flate2::read::ZlibDecoder::new(data).take(MAX_OBJECT as u64 + 1);
+                let result = z.read_to_end(&mut self.buf);
+                let n = self.buf.len() - before;
+                match result {
+                    Err(e) => Some(format!("zlib data is corrupt after {n} bytes ({e})")),
+                    Ok(_) if n > MAX_OBJECT => {
+                        self.buf.truncate(before + MAX_OBJECT);
+                        Some(format!("inflates to more than {MAX_OBJECT} bytes"))
+                    }
+                    Ok(_) => None,
+                }
+            }
+            Some(m) => Some(format!("unknown compression method {m}")),
+            None => Some("container header cut off".to_string()),
+        };
+        // Padding of an object that ended in the previous container.
+        let skip = self.skip.min(self.buf.len());
+        self.pos = skip;
+        self.skip -= skip;
+        match problem {
+            None => Object::Skipped,
+            Some(p) => {
+                // Objects read from this container so far are good; one that
+                // crosses its end, or starts in the next, is not trusted.
+                self.cut = Some(self.buf.len());
+                Object::Malformed(format!("log container at byte {at}: {p}").into())
+            }
+        }
+    }
+
+    /// Skips to the next `LOBJ` in the file (put back for the next read);
+    /// returns the bytes skipped.
+    fn find_object(&mut self) -> io::Result<u64> {
+        let mut skipped = 0u64;
+        let mut window = Vec::with_capacity(64 * 1024 + 3);
+        loop {
+            let keep = window.len();
+            window.resize(keep + 64 * 1024, 0);
+            let got = self.read(window.get_mut(keep..).unwrap_or_default())?;
+            window.truncate(keep + got);
+            if let Some(k) = memchr::memmem::find(&window, OBJ_MAGIC) {
+                self.back
+                    .splice(0..0, window.get(k..).unwrap_or_default().iter().copied());
+                self.offset -= (window.len() - k) as u64;
+                return Ok(skipped + k as u64);
+            }
+            if got == 0 {
+                return Ok(skipped + window.len() as u64);
+            }
+            // Keep the last 3 bytes: a signature may straddle two reads.
+            let drop = window.len().saturating_sub(3);
+            skipped += drop as u64;
+            window.drain(..drop);
+        }
+    }
+
+    /// Reads until `buf` is full or the input ends; returns the bytes read.
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let mut n = 0;
+        if !self.back.is_empty() {
+            let k = self.back.len().min(buf.len());
+            if let (Some(dst), Some(src)) = (buf.get_mut(..k), self.back.get(..k)) {
+                dst.copy_from_slice(src);
+            }
+            self.back.drain(..k);
+            n = k;
+        }
+        n += read_full(&mut self.input, buf.get_mut(n..).unwrap_or_default())?;
+        self.offset += n as u64;
+        Ok(n)
+    }
+}
+
+fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match input.read(buf.get_mut(n..).unwrap_or_default()) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+/// Decodes one object that is not a log container.
+fn decode(base: Base, body: &[u8], start: (u128, u8)) -> Object {
+    let name = match base.kind {
+        CAN_MESSAGE => "CAN message",
+        CAN_MESSAGE2 => "CAN message 2",
+        CAN_ERROR => "CAN error frame",
+        CAN_ERROR_EXT => "CAN error frame ext",
+        CAN_FD_MESSAGE => "CAN FD message",
+        CAN_FD_MESSAGE_64 => "CAN FD message 64",
+        _ => return Object::Skipped,
+    };
+    match decode_can(base, body, start) {
+        Ok(Some(d)) => Object::Frame(d),
+        Ok(None) => Object::Skipped,
+        Err(why) => Object::Malformed(
+            format!(
+                "{name} object (type {}) of {} bytes: {why}",
+                base.kind, base.size
+            )
+            .into(),
+        ),
+    }
+}
+
+fn decode_can(base: Base, body: &[u8], start: (u128, u8)) -> Result<Option<Decoded>, String> {
+    // Version 1: flags, client index, object version, timestamp (16 bytes);
+    // version 2 adds the original timestamp (24). The timestamp is at 8 in both.
+    let need = match base.header_version {
+        1 => 32,
+        2 => 40,
+        v => return Err(format!("unknown object header version {v}")),
+    };
+    if base.header_size < need {
+        return Err(format!(
+            "a version {} object header needs {need} bytes, not {}",
+            base.header_version, base.header_size
+        ));
+    }
+    let flags = u32_at(body, 0).ok_or("header cut off")?;
+    let ticks = u128::from(u64_at(body, 8).ok_or("header cut off")?);
+    let (atto, digits) = match flags {
+        1 => (ticks * 10_000_000_000_000, 6),
+        2 => (ticks * 1_000_000_000, 9),
+        f => return Err(format!("unknown timestamp unit flags 0x{f:X}")),
+    };
+    let total = start.0 + atto;
+    let time = u64::try_from(total / ATTO)
+        .ok()
+        .and_then(|s| Timestamp::from_raw(s, (total % ATTO) as u64, digits.max(start.1)))
+        .ok_or("timestamp out of range")?;
+    let d = body
+        .get(base.header_size - BASE_HEADER..)
+        .unwrap_or_default();
+    let short = |n: usize| -> Result<(), String> {
+        if d.len() < n {
+            Err(format!("{} bytes of content, {n} needed", d.len()))
+        } else {
+            Ok(())
+        }
+    };
+    let error = |channel: u16| Decoded {
+        time,
+        channel,
+        id: 0,
+        extended: false,
+        kind: FrameKind::Error,
+        len: 0,
+        data: Payload::new(),
+    };
+    let frame = match base.kind {
+        CAN_ERROR | CAN_ERROR_EXT => {
+            short(4)?;
+            error(u16_at(d, 0).unwrap_or(0))
+        }
+        CAN_MESSAGE | CAN_MESSAGE2 => {
+            short(16)?;
+            let flags = d.get(2).copied().unwrap_or(0);
+            let dlc = d.get(3).copied().unwrap_or(0);
+            let remote = flags & 0x80 != 0;
+            let len = classic_len(dlc)?;
+            let data = d.get(8..8 + usize::from(len)).unwrap_or_default();
+            build(time, u16_at(d, 0), u32_at(d, 4), remote, false, len, data)?
+        }
+        CAN_FD_MESSAGE => {
+            short(20)?;
+            let flags = d.get(2).copied().unwrap_or(0);
+            let dlc = d.get(3).copied().unwrap_or(0);
+            let fd = d.get(13).copied().unwrap_or(0) & 0x01 != 0;
+            let valid = d.get(14).copied().unwrap_or(0);
+            let len = if fd {
+                fd_len(valid)?
+            } else {
+                classic_len(dlc)?
+            };
+            short(20 + usize::from(len))?;
+            let data = d.get(20..20 + usize::from(len)).unwrap_or_default();
+            build(
+                time,
+                u16_at(d, 0),
+                u32_at(d, 4),
+                flags & 0x80 != 0,
+                fd,
+                len,
+                data,
+            )?
+        }
+        CAN_FD_MESSAGE_64 => {
+            short(40)?;
+            let dlc = d.get(1).copied().unwrap_or(0);
+            let valid = d.get(2).copied().unwrap_or(0);
+            let flags = u32_at(d, 12).unwrap_or(0);
+            if flags & 0x80 != 0 {
+                // A transmit request, not a frame on the bus.
+                return Ok(None);
+            }
+            let fd = flags & 0x1000 != 0;
+            let len = if fd {
+                fd_len(valid)?
+            } else {
+                classic_len(dlc)?
+            };
+            short(40 + usize::from(len))?;
+            let data = d.get(40..40 + usize::from(len)).unwrap_or_default();
+            let channel = d.first().map(|c| u16::from(*c));
+            build(
+                time,
+                channel,
+                u32_at(d, 4),
+                flags & 0x10 != 0,
+                fd,
+                len,
+                data,
+            )?
+        }
+        _ => return Ok(None),
+    };
+    Ok(Some(frame))
+}
+
+fn classic_len(dlc: u8) -> Result<u8, String> {
+    if dlc > 15 {
+        return Err(format!("DLC {dlc} is over 15"));
+    }
+    Ok(dlc.min(8))
+}
+
+fn fd_len(valid: u8) -> Result<u8, String> {
+    if valid > 64 {
+        return Err(format!("{valid} valid data bytes, at most 64"));
+    }
+    Ok(valid)
+}
+
+fn build(
+    time: Timestamp,
+    channel: Option<u16>,
+    raw_id: Option<u32>,
+    remote: bool,
+    fd: bool,
+    len: u8,
+    data: &[u8],
+) -> Result<Decoded, String> {
+    let raw_id = raw_id.ok_or("content cut off")?;
+    let extended = raw_id & 0x8000_0000 != 0;
+    let id = raw_id & 0x7FFF_FFFF;
+    if extended && id > 0x1FFF_FFFF || !extended && id > 0x7FF {
+        return Err(format!("id 0x{raw_id:08X} is not a CAN id"));
+    }
+    let (kind, len, data) = match (remote, fd) {
+        (true, false) => (FrameKind::Remote, 0, &[][..]),
+        (_, true) => (FrameKind::Fd, len, data),
+        (false, false) => (FrameKind::Data, len, data),
+    };
+    Ok(Decoded {
+        time,
+        channel: channel.ok_or("content cut off")?,
+        id,
+        extended,
+        kind,
+        len,
+        data: Payload::from_slice(data).ok_or("more than 64 data bytes")?,
+    })
+}
+
+/// A SYSTEMTIME (year, month, day of week, day, hour, minute, second, ms)
+/// to attoseconds since the Unix epoch; `Ok(None)` when all zero, `Err`
+/// with the date as written when it is not one.
+fn system_time(b: &[u8]) -> Result<Option<(u128, u8)>, String> {
+    let f = |i: usize| u16_at(b, i * 2).unwrap_or(0);
+    let (y, mo, d, h, mi, s, ms) = (f(0), f(1), f(3), f(4), f(5), f(6), f(7));
+    if (y, mo, d, h, mi, s, ms) == (0, 0, 0, 0, 0, 0, 0) {
+        return Ok(None);
+    }
+    let text = format!("{y:04}-{mo:02}-{d:02} {h:02}:{mi:02}:{s:02}.{ms:03}");
+    let days_in_month = match mo {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        2 if (y % 4 == 0 && y % 100 != 0) || y % 400 == 0 => 29,
+        2 => 28,
+        _ => 0,
+    };
+    if y < 1970 || d == 0 || d > days_in_month || h > 23 || mi > 59 || s > 59 || ms > 999 {
+        return Err(text);
+    }
+    // Days from the civil date (proleptic Gregorian), 1970-01-01 = 0.
+    let (y, m) = (i64::from(y), i64::from(mo));
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400;
+    let mp = (m + 9) % 12;
+    let doy = (153 * mp + 2) / 5 + i64::from(d) - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    let days = era * 146_097 + doe - 719_468;
+    let secs = days * 86_400 + i64::from(h) * 3600 + i64::from(mi) * 60 + i64::from(s);
+    let secs = u128::try_from(secs).map_err(|_| text.clone())?;
+    let digits = if ms == 0 { 0 } else { 3 };
+    Ok(Some((
+        secs * ATTO + u128::from(ms) * 1_000_000_000_000_000,
+        digits,
+    )))
+}
+
+/// Lines never reach this parser: BLF input goes to [`BlfReader`]. It
+/// exists so that every [`Format`] has a parser.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BinaryParser;
+
+impl LineParser for BinaryParser {
+    fn format(&self) -> Format {
+        Format::Blf
+    }
+
+    fn parse<'a>(&mut self, _line: &'a [u8], _interest: &Interest) -> Parsed<'a> {
+        Parsed::Malformed("BLF is a binary format, not read line by line".into())
+    }
+
+    fn context(&self) -> Option<u8> {
+        Some(0)
+    }
+}
+
+/// Fuzz target body: any bytes must read to the end without a panic or an
+/// endless loop, and every frame must be well-formed.
+#[doc(hidden)]
+pub fn fuzz_blf(data: &[u8]) {
+    let Ok(mut r) = BlfReader::new(data) else {
+        return;
+    };
+    let mut objects = 0usize;
+    while let Ok(Some(parsed)) = r.next_object() {
+        objects += 1;
+        // Every object consumes at least one byte of input or of inflated data.
+        assert!(objects <= data.len() + 16 * MAX_OBJECT, "no progress");
+        if let Parsed::Frame(f) = parsed {
+            assert!(usize::from(f.len) <= Payload::MAX);
+            if matches!(f.kind, FrameKind::Data | FrameKind::Fd) {
+                assert_eq!(f.data.len(), usize::from(f.len));
+            }
+            if f.kind == FrameKind::Data {
+                assert!(f.len <= 8);
+            }
+            assert!(f.id <= if f.extended { 0x1FFF_FFFF } else { 0x7FF });
+            assert!(f.time.is_some());
+            assert!(!f.channel.is_empty());
+        }
+    }
+    assert!(r.buf.len() <= 2 * MAX_OBJECT + 64);
+}
+
+/// Reads up to 4 bytes to look for the `LOGG` magic and puts them back in
+/// front of the stream: `(stream, Ok(is BLF))`.
+pub fn sniff<R: Read>(mut input: R) -> (io::Chain<io::Cursor<Vec<u8>>, R>, io::Result<bool>) {
+    let mut head = [0u8; 4];
+    let got = read_full(&mut input, &mut head);
+    let n = *got.as_ref().unwrap_or(&0);
+    let prefix = head.get(..n).unwrap_or_default().to_vec();
+    let magic = got.map(|n| n == 4 && &head == MAGIC);
+    (io::Cursor::new(prefix).chain(input), magic)
+}
