@@ -306,12 +306,12 @@ fn fixtures_decode_like_the_candump_log() {
         assert!(b.iter().any(|o| o["type"] == "emcy"));
         assert_eq!(a, b, "{blf} vs {log}");
     }
-    // The fixture with the unknown object: 15 frames, 1 unknown object and
-    // the containers skipped.
+    // The fixture with the unknown object: 19 frames (s300.log's, with the
+    // SDO identity reads), 1 unknown object and the containers skipped.
     let v = ndjson(Path::new("fixtures/s300.blf"));
     let i = input(&v);
     assert_eq!(i["format"], "blf");
-    assert_eq!(i["frames"], 15);
+    assert_eq!(i["frames"], 19);
     assert_eq!(
         i["lines"].as_u64(),
         Some(i["frames"].as_u64().unwrap() + i["skipped"].as_u64().unwrap())
