@@ -3,6 +3,7 @@
 //! them), then the node states and error timeline; at the end the input counts.
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
@@ -10,7 +11,7 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
-use crate::canopen::profile::{Decoded, FieldValue};
+use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::timeline::Interval;
 use crate::trace::Timestamp;
 use unicode_width::UnicodeWidthStr;
@@ -29,6 +30,11 @@ pub struct TableReport<W: Write> {
     /// `--view summary`: no events, no timeline; one line per node and bus.
     summary_only: bool,
     times: TimeFormat,
+    /// The event line being built, kept for its capacity.
+    line: String,
+    /// Register column texts, padded, by register value.
+    registers: Vec<Option<String>>,
+    descriptions: Descriptions,
 }
 
 #[derive(Clone, Copy)]
@@ -49,6 +55,9 @@ impl<W: Write> TableReport<W> {
             flush_each,
             summary_only: false,
             times: TimeFormat::default(),
+            line: String::new(),
+            registers: vec![None; 256],
+            descriptions: HashMap::new(),
         }
     }
 
@@ -68,7 +77,7 @@ impl<W: Write> TableReport<W> {
     /// longest error, first and last EMCY.
     fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
         self.times.set_origin(input.first_time);
-        let times = self.times;
+        let times = self.times.clone();
         let time = |t: Option<Timestamp>| times.show_opt(t);
         let mut nodes = new_table(&[
             "CHANNEL",
@@ -174,13 +183,37 @@ impl<W: Write> TableReport<W> {
     }
 
     fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: u8) -> String {
-        let time = self.times.show_opt(time);
+        let mut s = String::with_capacity(64);
+        self.push_prefix(&mut s, l, time, channel, node);
+        s
+    }
+
+    /// `TIME  CHANNEL  NODE  ` padded to the layout, appended to `line`.
+    fn push_prefix(
+        &self,
+        line: &mut String,
+        l: Layout,
+        time: Option<Timestamp>,
+        channel: &str,
+        node: u8,
+    ) {
+        let start = line.len();
+        line.push_str(&self.times.show_opt(time));
+        pad_to(line, start + l.time);
+        line.push_str("  ");
         let channel = printable(channel);
-        format!(
-            "{time:<tw$}  {channel:<cw$}  {node:>4}  ",
-            tw = l.time,
-            cw = l.channel
-        )
+        line.push_str(&channel);
+        for _ in channel.chars().count()..l.channel {
+            line.push(' ');
+        }
+        line.push_str("  ");
+        let mut digits = itoa::Buffer::new();
+        let node = digits.format(node);
+        for _ in node.len()..4 {
+            line.push(' ');
+        }
+        line.push_str(node);
+        line.push_str("  ");
     }
 
     fn description_indent(l: Layout) -> usize {
@@ -192,24 +225,28 @@ impl<W: Write> TableReport<W> {
     fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
         let mut widths = TIMELINE_HEADER.map(str::len);
         let mut rows = 0u64;
-        let times = self.times;
-        for_each_timeline_row(input, &times, |cells| {
+        let times = self.times.clone();
+        let mut descriptions = std::mem::take(&mut self.descriptions);
+        for_each_timeline_row(input, &times, &mut descriptions, |cells| {
             rows += 1;
             for (w, c) in widths.iter_mut().zip(cells) {
-                *w = (*w).max(UnicodeWidthStr::width(c.as_str()));
+                *w = (*w).max(display_width(c));
             }
             Ok(())
         })?;
         if rows == 0 {
+            self.descriptions = descriptions;
             return Ok(());
         }
         writeln!(self.out)?;
         writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
         write_row(&mut self.out, &TIMELINE_HEADER, &widths, &TIMELINE_RIGHT)?;
         let out = &mut self.out;
-        for_each_timeline_row(input, &times, |cells| {
+        let written = for_each_timeline_row(input, &times, &mut descriptions, |cells| {
             write_row(out, cells, &widths, &TIMELINE_RIGHT)
-        })
+        });
+        self.descriptions = descriptions;
+        written
     }
 
     fn end_event(&mut self) -> io::Result<()> {
@@ -251,20 +288,56 @@ fn decoded_text(d: &Decoded) -> String {
     format!("manufacturer: {}", fields.join("; "))
 }
 
+/// Descriptions by (profile address, code): profiles live for the whole run.
+type Descriptions = HashMap<(usize, u16), String>;
+
+fn describe<'d>(cache: &'d mut Descriptions, profile: &Profile, code: u16) -> &'d str {
+    cache
+        .entry((std::ptr::from_ref(profile) as usize, code))
+        .or_insert_with(|| profile.describe(code))
+}
+
+/// Columns a text takes on a terminal; ASCII (nearly every cell) needs no
+/// Unicode tables.
+fn display_width(s: &str) -> usize {
+    if s.is_ascii() {
+        s.len()
+    } else {
+        UnicodeWidthStr::width(s)
+    }
+}
+
+fn code_text(code: u16) -> String {
+    let mut s = String::with_capacity(6);
+    s.push_str("0x");
+    for shift in [12, 8, 4, 0] {
+        s.push(hex_digit((code >> shift) as u8));
+    }
+    s
+}
+
+fn hex_digit(nibble: u8) -> char {
+    char::from(b"0123456789ABCDEF"[usize::from(nibble & 0xF)])
+}
+
+fn push_hex_byte(s: &mut String, b: u8) {
+    s.push(hex_digit(b >> 4));
+    s.push(hex_digit(b));
+}
+
+/// Pads `s` with blanks up to `width` bytes (ASCII columns).
+fn pad_to(s: &mut String, width: usize) {
+    while s.len() < width {
+        s.push(' ');
+    }
+}
+
 fn codes_list(codes: &[u16]) -> String {
     codes
         .iter()
         .map(|c| format!("0x{c:04X}"))
         .collect::<Vec<_>>()
         .join(", ")
-}
-
-fn spaced_hex(bytes: &[u8]) -> String {
-    bytes
-        .iter()
-        .map(|b| format!("{b:02X}"))
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 impl<W: Write> Renderer for TableReport<W> {
@@ -280,30 +353,66 @@ impl<W: Write> Renderer for TableReport<W> {
         }
         self.times.set_origin(ev.time);
         let l = self.layout_for(ev.time, ev.channel)?;
-        let code = format!("0x{:04X}", ev.emcy.code);
         let style = match ev.transition {
             Some(1 | 3) => RED,
             Some(2) => YELLOW,
             Some(4) => GREEN,
             _ => Style::new(),
         };
-        let transition = ev
-            .transition
-            .map_or_else(|| "-".to_string(), |t| t.to_string());
-        let register = format!("{:02X} {}", ev.emcy.register.0, ev.emcy.register.short());
-        let mut description = ev.profile.profile.describe(ev.emcy.code);
-        if !ev.cleared.is_empty() {
-            description.push_str(&format!(" (cleared {})", codes_list(ev.cleared)));
+        // One reused buffer and cached texts: the table is the default
+        // output, and traces with many EMCY print a line per frame.
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        self.push_prefix(&mut line, l, ev.time, ev.channel, ev.node);
+        let code = code_text(ev.emcy.code);
+        if self.color {
+            line.push_str(&self.paint(style, &code));
+        } else {
+            line.push_str(&code);
         }
-        let line = format!(
-            "{}{}  {transition:>2}  {register:<rw$}  {:<mw$}  {description}",
-            self.prefix(l, ev.time, ev.channel, ev.node),
-            self.paint(style, &code),
-            spaced_hex(ev.emcy.manufacturer()),
-            rw = REGISTER_WIDTH,
-            mw = MANUFACTURER_WIDTH,
-        );
-        writeln!(self.out, "{}", line.trim_end())?;
+        line.push_str("  ");
+        match ev.transition {
+            Some(t) => {
+                line.push(' ');
+                line.push(char::from(b'0' + t % 10));
+            }
+            None => line.push_str(" -"),
+        }
+        line.push_str("  ");
+        let reg = ev.emcy.register.0;
+        let register = self.registers[usize::from(reg)].get_or_insert_with(|| {
+            format!(
+                "{:<rw$}",
+                format!("{reg:02X} {}", ev.emcy.register.short()),
+                rw = REGISTER_WIDTH
+            )
+        });
+        line.push_str(register);
+        line.push_str("  ");
+        let start = line.len();
+        for (i, b) in ev.emcy.manufacturer().iter().enumerate() {
+            if i > 0 {
+                line.push(' ');
+            }
+            push_hex_byte(&mut line, *b);
+        }
+        pad_to(&mut line, start + MANUFACTURER_WIDTH);
+        line.push_str("  ");
+        line.push_str(describe(
+            &mut self.descriptions,
+            ev.profile.profile,
+            ev.emcy.code,
+        ));
+        if !ev.cleared.is_empty() {
+            line.push_str(" (cleared ");
+            line.push_str(&codes_list(ev.cleared));
+            line.push(')');
+        }
+        let trimmed = line.trim_end().len();
+        line.truncate(trimmed);
+        line.push('\n');
+        self.out.write_all(line.as_bytes())?;
+        self.line = line;
         let indent = Self::description_indent(l);
         if let Some(decoded) = ev.decoded {
             writeln!(self.out, "{:indent$}{}", "", decoded_text(decoded))?;
@@ -411,7 +520,13 @@ const TIMELINE_HEADER: [&str; 8] = [
 const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
 
 /// Fills the cells of one error timeline row.
-fn timeline_cells(cells: &mut [String; 8], times: &TimeFormat, n: &NodeReport, iv: &Interval) {
+fn timeline_cells(
+    cells: &mut [String; 8],
+    times: &TimeFormat,
+    descriptions: &mut Descriptions,
+    n: &NodeReport,
+    iv: &Interval,
+) {
     let (channel, node) = (n.channel.as_str(), n.node);
     use std::fmt::Write as _;
     for c in cells.iter_mut() {
@@ -421,7 +536,7 @@ fn timeline_cells(cells: &mut [String; 8], times: &TimeFormat, n: &NodeReport, i
     cells[0].push_str(&printable(channel));
     let _ = write!(cells[1], "{node}");
     let _ = write!(cells[2], "0x{:04X}", iv.code);
-    cells[3].push_str(&n.profile.describe(iv.code));
+    cells[3].push_str(describe(descriptions, n.profile, iv.code));
     let _ = match iv.start.time {
         Some(t) => write!(cells[4], "{}", times.show(t)),
         None => write!(cells[4], "line {}", iv.start.line),
@@ -440,13 +555,14 @@ fn timeline_cells(cells: &mut [String; 8], times: &TimeFormat, n: &NodeReport, i
 fn for_each_timeline_row(
     input: &InputReport,
     times: &TimeFormat,
+    descriptions: &mut Descriptions,
     mut row: impl FnMut(&[String; 8]) -> io::Result<()>,
 ) -> io::Result<()> {
     let mut cells: [String; 8] = Default::default();
     let mut merge = input.history.merge();
     for n in &input.nodes {
         for iv in merge.node_errors(&n.channel, n.node) {
-            timeline_cells(&mut cells, times, n, &iv);
+            timeline_cells(&mut cells, times, descriptions, n, &iv);
             row(&cells)?;
         }
     }
@@ -468,7 +584,7 @@ fn write_row(
             .get(i)
             .copied()
             .unwrap_or(0)
-            .saturating_sub(UnicodeWidthStr::width(cell));
+            .saturating_sub(display_width(cell));
         if right.get(i).copied().unwrap_or(false) {
             line.extend(std::iter::repeat_n(' ', pad));
             line.push_str(cell);

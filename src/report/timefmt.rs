@@ -1,6 +1,8 @@
 //! How the table shows times (`--time`): candump's Unix times as UTC
 //! ISO-8601 by default, ASC's seconds since measurement start as written.
 
+use std::cell::Cell;
+
 use time::OffsetDateTime;
 
 use crate::trace::Timestamp;
@@ -24,10 +26,13 @@ pub enum TimeStyle {
 const UNIX_FROM: u64 = 1_000_000_000;
 
 /// A style and, for `relative`, the origin of the current input.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct TimeFormat {
     pub style: TimeStyle,
     pub origin: Option<Timestamp>,
+    /// `YYYY-MM-DDTHH:MM:SS` of the last second shown: consecutive events
+    /// share it, and the calendar arithmetic is the costly part.
+    iso_second: Cell<Option<(u64, [u8; 19])>>,
 }
 
 impl TimeFormat {
@@ -35,6 +40,7 @@ impl TimeFormat {
         TimeFormat {
             style,
             origin: None,
+            iso_second: Cell::new(None),
         }
     }
 
@@ -47,9 +53,9 @@ impl TimeFormat {
 
     pub fn show(&self, t: Timestamp) -> String {
         match self.style {
-            TimeStyle::Absolute => t.to_string(),
-            TimeStyle::Auto if t.secs() < UNIX_FROM => t.to_string(),
-            TimeStyle::Auto | TimeStyle::Iso => iso(t).unwrap_or_else(|| t.to_string()),
+            TimeStyle::Absolute => decimal(t),
+            TimeStyle::Auto if t.secs() < UNIX_FROM => decimal(t),
+            TimeStyle::Auto | TimeStyle::Iso => self.iso(t).unwrap_or_else(|| decimal(t)),
             TimeStyle::Relative => match self.origin {
                 Some(o) => t.since(o).to_string(),
                 None => t.to_string(),
@@ -62,20 +68,53 @@ impl TimeFormat {
     }
 }
 
-/// `2023-11-14T22:13:21.250000Z`, with the trace's fraction digits.
-fn iso(t: Timestamp) -> Option<String> {
-    let d = OffsetDateTime::from_unix_timestamp(i64::try_from(t.secs()).ok()?).ok()?;
-    let text = t.to_string();
-    let frac = text.find('.').map_or("", |i| &text[i..]);
-    Some(format!(
-        "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}{frac}Z",
+impl TimeFormat {
+    /// `2023-11-14T22:13:21.250000Z`, with the trace's fraction digits.
+    fn iso(&self, t: Timestamp) -> Option<String> {
+        let (secs, _, digits) = t.to_raw();
+        let second = match self.iso_second.get() {
+            Some((s, text)) if s == secs => text,
+            _ => {
+                let text = calendar_second(secs)?;
+                self.iso_second.set(Some((secs, text)));
+                text
+            }
+        };
+        let mut out = Vec::with_capacity(32);
+        out.extend_from_slice(&second);
+        if digits > 0 {
+            // The fraction exactly as the trace wrote it: `secs.frac`.
+            let mut d = Vec::with_capacity(24);
+            t.push_decimal(&mut d);
+            if let Some(dot) = d.iter().position(|&b| b == b'.') {
+                out.extend_from_slice(&d[dot..]);
+            }
+        }
+        out.push(b'Z');
+        String::from_utf8(out).ok()
+    }
+}
+
+/// `YYYY-MM-DDTHH:MM:SS` of a Unix second; `None` beyond the calendar.
+fn calendar_second(secs: u64) -> Option<[u8; 19]> {
+    let d = OffsetDateTime::from_unix_timestamp(i64::try_from(secs).ok()?).ok()?;
+    let text = format!(
+        "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}",
         d.year(),
         u8::from(d.month()),
         d.day(),
         d.hour(),
         d.minute(),
         d.second()
-    ))
+    );
+    text.as_bytes().try_into().ok()
+}
+
+/// The seconds as the trace wrote them, without `core::fmt`.
+fn decimal(t: Timestamp) -> String {
+    let mut v = Vec::with_capacity(24);
+    t.push_decimal(&mut v);
+    String::from_utf8(v).unwrap_or_default()
 }
 
 #[cfg(test)]
