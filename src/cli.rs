@@ -128,6 +128,8 @@ pub enum OutputFormat {
     Json,
     /// One JSON object per line: events, then nodes, then inputs
     Ndjson,
+    /// The error timeline as an SVG image: a lane per node, errors as bars
+    Svg,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -13,6 +13,7 @@ use crate::cli::{
 use crate::explain;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
+use crate::report::svg::SvgReport;
 use crate::report::table::{TableReport, use_color};
 use crate::report::{InputReport, Renderer, WithoutEvents};
 use crate::trace::input::{self, Source};
@@ -88,6 +89,7 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Json => Box::new(JsonDocument::new(out)),
         OutputFormat::Ndjson if summary => Box::new(WithoutEvents(Ndjson::new(out, live))),
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
+        OutputFormat::Svg => Box::new(SvgReport::new(out)),
     };
     let mut log = DiagnosticLog::new(io::stderr());
     let threads = Threads {
