@@ -130,6 +130,8 @@ pub enum OutputFormat {
     Ndjson,
     /// The error timeline as an SVG image: a lane per node, errors as bars
     Svg,
+    /// One self-contained HTML page: the timeline chart and the events table
+    Html,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -11,6 +11,7 @@ use crate::cli::{
     Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat, View,
 };
 use crate::explain;
+use crate::report::html::HtmlReport;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::svg::SvgReport;
@@ -90,6 +91,7 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Ndjson if summary => Box::new(WithoutEvents(Ndjson::new(out, live))),
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
         OutputFormat::Svg => Box::new(SvgReport::new(out)),
+        OutputFormat::Html => Box::new(HtmlReport::new(out)),
     };
     let mut log = DiagnosticLog::new(io::stderr());
     let threads = Threads {

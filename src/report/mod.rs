@@ -2,6 +2,7 @@
 //! that print it. The JSON key names here are a public contract (README).
 
 pub mod chart;
+pub mod html;
 pub mod json;
 pub mod jsonw;
 pub mod ndjson;
