@@ -180,6 +180,10 @@ pub enum OutputFormat {
     Json,
     /// One JSON object per line: events, then nodes, then inputs
     Ndjson,
+    /// The error timeline as an SVG image: a lane per node, errors as bars
+    Svg,
+    /// One self-contained HTML page: the timeline chart and the events table
+    Html,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

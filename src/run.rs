@@ -17,8 +17,10 @@ use crate::cli::{
 use crate::explain;
 use crate::interrupt;
 use crate::profile_choice;
+use crate::report::html::HtmlReport;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
+use crate::report::svg::SvgReport;
 use crate::report::table::{TableReport, use_color};
 use crate::report::{InputReport, Renderer, WithoutEvents};
 use crate::trace::input::{self, ReadMode, Source};
@@ -154,6 +156,8 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Json => Box::new(JsonDocument::new(out)),
         OutputFormat::Ndjson if summary => Box::new(WithoutEvents(Ndjson::new(out, live))),
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
+        OutputFormat::Svg => Box::new(SvgReport::new(out)),
+        OutputFormat::Html => Box::new(HtmlReport::new(out)),
     };
     let mut log = DiagnosticLog::new(io::stderr());
     log.quiet = args.quiet;

@@ -1,9 +1,12 @@
 //! What a run reports (events, nodes, inputs, diagnostics) and the renderers
 //! that print it. The JSON key names here are a public contract (README).
 
+pub mod chart;
+pub mod html;
 pub mod json;
 pub mod jsonw;
 pub mod ndjson;
+pub mod svg;
 pub mod table;
 pub mod timefmt;
 

@@ -1,0 +1,437 @@
+//! The timeline chart (`--format svg`, `--format html`): golden files for
+//! every fixture, and what must hold for any trace: well-formed XML, one lane
+//! per node, open errors marked, thousands of errors in a small file, no
+//! network references, trace text escaped.
+//!
+//! Refresh the golden files after an intended change with
+//! `UPDATE_GOLDEN=1 cargo test --test chart` and look at the diff (and at
+//! the picture: `scripts/screenshot.sh fixtures/s300.log`).
+
+mod common;
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use common::emcy_decode;
+use serde_json::Value;
+
+/// The fixtures golden.rs renders: files directly in fixtures/.
+fn fixtures() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = fs::read_dir("fixtures")
+        .expect("fixtures/ exists")
+        .map(|e| e.expect("readable entry").path())
+        .filter(|p| {
+            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            !name.ends_with(".py")
+                && !name.ends_with(".md")
+                && !name.ends_with(".toml")
+                && p.is_file()
+        })
+        .collect();
+    files.sort();
+    assert!(
+        files.len() >= 15,
+        "expected the fixture set, found {files:?}"
+    );
+    files
+}
+
+fn render(format: &str, args: &[&Path]) -> String {
+    let out = emcy_decode()
+        .args(["--format", format])
+        .args(args)
+        .output()
+        .expect("runs");
+    assert!(
+        matches!(out.status.code(), Some(0..=2)),
+        "exit status {:?}",
+        out.status
+    );
+    String::from_utf8(out.stdout).expect("utf-8 output")
+}
+
+fn check(path: &Path, actual: &str, failures: &mut Vec<String>) {
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        fs::write(path, actual).expect("write golden");
+        return;
+    }
+    match fs::read_to_string(path) {
+        Ok(expected) if expected == actual => {}
+        Ok(expected) => failures.push(format!(
+            "{} differs:\n{}",
+            path.display(),
+            common::first_difference(&expected, actual)
+        )),
+        Err(_) => failures.push(format!(
+            "{} is missing (run UPDATE_GOLDEN=1 cargo test --test chart)",
+            path.display()
+        )),
+    }
+}
+
+#[test]
+fn every_fixture_as_svg_and_html_matches_its_golden_file() {
+    let mut failures = Vec::new();
+    for fixture in fixtures() {
+        let name = fixture.file_name().and_then(|n| n.to_str()).expect("name");
+        for format in ["svg", "html"] {
+            let out = render(format, &[&fixture]);
+            let golden = Path::new("tests/golden").join(format!("{name}.{format}"));
+            check(&golden, &out, &mut failures);
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+/// The README's example image is the chart of the s300 fixture, kept in step.
+#[test]
+fn readme_example_is_the_current_rendering() {
+    let out = render("svg", &[Path::new("fixtures/s300.log")]);
+    let mut failures = Vec::new();
+    check(Path::new("docs/timeline-s300.svg"), &out, &mut failures);
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+fn parse(svg: &str) -> roxmltree::Document<'_> {
+    roxmltree::Document::parse(svg).unwrap_or_else(|e| panic!("not well-formed XML: {e}\n{svg}"))
+}
+
+fn has_class(n: &roxmltree::Node<'_, '_>, class: &str) -> bool {
+    n.attribute("class")
+        .is_some_and(|c| c.split(' ').any(|c| c == class))
+}
+
+fn count(doc: &roxmltree::Document<'_>, tag: &str, class: &str) -> usize {
+    doc.descendants()
+        .filter(|n| n.has_tag_name(tag) && has_class(n, class))
+        .count()
+}
+
+/// The SVG of an HTML page, for the XML checks.
+fn inline_svg(html: &str) -> &str {
+    let start = html.find("<svg").expect("page has an svg");
+    let end = html[start..].find("</svg>").expect("svg ends") + start + "</svg>".len();
+    &html[start..end]
+}
+
+fn node_objects(fixture: &Path) -> Vec<Value> {
+    render("ndjson", &[fixture])
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("JSON line"))
+        .filter(|o| o["type"] == "node")
+        .collect()
+}
+
+#[test]
+fn every_fixture_gives_well_formed_svg_with_one_lane_per_node_and_marked_open_errors() {
+    for fixture in fixtures() {
+        let svg = render("svg", &[&fixture]);
+        let doc = parse(&svg);
+        let nodes = node_objects(&fixture);
+        let lanes: Vec<String> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("g") && has_class(n, "lane"))
+            .map(|n| n.attribute("data-lane").expect("lane key").to_string())
+            .collect();
+        let expected: Vec<String> = nodes
+            .iter()
+            .map(|n| format!("{}/{}", n["channel"].as_str().unwrap(), n["node"]))
+            .collect();
+        assert_eq!(lanes, expected, "{}: one lane per node", fixture.display());
+
+        let errors: Vec<&Value> = nodes
+            .iter()
+            .flat_map(|n| n["errors"].as_array().unwrap())
+            .collect();
+        let open = errors.iter().filter(|e| e["end_line"].is_null()).count();
+        let bars = count(&doc, "rect", "b") - count_legend(&doc);
+        assert_eq!(bars, errors.len(), "{}: a bar per error", fixture.display());
+        assert_eq!(
+            count(&doc, "rect", "o") - usize::from(open > 0),
+            open,
+            "{}: open errors are drawn open (plus one legend swatch)",
+            fixture.display()
+        );
+        assert_eq!(
+            count(&doc, "path", "oe") - usize::from(open > 0),
+            open,
+            "{}: each open error ends in an open marker",
+            fixture.display()
+        );
+        // Every bar says what it is.
+        for bar in doc
+            .descendants()
+            .filter(|n| n.has_tag_name("rect") && has_class(n, "b"))
+            .filter(|n| !n.ancestors().any(|a| has_class(&a, "legend")))
+        {
+            let title = bar
+                .children()
+                .find(|c| c.has_tag_name("title"))
+                .and_then(|t| t.text())
+                .expect("bar has a tooltip");
+            for part in ["0x", "start: ", "end: ", "duration: ", "cleared by: "] {
+                assert!(title.contains(part), "{title:?} lacks {part:?}");
+            }
+        }
+    }
+}
+
+fn count_legend(doc: &roxmltree::Document<'_>) -> usize {
+    doc.descendants()
+        .filter(|n| n.has_tag_name("g") && has_class(n, "legend"))
+        .flat_map(|g| g.descendants())
+        .filter(|n| n.has_tag_name("rect") && has_class(n, "b"))
+        .count()
+}
+
+#[test]
+fn markers_show_resets_partial_resets_and_boot_ups() {
+    let doc_text = render("svg", &[Path::new("fixtures/s300.log")]);
+    let doc = parse(&doc_text);
+    let lane_marks = |class: &str| {
+        doc.descendants()
+            .filter(|n| n.has_tag_name("g") && has_class(n, "mk") && has_class(n, class))
+            .filter(|n| n.ancestors().any(|a| has_class(&a, "lane")))
+            .count()
+    };
+    // s300: one reset to 0x00, two partial resets, two boot-ups.
+    assert_eq!(lane_marks("reset"), 1);
+    assert_eq!(lane_marks("partial"), 2);
+    assert_eq!(lane_marks("boot"), 2);
+    // Wall-clock ticks for candump times, the date in the title.
+    assert!(doc_text.contains(">22:13:22</text>"), "{doc_text}");
+    assert!(doc_text.contains("2023-11-14 22:13:20.000000 – 22:13:27.000000 UTC"));
+    // ASC times are seconds from measurement start.
+    let asc = render("svg", &[Path::new("fixtures/s300.asc")]);
+    assert!(
+        asc.contains(">2</text>") && asc.contains("time (s)"),
+        "{asc}"
+    );
+}
+
+/// A candump log in which node 5 raises and clears `n` errors (0.2 ms each,
+/// one every 10 ms) and node 6 has a few long ones.
+fn many_errors_trace(n: u64) -> String {
+    let mut s = String::new();
+    let t0 = 1_700_000_000u64;
+    for i in 0..n {
+        let us = i * 10_000;
+        let codes = ["1043", "2023", "3031", "8181"];
+        let code = codes[(i % 4) as usize];
+        let _ = writeln!(
+            s,
+            "({}.{:06}) can0 085#{code}090000000000",
+            t0 + us / 1_000_000,
+            us % 1_000_000
+        );
+        let us = us + 200;
+        let _ = writeln!(
+            s,
+            "({}.{:06}) can0 085#0000000000000000",
+            t0 + us / 1_000_000,
+            us % 1_000_000
+        );
+        if i % 2_000 == 0 {
+            let _ = writeln!(
+                s,
+                "({}.{:06}) can0 086#{}",
+                t0 + us / 1_000_000,
+                us % 1_000_000,
+                if i % 4_000 == 0 {
+                    "1043090000000000"
+                } else {
+                    "0000000000000000"
+                }
+            );
+        }
+    }
+    s
+}
+
+#[test]
+fn ten_thousand_errors_stay_small_and_merged_bars_say_so() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("many.log");
+    fs::write(&trace, many_errors_trace(10_000)).expect("write trace");
+    let svg = render("svg", &[&trace]);
+    let doc = parse(&svg);
+    assert!(
+        svg.len() < 150_000,
+        "10 000 errors gave {} bytes of SVG",
+        svg.len()
+    );
+    let merged: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("rect") && has_class(n, "m"))
+        .filter(|n| !n.ancestors().any(|a| has_class(&a, "legend")))
+        .filter_map(|n| n.children().find(|c| c.has_tag_name("title")))
+        .filter_map(|t| t.text())
+        .collect();
+    assert!(!merged.is_empty(), "no merged bars");
+    for title in &merged {
+        assert!(title.contains("errors merged into one bar"), "{title}");
+    }
+    // Every error is in some bar: merged counts add up.
+    let in_merged: u64 = merged
+        .iter()
+        .map(|t| t.split(' ').next().unwrap().parse::<u64>().unwrap())
+        .sum();
+    let single = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("rect") && has_class(n, "b") && !has_class(n, "m"))
+        .filter(|n| n.ancestors().any(|a| has_class(&a, "lane")))
+        .count() as u64;
+    assert_eq!(in_merged + single, 10_000 + 3);
+    // Resets: 10 000 of them, drawn as far fewer merged markers.
+    let resets = count(&doc, "g", "reset");
+    assert!(resets < 1_000, "{resets} reset markers");
+
+    let html = render("html", &[&trace]);
+    assert!(html.len() < 600_000, "{} bytes of HTML", html.len());
+    assert_eq!(
+        html.matches("<tr data-lane=").count() + html.matches("<tr class=").count(),
+        1_000
+    );
+    assert!(
+        html.contains("The first 1000 of 20005 events are listed; 19005 more not shown."),
+        "the table says it is cut"
+    );
+}
+
+#[test]
+fn html_is_self_contained() {
+    for fixture in fixtures() {
+        let html = render("html", &[&fixture]);
+        let without_xmlns = html.replace("xmlns=\"http://www.w3.org/2000/svg\"", "");
+        assert!(
+            !without_xmlns.contains("http:") && !without_xmlns.contains("https:"),
+            "{}: network reference",
+            fixture.display()
+        );
+        for external in ["<link", " src=", "@import", "url(", "@font-face"] {
+            assert!(
+                !html.contains(external),
+                "{}: {external}",
+                fixture.display()
+            );
+        }
+        assert!(html.starts_with("<!DOCTYPE html>"));
+        parse(inline_svg(&html));
+    }
+}
+
+#[test]
+fn html_events_table_filters_by_node() {
+    let html = render("html", &[Path::new("fixtures/edge.log")]);
+    for lane in ["can0/1", "can0/127", "can10/2"] {
+        assert!(
+            html.contains(&format!("<option value=\"{lane}\">")),
+            "{lane}"
+        );
+        assert!(
+            html.contains(&format!("<tr data-lane=\"{lane}\">")),
+            "{lane}"
+        );
+    }
+    assert!(html.contains("<select>"));
+}
+
+#[test]
+fn trace_text_is_escaped() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // A file name and a channel name full of markup and a control character.
+    let trace = dir.path().join("a&b<c>'d\".log");
+    fs::write(
+        &trace,
+        "(1700000000.000000) c<a&n\"0' 081#1043090000000000\n\
+         (1700000000.500000) c\u{1b}]0;x\u{7} 082#1043090000000000\n\
+         (1700000001.000000) c<a&n\"0' 081#0000000000000000\n",
+    )
+    .expect("write trace");
+    let svg = render("svg", &[&trace]);
+    let doc = parse(&svg);
+    let lanes: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("g") && has_class(n, "lane"))
+        .filter_map(|n| n.attribute("data-lane"))
+        .collect();
+    // Report order: channel names sorted ("c\x1b" before "c<").
+    assert_eq!(lanes, ["c\\u{1b}]0;x\\u{7}/2", "c<a&n\"0'/1"]);
+    assert!(svg.contains("a&amp;b&lt;c&gt;&#39;d&quot;.log"));
+    assert!(!svg.contains('\u{1b}'));
+    let html = render("html", &[&trace]);
+    parse(inline_svg(&html));
+    assert!(!html.contains("c<a&n"));
+    assert!(!html.contains('\u{1b}'));
+    assert!(html.contains("c&lt;a&amp;n&quot;0&#39;"));
+}
+
+#[test]
+fn several_inputs_give_one_panel_each() {
+    let svg = render(
+        "svg",
+        &[
+            Path::new("fixtures/s300.log"),
+            Path::new("fixtures/festo.asc"),
+        ],
+    );
+    let doc = parse(&svg);
+    let titles: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("text") && has_class(n, "t1"))
+        .filter_map(|n| n.text())
+        .collect();
+    assert_eq!(titles, ["fixtures/s300.log", "fixtures/festo.asc"]);
+    let html = render(
+        "html",
+        &[
+            Path::new("fixtures/s300.log"),
+            Path::new("fixtures/festo.asc"),
+        ],
+    );
+    assert_eq!(html.matches("<section class=\"input\">").count(), 2);
+}
+
+#[test]
+fn output_is_deterministic() {
+    let a = render("html", &[Path::new("fixtures/edge.asc")]);
+    let b = render("html", &[Path::new("fixtures/edge.asc")]);
+    assert_eq!(a, b);
+}
+
+/// Renders the HTML of a fixture in headless Chromium when it is installed
+/// (skips with a message when not): the page must load from disk and paint.
+#[test]
+fn chromium_renders_the_html_when_present() {
+    let found = ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|b| {
+            std::process::Command::new(b)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        });
+    let Some(_) = found else {
+        eprintln!("skipped: no Chromium (apt-get install -y chromium to run this check)");
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let png = dir.path().join("s300.png");
+    let out = std::process::Command::new("sh")
+        .arg("scripts/screenshot.sh")
+        .arg("fixtures/s300.log")
+        .arg(&png)
+        .env("EMCY_DECODE", assert_cmd::cargo::cargo_bin("emcy-decode"))
+        .output()
+        .expect("runs the script");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = fs::read(&png).expect("a PNG was written");
+    assert!(bytes.starts_with(b"\x89PNG"), "not a PNG");
+    assert!(bytes.len() > 10_000, "a blank page? {} bytes", bytes.len());
+}
