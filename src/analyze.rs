@@ -124,7 +124,7 @@ impl<E: Write> DiagnosticLog<E> {
 /// The ids whose frames are decoded; everything else is only counted:
 /// EMCY, NMT error control (boot-up), SDO (identity, moved EMCY ids) and
 /// EMCY ids given on the command line.
-fn interest(opts: &Options) -> Interest {
+pub(crate) fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard_range(emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127);

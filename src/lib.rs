@@ -10,6 +10,8 @@ pub mod analyze;
 pub mod canopen;
 pub mod cli;
 pub mod explain;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod history;
 pub mod report;
 pub mod run;
