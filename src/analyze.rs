@@ -215,6 +215,10 @@ fn classify_block(
 struct Nodes {
     channels: Vec<ChannelNodes>,
     index: HashMap<Vec<u8>, usize>,
+    /// Channels by name. Different bytes can read as one name (invalid
+    /// UTF-8 becomes U+FFFD); reports and the history know a channel by its
+    /// name, so those bytes are one channel.
+    by_name: HashMap<String, usize>,
     /// The channel of the previous lookup: nearly every trace has one or two.
     last: Option<usize>,
     /// Closed intervals of every node (timelines keep only active ones).
@@ -243,6 +247,7 @@ impl Nodes {
         Nodes {
             channels: Vec::new(),
             index: HashMap::new(),
+            by_name: HashMap::new(),
             last: None,
             history: History::new(spill_at),
         }
@@ -258,15 +263,22 @@ impl Nodes {
             Some(i) => i,
             None => {
                 let name = String::from_utf8_lossy(raw).into_owned();
-                let id = self.history.add_channel(&name);
-                self.channels.push(ChannelNodes {
-                    raw: raw.to_vec(),
-                    name,
-                    id,
-                    nodes: Vec::new(),
-                });
-                self.index.insert(raw.to_vec(), self.channels.len() - 1);
-                self.channels.len() - 1
+                let i = match self.by_name.get(&name) {
+                    Some(&i) => i,
+                    None => {
+                        let id = self.history.add_channel(&name);
+                        self.by_name.insert(name.clone(), self.channels.len());
+                        self.channels.push(ChannelNodes {
+                            raw: raw.to_vec(),
+                            name,
+                            id,
+                            nodes: Vec::new(),
+                        });
+                        self.channels.len() - 1
+                    }
+                };
+                self.index.insert(raw.to_vec(), i);
+                i
             }
         };
         self.last = Some(idx);
