@@ -152,7 +152,7 @@ impl<E: Write> DiagnosticLog<E> {
 /// The ids whose frames are decoded; everything else is only counted:
 /// EMCY, NMT error control (boot-up), SDO (identity, moved EMCY ids) and
 /// EMCY ids given on the command line.
-fn interest(opts: &Options) -> Interest {
+pub(crate) fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard_range(emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127);
@@ -243,6 +243,10 @@ fn classify_block(
 struct Nodes {
     channels: Vec<ChannelNodes>,
     index: HashMap<Vec<u8>, usize>,
+    /// Channels by name. Different bytes can read as one name (invalid
+    /// UTF-8 becomes U+FFFD); reports and the history know a channel by its
+    /// name, so those bytes are one channel.
+    by_name: HashMap<String, usize>,
     /// The channel of the previous lookup: nearly every trace has one or two.
     last: Option<usize>,
     /// Closed intervals of every node (timelines keep only active ones).
@@ -271,6 +275,7 @@ impl Nodes {
         Nodes {
             channels: Vec::new(),
             index: HashMap::new(),
+            by_name: HashMap::new(),
             last: None,
             history: History::new(spill_at),
         }
@@ -286,15 +291,22 @@ impl Nodes {
             Some(i) => i,
             None => {
                 let name = String::from_utf8_lossy(raw).into_owned();
-                let id = self.history.add_channel(&name);
-                self.channels.push(ChannelNodes {
-                    raw: raw.to_vec(),
-                    name,
-                    id,
-                    nodes: Vec::new(),
-                });
-                self.index.insert(raw.to_vec(), self.channels.len() - 1);
-                self.channels.len() - 1
+                let i = match self.by_name.get(&name) {
+                    Some(&i) => i,
+                    None => {
+                        let id = self.history.add_channel(&name);
+                        self.by_name.insert(name.clone(), self.channels.len());
+                        self.channels.push(ChannelNodes {
+                            raw: raw.to_vec(),
+                            name,
+                            id,
+                            nodes: Vec::new(),
+                        });
+                        self.channels.len() - 1
+                    }
+                };
+                self.index.insert(raw.to_vec(), i);
+                i
             }
         };
         self.last = Some(idx);

@@ -12,6 +12,8 @@ pub mod batch;
 pub mod canopen;
 pub mod cli;
 pub mod explain;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod history;
 pub mod interrupt;
 pub mod profile_choice;

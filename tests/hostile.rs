@@ -20,7 +20,7 @@
 //! | formats mixing | `every_pair_of_formats_mixes_only_with_a_warning`, `input_format_turns_mixing_off` |
 //! | `forbid(unsafe_code)` | `the_library_and_the_binary_forbid_unsafe_code` |
 //! | diagnostics name file:line, bounded | `every_diagnostic_names_file_and_line`, `max_diagnostics_bounds_printing_never_counting` |
-//! | regressions found here | `many_distinct_channels_stay_linear_in_time_and_memory`, `channel_names_cannot_put_control_sequences_on_the_terminal` |
+//! | regressions found here | `many_distinct_channels_stay_linear_in_time_and_memory`, `channel_names_cannot_put_control_sequences_on_the_terminal`, `channel_names_that_read_the_same_are_one_channel` (fuzzing) |
 //!
 //! That no EMCY is lost or invented among garbage is a property test:
 //! tests/conservation.rs.
@@ -1333,4 +1333,25 @@ fn channel_names_cannot_put_control_sequences_on_the_terminal() {
     // JSON keeps the name exactly (escaped by JSON itself).
     let (_, objects, _) = ndjson_run(&["-"], input);
     assert_eq!(of_type(&objects, "emcy")[0]["channel"], "\x1b]0;pwned\x07");
+}
+
+#[test]
+fn channel_names_that_read_the_same_are_one_channel() {
+    // Found by fuzzing (fuzz/regressions/candump_screen/same-name-different-bytes):
+    // two interface names that differ only in invalid UTF-8 both read as
+    // "\u{FFFD}can0". They were two channels with one name, and the node
+    // report of the first got the errors of both.
+    let mut input = Vec::new();
+    input.extend_from_slice(b"(1.0) \xffcan0 082#1043012900000000\n");
+    input.extend_from_slice(b"(2.0) \xfecan0 082#1043012900000000\n");
+    let (code, objects, _) = ndjson_run(&["-"], input);
+    assert_eq!(code, 0);
+    let nodes = of_type(&objects, "node");
+    assert_eq!(nodes.len(), 1, "{nodes:?}");
+    assert_eq!(nodes[0]["channel"], "\u{FFFD}can0");
+    assert_eq!(nodes[0]["emcy_count"], 2);
+    assert_eq!(nodes[0]["active"], serde_json::json!(["0x4310"]));
+    assert_eq!(nodes[0]["errors"].as_array().map(Vec::len), Some(1));
+    // The second frame repeats an active error: no second raise.
+    assert_eq!(of_type(&objects, "emcy")[1]["transition"], 3);
 }

@@ -111,6 +111,8 @@ pub struct BlockReader<R> {
     skipping: Option<u64>,
     /// A too-long line that ended; goes in front of the next block.
     too_long: Option<u64>,
+    /// A read error held back until the too-long line before it is out.
+    error: Option<io::Error>,
     bytes_read: u64,
     /// Bytes to ask for next: doubles while reads come back full (files),
     /// follows short reads down (pipes hand out 64 KiB), so buffers are not
@@ -132,6 +134,7 @@ impl<R: Read> BlockReader<R> {
             eof: false,
             skipping: None,
             too_long: None,
+            error: None,
             bytes_read: 0,
             read_size: MIN_READ,
         }
@@ -150,6 +153,9 @@ impl<R: Read> BlockReader<R> {
     /// discarded). `Ok(None)` at end of input. An I/O error (corrupt gzip) is
     /// returned once; the unfinished line before it is dropped.
     pub fn next_block(&mut self, mut buf: Vec<u8>) -> io::Result<Option<Block>> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
         loop {
             if self.skipping.is_some() {
                 self.skip_long_line()?;
@@ -201,7 +207,22 @@ impl<R: Read> BlockReader<R> {
                 self.filled = 0;
                 continue;
             }
-            self.read_more()?;
+            if let Err(e) = self.read_more() {
+                // A too-long line that ended before the error is a complete
+                // line: hand it out first, as when it came in the same read
+                // as the lines before it, so the count never depends on
+                // where reads split the input.
+                let Some(n) = self.too_long.take() else {
+                    return Err(e);
+                };
+                self.error = Some(e);
+                buf.clear();
+                return Ok(Some(Block {
+                    bytes: buf,
+                    too_long_before: Some(n),
+                    last: false,
+                }));
+            }
         }
     }
 
@@ -505,5 +526,36 @@ mod tests {
             Some("one".to_string())
         );
         assert!(r.next_line().is_err());
+    }
+
+    #[test]
+    fn a_long_line_ended_before_a_read_error_is_still_reported() {
+        // Found by fuzzing (fuzz/regressions/detect/gzip-bad-checksum-after-long-lines):
+        // a too-long line whose newline came in the last read before an
+        // error was dropped with small reads and counted with large ones.
+        struct Failing(u8);
+        impl Read for Failing {
+            fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+                self.0 += 1;
+                let data: &[u8] = match self.0 {
+                    1 => b"ok\nxxxxxxxx",
+                    2 => b"xxxx\nyy",
+                    _ => return Err(io::Error::other("corrupt")),
+                };
+                buf[..data.len()].copy_from_slice(data);
+                Ok(data.len())
+            }
+        }
+        let mut r = LineReader::with_max_line(Failing(0), 4);
+        let mut got = Vec::new();
+        let err = loop {
+            match r.next_line() {
+                Ok(Some(line)) => got.push(describe(line)),
+                Ok(None) => panic!("the error is reported"),
+                Err(e) => break e,
+            }
+        };
+        assert_eq!(got, ["ok", "<too long 12>"]);
+        assert_eq!(err.to_string(), "corrupt");
     }
 }

@@ -1,0 +1,993 @@
+//! The bodies of the cargo-fuzz targets in `fuzz/`, kept in the library so
+//! that `cargo test` on stable replays the committed corpus and regressions
+//! (`tests/fuzz_regressions.rs`) through exactly the code the fuzzer ran.
+//!
+//! Each body panics when an invariant breaks, not only when the code under
+//! test panics: a panic is what libFuzzer reports as a crash. Not part of the
+//! public API.
+
+use std::io::{self, Read};
+
+use serde_json::Value;
+
+use crate::analyze::{self, DiagnosticLog, Options};
+use crate::canopen::emcy::{self, Emcy, Warning};
+use crate::canopen::sdo;
+use crate::history::History;
+use crate::report::json::JsonDocument;
+use crate::report::ndjson::Ndjson;
+use crate::report::table::TableReport;
+use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
+use crate::timeline::{At, ClearedBy, Interval, NodeTimeline, State, Step};
+use crate::trace::input::sniff_gzip;
+use crate::trace::lines::Block;
+use crate::trace::{Format, FrameKind, Interest, LineParser, Parsed, Timestamp};
+
+// ---- readers: one trace through analyze ------------------------------------------
+
+/// The `candump_log`, `candump_screen` and `asc` targets (`Some(format)`,
+/// forced as with `--input-format`), and the plain-bytes half of `detect`.
+///
+/// Checks, per line, that the parser classifies the same whatever the
+/// wanted ids (id-first filtering only skips decoding) and that the quick
+/// path only ever skips valid frames nobody wants; then, through the whole
+/// pipeline, the count, event, node and history invariants of [`check_run`].
+pub fn reader(format: Option<Format>, data: &[u8]) {
+    if let Some(format) = format {
+        lines_agree(format, data);
+    }
+    let opts = Options {
+        input_format: format,
+        max_line: 512,
+        max_diagnostics: 20,
+        block_size: 64 * 1024,
+        spill_at: 16,
+        ..Options::default()
+    };
+    let run = run(data, false, &opts, Output::Ndjson);
+    check_run(&run, format, Some(data));
+}
+
+/// The `detect` target: the format is detected; gzip is read when the bytes
+/// start with its magic. The same input is read once sequentially as the
+/// reference, then with 2-4 threads and tiny blocks, with a line cap, a
+/// diagnostics limit and a spill threshold chosen from the first byte and
+/// the length: ndjson output and diagnostics must be identical, the JSON
+/// document (tiny blocks) must hold the same values, and the table (tiny
+/// blocks) must be UTF-8 without terminal control characters.
+pub fn detect(data: &[u8]) {
+    let seed = data.first().copied().unwrap_or(0) ^ (data.len() as u8);
+    const BLOCKS: [usize; 8] = [1, 2, 3, 7, 16, 64, 300, 4096];
+    const MAX_LINE: [usize; 4] = [16, 64, 200, 4096];
+    const MAX_DIAGS: [usize; 4] = [0, 1, 5, 20];
+    let base = Options {
+        max_line: MAX_LINE[usize::from(seed >> 5 & 3)],
+        max_diagnostics: MAX_DIAGS[usize::from(seed >> 3 & 3)],
+        spill_at: 1 + usize::from(seed >> 7) * 8,
+        ..Options::default()
+    };
+    let small = Options {
+        threads: 2 + usize::from(seed % 3),
+        block_size: BLOCKS[usize::from(seed >> 2 & 7)],
+        ..base.clone()
+    };
+    let gzip = data.starts_with(&[0x1f, 0x8b]);
+    let plain = (!gzip).then_some(data);
+
+    let reference = run(data, gzip, &base, Output::Ndjson);
+    check_run(&reference, None, plain);
+
+    let split = run(data, gzip, &small, Output::Ndjson);
+    check_run(&split, None, plain);
+    assert_eq!(
+        String::from_utf8_lossy(&split.out),
+        String::from_utf8_lossy(&reference.out),
+        "ndjson differs with {} threads and {}-byte blocks",
+        small.threads,
+        small.block_size
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&split.err),
+        String::from_utf8_lossy(&reference.err),
+        "diagnostics differ with {} threads and {}-byte blocks",
+        small.threads,
+        small.block_size
+    );
+    assert_eq!(split.report.counts, reference.report.counts);
+    assert_eq!(split.errors_raised, reference.errors_raised);
+
+    // Threads are tested above; one each is enough for the other renderers
+    // (thread start-up would dominate the time per input).
+    let small = Options {
+        threads: 1,
+        ..small
+    };
+    let json = run(data, gzip, &small, Output::Json);
+    let doc: Value = serde_json::from_slice(&json.out).expect("the JSON document parses");
+    let lines = ndjson_values(&reference.out);
+    let of_type = |t: &str| -> Vec<Value> {
+        lines
+            .iter()
+            .filter(|v| v["type"] == t)
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    let events: Vec<Value> = lines
+        .iter()
+        .filter(|v| v["type"] == "emcy" || v["type"] == "boot")
+        .cloned()
+        .collect();
+    assert_eq!(doc["events"], Value::Array(events), "json events = ndjson");
+    assert_eq!(doc["nodes"], Value::Array(of_type("node")), "json nodes");
+    assert_eq!(doc["inputs"], Value::Array(of_type("input")), "json inputs");
+    let diags = doc["diagnostics"].as_array().expect("diagnostics array");
+    assert_eq!(diags.len(), reference.diagnostics.len());
+
+    let table = run(data, gzip, &small, Output::Table);
+    no_control_characters("table", &table.out);
+}
+
+/// How [`run`] renders.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Output {
+    Ndjson,
+    Json,
+    Table,
+}
+
+/// One input through `analyze` and a renderer, captured.
+struct Run {
+    out: Vec<u8>,
+    err: Vec<u8>,
+    report: InputReport,
+    errors_raised: u64,
+    diagnostics: Vec<Diagnostic>,
+    /// What the pipeline read (after gzip), measured as it went by.
+    seen: Seen,
+    opts: Options,
+}
+
+/// Newlines and bytes that went through a reader.
+#[derive(Clone, Copy, Default)]
+struct Seen {
+    bytes: u64,
+    newlines: u64,
+    last: Option<u8>,
+}
+
+impl Seen {
+    fn lines(&self) -> u64 {
+        self.newlines + u64::from(self.last.is_some_and(|b| b != b'\n'))
+    }
+}
+
+struct Counting<R> {
+    inner: R,
+    seen: std::sync::Arc<std::sync::Mutex<Seen>>,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let got = buf.get(..n).unwrap_or_default();
+        if let Ok(mut s) = self.seen.lock() {
+            s.bytes += n as u64;
+            s.newlines += memchr::memchr_iter(b'\n', got).count() as u64;
+            if let Some(&b) = got.last() {
+                s.last = Some(b);
+            }
+        }
+        Ok(n)
+    }
+}
+
+fn run(data: &[u8], gzip: bool, opts: &Options, output: Output) -> Run {
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Seen::default()));
+    let opened =
+        sniff_gzip(Box::new(io::Cursor::new(data.to_vec()))).expect("reading a Vec cannot fail");
+    assert_eq!(opened.gzip, gzip, "gzip sniffed from the magic");
+    let reader = Counting {
+        inner: opened.reader,
+        seen: std::sync::Arc::clone(&seen),
+    };
+    let mut out = Vec::new();
+    let mut err = Vec::new();
+    let mut renderer: Box<dyn Renderer + '_> = match output {
+        Output::Ndjson => Box::new(Ndjson::new(&mut out, false)),
+        Output::Json => Box::new(JsonDocument::new(&mut out)),
+        Output::Table => Box::new(TableReport::new(&mut out, false, false)),
+    };
+    let mut log = DiagnosticLog::new(&mut err);
+    let analysis = analyze::analyze("fuzz", reader, gzip, opts, renderer.as_mut(), &mut log)
+        .expect("output to a Vec cannot fail");
+    let diagnostics = std::mem::take(&mut log.collected);
+    drop(log);
+    renderer
+        .finish(std::slice::from_ref(&analysis.report), &diagnostics)
+        .expect("finishing into a Vec cannot fail");
+    drop(renderer);
+    let seen = *seen.lock().expect("not poisoned");
+    Run {
+        out,
+        err,
+        report: analysis.report,
+        errors_raised: analysis.errors_raised,
+        diagnostics,
+        seen,
+        opts: opts.clone(),
+    }
+}
+
+/// Invariants of one ndjson run. `plain` is the input when it was not gzip.
+fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
+    let report = &run.report;
+    let c: Counts = report.counts;
+    assert_eq!(
+        c.lines,
+        c.frames + c.skipped + c.malformed,
+        "lines = frames + skipped + malformed: {c:?}"
+    );
+    assert!(
+        c.emcy + c.emcy_invalid + c.boot <= c.frames,
+        "EMCY and boot frames are frames: {c:?}"
+    );
+    assert!(c.other_format <= c.frames, "{c:?}");
+    if report.error.is_none() {
+        assert_eq!(c.lines, run.seen.lines(), "every line read is counted");
+    }
+    if let Some(data) = plain {
+        assert_eq!(
+            run.seen.bytes,
+            data.len() as u64,
+            "the input is read to its end"
+        );
+    }
+    if let Some(f) = forced {
+        assert_eq!(report.format, Some(f));
+        assert_eq!(c.other_format, 0, "a forced format reads nothing else");
+    }
+    if report.format.is_none() {
+        assert_eq!(c.frames, 0, "no format, no frame: {c:?}");
+    }
+
+    // Diagnostics: bounded, in line order, naming a line of the input.
+    assert!(run.diagnostics.len() <= run.opts.max_diagnostics);
+    let mut previous = 0;
+    for d in &run.diagnostics {
+        assert!(
+            d.line >= 1 && d.line <= c.lines.max(1),
+            "diagnostic names line {} of {}",
+            d.line,
+            c.lines
+        );
+        assert!(d.line >= previous, "diagnostics in line order");
+        previous = d.line;
+    }
+    no_control_characters("diagnostics", &run.err);
+
+    let values = ndjson_values(&run.out);
+    let (mut emcy, mut boot, mut raised, mut nodes, mut inputs) = (0, 0, 0, 0, 0);
+    let mut last_line = 0;
+    let mut node_emcy = 0;
+    for v in &values {
+        match v["type"].as_str() {
+            Some("emcy") => {
+                emcy += 1;
+                let line = v["line"].as_u64().expect("line");
+                assert!(line > last_line && line <= c.lines, "events in line order");
+                last_line = line;
+                check_emcy_event(v, true);
+                if v["code"] != "0x0000" {
+                    raised += 1;
+                }
+            }
+            Some("boot") => {
+                boot += 1;
+                let line = v["line"].as_u64().expect("line");
+                assert!(line > last_line && line <= c.lines, "events in line order");
+                last_line = line;
+                let _ = codes(&v["cleared"]);
+            }
+            Some("node") => {
+                nodes += 1;
+                node_emcy += v["emcy_count"].as_u64().expect("emcy_count");
+                check_node(v);
+            }
+            Some("input") => {
+                inputs += 1;
+                for (key, n) in [
+                    ("lines", c.lines),
+                    ("frames", c.frames),
+                    ("emcy", c.emcy),
+                    ("skipped", c.skipped),
+                    ("malformed", c.malformed),
+                    ("boot", c.boot),
+                    ("emcy_invalid", c.emcy_invalid),
+                    ("other_format", c.other_format),
+                ] {
+                    assert_eq!(v[key].as_u64(), Some(n), "input.{key}");
+                }
+            }
+            other => panic!("unknown ndjson object type {other:?}"),
+        }
+    }
+    assert_eq!(emcy, c.emcy, "one event per decoded EMCY");
+    assert_eq!(boot, c.boot, "one event per boot-up");
+    assert_eq!(
+        raised, run.errors_raised,
+        "errors raised = events with a code"
+    );
+    assert_eq!(nodes, report.nodes.len() as u64);
+    assert_eq!(node_emcy, c.emcy, "node EMCY counts add up");
+    assert_eq!(inputs, 1);
+}
+
+fn ndjson_values(out: &[u8]) -> Vec<Value> {
+    out.split(|b| *b == b'\n')
+        .filter(|l| !l.is_empty())
+        .map(|l| {
+            serde_json::from_slice(l).unwrap_or_else(|e| {
+                panic!(
+                    "ndjson line does not parse ({e}): {}",
+                    String::from_utf8_lossy(l)
+                )
+            })
+        })
+        .collect()
+}
+
+fn codes(v: &Value) -> Vec<String> {
+    v.as_array()
+        .expect("an array of codes")
+        .iter()
+        .map(|c| c.as_str().expect("a code string").to_string())
+        .collect()
+}
+
+/// An EMCY event agrees with the state machine's rules. `plain`: decoded
+/// without error status bits (a status-bit reset may be an information
+/// report that changes nothing, whatever its register).
+fn check_emcy_event(v: &Value, plain: bool) {
+    let code = v["code"].as_str().expect("code");
+    let transition = v["transition"].as_u64();
+    let state = v["state"].as_str().expect("state");
+    let active = codes(&v["active"]);
+    let cleared = codes(&v["cleared"]);
+    let data = v["data"].as_str().expect("data");
+    assert!(
+        (6..=16).contains(&data.len()) && data.len() % 2 == 0,
+        "EMCY data has 3 to 8 bytes: {v}"
+    );
+    assert!(
+        has_unique(&active),
+        "an active code is listed once: {active:?}"
+    );
+    if code != "0x0000" {
+        assert!(matches!(transition, Some(1 | 3)), "raise: {v}");
+        assert_eq!(state, "error_occurred");
+        assert!(active.iter().any(|a| a == code), "raised code active: {v}");
+        assert!(cleared.is_empty(), "a raise clears nothing: {v}");
+    } else {
+        assert!(matches!(transition, None | Some(2 | 4)), "reset: {v}");
+        if plain && v["register"] == 0 {
+            assert_eq!(state, "error_free", "{v}");
+            assert!(active.is_empty(), "full reset leaves nothing active: {v}");
+        } else if plain {
+            assert_eq!(state, "error_occurred", "{v}");
+        }
+    }
+    for c in &cleared {
+        assert!(
+            !active.iter().any(|a| a == c),
+            "cleared and still active: {v}"
+        );
+    }
+    if state == "error_free" {
+        assert!(active.is_empty(), "error-free with active errors: {v}");
+    }
+}
+
+/// A node's error list: each error ends after it starts (in line order),
+/// the still-active ones are exactly the node's active codes.
+fn check_node(v: &Value) {
+    let active = codes(&v["active"]);
+    let errors = v["errors"].as_array().expect("errors");
+    let mut open = Vec::new();
+    for e in errors {
+        let start = e["start_line"].as_u64().expect("start_line");
+        match e["end_line"].as_u64() {
+            Some(end) => {
+                assert!(
+                    end >= start,
+                    "error ends at line {end} before it starts at {start}"
+                );
+                assert!(!e["cleared_by"].is_null(), "a closed error says why");
+            }
+            None => {
+                assert!(e["end_line"].is_null());
+                assert!(e["cleared_by"].is_null(), "an open error is not cleared");
+                open.push(e["code"].as_str().expect("code").to_string());
+            }
+        }
+    }
+    assert_eq!(
+        open, active,
+        "open errors = active codes, in raise order: {v}"
+    );
+    if v["state"] == "error_free" {
+        assert!(active.is_empty(), "error-free node with active errors: {v}");
+    }
+}
+
+fn has_unique(items: &[String]) -> bool {
+    items
+        .iter()
+        .enumerate()
+        .all(|(i, a)| !items.iter().skip(i + 1).any(|b| a == b))
+}
+
+/// What goes to a terminal must be UTF-8 with no control character but the
+/// newline: a trace must not be able to send escape sequences.
+fn no_control_characters(what: &str, bytes: &[u8]) {
+    let text = std::str::from_utf8(bytes).unwrap_or_else(|e| panic!("{what} is not UTF-8: {e}"));
+    if let Some(c) = text.chars().find(|&c| c.is_control() && c != '\n') {
+        panic!("{what} holds control character {c:?}");
+    }
+}
+
+/// Per line: the same classification whatever the interest, and the quick
+/// path only skips valid frames that are not wanted.
+fn lines_agree(format: Format, data: &[u8]) {
+    let wanted = analyze::interest(&Options::default());
+    let all = Interest::all();
+    let mut p_all = format.parser();
+    let mut p_wanted = format.parser();
+    let mut p_quick = format.parser();
+    let block = Block {
+        bytes: data.to_vec(),
+        too_long_before: None,
+        last: true,
+    };
+    for raw in block.lines(512) {
+        let crate::trace::lines::RawLine::Text(line) = raw else {
+            continue;
+        };
+        let a = p_all.parse(line, &all);
+        let w = p_wanted.parse(line, &wanted);
+        let quick = p_quick.quick(line, &wanted);
+        let q = if quick {
+            None
+        } else {
+            Some(p_quick.parse(line, &wanted))
+        };
+        let shown = || String::from_utf8_lossy(line).into_owned();
+        match (&a, &w) {
+            (Parsed::Frame(fa), Parsed::Frame(fw)) => {
+                assert_eq!(
+                    (fa.id, fa.extended, fa.kind, fa.len, fa.channel),
+                    (fw.id, fw.extended, fw.kind, fw.len, fw.channel),
+                    "the interest changed the frame: {:?}",
+                    shown()
+                );
+                if fw.kind == FrameKind::Data && wanted.wants(fw.id, fw.extended) {
+                    assert_eq!(fa.data, fw.data, "{:?}", shown());
+                    assert_eq!(fa.time, fw.time, "{:?}", shown());
+                }
+                check_frame(fa, line);
+            }
+            (Parsed::Skipped, Parsed::Skipped) | (Parsed::Malformed(_), Parsed::Malformed(_)) => {}
+            _ => panic!(
+                "the interest changed the classification of {:?}: {a:?} vs {w:?}",
+                shown()
+            ),
+        }
+        match q {
+            None => {
+                let Parsed::Frame(f) = &a else {
+                    panic!("quick skipped a line that is not a frame: {:?}", shown());
+                };
+                assert!(
+                    !(f.kind == FrameKind::Data && wanted.wants(f.id, f.extended)),
+                    "quick skipped a wanted frame: {:?}",
+                    shown()
+                );
+            }
+            Some(q) => assert_eq!(q, w, "quick then parse = parse: {:?}", shown()),
+        }
+        assert_eq!(p_all.context(), p_wanted.context(), "{:?}", shown());
+        assert_eq!(p_all.context(), p_quick.context(), "{:?}", shown());
+    }
+}
+
+fn check_frame(f: &crate::trace::Frame<'_>, line: &[u8]) {
+    let shown = String::from_utf8_lossy(line);
+    match f.kind {
+        FrameKind::Data => {
+            assert!(f.len <= 8, "classic frame of {} bytes: {shown:?}", f.len);
+            assert_eq!(f.data.len(), usize::from(f.len), "{shown:?}");
+        }
+        FrameKind::Fd => {
+            assert!(f.len <= 64, "FD frame of {} bytes: {shown:?}", f.len);
+            assert_eq!(f.data.len(), usize::from(f.len), "{shown:?}");
+        }
+        FrameKind::Remote => assert!(f.data.is_empty(), "{shown:?}"),
+        FrameKind::Error => return,
+    }
+    let max = if f.extended { 0x1FFF_FFFF } else { 0x7FF };
+    assert!(f.id <= max, "id {:#X} out of range: {shown:?}", f.id);
+}
+
+// ---- decoder + timeline ------------------------------------------------------------
+
+/// Bytes read front to back; past the end every read is 0.
+struct Bytes<'a>(&'a [u8]);
+
+impl Bytes<'_> {
+    fn u8(&mut self) -> u8 {
+        match self.0.split_first() {
+            Some((&b, rest)) => {
+                self.0 = rest;
+                b
+            }
+            None => 0,
+        }
+    }
+
+    fn take(&mut self, n: usize) -> &[u8] {
+        let (a, b) = self.0.split_at(n.min(self.0.len()));
+        self.0 = b;
+        a
+    }
+
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+}
+
+const CHANNELS: [&str; 2] = ["can0", "can1"];
+const NODES: [u8; 4] = [1, 2, 3, 127];
+
+/// One node of the model: its timeline and what the checks know about it.
+struct ModelNode {
+    channel: u32,
+    node: u8,
+    timeline: NodeTimeline,
+    emcy: u64,
+    /// Intervals opened / closed so far.
+    opened: u64,
+    closed: u64,
+}
+
+/// The `decode_timeline` target: the bytes are a script of frames (EMCY,
+/// EMCY with an error status bit, boot-up, SDO, raw ids) for four nodes on
+/// two channels. Every EMCY is decoded, run through the node's timeline,
+/// checked against the state machine's rules and rendered (ndjson and
+/// table); closed intervals go to an error history that spills to disk
+/// early; at the end the history must give back every interval exactly
+/// once, in report order, ending after it started.
+pub fn decode_timeline(data: &[u8]) {
+    let mut input = Bytes(data);
+    let spill_at = [1, 2, 5, 1000][usize::from(input.u8() & 3)];
+    let mut history = History::new(spill_at);
+    for name in CHANNELS {
+        history.add_channel(name);
+    }
+    let mut nodes: Vec<ModelNode> = (0..2u32)
+        .flat_map(|channel| {
+            NODES.iter().map(move |&node| ModelNode {
+                channel,
+                node,
+                timeline: NodeTimeline::new(),
+                emcy: 0,
+                opened: 0,
+                closed: 0,
+            })
+        })
+        .collect();
+    let mut ndjson_out = Vec::new();
+    let mut table_out = Vec::new();
+    let mut ndjson = Ndjson::new(&mut ndjson_out, false);
+    let mut table = TableReport::new(&mut table_out, false, false);
+    let mut tracker = sdo::Tracker::default();
+    let mut clock = Timestamp::from_parts(1_700_000_000, 0, 6);
+    let mut line = 0u64;
+    let mut events = 0u64;
+    let mut warnings = Vec::new();
+    let mut first_time = None;
+    let mut last_time = None;
+
+    while !input.0.is_empty() {
+        let op = input.u8();
+        line += 1 + u64::from(op >> 7);
+        let time = next_time(&mut input, &mut clock);
+        if let Some(t) = time {
+            first_time.get_or_insert(t);
+            last_time = Some(t);
+        }
+        let at = At { time, line };
+        match op % 5 {
+            0 | 1 => {
+                let slot = usize::from(input.u8()) % nodes.len();
+                let bit = (op % 5 == 1).then(|| input.u8());
+                let len = usize::from(input.u8() % 9);
+                let payload = input.take(len).to_vec();
+                let Some(e) = decode_emcy(&payload) else {
+                    continue;
+                };
+                let m = &mut nodes[slot];
+                warnings.clear();
+                let info = e.info();
+                e.frame_warnings(&info, &mut warnings);
+                let before = m.timeline.active().to_vec();
+                let was = m.timeline.state();
+                let step = match bit {
+                    Some(bit) => m.timeline.emcy_with_status_bit(&e, at, bit, &mut warnings),
+                    None => m.timeline.emcy(&e, at, &mut warnings),
+                };
+                m.emcy += 1;
+                check_step(&e, bit, was, &before, &step, m, at);
+                m.opened += (m.timeline.active().len() + step.closed.len())
+                    .saturating_sub(before.len()) as u64;
+                m.closed += step.closed.len() as u64;
+                for iv in &step.closed {
+                    history.push(m.channel, m.node, iv.clone());
+                }
+                for w in &warnings {
+                    let _ = (w.tag(), w.to_string());
+                }
+                let active: Vec<u16> = m.timeline.active_codes().collect();
+                let event = EmcyEvent {
+                    file: "fuzz",
+                    line,
+                    time,
+                    channel: CHANNELS[m.channel as usize],
+                    node: m.node,
+                    cob_id: emcy::EMCY_BASE + u32::from(m.node),
+                    data: &payload,
+                    emcy: &e,
+                    info: &info,
+                    transition: step.transition,
+                    state: step.state,
+                    active: &active,
+                    cleared: &step.cleared,
+                    warnings: &warnings,
+                };
+                ndjson.emcy(&event).expect("Vec");
+                table.emcy(&event).expect("Vec");
+                events += 1;
+            }
+            2 => {
+                let slot = usize::from(input.u8()) % nodes.len();
+                let m = &mut nodes[slot];
+                let before = m.timeline.active().to_vec();
+                let closed = m.timeline.boot(at);
+                assert_eq!(m.timeline.state(), State::ErrorFree, "boot: error-free");
+                assert!(m.timeline.active().is_empty(), "boot closes everything");
+                assert_eq!(closed.len(), before.len(), "boot closes every active error");
+                for (iv, old) in closed.iter().zip(&before) {
+                    assert_eq!(iv.seq, old.seq);
+                    assert_eq!(iv.cleared_by, Some(ClearedBy::Boot));
+                    check_closed(iv, at);
+                }
+                m.closed += closed.len() as u64;
+                let cleared: Vec<u16> = closed.iter().map(|iv| iv.code).collect();
+                for iv in closed {
+                    history.push(m.channel, m.node, iv);
+                }
+                let event = BootEvent {
+                    file: "fuzz",
+                    line,
+                    time,
+                    channel: CHANNELS[m.channel as usize],
+                    node: m.node,
+                    cleared: &cleared,
+                };
+                ndjson.boot(&event).expect("Vec");
+                table.boot(&event).expect("Vec");
+                events += 1;
+            }
+            3 => {
+                let pick = input.u8();
+                let base = if pick & 0x80 == 0 {
+                    sdo::RESPONSE_BASE
+                } else {
+                    sdo::REQUEST_BASE
+                };
+                let id = base + u32::from(pick & 0x7F);
+                let len = if input.u8() & 7 == 0 { 7 } else { 8 };
+                let payload = input.take(len).to_vec();
+                check_sdo(&mut tracker, id, &payload);
+            }
+            _ => {
+                let id = input.u32() & if op & 0x40 != 0 { 0x7FF } else { u32::MAX };
+                let len = usize::from(input.u8() % 3);
+                let payload = input.take(len);
+                check_ids(id, payload);
+                let _ = sdo::parse(id, payload);
+            }
+        }
+    }
+
+    // Every interval once, in report order, ending after it started.
+    let opened: u64 = nodes.iter().map(|m| m.opened).sum();
+    let mut open = Vec::new();
+    for m in &nodes {
+        assert_eq!(m.timeline.emcy_count(), m.emcy, "EMCY count");
+        let raised: u64 = m.timeline.stats().raised.values().sum();
+        assert_eq!(raised, m.opened, "stats.raised counts every raise");
+        assert_eq!(
+            m.opened - m.closed,
+            m.timeline.active().len() as u64,
+            "opened = closed + active"
+        );
+        open.extend(m.timeline.active().iter().map(|iv| crate::history::Record {
+            channel: m.channel,
+            node: m.node,
+            interval: iv.clone(),
+        }));
+    }
+    let finished = history.finish(open);
+    let mut merge = finished.merge();
+    let mut seen = 0u64;
+    let mut previous: Option<(u32, u8, u64)> = None;
+    while let Some(r) = merge.next_record() {
+        seen += 1;
+        let key = (r.channel, r.node, r.interval.seq);
+        if let Some(p) = previous {
+            assert!(p < key, "history out of report order: {p:?} then {key:?}");
+        }
+        previous = Some(key);
+        if let Some(end) = r.interval.end {
+            assert!(end.line >= r.interval.start.line, "ends before it starts");
+        }
+    }
+    assert!(merge.take_error().is_none(), "history read back");
+    assert_eq!(seen, opened, "the history holds every interval once");
+
+    // The node reports render.
+    let reports: Vec<NodeReport> = nodes
+        .iter()
+        .map(|m| NodeReport {
+            channel: CHANNELS[m.channel as usize].to_string(),
+            node: m.node,
+            state: m.timeline.state(),
+            active: m.timeline.active_codes().collect(),
+            emcy_count: m.timeline.emcy_count(),
+            stats: m.timeline.stats().clone(),
+        })
+        .collect();
+    let report = InputReport {
+        file: "fuzz".to_string(),
+        format: None,
+        gzip: false,
+        counts: Counts::default(),
+        nodes: reports,
+        history: finished,
+        first_time,
+        last_time,
+        error: None,
+    };
+    let inputs = std::slice::from_ref(&report);
+    ndjson.end_input(&report).expect("Vec");
+    ndjson.finish(inputs, &[]).expect("Vec");
+    table.end_input(&report).expect("Vec");
+    table.finish(inputs, &[]).expect("Vec");
+    let values = ndjson_values(&ndjson_out);
+    let mut rendered_events = 0;
+    for v in &values {
+        match v["type"].as_str() {
+            Some("emcy") => {
+                rendered_events += 1;
+                // check_step checked each step against the exact rules.
+                check_emcy_event(v, false);
+            }
+            Some("boot") => rendered_events += 1,
+            Some("node") => check_node(v),
+            _ => {}
+        }
+    }
+    assert_eq!(rendered_events, events);
+    no_control_characters("table", &table_out);
+}
+
+/// A time for the next frame: none, forwards, backwards, or near the end of
+/// u64 seconds.
+fn next_time(input: &mut Bytes<'_>, clock: &mut Timestamp) -> Option<Timestamp> {
+    let t = input.u8();
+    match t {
+        0xFF => return None,
+        0xFE => *clock = Timestamp::from_parts(u64::MAX - u64::from(input.u8()), 999_999, 6),
+        0xFD => *clock = Timestamp::from_parts(0, 0, 0),
+        0xFC => {
+            let digits = input.u8() % 20;
+            *clock = Timestamp::from_parts(clock.secs(), u64::from(input.u32()), digits);
+        }
+        _ if t & 0x80 != 0 => {
+            *clock = Timestamp::from_parts(clock.secs().saturating_sub(u64::from(t & 0x7F)), 0, 3)
+        }
+        _ => {
+            let delta = Timestamp::from_parts(u64::from(t >> 4), u64::from(t & 0xF), 3);
+            *clock = clock.checked_add(delta).unwrap_or(*clock);
+        }
+    }
+    Some(*clock)
+}
+
+/// `Emcy::decode` against the frame layout.
+fn decode_emcy(data: &[u8]) -> Option<Emcy> {
+    match Emcy::decode(data) {
+        Err(short) => {
+            assert!(data.len() < 3, "{} bytes are enough", data.len());
+            assert_eq!(short.0, data.len());
+            let _ = short.to_string();
+            None
+        }
+        Ok(e) => {
+            assert!(data.len() >= 3);
+            assert_eq!(e.code, u16::from_le_bytes([data[0], data[1]]));
+            assert_eq!(e.register.0, data[2]);
+            assert_eq!(e.manufacturer(), &data[3..data.len().min(8)]);
+            assert_eq!(usize::from(e.len), data.len().min(8));
+            assert_eq!(e.is_reset(), e.code == 0);
+            let mut w = Vec::new();
+            e.frame_warnings(&e.info(), &mut w);
+            assert_eq!(
+                w.iter().any(|w| matches!(w, Warning::ShortFrame { .. })),
+                e.len != 8
+            );
+            Some(e)
+        }
+    }
+}
+
+fn check_closed(iv: &Interval, at: At) {
+    assert_eq!(iv.end, Some(at), "closed at this frame");
+    assert!(at.line >= iv.start.line, "closed before it was raised");
+    assert!(iv.cleared_by.is_some());
+}
+
+/// One EMCY's step against the rules in `timeline.rs`.
+fn check_step(
+    e: &Emcy,
+    bit: Option<u8>,
+    was: State,
+    before: &[Interval],
+    step: &Step,
+    m: &ModelNode,
+    at: At,
+) {
+    let tl = &m.timeline;
+    let active = tl.active();
+    assert_eq!(step.state, tl.state());
+    assert_eq!(
+        step.cleared,
+        step.closed.iter().map(|iv| iv.code).collect::<Vec<_>>()
+    );
+    for iv in &step.closed {
+        check_closed(iv, at);
+        assert!(
+            before.iter().any(|b| b.seq == iv.seq),
+            "closed an inactive error"
+        );
+    }
+    // Active: still open, unique codes, raise order, never code 0.
+    for (i, iv) in active.iter().enumerate() {
+        assert!(iv.end.is_none() && iv.cleared_by.is_none());
+        assert_ne!(iv.code, 0, "a reset code is never active");
+        if let Some(next) = active.get(i + 1) {
+            assert!(iv.seq < next.seq, "active in raise order");
+            assert!(
+                active[i + 1..].iter().all(|o| o.code != iv.code),
+                "code twice"
+            );
+        }
+    }
+    // Nothing lost: before = still active + closed (+ at most one new).
+    let kept = before
+        .iter()
+        .filter(|b| active.iter().any(|a| a.seq == b.seq))
+        .count();
+    assert_eq!(kept + step.closed.len(), before.len(), "an error vanished");
+    if tl.state() == State::ErrorFree {
+        assert!(active.is_empty(), "error-free with active errors");
+    }
+    if !e.is_reset() {
+        assert_eq!(
+            step.transition,
+            Some(if was == State::ErrorFree { 1 } else { 3 })
+        );
+        assert_eq!(tl.state(), State::ErrorOccurred);
+        assert!(step.closed.is_empty());
+        let raised = active.iter().find(|iv| iv.code == e.code);
+        let raised = raised.expect("the raised code is active");
+        if let Some(bit) = bit
+            && !before.iter().any(|b| b.code == e.code)
+        {
+            assert_eq!(raised.status_bit, Some(bit));
+        }
+        return;
+    }
+    match bit {
+        Some(bit) => {
+            let expect: Vec<u64> = before
+                .iter()
+                .filter(|b| b.status_bit == Some(bit))
+                .map(|b| b.seq)
+                .collect();
+            let got: Vec<u64> = step.closed.iter().map(|iv| iv.seq).collect();
+            assert_eq!(got, expect, "a status-bit reset closes exactly its bit");
+            let want = if got.is_empty() {
+                None
+            } else if active.is_empty() {
+                Some(4)
+            } else {
+                Some(2)
+            };
+            assert_eq!(step.transition, want);
+            if got.is_empty() {
+                assert_eq!(tl.state(), was, "an information report changes nothing");
+            }
+        }
+        None if e.register.0 == 0 => {
+            assert!(active.is_empty(), "reset closes everything");
+            assert_eq!(step.closed.len(), before.len());
+            assert_eq!(tl.state(), State::ErrorFree);
+            let want = (was == State::ErrorOccurred).then_some(4);
+            assert_eq!(step.transition, want);
+        }
+        None => {
+            assert_eq!(tl.state(), State::ErrorOccurred);
+            let want = (was == State::ErrorOccurred).then_some(2);
+            assert_eq!(step.transition, want);
+            for iv in &step.closed {
+                assert_eq!(iv.cleared_by, Some(ClearedBy::PartialReset));
+            }
+        }
+    }
+}
+
+/// SDO parsing and the write tracker.
+fn check_sdo(tracker: &mut sdo::Tracker, id: u32, data: &[u8]) {
+    let parsed = sdo::parse(id, data);
+    let node_ok = |node: u8| (1..=127).contains(&node);
+    let Some(access) = parsed else {
+        return;
+    };
+    assert_eq!(data.len(), 8, "SDO frames are 8 bytes");
+    match access {
+        sdo::Sdo::Uploaded { node, .. }
+        | sdo::Sdo::Writing { node, .. }
+        | sdo::Sdo::Written { node, .. }
+        | sdo::Sdo::Aborted { node, .. } => {
+            assert!(node_ok(node));
+            let base = id - u32::from(node);
+            assert!(base == sdo::RESPONSE_BASE || base == sdo::REQUEST_BASE);
+        }
+    }
+    if let Some((node, object, value)) = tracker.feed(access) {
+        assert!(node_ok(node));
+        let _ = object;
+        if let Some((emcy_id, extended)) = sdo::cob_id_emcy(value) {
+            assert!(value & 0x8000_0000 == 0);
+            let max = if extended { 0x1FFF_FFFF } else { 0x7FF };
+            assert!(emcy_id <= max);
+        }
+    }
+}
+
+/// EMCY and boot-up id arithmetic.
+fn check_ids(id: u32, data: &[u8]) {
+    match emcy::emcy_node(id) {
+        Some(node) => {
+            assert!((emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID).contains(&id));
+            assert_eq!(emcy::EMCY_BASE + u32::from(node), id);
+            assert!((1..=127).contains(&node));
+        }
+        None => assert!(!(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID).contains(&id)),
+    }
+    if let Some(node) = emcy::boot_node(id, data) {
+        assert_eq!(data, [0]);
+        assert_eq!(emcy::NMT_ERROR_CONTROL_BASE + u32::from(node), id);
+        assert!((1..=127).contains(&node));
+    }
+}
