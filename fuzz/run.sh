@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(candump_log candump_screen asc detect decode_timeline)
+[ ${#targets[@]} -gt 0 ] || targets=(candump_log candump_screen asc trc blf detect decode_timeline)
 for t in "${targets[@]}"; do
     max_len=4096
     [ "$t" = decode_timeline ] && max_len=1024

@@ -545,7 +545,11 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         if frame.kind != FrameKind::Data {
             return Ok(());
         }
-        if let Some(t) = frame.time {
+        // Only wanted ids count: workers may hand over frames the sequential
+        // reader only counts, and the result must not depend on the path.
+        if let Some(t) = frame.time
+            && self.interest.wants(frame.id, frame.extended)
+        {
             self.first_time.get_or_insert(t);
             self.last_time = Some(t);
         }

@@ -6,6 +6,8 @@
 //! test panics: a panic is what libFuzzer reports as a crash. Not part of the
 //! public API.
 
+use crate::canopen::profile::{self, Profile};
+use crate::profile_choice::{Chosen, ProfileSource};
 use std::io::{self, Read};
 
 use serde_json::Value;
@@ -232,7 +234,8 @@ fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
         "EMCY and boot frames are frames: {c:?}"
     );
     assert!(c.other_format <= c.frames, "{c:?}");
-    if report.error.is_none() {
+    // BLF is binary: its "lines" are objects, not newlines.
+    if report.error.is_none() && report.format != Some(Format::Blf) {
         assert_eq!(c.lines, run.seen.lines(), "every line read is counted");
     }
     if let Some(data) = plain {
@@ -551,6 +554,8 @@ const NODES: [u8; 4] = [1, 2, 3, 127];
 struct ModelNode {
     channel: u32,
     node: u8,
+    /// Every built-in profile decodes some node's frames.
+    profile: &'static Profile,
     timeline: NodeTimeline,
     emcy: u64,
     /// Intervals opened / closed so far.
@@ -574,9 +579,11 @@ pub fn decode_timeline(data: &[u8]) {
     }
     let mut nodes: Vec<ModelNode> = (0..2u32)
         .flat_map(|channel| {
-            NODES.iter().map(move |&node| ModelNode {
+            NODES.iter().enumerate().map(move |(i, &node)| ModelNode {
                 channel,
                 node,
+                profile: &profile::builtins()
+                    [(i + 4 * channel as usize) % profile::builtins().len()],
                 timeline: NodeTimeline::new(),
                 emcy: 0,
                 opened: 0,
@@ -616,8 +623,22 @@ pub fn decode_timeline(data: &[u8]) {
                 };
                 let m = &mut nodes[slot];
                 warnings.clear();
-                let info = e.info();
+                let info = m.profile.info(e.code);
                 e.frame_warnings(&info, &mut warnings);
+                m.profile.frame_warnings(&e, &mut warnings);
+                let decoded = m.profile.decode_manufacturer(&e);
+                if let Some(d) = &decoded {
+                    for (key, _) in &d.fields {
+                        assert!(!key.is_empty(), "decoded field without a key");
+                    }
+                }
+                if let Some(c) = m.profile.category(&e) {
+                    assert!((1..=5).contains(&c), "built-in categories are 1-5, got {c}");
+                }
+                assert!(
+                    !m.profile.describe(e.code).is_empty(),
+                    "every code is described"
+                );
                 let before = m.timeline.active().to_vec();
                 let was = m.timeline.state();
                 let step = match bit {
@@ -651,6 +672,11 @@ pub fn decode_timeline(data: &[u8]) {
                     active: &active,
                     cleared: &step.cleared,
                     warnings: &warnings,
+                    profile: Chosen {
+                        profile: m.profile,
+                        source: ProfileSource::Flag,
+                    },
+                    decoded: decoded.as_ref(),
                 };
                 ndjson.emcy(&event).expect("Vec");
                 table.emcy(&event).expect("Vec");
@@ -754,6 +780,9 @@ pub fn decode_timeline(data: &[u8]) {
             active: m.timeline.active_codes().collect(),
             emcy_count: m.timeline.emcy_count(),
             stats: m.timeline.stats().clone(),
+            profile: m.profile,
+            profile_source: ProfileSource::Flag,
+            profile_reason: None,
         })
         .collect();
     let report = InputReport {

@@ -15,7 +15,7 @@ use emcy_decode::trace::Format;
 type Body = fn(&[u8]);
 
 /// The fuzz targets and the bodies they run.
-const TARGETS: [(&str, Body); 5] = [
+const TARGETS: [(&str, Body); 7] = [
     ("candump_log", |d| {
         fuzzing::reader(Some(Format::CandumpLog), d)
     }),
@@ -23,6 +23,14 @@ const TARGETS: [(&str, Body); 5] = [
         fuzzing::reader(Some(Format::CandumpScreen), d)
     }),
     ("asc", |d| fuzzing::reader(Some(Format::Asc), d)),
+    ("trc", |d| {
+        emcy_decode::trace::trc::fuzz_trc(d);
+        fuzzing::reader(Some(Format::Trc), d)
+    }),
+    ("blf", |d| {
+        emcy_decode::trace::blf::fuzz_blf(d);
+        fuzzing::reader(Some(Format::Blf), d)
+    }),
     ("detect", fuzzing::detect),
     ("decode_timeline", fuzzing::decode_timeline),
 ];

@@ -1,0 +1,12 @@
+//! Arbitrary bytes read as a PEAK TRC trace (format forced): the reader's own body
+//! (well-formed frames, no endless loop) and the whole pipeline with the
+//! invariants of `emcy_decode::fuzzing::reader`.
+#![no_main]
+
+use emcy_decode::trace::Format;
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    emcy_decode::trace::trc::fuzz_trc(data);
+    emcy_decode::fuzzing::reader(Some(Format::Trc), data);
+});
