@@ -417,6 +417,14 @@ impl AscParser {
         }
         self.base = base;
         if let Some(relative) = relative {
+            // Turning relative times on starts the running time at 0 (the
+            // measurement start of what follows, as at the top of a file),
+            // not at the last absolute time: otherwise the state after this
+            // line would depend on lines before it that `context` does not
+            // show, and a block read in parallel would get other times.
+            if relative && !self.relative {
+                self.now = Timestamp::ZERO;
+            }
             self.relative = relative;
         }
         Ok(())
@@ -1404,6 +1412,26 @@ mod tests {
             Parsed::Frame(f) => assert_eq!(time(&f), "0.5"),
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn turning_relative_times_on_starts_from_zero() {
+        // Found by fuzzing (fuzz/regressions/detect/asc-relative-after-absolute):
+        // relative times went on from the last absolute time, which the
+        // parser's context does not carry, so a block read on another thread
+        // got other times than the same block read in order.
+        let mut p = AscParser::new();
+        let t = |p: &mut AscParser, l: &str| match parse_with(p, l) {
+            Parsed::Frame(f) => time(&f),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(t(&mut p, "0.45 1 081 Rx d 0"), "0.45");
+        parse_with(&mut p, "base hex  timestamps relative");
+        assert_eq!(t(&mut p, "0.1 1 081 Rx d 0"), "0.1");
+        assert_eq!(t(&mut p, "0.1 1 081 Rx d 0"), "0.2");
+        // Saying relative again changes nothing: the sum goes on.
+        parse_with(&mut p, "base dec  timestamps relative");
+        assert_eq!(t(&mut p, "0.1 1 129 Rx d 0"), "0.3");
     }
 
     #[test]
