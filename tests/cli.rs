@@ -768,3 +768,37 @@ fn explain_reads_a_payload_with_a_profile() {
         .assert()
         .code(2);
 }
+
+/// A node with megabytes of errors is written in pieces; the pieces must
+/// still make one valid object, the same in ndjson and the JSON document.
+#[test]
+fn a_node_with_many_errors_is_one_valid_object_in_both_json_formats() {
+    let mut trace = String::new();
+    for i in 0..6000u32 {
+        let data = if i % 2 == 0 {
+            "1043090000000000"
+        } else {
+            "0000000000000000"
+        };
+        trace.push_str(&format!(
+            "({}.{:06}) can0 085#{data}\n",
+            1_700_000_000 + i / 10,
+            i
+        ));
+    }
+    let nd = emcy_decode()
+        .args(["--format", "ndjson", "--view", "summary", "-"])
+        .write_stdin(trace.clone())
+        .output()
+        .unwrap();
+    let objects = ndjson_objects(&nd.stdout);
+    let node = of_type(&objects, "node")[0].clone();
+    assert_eq!(node["errors"].as_array().map(Vec::len), Some(3000));
+    let doc = emcy_decode()
+        .args(["--format", "json", "-"])
+        .write_stdin(trace)
+        .output()
+        .unwrap();
+    let doc: Value = serde_json::from_slice(&doc.stdout).expect("one valid document");
+    assert_eq!(doc["nodes"][0], node);
+}

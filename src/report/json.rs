@@ -3,7 +3,7 @@
 
 use std::io::{self, Write};
 
-use super::jsonw::{JsonWriter, pretty};
+use super::jsonw::{JsonWriter, Pretty, pretty};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 
 /// `{"events":[...],"nodes":[...],"inputs":[...],"diagnostics":[...]}`,
@@ -75,8 +75,22 @@ impl<W: Write> Renderer for JsonDocument<W> {
             let mut merge = input.history.merge();
             for node in &input.nodes {
                 let errors = merge.node_errors(&node.channel, node.node);
-                self.json.node(&mut self.compact, input, node, errors);
-                self.element(n == 0)?;
+                // Streamed: a node's errors can be millions.
+                self.out
+                    .write_all(if n == 0 { b"\n    " } else { b",\n    " })?;
+                let mut pretty = Pretty::new(2);
+                let (out, text) = (&mut self.out, &mut self.text);
+                self.json
+                    .node(&mut self.compact, input, node, errors, &mut |part| {
+                        text.clear();
+                        pretty.feed(part, text);
+                        part.clear();
+                        out.write_all(text)
+                    })?;
+                self.text.clear();
+                pretty.feed(&self.compact, &mut self.text);
+                self.compact.clear();
+                self.out.write_all(&self.text)?;
                 n += 1;
             }
             if let Some(e) = merge.take_error() {

@@ -7,6 +7,7 @@
 //! does, so both output formats come from this one module.
 
 use std::collections::HashMap;
+use std::io;
 
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::emcy::Warning;
@@ -347,13 +348,18 @@ impl JsonWriter {
     }
 
     /// A node object; `errors` in the order they were raised.
+    ///
+    /// A node that raised millions of errors makes one huge object: `flush`
+    /// is handed the bytes built so far whenever they pass [`FLUSH_AT`], so
+    /// memory stays bounded (it must drain `out`).
     pub fn node(
         &mut self,
         out: &mut Vec<u8>,
         input: &InputReport,
         node: &NodeReport,
         errors: impl IntoIterator<Item = Interval>,
-    ) {
+        flush: &mut dyn FnMut(&mut Vec<u8>) -> io::Result<()>,
+    ) -> io::Result<()> {
         let file = input.file.as_str();
         let mut o = Obj::new(out);
         o.str("type", "node");
@@ -406,9 +412,13 @@ impl JsonWriter {
                 e.push(b',');
             }
             self.interval(e, node.profile, &iv);
+            if e.len() >= FLUSH_AT {
+                flush(e)?;
+            }
         }
         e.push(b']');
         o.end();
+        Ok(())
     }
 
     fn interval(&mut self, out: &mut Vec<u8>, profile: &Profile, iv: &Interval) {
@@ -485,55 +495,77 @@ impl JsonWriter {
 /// spaces, `"key": value`, empty `[]`/`{}` kept on one line), starting at
 /// `level` levels of indentation. Bytes inside strings are copied as they are.
 pub fn pretty(compact: &[u8], level: usize, out: &mut Vec<u8>) {
-    let mut depth = level;
-    let mut in_string = false;
-    let mut escaped = false;
-    let mut i = 0;
-    let newline = |out: &mut Vec<u8>, depth: usize| {
-        out.push(b'\n');
-        out.extend(std::iter::repeat_n(b' ', 2 * depth));
-    };
-    while let Some(&b) = compact.get(i) {
-        i += 1;
-        if in_string {
-            out.push(b);
-            if escaped {
-                escaped = false;
-            } else if b == b'\\' {
-                escaped = true;
-            } else if b == b'"' {
-                in_string = false;
-            }
-            continue;
+    Pretty::new(level).feed(compact, out);
+}
+
+/// How many bytes of one JSON value are built before they are written.
+pub const FLUSH_AT: usize = 64 * 1024;
+
+/// [`pretty`] in pieces: compact JSON may be fed in chunks split anywhere.
+pub struct Pretty {
+    depth: usize,
+    in_string: bool,
+    escaped: bool,
+    /// An opening bracket whose next byte decides `[]` or a new line.
+    open: Option<u8>,
+}
+
+impl Pretty {
+    pub fn new(level: usize) -> Self {
+        Pretty {
+            depth: level,
+            in_string: false,
+            escaped: false,
+            open: None,
         }
-        match b {
-            b'"' => {
-                in_string = true;
-                out.push(b);
-            }
-            b'{' | b'[' => {
-                let close = if b == b'{' { b'}' } else { b']' };
-                if compact.get(i) == Some(&close) {
-                    out.push(b);
+    }
+
+    fn newline(&self, out: &mut Vec<u8>) {
+        out.push(b'\n');
+        out.extend(std::iter::repeat_n(b' ', 2 * self.depth));
+    }
+
+    pub fn feed(&mut self, compact: &[u8], out: &mut Vec<u8>) {
+        for &b in compact {
+            if let Some(open) = self.open.take() {
+                let close = if open == b'{' { b'}' } else { b']' };
+                out.push(open);
+                if b == close {
                     out.push(close);
-                    i += 1;
-                } else {
-                    out.push(b);
-                    depth += 1;
-                    newline(out, depth);
+                    continue;
                 }
+                self.depth += 1;
+                self.newline(out);
             }
-            b'}' | b']' => {
-                depth = depth.saturating_sub(1);
-                newline(out, depth);
+            if self.in_string {
                 out.push(b);
+                if self.escaped {
+                    self.escaped = false;
+                } else if b == b'\\' {
+                    self.escaped = true;
+                } else if b == b'"' {
+                    self.in_string = false;
+                }
+                continue;
             }
-            b',' => {
-                out.push(b);
-                newline(out, depth);
+            match b {
+                b'"' => {
+                    self.in_string = true;
+                    out.push(b);
+                }
+                b'{' | b'[' => self.open = Some(b),
+                b'}' | b']' => {
+                    self.depth = self.depth.saturating_sub(1);
+                    self.newline(out);
+                    out.push(b);
+                }
+                b',' => {
+                    out.push(b);
+                    self.newline(out);
+                }
+                b':' => out.extend_from_slice(b": "),
+                _ => out.push(b),
             }
-            b':' => out.extend_from_slice(b": "),
-            _ => out.push(b),
         }
     }
 }
@@ -560,6 +592,24 @@ mod tests {
         }
         let s = "Temperature · drive \"q\" \\ \u{1b}[31m ok";
         assert_eq!(json_str(s), serde_json::to_string(s).unwrap());
+    }
+
+    #[test]
+    fn pretty_in_chunks_equals_pretty_at_once() {
+        let compact = br#"{"a":[],"b":{},"c":[1,{"d":"x,\"y[]"}],"e":{"f":[]}}"#;
+        let mut whole = Vec::new();
+        pretty(compact, 1, &mut whole);
+        for split in 0..=compact.len() {
+            let mut p = Pretty::new(1);
+            let mut got = Vec::new();
+            p.feed(&compact[..split], &mut got);
+            p.feed(&compact[split..], &mut got);
+            assert_eq!(
+                String::from_utf8_lossy(&got),
+                String::from_utf8_lossy(&whole),
+                "split at {split}"
+            );
+        }
     }
 
     #[test]

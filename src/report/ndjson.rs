@@ -52,7 +52,13 @@ impl<W: Write> Renderer for Ndjson<W> {
             let mut merge = input.history.merge();
             for node in &input.nodes {
                 let errors = merge.node_errors(&node.channel, node.node);
-                self.json.node(&mut self.buf, input, node, errors);
+                let out = &mut self.out;
+                self.json
+                    .node(&mut self.buf, input, node, errors, &mut |part| {
+                        out.write_all(part)?;
+                        part.clear();
+                        Ok(())
+                    })?;
                 self.line()?;
             }
             if let Some(e) = merge.take_error() {
