@@ -361,7 +361,7 @@ fn check_emcy_event(v: &Value, plain: bool) {
     let cleared = codes(&v["cleared"]);
     let data = v["data"].as_str().expect("data");
     assert!(
-        (6..=16).contains(&data.len()) && data.len() % 2 == 0,
+        (6..=16).contains(&data.len()) && data.len().is_multiple_of(2),
         "EMCY data has 3 to 8 bytes: {v}"
     );
     assert!(

@@ -73,10 +73,11 @@ impl History {
             interval,
         });
         self.len += 1;
-        if self.buffer.len() >= self.spill_at && self.spill_error.is_none() {
-            if let Err(e) = self.spill() {
-                self.spill_error = Some(e.to_string());
-            }
+        if self.buffer.len() >= self.spill_at
+            && self.spill_error.is_none()
+            && let Err(e) = self.spill()
+        {
+            self.spill_error = Some(e.to_string());
         }
     }
 
@@ -126,10 +127,12 @@ impl History {
         self.buffer.extend(open);
         // A small remainder stays in memory; a large one goes to disk too,
         // so many inputs do not each keep a full buffer.
-        if self.file.is_some() && self.buffer.len() > 1024 && self.spill_error.is_none() {
-            if let Err(e) = self.spill() {
-                self.spill_error = Some(e.to_string());
-            }
+        if self.file.is_some()
+            && self.buffer.len() > 1024
+            && self.spill_error.is_none()
+            && let Err(e) = self.spill()
+        {
+            self.spill_error = Some(e.to_string());
         }
         Self::sort(&self.names, &mut self.buffer);
         ErrorHistory {

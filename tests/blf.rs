@@ -611,7 +611,7 @@ fn forced_blf_on_text_is_an_error_and_text_formats_ignore_blf() {
 fn as_object(f: &TestFrame, style: u8, ch: u8, h: Header, ticks: u64) -> Vec<u8> {
     let (k, p) = match f.kind {
         FrameKind::Error => error_ext(u16::from(ch)),
-        FrameKind::Fd if style % 2 == 0 => {
+        FrameKind::Fd if style.is_multiple_of(2) => {
             fd_message(u16::from(ch), f.id, f.extended, true, &f.data)
         }
         FrameKind::Fd => fd64(ch, f.id, f.extended, true, false, &f.data),

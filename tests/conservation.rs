@@ -332,7 +332,11 @@ fn garbage_bytes(g: &Garbage, style: &Style) -> Vec<u8> {
         Garbage::TooLong { frame, len } => {
             let mut v = render(frame, style).1.into_bytes();
             while v.len() < *len {
-                v.push(if v.len() % 2 == 0 { b' ' } else { b'\t' });
+                v.push(if v.len().is_multiple_of(2) {
+                    b' '
+                } else {
+                    b'\t'
+                });
             }
             v
         }

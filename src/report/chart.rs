@@ -417,12 +417,13 @@ struct Clusters {
 
 impl Clusters {
     fn push(&mut self, v: f64, at: At) {
-        if let Some(last) = self.items.last_mut() {
-            if v >= last.lo && v <= last.hi {
-                last.count += 1;
-                last.last = at;
-                return;
-            }
+        if let Some(last) = self.items.last_mut()
+            && v >= last.lo
+            && v <= last.hi
+        {
+            last.count += 1;
+            last.last = at;
+            return;
         }
         self.items.push(Cluster {
             lo: v,
@@ -597,10 +598,10 @@ impl Bar {
                 self.last_end = Some(end);
             }
         }
-        if let Some(i) = cleared_index(iv.cleared_by) {
-            if let Some(n) = self.cleared.get_mut(i) {
-                *n += 1;
-            }
+        if let Some(i) = cleared_index(iv.cleared_by)
+            && let Some(n) = self.cleared.get_mut(i)
+        {
+            *n += 1;
         }
         if let Some((_, n)) = self.codes.iter_mut().find(|(c, _)| *c == iv.code) {
             *n += 1;

@@ -443,14 +443,14 @@ fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Frame<'a>, Reas
         if body.errorframe && !is_error {
             return Err("ERRORFRAME on a frame without the error flag 0x20000000".into());
         }
-        if let Some(column) = body.ascii {
-            if !ascii_matches(column, shown) {
-                return Err(format!(
-                    "ASCII column '{}' does not match the data bytes",
-                    show(column)
-                )
-                .into());
-            }
+        if let Some(column) = body.ascii
+            && !ascii_matches(column, shown)
+        {
+            return Err(format!(
+                "ASCII column '{}' does not match the data bytes",
+                show(column)
+            )
+            .into());
         }
         if wanted {
             // `-S` printed the last byte first.
@@ -562,7 +562,7 @@ fn parse_date(text: &[u8]) -> Result<Timestamp, Reason> {
 }
 
 fn is_leap(year: u64) -> bool {
-    year % 4 == 0 && (year % 100 != 0 || year % 400 == 0)
+    year.is_multiple_of(4) && (!year.is_multiple_of(100) || year.is_multiple_of(400))
 }
 
 /// Days from 1970-01-01 to the given civil (proleptic Gregorian) date;

@@ -579,7 +579,7 @@ fn start_time(value: &[u8]) -> Result<Option<(u128, u8)>, Reason> {
     // The digits the exact value needs (trailing zeros dropped).
     let mut digits = 18u8;
     let mut rest = total % ATTO;
-    while digits > 0 && rest % 10 == 0 {
+    while digits > 0 && rest.is_multiple_of(10) {
         rest /= 10;
         digits -= 1;
     }
