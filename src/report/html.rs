@@ -7,6 +7,7 @@
 //! listed and a note says how many more were left out (the chart still
 //! draws all of them; `--format table` or `ndjson` list every event).
 
+use super::table::codes_list;
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
@@ -107,14 +108,6 @@ d=(!isNaN(nx)&&!isNaN(ny)&&String(nx)===x&&String(ny)===y)?nx-ny:x.localeCompare
 rows.forEach(function(r){tb.appendChild(r);});});});
 apply();});
 ";
-
-fn codes_list(codes: &[u16]) -> String {
-    codes
-        .iter()
-        .map(|c| format!("0x{c:04X}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
 
 fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
     s.push_str("<section class=\"input\">\n<div class=\"chart\">\n");

@@ -332,7 +332,7 @@ fn pad_to(s: &mut String, width: usize) {
     }
 }
 
-fn codes_list(codes: &[u16]) -> String {
+pub(crate) fn codes_list(codes: &[u16]) -> String {
     codes
         .iter()
         .map(|c| format!("0x{c:04X}"))

@@ -341,17 +341,7 @@ impl TrcParser {
             return Ok(Some(error_frame(time()?, channel)));
         }
         if data == [&b"RTR"[..]] {
-            let t = time()?;
-            let wanted = interest.wants(id, extended);
-            return Ok(Some(Frame {
-                time: wanted.then_some(t),
-                channel,
-                id,
-                extended,
-                kind: FrameKind::Remote,
-                len: 0,
-                data: Payload::new(),
-            }));
+            return Ok(Some(remote_frame(time()?, channel, id, extended, interest)));
         }
         frame(
             time,
@@ -411,16 +401,7 @@ impl TrcParser {
             if !data.is_empty() {
                 return Err("a remote request carries no data".into());
             }
-            let t = time()?;
-            return Ok(Some(Frame {
-                time: interest.wants(id, extended).then_some(t),
-                channel,
-                id,
-                extended,
-                kind: FrameKind::Remote,
-                len: 0,
-                data: Payload::new(),
-            }));
+            return Ok(Some(remote_frame(time()?, channel, id, extended, interest)));
         }
         frame(
             time,
@@ -848,5 +829,24 @@ mod tests {
     fn fuzz_body_survives_odd_input() {
         fuzz_trc(b";$FILEVERSION=2.1\n;$COLUMNS=O,T,I,L,D\n1 DT 81 15 00\n\xff\x00)\n");
         fuzz_trc(b";$STARTTIME=999999999.999999999999999999\n1) 9999999999999999999.999999999999999 0081 0\n");
+    }
+}
+
+/// A remote request; its time is kept only for wanted ids, like data frames.
+fn remote_frame<'a>(
+    t: Timestamp,
+    channel: &'a [u8],
+    id: u32,
+    extended: bool,
+    interest: &Interest,
+) -> Frame<'a> {
+    Frame {
+        time: interest.wants(id, extended).then_some(t),
+        channel,
+        id,
+        extended,
+        kind: FrameKind::Remote,
+        len: 0,
+        data: Payload::new(),
     }
 }
