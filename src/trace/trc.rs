@@ -607,6 +607,25 @@ pub fn fuzz_trc(data: &[u8]) {
     }
 }
 
+/// A remote request; its time is kept only for wanted ids, like data frames.
+fn remote_frame<'a>(
+    t: Timestamp,
+    channel: &'a [u8],
+    id: u32,
+    extended: bool,
+    interest: &Interest,
+) -> Frame<'a> {
+    Frame {
+        time: interest.wants(id, extended).then_some(t),
+        channel,
+        id,
+        extended,
+        kind: FrameKind::Remote,
+        len: 0,
+        data: Payload::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -829,24 +848,5 @@ mod tests {
     fn fuzz_body_survives_odd_input() {
         fuzz_trc(b";$FILEVERSION=2.1\n;$COLUMNS=O,T,I,L,D\n1 DT 81 15 00\n\xff\x00)\n");
         fuzz_trc(b";$STARTTIME=999999999.999999999999999999\n1) 9999999999999999999.999999999999999 0081 0\n");
-    }
-}
-
-/// A remote request; its time is kept only for wanted ids, like data frames.
-fn remote_frame<'a>(
-    t: Timestamp,
-    channel: &'a [u8],
-    id: u32,
-    extended: bool,
-    interest: &Interest,
-) -> Frame<'a> {
-    Frame {
-        time: interest.wants(id, extended).then_some(t),
-        channel,
-        id,
-        extended,
-        kind: FrameKind::Remote,
-        len: 0,
-        data: Payload::new(),
     }
 }
