@@ -23,6 +23,7 @@ use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeR
 use crate::timeline::{At, NodeTimeline};
 use crate::trace::blf;
 use crate::trace::detect::Detector;
+use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::{Block, BlockReader, DEFAULT_BLOCK, RawLine};
 use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Timestamp};
 
@@ -808,6 +809,50 @@ impl<E: Write> Consumer<'_, '_, E> {
 }
 
 // ---- drivers ---------------------------------------------------------------------
+
+/// Opens one source and reads it to the end ([`analyze`]); what stops it
+/// (it cannot be opened, or reading failed part way) goes to the log as
+/// `error: NAME: reason`. `None` when the source could not be opened.
+/// `threads` picks the thread count from what was opened; `wrap` may wrap
+/// the (decompressed) reader, e.g. to count progress.
+pub fn analyze_source<E: Write>(
+    source: &Source,
+    mode: ReadMode,
+    opts: &Options,
+    threads: impl FnOnce(&Opened) -> usize,
+    wrap: impl FnOnce(&Opened, Box<dyn Read + Send>) -> Box<dyn Read + Send>,
+    renderer: &mut dyn Renderer,
+    log: &mut DiagnosticLog<E>,
+) -> Result<Option<Analysis>, OutputError> {
+    let name = source.display_name();
+    let mut opened = match input::open_as(source, mode) {
+        Ok(o) => o,
+        Err(e) => {
+            log.error(&format!("{name}: {}", describe_io(&e)));
+            return Ok(None);
+        }
+    };
+    let input_opts = Options {
+        threads: threads(&opened),
+        ..opts.clone()
+    };
+    let reader = std::mem::replace(&mut opened.reader, Box::new(io::empty()));
+    let reader = wrap(&opened, reader);
+    let analysis = analyze(&name, reader, opened.gzip, &input_opts, renderer, log)?;
+    if let Some(err) = &analysis.report.error {
+        log.error(&format!("{name}: {err}"));
+    }
+    Ok(Some(analysis))
+}
+
+/// `No such file or directory` without Rust's `(os error 2)` suffix.
+pub fn describe_io(e: &io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text.get(..i).unwrap_or(&text).to_string(),
+        None => text,
+    }
+}
 
 /// Reads one input to the end and reports it.
 pub fn analyze<R: Read + Send, E: Write>(

@@ -24,7 +24,7 @@ use crate::cli::{InputFormat, parse_emcy_id, parse_node};
 use crate::report::table::printable;
 use crate::report::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 use crate::run::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK};
-use crate::trace::input::{self, Source};
+use crate::trace::input::{ReadMode, Source};
 
 /// The `baseline_version` this build writes and reads.
 pub const VERSION: u32 = 1;
@@ -384,32 +384,21 @@ fn read_traces(args: &TraceArgs) -> Result<Option<Vec<(String, InputReport)>>> {
     let mut failed = false;
     for arg in &args.traces {
         let source = Source::from_arg(arg);
-        let name = source.display_name();
-        let opened = match input::open(&source) {
-            Ok(o) => o,
-            Err(e) => {
-                log.error(&format!("{name}: {}", crate::batch::describe_io(&e)));
-                failed = true;
-                continue;
-            }
-        };
-        let input_opts = Options {
-            threads: crate::run::auto_threads(&opened),
-            ..opts.clone()
-        };
-        let analysis = analyze::analyze(
-            &name,
-            opened.reader,
-            opened.gzip,
-            &input_opts,
+        let analysis = analyze::analyze_source(
+            &source,
+            ReadMode::Finite,
+            &opts,
+            crate::run::auto_threads,
+            |_, reader| reader,
             &mut Discard,
             &mut log,
         )
         .map_err(|OutputError(e)| anyhow::Error::from(e))?;
-        if let Some(err) = &analysis.report.error {
-            log.error(&format!("{name}: {err}"));
+        let Some(analysis) = analysis else {
             failed = true;
-        }
+            continue;
+        };
+        failed |= analysis.report.error.is_some();
         reports.push((trace_key(arg, cwd.as_deref()), analysis.report));
     }
     Ok((!failed).then_some(reports))
@@ -471,7 +460,7 @@ pub fn baseline_command(args: &BaselineArgs) -> Result<ExitCode> {
 pub fn check_command(args: &CheckArgs) -> Result<ExitCode> {
     let name = args.baseline.display();
     let text = std::fs::read_to_string(&args.baseline)
-        .map_err(|e| anyhow::anyhow!("{name}: {}", crate::batch::describe_io(&e)))?;
+        .map_err(|e| anyhow::anyhow!("{name}: {}", analyze::describe_io(&e)))?;
     let old = Baseline::from_json(&text).with_context(|| name.to_string())?;
     let Some(reports) = read_traces(&args.read)? else {
         return Ok(ExitCode::from(EXIT_ERROR));

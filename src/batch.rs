@@ -18,7 +18,7 @@ use crate::profile_choice::Chosen;
 use crate::report::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
 use crate::timeline::State;
 use crate::trace::Timestamp;
-use crate::trace::input::{self, Source};
+use crate::trace::input::{ReadMode, Source};
 
 /// One event, owned.
 enum Recorded {
@@ -177,34 +177,20 @@ impl FileResult {
 
 /// Analyses one file completely, recording its output.
 fn record(source: &Source, opts: &Options) -> FileResult {
-    let name = source.display_name();
     let mut log = DiagnosticLog::new(Vec::new());
     let mut recorder = Recorder::default();
-    let analysis = match input::open(source) {
-        Err(e) => {
-            log.error(&format!("{name}: {}", describe_io(&e)));
-            None
-        }
-        Ok(opened) => {
-            let opts = Options {
-                threads: 1,
-                ..opts.clone()
-            };
-            // A Recorder never fails to write.
-            analyze::analyze(
-                &name,
-                opened.reader,
-                opened.gzip,
-                &opts,
-                &mut recorder,
-                &mut log,
-            )
-            .ok()
-        }
-    };
-    if let Some(Some(err)) = analysis.as_ref().map(|a| a.report.error.as_ref()) {
-        log.error(&format!("{name}: {err}"));
-    }
+    // A Recorder never fails to write.
+    let analysis = analyze::analyze_source(
+        source,
+        ReadMode::Finite,
+        opts,
+        |_| 1,
+        |_, reader| reader,
+        &mut recorder,
+        &mut log,
+    )
+    .ok()
+    .flatten();
     let diagnostics = std::mem::take(&mut log.collected);
     FileResult {
         events: recorder.events,
@@ -270,13 +256,4 @@ pub fn run_parallel(
         drop(ticket_tx);
         result
     })
-}
-
-/// `No such file or directory` without Rust's `(os error 2)` suffix.
-pub fn describe_io(e: &io::Error) -> String {
-    let text = e.to_string();
-    match text.find(" (os error") {
-        Some(i) => text[..i].to_string(),
-        None => text,
-    }
 }

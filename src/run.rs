@@ -306,33 +306,26 @@ fn decode_all(
         }
         let source = &sources[i];
         i += 1;
-        let name = source.display_name();
-        let opened = match input::open_as(source, how.mode) {
-            Ok(o) => o,
-            Err(e) => {
-                log.error(&format!("{name}: {}", batch::describe_io(&e)));
-                open_failures += 1;
-                continue;
-            }
-        };
-        let input_opts = Options {
-            threads: how.threads_for(&opened),
-            ..opts.clone()
-        };
-        let bar = progress_bar(how, opened.size.filter(|_| !opened.gzip));
-        let reader: Box<dyn io::Read + Send> = match &bar {
-            Some(bar) => Box::new(bar.wrap_read(opened.reader)),
-            None => opened.reader,
-        };
-        let analysis = analyze::analyze(&name, reader, opened.gzip, &input_opts, renderer, log);
+        let mut bar = None;
+        let analysis = analyze::analyze_source(
+            source,
+            how.mode,
+            opts,
+            |opened| how.threads_for(opened),
+            |opened, reader| match progress_bar(how, opened.size.filter(|_| !opened.gzip)) {
+                Some(b) => Box::new(bar.insert(b).wrap_read(reader)),
+                None => reader,
+            },
+            renderer,
+            log,
+        );
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
-        let analysis = analysis?;
-        if let Some(err) = &analysis.report.error {
-            log.error(&format!("{name}: {err}"));
+        match analysis? {
+            Some(a) => analyses.push(a),
+            None => open_failures += 1,
         }
-        analyses.push(analysis);
     }
     let reports: Vec<InputReport> = analyses.iter().map(|a| a.report.clone()).collect();
     renderer
