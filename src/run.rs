@@ -165,9 +165,11 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         threads: args.threads,
         live,
         mode,
-        progress: !args.quiet
-            && io::stderr().is_terminal()
-            && std::env::var_os("CI").is_none_or(|v| v.is_empty()),
+        progress: progress_allowed(
+            args.quiet,
+            io::stderr().is_terminal(),
+            std::env::var_os("CI").as_deref(),
+        ),
     };
 
     let result = decode_all(&sources, &opts, how, renderer.as_mut(), &mut log);
@@ -350,6 +352,12 @@ fn progress_bar(how: HowToRead, size: Option<u64>) -> Option<indicatif::Progress
     Some(bar)
 }
 
+/// Progress bars only for a person at a terminal: not with --quiet, not
+/// into a pipe or file, not in CI (`CI` set and not empty).
+fn progress_allowed(quiet: bool, stderr_is_terminal: bool, ci: Option<&std::ffi::OsStr>) -> bool {
+    !quiet && stderr_is_terminal && ci.is_none_or(|v| v.is_empty())
+}
+
 /// A progress bar only where someone watches: allowed (terminal, not CI,
 /// not --quiet) and a file big enough to wait for.
 fn wants_progress(allowed: bool, size: u64) -> bool {
@@ -423,4 +431,25 @@ pub fn fail_on_met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
 
 fn plural(n: u64) -> &'static str {
     if n == 1 { "" } else { "s" }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::ffi::OsStr;
+
+    #[test]
+    fn progress_only_for_big_files_on_a_terminal_outside_ci_without_quiet() {
+        assert!(progress_allowed(false, true, None));
+        assert!(progress_allowed(false, true, Some(OsStr::new(""))));
+        assert!(!progress_allowed(true, true, None), "--quiet");
+        assert!(!progress_allowed(false, false, None), "a pipe");
+        assert!(
+            !progress_allowed(false, true, Some(OsStr::new("true"))),
+            "CI"
+        );
+        assert!(wants_progress(true, PROGRESS_MIN_BYTES));
+        assert!(!wants_progress(true, PROGRESS_MIN_BYTES - 1));
+        assert!(!wants_progress(false, u64::MAX));
+    }
 }
