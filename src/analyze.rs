@@ -157,16 +157,13 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard_range(emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127);
-    i.add_standard_range(SDO_RESPONSE_BASE + 1..=SDO_RESPONSE_BASE + 127);
-    i.add_standard_range(SDO_REQUEST_BASE + 1..=SDO_REQUEST_BASE + 127);
+    i.add_standard_range(sdo::RESPONSE_BASE + 1..=sdo::RESPONSE_BASE + 127);
+    i.add_standard_range(sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127);
     for e in &opts.emcy_ids {
         add_id(&mut i, e.id, e.extended);
     }
     i
 }
-
-const SDO_RESPONSE_BASE: u32 = sdo::RESPONSE_BASE;
-const SDO_REQUEST_BASE: u32 = sdo::REQUEST_BASE;
 
 fn add_id(interest: &mut Interest, id: u32, extended: bool) {
     if extended {
@@ -178,9 +175,7 @@ fn add_id(interest: &mut Interest, id: u32, extended: bool) {
 
 /// An SDO request or response naming object 0x1014 (COB-ID EMCY).
 fn is_cob_id_emcy_access(frame: &Frame<'_>) -> bool {
-    let sdo = (SDO_RESPONSE_BASE + 1..=SDO_RESPONSE_BASE + 127).contains(&frame.id)
-        || (SDO_REQUEST_BASE + 1..=SDO_REQUEST_BASE + 127).contains(&frame.id);
-    sdo && !frame.extended && frame.data.as_slice().get(1..3) == Some(&[0x14, 0x10])
+    !frame.extended && sdo::names_object(frame.id, frame.data.as_slice(), sdo::COB_ID_EMCY)
 }
 
 /// The current interest and its generation, shared with workers: a block

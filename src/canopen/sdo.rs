@@ -50,6 +50,14 @@ const SCS_UPLOAD_INITIATE: u8 = 2;
 const SCS_DOWNLOAD_INITIATE: u8 = 3;
 const CS_ABORT: u8 = 4;
 
+/// Whether an SDO frame (request or response, any command) names `index`:
+/// a cheap test for frames that may change a value the decoder follows.
+pub fn names_object(id: u32, data: &[u8], index: u16) -> bool {
+    let sdo_id = (RESPONSE_BASE + 1..=RESPONSE_BASE + 127).contains(&id)
+        || (REQUEST_BASE + 1..=REQUEST_BASE + 127).contains(&id);
+    sdo_id && data.get(1..3) == Some(&index.to_le_bytes()[..])
+}
+
 /// Reads an SDO frame on a standard id; `None` for anything that is not an
 /// SDO id or not a frame this module tracks.
 pub fn parse(id: u32, data: &[u8]) -> Option<Sdo> {
@@ -256,6 +264,15 @@ mod tests {
         assert_eq!(t.feed(other), None);
         let other_node = parse(0x586, &[0x60, 0x14, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
         assert_eq!(t.feed(other_node), None);
+    }
+
+    #[test]
+    fn names_object_looks_at_the_index_of_sdo_ids_only() {
+        assert!(names_object(0x605, &[0x23, 0x14, 0x10, 0], COB_ID_EMCY));
+        assert!(names_object(0x585, &[0x80, 0x14, 0x10], COB_ID_EMCY));
+        assert!(!names_object(0x585, &[0x43, 0x18, 0x10, 1], COB_ID_EMCY));
+        assert!(!names_object(0x085, &[0x23, 0x14, 0x10, 0], COB_ID_EMCY));
+        assert!(!names_object(0x605, &[0x23, 0x14], COB_ID_EMCY));
     }
 
     #[test]
