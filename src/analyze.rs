@@ -25,7 +25,7 @@ use crate::trace::blf;
 use crate::trace::detect::Detector;
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::{Block, BlockReader, DEFAULT_BLOCK, RawLine};
-use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Timestamp};
+use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Scan, Timestamp};
 
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
@@ -165,6 +165,53 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     i
 }
 
+/// The ids whose frames are decoded ([`interest`]), and which of them are
+/// EMCY ids other than the pre-defined 0x80 + node (`--emcy-id`, or moved by
+/// object 0x1014): those are decoded as EMCY whatever range they are in.
+#[derive(Clone, Debug)]
+pub(crate) struct Wanted {
+    pub ids: Interest,
+    other_emcy: Interest,
+}
+
+impl Wanted {
+    fn new(opts: &Options) -> Self {
+        let mut other_emcy = Interest::none();
+        for e in &opts.emcy_ids {
+            add_id(&mut other_emcy, e.id, e.extended);
+        }
+        Wanted {
+            ids: interest(opts),
+            other_emcy,
+        }
+    }
+
+    fn add_emcy(&mut self, id: u32, extended: bool) {
+        add_id(&mut self.ids, id, extended);
+        add_id(&mut self.other_emcy, id, extended);
+    }
+
+    /// Whether a data frame on a wanted id can change more than the input's
+    /// first and last time: EMCY frames always; on the NMT error control ids
+    /// only boot-ups, on the SDO ids only frames naming an object the
+    /// decoder follows. Most frames on those ids are heartbeats and SDO
+    /// traffic for other objects; they skip the consumer's work.
+    #[inline]
+    fn matters(&self, frame: &Frame<'_>) -> bool {
+        if frame.extended || self.other_emcy.wants(frame.id, false) {
+            return true;
+        }
+        let data = frame.data.as_slice();
+        if emcy::is_nmt_error_control(frame.id) {
+            emcy::boot_node(frame.id, data).is_some()
+        } else if sdo::is_sdo_id(frame.id) {
+            sdo::names_followed_object(frame.id, data)
+        } else {
+            true
+        }
+    }
+}
+
 fn add_id(interest: &mut Interest, id: u32, extended: bool) {
     if extended {
         interest.add_extended(id);
@@ -178,9 +225,9 @@ fn is_cob_id_emcy_access(frame: &Frame<'_>) -> bool {
     !frame.extended && sdo::names_object(frame.id, frame.data.as_slice(), sdo::COB_ID_EMCY)
 }
 
-/// The current interest and its generation, shared with workers: a block
+/// The current wanted ids and their generation, shared with workers: a block
 /// parsed with an older generation is parsed again in order.
-type SharedInterest = Arc<RwLock<(u64, Interest)>>;
+type SharedInterest = Arc<RwLock<(u64, Wanted)>>;
 
 // ---- classification -----------------------------------------------------------
 
@@ -190,7 +237,7 @@ type Foreign = Option<(Format, Format)>;
 /// Receives classified lines; `idx` is the line's 0-based index in its block.
 trait LineSink {
     /// The ids to decode now (the consumer's can change mid-input).
-    fn interest(&self) -> &Interest;
+    fn wanted(&self) -> &Wanted;
     /// A valid frame the consumer has no use for: counted only.
     fn plain_frame(&mut self);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
@@ -214,14 +261,17 @@ fn classify_block(
     for raw in block.lines(max_line) {
         match raw {
             RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
-            RawLine::Text(text) if detector.quick(text, sink.interest()) => sink.plain_frame(),
-            RawLine::Text(text) => match detector.parse(text, sink.interest()) {
-                Parsed::Frame(frame) => {
-                    let foreign = detector.take_foreign().zip(detector.format());
-                    sink.frame(idx, &frame, foreign)?;
-                }
-                Parsed::Skipped => sink.skipped(),
-                Parsed::Malformed(reason) => sink.malformed(idx, reason),
+            RawLine::Text(text) => match detector.scan(text, &sink.wanted().ids) {
+                Scan::Plain => sink.plain_frame(),
+                Scan::Frame(frame) => sink.frame(idx, &frame, None)?,
+                Scan::Parse => match detector.parse(text, &sink.wanted().ids) {
+                    Parsed::Frame(frame) => {
+                        let foreign = detector.take_foreign().zip(detector.format());
+                        sink.frame(idx, &frame, foreign)?;
+                    }
+                    Parsed::Skipped => sink.skipped(),
+                    Parsed::Malformed(reason) => sink.malformed(idx, reason),
+                },
             },
         }
         idx += 1;
@@ -425,7 +475,7 @@ struct Consumer<'r, 'l, E: Write> {
     /// First and last time of a decoded frame.
     first_time: Option<Timestamp>,
     last_time: Option<Timestamp>,
-    interest: Interest,
+    wanted: Wanted,
     interest_gen: u64,
     /// Set while workers run: where they read the interest from.
     shared_interest: Option<SharedInterest>,
@@ -466,13 +516,19 @@ impl<E: Write> Consumer<'_, '_, E> {
         if self.emcy_ids.insert((id, extended), node) == Some(node) {
             return;
         }
-        add_id(&mut self.interest, id, extended);
+        self.wanted.add_emcy(id, extended);
         self.interest_gen += 1;
         if let Some(shared) = &self.shared_interest
             && let Ok(mut w) = shared.write()
         {
-            *w = (self.interest_gen, self.interest.clone());
+            *w = (self.interest_gen, self.wanted.clone());
         }
+    }
+
+    /// A wanted frame's time: the input's first and last time.
+    fn time(&mut self, t: Timestamp) {
+        self.first_time.get_or_insert(t);
+        self.last_time = Some(t);
     }
 
     /// A time earlier than the previous EMCY's or boot-up's (two logs
@@ -498,8 +554,8 @@ impl<E: Write> Consumer<'_, '_, E> {
 }
 
 impl<E: Write> LineSink for Consumer<'_, '_, E> {
-    fn interest(&self) -> &Interest {
-        &self.interest
+    fn wanted(&self) -> &Wanted {
+        &self.wanted
     }
 
     fn plain_frame(&mut self) {
@@ -543,11 +599,14 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         }
         // Only wanted ids count: workers may hand over frames the sequential
         // reader only counts, and the result must not depend on the path.
-        if let Some(t) = frame.time
-            && self.interest.wants(frame.id, frame.extended)
-        {
-            self.first_time.get_or_insert(t);
-            self.last_time = Some(t);
+        if !self.wanted.ids.wants(frame.id, frame.extended) {
+            return Ok(());
+        }
+        if let Some(t) = frame.time {
+            self.time(t);
+        }
+        if !self.wanted.matters(frame) {
+            return Ok(());
         }
         let at = At {
             time: frame.time,
@@ -674,6 +733,9 @@ enum BlockRecord {
         idx: u64,
         reason: Reason,
     },
+    /// A wanted frame that only moves the input's first/last time (already
+    /// counted in `plain_frames`).
+    Time(Timestamp),
 }
 
 /// A worker's summary of one block.
@@ -701,15 +763,19 @@ struct BlockResult {
 
 /// The worker-side sink: keeps only what the consumer needs.
 struct Recorder {
-    interest: Interest,
+    wanted: Wanted,
+    /// Frames that only move the input's first/last time are collapsed: the
+    /// block's first one is recorded, of each later run only the last.
+    time_kept: bool,
+    time_pending: Option<Timestamp>,
     limit: usize,
     result: BlockResult,
     malformed_kept: usize,
 }
 
 impl LineSink for Recorder {
-    fn interest(&self) -> &Interest {
-        &self.interest
+    fn wanted(&self) -> &Wanted {
+        &self.wanted
     }
 
     fn plain_frame(&mut self) {
@@ -739,11 +805,24 @@ impl LineSink for Recorder {
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         let candidate =
-            frame.kind == FrameKind::Data && self.interest.wants(frame.id, frame.extended);
+            frame.kind == FrameKind::Data && self.wanted.ids.wants(frame.id, frame.extended);
         if !candidate && foreign.is_none() {
             self.result.plain_frames += 1;
             return Ok(());
         }
+        if candidate && foreign.is_none() && !self.wanted.matters(frame) {
+            self.result.plain_frames += 1;
+            if let Some(t) = frame.time {
+                if self.time_kept {
+                    self.time_pending = Some(t);
+                } else {
+                    self.time_kept = true;
+                    self.result.records.push(BlockRecord::Time(t));
+                }
+            }
+            return Ok(());
+        }
+        self.flush_time();
         if is_cob_id_emcy_access(frame) {
             self.result.moves_emcy_id = true;
         }
@@ -764,6 +843,16 @@ impl LineSink for Recorder {
     }
 }
 
+impl Recorder {
+    /// Records the last time of a run of time-only frames (before the next
+    /// frame record, and at the end of the block).
+    fn flush_time(&mut self) {
+        if let Some(t) = self.time_pending.take() {
+            self.result.records.push(BlockRecord::Time(t));
+        }
+    }
+}
+
 impl<E: Write> Consumer<'_, '_, E> {
     /// Replays a worker's block result as if its lines had been read here.
     fn replay(&mut self, r: BlockResult) -> Result<Block, OutputError> {
@@ -774,6 +863,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         for record in r.records {
             match record {
                 BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
+                BlockRecord::Time(t) => self.time(t),
                 BlockRecord::Frame {
                     idx,
                     time,
@@ -890,7 +980,7 @@ pub fn analyze<R: Read + Send, E: Write>(
             .iter()
             .map(|e| ((e.id, e.extended), e.node))
             .collect(),
-        interest: interest(opts),
+        wanted: Wanted::new(opts),
         interest_gen: 0,
         shared_interest: None,
         warnings: Vec::new(),
@@ -953,7 +1043,7 @@ fn read_blf<R: Read, E: Write>(
     loop {
         match reader.next_object() {
             Ok(Some(Parsed::Frame(f))) => {
-                if f.kind == FrameKind::Data && !consumer.interest.wants(f.id, f.extended) {
+                if f.kind == FrameKind::Data && !consumer.wanted.ids.wants(f.id, f.extended) {
                     consumer.plain_frame();
                 } else {
                     consumer.frame(0, &f, None)?;
@@ -1047,7 +1137,7 @@ fn parallel<R: Read + Send, E: Write>(
     let mut current = detector;
     let shared: SharedInterest = Arc::new(RwLock::new((
         consumer.interest_gen,
-        consumer.interest.clone(),
+        consumer.wanted.clone(),
     )));
     consumer.shared_interest = Some(Arc::clone(&shared));
     let outcome = std::thread::scope(|scope| {
@@ -1108,12 +1198,14 @@ fn parallel<R: Read + Send, E: Write>(
             scope.spawn(move || {
                 while let Some((seq, block)) = next_job(&rx) {
                     let start_context = det.context();
-                    let Ok((interest_gen, interest)) = shared.read().map(|g| g.clone()) else {
+                    let Ok((interest_gen, wanted)) = shared.read().map(|g| g.clone()) else {
                         return;
                     };
                     let mut rec = Recorder {
-                        interest,
+                        wanted,
                         limit,
+                        time_kept: false,
+                        time_pending: None,
                         malformed_kept: 0,
                         result: BlockResult {
                             seq,
@@ -1132,6 +1224,7 @@ fn parallel<R: Read + Send, E: Write>(
                     };
                     // A recorder never fails: it only collects.
                     let _ = classify_block(&block, max_line, &mut det, &mut rec);
+                    rec.flush_time();
                     let mut result = rec.result;
                     result.end = det.fork();
                     result.block = block;

@@ -23,7 +23,7 @@ use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeR
 use crate::timeline::{At, ClearedBy, Interval, NodeTimeline, State, Step};
 use crate::trace::input::sniff_gzip;
 use crate::trace::lines::Block;
-use crate::trace::{Format, FrameKind, Interest, LineParser, Parsed, Timestamp};
+use crate::trace::{Format, FrameKind, Interest, LineParser, Parsed, Scan, Timestamp};
 
 // ---- readers: one trace through analyze ------------------------------------------
 
@@ -441,14 +441,15 @@ fn no_control_characters(what: &str, bytes: &[u8]) {
     }
 }
 
-/// Per line: the same classification whatever the interest, and the quick
-/// path only skips valid frames that are not wanted.
+/// Per line: the same classification whatever the interest, and the scan
+/// shortcut only skips valid frames that are not wanted and returns wanted
+/// ones exactly as `parse` does.
 fn lines_agree(format: Format, data: &[u8]) {
     let wanted = analyze::interest(&Options::default());
     let all = Interest::all();
     let mut p_all = format.parser();
     let mut p_wanted = format.parser();
-    let mut p_quick = format.parser();
+    let mut p_scan = format.parser();
     let block = Block {
         bytes: data.to_vec(),
         too_long_before: None,
@@ -460,11 +461,10 @@ fn lines_agree(format: Format, data: &[u8]) {
         };
         let a = p_all.parse(line, &all);
         let w = p_wanted.parse(line, &wanted);
-        let quick = p_quick.quick(line, &wanted);
-        let q = if quick {
-            None
-        } else {
-            Some(p_quick.parse(line, &wanted))
+        let q = match p_scan.scan(line, &wanted) {
+            Scan::Plain => None,
+            Scan::Frame(f) => Some(Parsed::Frame(f)),
+            Scan::Parse => Some(p_scan.parse(line, &wanted)),
         };
         let shown = || String::from_utf8_lossy(line).into_owned();
         match (&a, &w) {
@@ -490,18 +490,18 @@ fn lines_agree(format: Format, data: &[u8]) {
         match q {
             None => {
                 let Parsed::Frame(f) = &a else {
-                    panic!("quick skipped a line that is not a frame: {:?}", shown());
+                    panic!("scan skipped a line that is not a frame: {:?}", shown());
                 };
                 assert!(
-                    !(f.kind == FrameKind::Data && wanted.wants(f.id, f.extended)),
-                    "quick skipped a wanted frame: {:?}",
+                    !wanted.wants(f.id, f.extended),
+                    "scan skipped a wanted frame: {:?}",
                     shown()
                 );
             }
-            Some(q) => assert_eq!(q, w, "quick then parse = parse: {:?}", shown()),
+            Some(q) => assert_eq!(q, w, "scan (then parse) = parse: {:?}", shown()),
         }
         assert_eq!(p_all.context(), p_wanted.context(), "{:?}", shown());
-        assert_eq!(p_all.context(), p_quick.context(), "{:?}", shown());
+        assert_eq!(p_all.context(), p_scan.context(), "{:?}", shown());
     }
 }
 

@@ -265,3 +265,39 @@ fn emcy_id_moved_by_sdo_mid_trace() {
     assert_eq!(on_moved, 298, "EMCYs on 0x3F5 after the write");
     assert_split_independent("moved emcy id", &trace);
 }
+
+/// Heartbeats and SDO traffic for objects the decoder does not follow only
+/// move the input's first and last time (workers collapse them); the SDO
+/// upload of a vendor id still chooses the profile. Here they come first and
+/// last, and in runs across block boundaries (issue 4).
+#[test]
+fn heartbeats_and_other_sdo_traffic_only_move_the_time_span() {
+    let mut t = Vec::new();
+    t.extend(b"(999.250000) can0 705#05\n");
+    for i in 0..400u32 {
+        let time = format!("({}.{:06})", 1000 + i / 10, i);
+        let line = match i % 8 {
+            0 => format!("{time} can0 705#05\n"),
+            1 => format!("{time} can0 605#4000600000000000\n"),
+            2 => format!("{time} can0 585#4B00600000020000\n"),
+            3 if i == 3 => format!("{time} can0 585#43181001B9000000\n"),
+            4 => format!("{time} can0 085#1043090100000000\n"),
+            5 => format!("{time} can0 085#0000000000000000\n"),
+            6 if i % 48 == 6 => format!("{time} can0 705#00\n"),
+            _ => format!("{time} can0 183#0102\n"),
+        };
+        t.extend(line.bytes());
+    }
+    t.extend(b"(2000.125000) can0 605#2340600006000000\n");
+    assert_split_independent("heartbeats", &t);
+    let (out, _) = run(&t, 2, 64);
+    assert!(
+        out.contains("\"first_time\":999.250000,\"last_time\":2000.125000"),
+        "{out}"
+    );
+    assert!(
+        out.contains("\"profile\":\"stoeber\""),
+        "vendor id 0xB9 read"
+    );
+    assert!(out.contains("\"type\":\"boot\""));
+}

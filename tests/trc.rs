@@ -10,7 +10,7 @@ use std::path::Path;
 use common::emcy_decode;
 use common::frames::*;
 use emcy_decode::trace::detect::Detector;
-use emcy_decode::trace::{Format, FrameKind, Interest, Parsed};
+use emcy_decode::trace::{Format, FrameKind, Interest, Parsed, Scan};
 use proptest::prelude::*;
 use serde_json::Value;
 
@@ -277,7 +277,15 @@ proptest! {
             q.parse(h.as_bytes(), &Interest::all());
         }
         q.parse(row.as_bytes(), &Interest::all());
-        prop_assert!(q.quick(row.as_bytes(), &Interest::none()) || f.kind == FrameKind::Error);
+        prop_assert!(
+            q.fork().scan(row.as_bytes(), &Interest::none()) == Scan::Plain
+                || f.kind == FrameKind::Error
+        );
+        // And a wanted one comes back as the full parser reads it.
+        prop_assert_eq!(
+            q.fork().scan(row.as_bytes(), &Interest::all()),
+            Scan::Frame(got.clone())
+        );
     }
 
     /// Whatever the bytes, the reader classifies every line without a panic.

@@ -22,6 +22,11 @@ pub fn emcy_node(id: u32) -> Option<u8> {
         .then(|| (id - EMCY_BASE) as u8)
 }
 
+/// Whether `id` is a node's NMT error control id (0x701-0x77F).
+pub fn is_nmt_error_control(id: u32) -> bool {
+    (NMT_ERROR_CONTROL_BASE + 1..=NMT_ERROR_CONTROL_BASE + 127).contains(&id)
+}
+
 /// The node a boot-up frame (0x700 + node, one byte 0x00) announces.
 pub fn boot_node(id: u32, data: &[u8]) -> Option<u8> {
     let node = id.checked_sub(NMT_ERROR_CONTROL_BASE)?;

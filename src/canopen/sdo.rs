@@ -50,12 +50,35 @@ const SCS_UPLOAD_INITIATE: u8 = 2;
 const SCS_DOWNLOAD_INITIATE: u8 = 3;
 const CS_ABORT: u8 = 4;
 
+/// The objects whose values the decoder follows: device type and vendor id
+/// choose a node's profile, COB-ID EMCY moves its EMCY id. Frames naming
+/// any other object change nothing (the [`Tracker`] ignores them).
+pub const FOLLOWED: [u16; 3] = [DEVICE_TYPE, COB_ID_EMCY, IDENTITY];
+
+/// Whether `id` is a node's SDO request or response id.
+pub fn is_sdo_id(id: u32) -> bool {
+    (RESPONSE_BASE + 1..=RESPONSE_BASE + 127).contains(&id)
+        || (REQUEST_BASE + 1..=REQUEST_BASE + 127).contains(&id)
+}
+
+/// The object index an SDO frame's bytes 1-2 name (any command).
+fn named_index(data: &[u8]) -> Option<u16> {
+    match data {
+        [_, lo, hi, ..] => Some(u16::from_le_bytes([*lo, *hi])),
+        _ => None,
+    }
+}
+
 /// Whether an SDO frame (request or response, any command) names `index`:
 /// a cheap test for frames that may change a value the decoder follows.
 pub fn names_object(id: u32, data: &[u8], index: u16) -> bool {
-    let sdo_id = (RESPONSE_BASE + 1..=RESPONSE_BASE + 127).contains(&id)
-        || (REQUEST_BASE + 1..=REQUEST_BASE + 127).contains(&id);
-    sdo_id && data.get(1..3) == Some(&index.to_le_bytes()[..])
+    is_sdo_id(id) && named_index(data) == Some(index)
+}
+
+/// Whether an SDO frame names one of the [`FOLLOWED`] objects: only those
+/// can change what the decoder knows.
+pub fn names_followed_object(id: u32, data: &[u8]) -> bool {
+    is_sdo_id(id) && named_index(data).is_some_and(|i| FOLLOWED.contains(&i))
 }
 
 /// Reads an SDO frame on a standard id; `None` for anything that is not an
@@ -127,7 +150,10 @@ pub fn cob_id_emcy(value: u32) -> Option<(u32, bool)> {
 }
 
 /// Follows writes to their confirmation, per node: a value counts only once
-/// the node accepted it (or reported it in an upload).
+/// the node accepted it (or reported it in an upload). Only the
+/// [`FOLLOWED`] objects are tracked: a write to any other object neither
+/// counts nor drops a pending one (its confirmation names its object), so
+/// frames for other objects can be skipped without reading them.
 #[derive(Debug, Default)]
 pub struct Tracker {
     pending: Vec<(u8, Object, u32)>,
@@ -136,6 +162,13 @@ pub struct Tracker {
 impl Tracker {
     /// Feeds one SDO frame; returns an object value the node now holds.
     pub fn feed(&mut self, sdo: Sdo) -> Option<(u8, Object, u32)> {
+        let (Sdo::Uploaded { object, .. }
+        | Sdo::Writing { object, .. }
+        | Sdo::Written { object, .. }
+        | Sdo::Aborted { object, .. }) = sdo;
+        if !FOLLOWED.contains(&object.index) {
+            return None;
+        }
         match sdo {
             Sdo::Uploaded {
                 node,
@@ -264,6 +297,46 @@ mod tests {
         assert_eq!(t.feed(other), None);
         let other_node = parse(0x586, &[0x60, 0x14, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
         assert_eq!(t.feed(other_node), None);
+    }
+
+    #[test]
+    fn objects_not_followed_are_ignored() {
+        let mut t = Tracker::default();
+        let upload = parse(0x585, &[0x43, 0x00, 0x20, 0x00, 1, 0, 0, 0]).unwrap();
+        assert_eq!(t.feed(upload), None, "upload of 0x2000");
+        t.feed(parse(0x605, &[0x23, 0x14, 0x10, 0x00, 0xA5, 0, 0, 0]).unwrap());
+        // A write and an abort for another object leave the 0x1014 write pending.
+        t.feed(parse(0x605, &[0x23, 0x40, 0x60, 0x00, 0x0F, 0, 0, 0]).unwrap());
+        t.feed(parse(0x585, &[0x80, 0x40, 0x60, 0x00, 0, 0, 0x09, 0x06]).unwrap());
+        let ok = parse(0x585, &[0x60, 0x14, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
+        assert_eq!(t.feed(ok), Some((5, EMCY_OBJ, 0xA5)));
+        // Uploads of the followed objects count.
+        let vendor = parse(0x585, &[0x43, 0x18, 0x10, 0x01, 0x6A, 0, 0, 0]).unwrap();
+        assert_eq!(
+            t.feed(vendor),
+            Some((
+                5,
+                Object {
+                    index: IDENTITY,
+                    sub: 1
+                },
+                0x6A
+            ))
+        );
+    }
+
+    #[test]
+    fn followed_objects_are_recognised_by_their_index() {
+        assert!(names_followed_object(0x605, &[0x23, 0x14, 0x10, 0]));
+        assert!(names_followed_object(
+            0x581,
+            &[0x43, 0x00, 0x10, 0, 0, 0, 0, 0]
+        ));
+        assert!(names_followed_object(0x581, &[0x41, 0x18, 0x10, 2]));
+        assert!(!names_followed_object(0x581, &[0x43, 0x17, 0x10, 0]));
+        assert!(!names_followed_object(0x581, &[0x43, 0x00]));
+        assert!(!names_followed_object(0x081, &[0x43, 0x00, 0x10, 0]));
+        assert!(!names_followed_object(0x680, &[0x43, 0x00, 0x10, 0]));
     }
 
     #[test]

@@ -19,7 +19,7 @@
 
 use super::time::MAX_FRACTION_DIGITS;
 use super::{
-    Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp,
+    Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
     split_token, trim_end, trim_start,
 };
 use super::{hex, scan};
@@ -93,13 +93,20 @@ impl LineParser for AscParser {
     }
 
     #[inline]
-    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
-        match self.shape(line) {
-            Some(shape) if !interest.wants(shape.id, shape.extended) => {
+    fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        let Some(shape) = self.shape(line) else {
+            return Scan::Parse;
+        };
+        if !interest.wants(shape.id, shape.extended) {
+            self.now = shape.time;
+            return Scan::Plain;
+        }
+        match shape.frame(line, true) {
+            Some(frame) => {
                 self.now = shape.time;
-                true
+                Scan::Frame(frame)
             }
-            _ => false,
+            None => Scan::Parse,
         }
     }
 
@@ -134,6 +141,32 @@ struct AscShape {
     extended: bool,
     dlc: u8,
     data_start: usize,
+}
+
+impl AscShape {
+    /// The frame of the line the shape was taken from; data bytes are
+    /// converted only when `wanted`.
+    #[inline]
+    fn frame<'a>(&self, line: &'a [u8], wanted: bool) -> Option<Frame<'a>> {
+        let mut frame = Frame {
+            time: Some(self.time),
+            channel: line.get(self.channel.clone())?,
+            id: self.id,
+            extended: self.extended,
+            kind: FrameKind::Data,
+            len: self.dlc,
+            data: Payload::new(),
+        };
+        if wanted {
+            for k in 0..usize::from(self.dlc) {
+                let at = self.data_start + 3 * k;
+                frame
+                    .data
+                    .push(hex::parse_byte(*line.get(at + 1)?, *line.get(at + 2)?)?);
+            }
+        }
+        Some(frame)
+    }
 }
 
 /// Index after at least one blank following `at`; `None` when there is none.
@@ -208,23 +241,7 @@ impl AscParser {
     #[inline]
     fn canonical<'a>(&self, line: &'a [u8], interest: &Interest) -> Option<(Frame<'a>, Timestamp)> {
         let shape = self.shape(line)?;
-        let mut frame = Frame {
-            time: Some(shape.time),
-            channel: line.get(shape.channel)?,
-            id: shape.id,
-            extended: shape.extended,
-            kind: FrameKind::Data,
-            len: shape.dlc,
-            data: Payload::new(),
-        };
-        if interest.wants(shape.id, shape.extended) {
-            for k in 0..usize::from(shape.dlc) {
-                let at = shape.data_start + 3 * k;
-                frame
-                    .data
-                    .push(hex::parse_byte(*line.get(at + 1)?, *line.get(at + 2)?)?);
-            }
-        }
+        let frame = shape.frame(line, interest.wants(shape.id, shape.extended))?;
         Some((frame, shape.time))
     }
 
@@ -1046,20 +1063,29 @@ mod tests {
         use proptest::prelude::*;
 
         #[test]
-        fn quick_counts_valid_unwanted_lines_and_keeps_the_clock() {
+        fn scan_counts_valid_unwanted_lines_decodes_wanted_ones_and_keeps_the_clock() {
             let mut interest = Interest::none();
             interest.add_standard(0x81);
             let mut p = parser(true, 5);
-            assert!(p.quick(b"   0.5 1  181  Rx   d 1 00", &interest));
+            assert_eq!(
+                p.scan(b"   0.5 1  181  Rx   d 1 00", &interest),
+                Scan::Plain
+            );
             assert_eq!(p.now.to_string(), "5.750");
-            assert!(!p.quick(b"   0.5 1  81  Rx   d 1 00", &interest), "wanted");
-            assert!(
-                !p.quick(b"   0.5 1  181  Rx   d 2 00", &interest),
+            let Scan::Frame(f) = p.scan(b"   0.25 1  81  Rx   d 2 10 8A", &interest) else {
+                panic!("a wanted frame is decoded");
+            };
+            assert_eq!((f.id, f.data.as_slice()), (0x81, &[0x10, 0x8A][..]));
+            assert_eq!(f.time.map(|t| t.to_string()).as_deref(), Some("6.000"));
+            assert_eq!(p.now.to_string(), "6.000");
+            assert_eq!(
+                p.scan(b"   0.5 1  181  Rx   d 2 00", &interest),
+                Scan::Parse,
                 "invalid"
             );
             assert_eq!(
                 p.now.to_string(),
-                "5.750",
+                "6.000",
                 "a declined line leaves the clock"
             );
         }

@@ -11,7 +11,7 @@
 
 use super::time::MAX_FRACTION_DIGITS;
 use super::{
-    Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp, is_blank,
+    Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp, is_blank,
     split_token, trim_end, trim_start,
 };
 use super::{hex, scan};
@@ -41,8 +41,17 @@ impl LineParser for CandumpLogParser {
     }
 
     #[inline]
-    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
-        shape(line).is_some_and(|s| !interest.wants(s.id, s.extended))
+    fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        let Some(shape) = shape(line) else {
+            return Scan::Parse;
+        };
+        if !interest.wants(shape.id, shape.extended) {
+            return Scan::Plain;
+        }
+        match shape.frame(line, true) {
+            Some(frame) => Scan::Frame(frame),
+            None => Scan::Parse,
+        }
     }
 
     #[inline]
@@ -121,29 +130,7 @@ fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Fra
 #[inline]
 fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
     let shape = shape(line)?;
-    let mut frame = Frame {
-        time: None,
-        channel: line.get(shape.channel.clone())?,
-        id: shape.id,
-        extended: shape.extended,
-        kind: shape.kind,
-        len: (shape.data.len() / 2) as u8,
-        data: Payload::new(),
-    };
-    if interest.wants(shape.id, shape.extended) {
-        // At most 19 digits: always fits in u64.
-        let secs = scan::decimal_u64(line.get(1..shape.dot)?);
-        let frac = line.get(shape.dot + 1..shape.close)?;
-        frame.time = Some(Timestamp::from_parts(
-            secs,
-            scan::decimal_u64(frac),
-            frac.len() as u8,
-        ));
-        for pair in line.get(shape.data)?.chunks_exact(2) {
-            frame.data.push(hex::parse_byte(pair[0], pair[1])?);
-        }
-    }
-    Some(frame)
+    shape.frame(line, interest.wants(shape.id, shape.extended))
 }
 
 /// Where the fields of a canonical line are.
@@ -155,6 +142,37 @@ struct Shape {
     extended: bool,
     kind: FrameKind,
     data: std::ops::Range<usize>,
+}
+
+impl Shape {
+    /// The frame of the line the shape was taken from; time and data are
+    /// converted only when `wanted`.
+    #[inline]
+    fn frame<'a>(&self, line: &'a [u8], wanted: bool) -> Option<Frame<'a>> {
+        let mut frame = Frame {
+            time: None,
+            channel: line.get(self.channel.clone())?,
+            id: self.id,
+            extended: self.extended,
+            kind: self.kind,
+            len: (self.data.len() / 2) as u8,
+            data: Payload::new(),
+        };
+        if wanted {
+            // At most 19 digits: always fits in u64.
+            let secs = scan::decimal_u64(line.get(1..self.dot)?);
+            let frac = line.get(self.dot + 1..self.close)?;
+            frame.time = Some(Timestamp::from_parts(
+                secs,
+                scan::decimal_u64(frac),
+                frac.len() as u8,
+            ));
+            for pair in line.get(self.data.clone())?.chunks_exact(2) {
+                frame.data.push(hex::parse_byte(pair[0], pair[1])?);
+            }
+        }
+        Some(frame)
+    }
 }
 
 /// Validates a canonical line (see [`canonical`]) without building a frame.
@@ -517,15 +535,30 @@ mod tests {
     }
 
     #[test]
-    fn quick_counts_only_valid_unwanted_lines() {
+    fn scan_counts_valid_unwanted_lines_and_decodes_wanted_ones() {
         let mut p = CandumpLogParser::new();
         let mut interest = Interest::none();
         interest.add_standard(0x81);
-        assert!(p.quick(b"(1.000000) can0 181#1122", &interest));
-        assert!(!p.quick(b"(1.000000) can0 081#1122", &interest), "wanted");
-        assert!(!p.quick(b"(1.000000) can0 181#112", &interest), "invalid");
-        assert!(
-            !p.quick(b"(1.000000)  can0 181#1122", &interest),
+        assert_eq!(p.scan(b"(1.000000) can0 181#1122", &interest), Scan::Plain);
+        let line = b"(1.000000) can0 081#1122";
+        assert_eq!(
+            p.scan(line, &interest),
+            Scan::Frame(canonical(line, &interest).unwrap()),
+            "wanted"
+        );
+        let Scan::Frame(f) = p.scan(line, &interest) else {
+            unreachable!()
+        };
+        assert_eq!(f.data.as_slice(), [0x11, 0x22]);
+        assert_eq!(f.time.map(|t| t.to_string()).as_deref(), Some("1.000000"));
+        assert_eq!(
+            p.scan(b"(1.000000) can0 181#112", &interest),
+            Scan::Parse,
+            "invalid"
+        );
+        assert_eq!(
+            p.scan(b"(1.000000)  can0 181#1122", &interest),
+            Scan::Parse,
             "not canonical"
         );
     }

@@ -10,7 +10,7 @@
 //! in another one is still read, and [`Detector::take_foreign`] says so, so the
 //! caller warns. No EMCY is lost because a file changed its mind.
 
-use super::{AnyParser, Format, Interest, LineParser, Parsed};
+use super::{AnyParser, Format, Interest, LineParser, Parsed, Scan};
 
 pub struct Detector {
     parsers: Vec<AnyParser>,
@@ -76,13 +76,13 @@ impl Detector {
         self.foreign.take()
     }
 
-    /// See [`LineParser::quick`]; only once the format is known, and only
-    /// for the detected format.
+    /// See [`LineParser::scan`]; only once the format is known, and only
+    /// for the detected format (a frame it returns is never foreign).
     #[inline]
-    pub fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+    pub fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
         match self.primary.and_then(|i| self.parsers.get_mut(i)) {
-            Some(p) => p.quick(line, interest),
-            None => false,
+            Some(p) => p.scan(line, interest),
+            None => Scan::Parse,
         }
     }
 

@@ -273,6 +273,17 @@ pub enum Parsed<'a> {
     Malformed(Reason),
 }
 
+/// What [`LineParser::scan`] made of a line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Scan<'a> {
+    /// A valid frame whose id is not wanted: count it.
+    Plain,
+    /// A valid frame on a wanted id, as `parse` returns it.
+    Frame(Frame<'a>),
+    /// Not the common shape: call `parse`.
+    Parse,
+}
+
 /// A parser for one text format. Parsers may keep state across lines (ASC
 /// headers set the number base and relative timestamps).
 pub trait LineParser: Send {
@@ -282,12 +293,14 @@ pub trait LineParser: Send {
     /// any input.
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a>;
 
-    /// The id-first shortcut: `true` when `line` is certainly a valid frame
-    /// whose id `interest` does not want, so it only needs counting (state a
-    /// parser keeps is updated as by `parse`). `false` means "parse it".
+    /// The id-first shortcut for the common shape of a format's frame line,
+    /// validated once: [`Scan::Plain`] for a valid frame on an id `interest`
+    /// does not want (only counted), [`Scan::Frame`] for one it wants,
+    /// exactly as `parse` would return it, [`Scan::Parse`] for anything
+    /// else. State a parser keeps is updated as by `parse`.
     #[inline]
-    fn quick(&mut self, _line: &[u8], _interest: &Interest) -> bool {
-        false
+    fn scan<'a>(&mut self, _line: &'a [u8], _interest: &Interest) -> Scan<'a> {
+        Scan::Parse
     }
 
     /// The state later lines depend on, as a small exact value (below 256):
@@ -342,13 +355,13 @@ impl LineParser for AnyParser {
     }
 
     #[inline]
-    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+    fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
         match self {
-            AnyParser::CandumpLog(p) => p.quick(line, interest),
-            AnyParser::CandumpScreen(p) => p.quick(line, interest),
-            AnyParser::Asc(p) => p.quick(line, interest),
-            AnyParser::Trc(p) => p.quick(line, interest),
-            AnyParser::Blf(p) => p.quick(line, interest),
+            AnyParser::CandumpLog(p) => p.scan(line, interest),
+            AnyParser::CandumpScreen(p) => p.scan(line, interest),
+            AnyParser::Asc(p) => p.scan(line, interest),
+            AnyParser::Trc(p) => p.scan(line, interest),
+            AnyParser::Blf(p) => p.scan(line, interest),
         }
     }
 }

@@ -27,7 +27,9 @@
 //! error frames; `RTR` rows and `RR` are remote frames; `FD`, `FB`, `FE`,
 //! `BI` are CAN FD frames (never an EMCY).
 
-use super::{Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp};
+use super::{
+    Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
+};
 use super::{hex, is_blank, trim_start};
 
 /// The TRC file versions (`;$FILEVERSION=`).
@@ -200,12 +202,16 @@ impl LineParser for TrcParser {
     }
 
     #[inline]
-    fn quick(&mut self, line: &[u8], interest: &Interest) -> bool {
+    fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
         // Header lines change the state: leave them to `parse`.
         if trim_start(line).first() == Some(&b';') {
-            return false;
+            return Scan::Parse;
         }
-        matches!(self.row(line, interest), Ok(Some(f)) if !interest.wants(f.id, f.extended))
+        match self.row(line, interest) {
+            Ok(Some(f)) if interest.wants(f.id, f.extended) => Scan::Frame(f),
+            Ok(Some(_)) => Scan::Plain,
+            _ => Scan::Parse,
+        }
     }
 
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
@@ -590,7 +596,7 @@ pub fn fuzz_trc(data: &[u8]) {
     let all = Interest::all();
     let none = Interest::none();
     for line in data.split(|b| *b == b'\n') {
-        let quick = p.clone().quick(line, &none);
+        let plain = p.clone().scan(line, &none) == Scan::Plain;
         let parsed = p.parse(line, &all);
         if let Parsed::Frame(f) = &parsed {
             assert!(usize::from(f.len) <= Payload::MAX);
@@ -601,8 +607,8 @@ pub fn fuzz_trc(data: &[u8]) {
             assert!(f.id <= 0x1FFF_FFFF);
             assert!(f.time.is_some());
         }
-        if quick {
-            assert!(matches!(parsed, Parsed::Frame(_)), "quick took a non-frame");
+        if plain {
+            assert!(matches!(parsed, Parsed::Frame(_)), "scan took a non-frame");
         }
     }
 }
@@ -824,10 +830,16 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
-        assert!(p.quick(line, &Interest::none()));
-        assert!(!p.quick(line, &Interest::all()));
-        assert!(!p.quick(b"     1)      1841      0181  2  10", &Interest::none()));
-        assert!(!p.quick(b";$FILEVERSION=2.1", &Interest::none()));
+        assert_eq!(p.scan(line, &Interest::none()), Scan::Plain);
+        let Parsed::Frame(wanted) = p.clone().parse(line, &Interest::all()) else {
+            panic!("a frame line");
+        };
+        assert_eq!(p.scan(line, &Interest::all()), Scan::Frame(wanted));
+        assert_eq!(
+            p.scan(b"     1)      1841      0181  2  10", &Interest::none()),
+            Scan::Parse
+        );
+        assert_eq!(p.scan(b";$FILEVERSION=2.1", &Interest::none()), Scan::Parse);
         assert_eq!(p.version(), Version::V1_0);
     }
 
