@@ -24,7 +24,7 @@ use crate::timeline::{At, NodeTimeline};
 use crate::trace::blf;
 use crate::trace::detect::Detector;
 use crate::trace::input::{self, Opened, ReadMode, Source};
-use crate::trace::lines::{Block, BlockReader, DEFAULT_BLOCK, RawLine};
+use crate::trace::lines::{self, Block, BlockReader, DEFAULT_BLOCK, RawLine};
 use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Scan, Timestamp};
 
 /// What the user asked for that shapes reading and selection.
@@ -238,8 +238,8 @@ type Foreign = Option<(Format, Format)>;
 trait LineSink {
     /// The ids to decode now (the consumer's can change mid-input).
     fn wanted(&self) -> &Wanted;
-    /// A valid frame the consumer has no use for: counted only.
-    fn plain_frame(&mut self);
+    /// Valid frames the consumer has no use for: counted only.
+    fn plain_frames(&mut self, n: u64);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     fn malformed(&mut self, idx: u64, reason: Reason);
@@ -250,19 +250,46 @@ fn too_long(n: u64, max_line: usize) -> Reason {
     format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
 }
 
-/// The one loop that classifies lines, sequentially or on a worker.
+/// The one loop that classifies lines, sequentially or on a worker: runs
+/// of common lines through the parser's hot loop, anything else a line at
+/// a time.
 fn classify_block(
     block: &Block,
     max_line: usize,
     detector: &mut Detector,
     sink: &mut impl LineSink,
 ) -> Result<(), OutputError> {
+    let bytes = block.bytes.as_slice();
     let mut idx = 0u64;
-    for raw in block.lines(max_line) {
+    let mut pos = 0usize;
+    if let Some(n) = block.too_long_before {
+        sink.malformed(idx, too_long(n, max_line));
+        idx += 1;
+    }
+    loop {
+        let run = detector.run(
+            bytes.get(pos..).unwrap_or_default(),
+            max_line,
+            &sink.wanted().ids,
+        );
+        pos += run.bytes;
+        if run.plain > 0 {
+            sink.plain_frames(run.plain);
+            idx += run.plain;
+        }
+        if let Some(frame) = run.frame {
+            sink.frame(idx, &frame, None)?;
+            idx += 1;
+            continue;
+        }
+        let Some((raw, next)) = lines::line_at(bytes, pos, max_line) else {
+            break;
+        };
+        pos = next;
         match raw {
             RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
             RawLine::Text(text) => match detector.scan(text, &sink.wanted().ids) {
-                Scan::Plain => sink.plain_frame(),
+                Scan::Plain => sink.plain_frames(1),
                 Scan::Frame(frame) => sink.frame(idx, &frame, None)?,
                 Scan::Parse => match detector.parse(text, &sink.wanted().ids) {
                     Parsed::Frame(frame) => {
@@ -558,8 +585,8 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         &self.wanted
     }
 
-    fn plain_frame(&mut self) {
-        self.counts.frames += 1;
+    fn plain_frames(&mut self, n: u64) {
+        self.counts.frames += n;
     }
 
     fn lines(&mut self, n: u64) {
@@ -778,8 +805,8 @@ impl LineSink for Recorder {
         &self.wanted
     }
 
-    fn plain_frame(&mut self) {
-        self.result.plain_frames += 1;
+    fn plain_frames(&mut self, n: u64) {
+        self.result.plain_frames += n;
     }
 
     fn lines(&mut self, n: u64) {
@@ -1044,7 +1071,7 @@ fn read_blf<R: Read, E: Write>(
         match reader.next_object() {
             Ok(Some(Parsed::Frame(f))) => {
                 if f.kind == FrameKind::Data && !consumer.wanted.ids.wants(f.id, f.extended) {
-                    consumer.plain_frame();
+                    consumer.plain_frames(1);
                 } else {
                     consumer.frame(0, &f, None)?;
                 }

@@ -11,8 +11,8 @@
 
 use super::time::MAX_FRACTION_DIGITS;
 use super::{
-    Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp, is_blank,
-    split_token, trim_end, trim_start,
+    Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Run, Scan, Timestamp,
+    is_blank, split_token, trim_end, trim_start,
 };
 use super::{hex, scan};
 use crate::trace::Format;
@@ -22,11 +22,27 @@ pub const ERROR_FLAG: u32 = 0x2000_0000;
 const EFF_MASK: u32 = 0x1FFF_FFFF;
 
 #[derive(Default, Clone, Copy)]
-pub struct CandumpLogParser;
+pub struct CandumpLogParser {
+    /// The layout of the last canonical line (a cache: results never
+    /// depend on it, only speed).
+    layout: Option<Layout>,
+}
 
 impl CandumpLogParser {
     pub fn new() -> Self {
-        CandumpLogParser
+        CandumpLogParser::default()
+    }
+
+    /// The shape of a canonical line: the last line's layout first, then
+    /// the general scan (which then becomes the layout).
+    #[inline]
+    fn shape(&mut self, line: &[u8]) -> Option<Shape> {
+        if let Some(shape) = self.layout.as_ref().and_then(|l| l.shape(line)) {
+            return Some(shape);
+        }
+        let shape = shape(line)?;
+        self.layout = Layout::of(line, &shape);
+        Some(shape)
     }
 }
 
@@ -42,7 +58,7 @@ impl LineParser for CandumpLogParser {
 
     #[inline]
     fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
-        let Some(shape) = shape(line) else {
+        let Some(shape) = self.shape(line) else {
             return Scan::Parse;
         };
         if !interest.wants(shape.id, shape.extended) {
@@ -52,6 +68,31 @@ impl LineParser for CandumpLogParser {
             Some(frame) => Scan::Frame(frame),
             None => Scan::Parse,
         }
+    }
+
+    /// Lines of the last line's layout, found without a separate newline
+    /// search: the data field's end is where the line must end.
+    #[inline]
+    fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+        let mut run = Run::default();
+        let Some(layout) = self.layout.as_ref() else {
+            return run;
+        };
+        while let Some(rest) = bytes.get(run.bytes..)
+            && let Some((shape, len)) = layout.line(rest)
+            && len <= max_line
+        {
+            if interest.wants(shape.id, shape.extended) {
+                if let Some(frame) = rest.get(..len).and_then(|l| shape.frame(l, true)) {
+                    run.bytes += len + 1;
+                    run.frame = Some(frame);
+                }
+                break;
+            }
+            run.plain += 1;
+            run.bytes += len + 1;
+        }
+        run
     }
 
     #[inline]
@@ -134,6 +175,7 @@ fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
 }
 
 /// Where the fields of a canonical line are.
+#[derive(Debug, PartialEq, Eq)]
 struct Shape {
     dot: usize,
     close: usize,
@@ -167,11 +209,158 @@ impl Shape {
                 scan::decimal_u64(frac),
                 frac.len() as u8,
             ));
-            for pair in line.get(self.data.clone())?.chunks_exact(2) {
-                frame.data.push(hex::parse_byte(pair[0], pair[1])?);
+            // At most 8 bytes (the shape checked it).
+            let text = line.get(self.data.clone())?;
+            let mut bytes = [0u8; 8];
+            for (b, pair) in bytes.iter_mut().zip(text.chunks_exact(2)) {
+                *b = hex::parse_byte(pair[0], pair[1])?;
             }
+            frame.data = Payload::inline(bytes, (text.len() / 2) as u8);
         }
         Some(frame)
+    }
+}
+
+/// The fixed part of a canonical line: nearly every line of a log has the
+/// same timestamp width and interface, so a line is first checked against
+/// the last one's layout, a few word compares, before the general scan.
+/// Accepts exactly what [`shape`] accepts with these positions and a 3-digit id.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Layout {
+    dot: usize,
+    close: usize,
+    /// `) DEV ` (at most 16 bytes): its first eight bytes as a word (masked
+    /// to the length when shorter), and when longer its last eight.
+    sep_len: usize,
+    sep_head: u64,
+    sep_tail: u64,
+    /// Words inside the timestamp's digits, and the non-digit mask each
+    /// must show (the dot's byte only).
+    probes: [(usize, u64); 3],
+}
+
+impl Layout {
+    fn of(line: &[u8], s: &Shape) -> Option<Layout> {
+        let sep_len = s.channel.end + 1 - s.close;
+        if s.close < 9 || sep_len > 16 || s.kind != FrameKind::Data || s.extended {
+            return None;
+        }
+        let probe = |p: usize| {
+            let mask = match s.dot.checked_sub(p) {
+                Some(k) if k < 8 => 0x80u64 << (8 * k),
+                _ => 0,
+            };
+            (p, mask)
+        };
+        Some(Layout {
+            dot: s.dot,
+            close: s.close,
+            sep_len,
+            sep_head: scan::word(line, s.close)? & head_mask(sep_len),
+            sep_tail: if sep_len > 8 {
+                scan::word(line, s.close + sep_len - 8)?
+            } else {
+                0
+            },
+            probes: [probe(1), probe(9.min(s.close - 8)), probe(s.close - 8)],
+        })
+    }
+
+    /// The shape and length of the line at the start of `bytes` when it
+    /// has this layout and ends with a newline right after its frame.
+    #[inline]
+    fn line(&self, bytes: &[u8]) -> Option<(Shape, usize)> {
+        let id_start = self.head(bytes)?;
+        let data_start = id_start + 4;
+        let data_len = scan::hex_run(bytes, data_start);
+        let data_end = data_start + data_len;
+        let len = match bytes.get(data_end) {
+            Some(b'\n') => data_end,
+            Some(b' ')
+                if matches!(
+                    bytes.get(data_end + 1..data_end + 3),
+                    Some([b'T' | b'R', b'\n'])
+                ) =>
+            {
+                data_end + 2
+            }
+            _ => return None,
+        };
+        if !data_len.is_multiple_of(2) || data_len > 16 {
+            return None;
+        }
+        Some((self.shape_at(id_start, bytes, data_end)?, len))
+    }
+
+    /// Through the id: the index where the 3-digit id starts, when `line`
+    /// has this layout up to a `#` after it.
+    #[inline]
+    fn head(&self, line: &[u8]) -> Option<usize> {
+        if line.first() != Some(&b'(') || line.get(self.dot) != Some(&b'.') {
+            return None;
+        }
+        for (at, expect) in self.probes {
+            if scan::non_digits(scan::word(line, at)?) != expect {
+                return None;
+            }
+        }
+        // `)`, a space, the interface, a space: the bytes of the last line.
+        if scan::word(line, self.close)? & head_mask(self.sep_len) != self.sep_head
+            || (self.sep_len > 8
+                && scan::word(line, self.close + self.sep_len - 8)? != self.sep_tail)
+        {
+            return None;
+        }
+        let id_start = self.close + self.sep_len;
+        match line.get(id_start + 3) {
+            Some(b'#') => Some(id_start),
+            _ => None,
+        }
+    }
+
+    /// The shape of a whole line.
+    #[inline]
+    fn shape(&self, line: &[u8]) -> Option<Shape> {
+        let id_start = self.head(line)?;
+        let data_start = id_start + 4;
+        let data_end = match line {
+            [.., b' ', b'T' | b'R'] => line.len() - 2,
+            _ => line.len(),
+        };
+        let data_len = data_end.checked_sub(data_start)?;
+        if data_len % 2 != 0 || data_len > 16 || !scan::all_hex_at(line, data_start, data_end) {
+            return None;
+        }
+        self.shape_at(id_start, line, data_end)
+    }
+
+    /// The shape once the layout matched and the data was checked.
+    #[inline]
+    fn shape_at(&self, id_start: usize, line: &[u8], data_end: usize) -> Option<Shape> {
+        let id = hex::parse_u32(line.get(id_start..id_start + 3)?)?;
+        if id > 0x7FF {
+            return None;
+        }
+        let data_start = id_start + 4;
+        Some(Shape {
+            dot: self.dot,
+            close: self.close,
+            channel: self.close + 2..id_start - 1,
+            id,
+            extended: false,
+            kind: FrameKind::Data,
+            data: data_start..data_end,
+        })
+    }
+}
+
+/// Keeps the first `n` bytes of a little-endian word (all when `n >= 8`).
+#[inline(always)]
+fn head_mask(n: usize) -> u64 {
+    if n >= 8 {
+        u64::MAX
+    } else {
+        (1u64 << (8 * n)) - 1
     }
 }
 
@@ -532,6 +721,149 @@ mod tests {
             proptest::prop_assert!(fast.is_some(), "declined {}", line);
             proptest::prop_assert_eq!(Ok(fast), parse_line_full(line.as_bytes(), &interest));
         }
+
+        /// The last line's layout accepts exactly what the general scan
+        /// accepts at the same positions, and takes the usual next line.
+        #[test]
+        fn layout_agrees_with_the_general_scan(
+            first in r"\([0-9]{1,12}\.[0-9]{1,9}\) [a-z0-9-]{1,14} [0-7][0-9a-fA-F]{2}#([0-9a-fA-F]{2}){0,8}",
+            next in r"\(([0-9]{0,12}\.[0-9]{0,9}|x)\)[ ]{1,2}[a-z0-9-]{0,14}[ ]{1,2}[0-9a-fA-FxR]{0,9}[#_.R]{0,2}[0-9a-fA-FRr._#]{0,18}( T| R| X|  )?",
+            same_layout in "[0-7][0-9a-fA-F]{2}#([0-9a-fA-F]{2}){0,8}( T| R)?",
+            at in 0usize..48,
+            byte in proptest::sample::select(b"09aG.) #xTR-\t".to_vec()),
+        ) {
+            let first = first.as_bytes();
+            let general = shape(first).expect("a canonical line");
+            let Some(layout) = Layout::of(first, &general) else {
+                // Only short timestamps and long interface names keep none.
+                let sep_len = general.channel.end + 1 - general.close;
+                proptest::prop_assert!(general.close < 9 || sep_len > 16);
+                return Ok(());
+            };
+            if let Some(fast) = layout.shape(next.as_bytes()) {
+                proptest::prop_assert_eq!(Some(fast), shape(next.as_bytes()), "{}", next);
+            }
+            // The same timestamp width and interface with another frame.
+            let sep_end = layout.close + layout.sep_len;
+            let mut usual = first[..sep_end].to_vec();
+            usual.extend_from_slice(same_layout.as_bytes());
+            let fast = layout.shape(&usual);
+            proptest::prop_assert!(fast.is_some(), "declined {:?}", String::from_utf8_lossy(&usual));
+            proptest::prop_assert_eq!(fast, shape(&usual));
+            // One byte changed anywhere: still never a different answer.
+            if let Some(b) = usual.get_mut(at) {
+                *b = byte;
+            }
+            if let Some(fast) = layout.shape(&usual) {
+                proptest::prop_assert_eq!(Some(fast), shape(&usual), "{:?}", String::from_utf8_lossy(&usual));
+            }
+        }
+    }
+
+    /// What `run` must return: line by line with `scan`, as the general
+    /// loop would read them.
+    fn run_by_lines<'a>(
+        p: &mut CandumpLogParser,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+    ) -> (usize, u64, Option<Frame<'a>>) {
+        let (mut at, mut plain) = (0, 0);
+        while let Some(rest) = bytes.get(at..)
+            && let Some(len) = rest.iter().position(|b| *b == b'\n')
+            && len <= max_line
+            && !rest[..len].ends_with(b"\r")
+        {
+            match p.scan(&rest[..len], interest) {
+                Scan::Plain => plain += 1,
+                Scan::Frame(f) => return (at + len + 1, plain, Some(f)),
+                Scan::Parse => break,
+            }
+            at += len + 1;
+        }
+        (at, plain, None)
+    }
+
+    proptest::proptest! {
+        /// The hot loop reads what reading line by line would.
+        #[test]
+        fn run_equals_line_by_line(
+            lines in proptest::collection::vec(proptest::prop_oneof![
+                4 => r"\(1700000000\.[0-9]{6}\) can0 [0-7][0-9A-F]{2}#([0-9A-F]{2}){0,8}( T)?",
+                1 => r"\(1700000000\.[0-9]{6}\) can[01] [0-9A-Fa-f]{3,8}#[0-9A-Fa-fR._]{0,18}( T| R|\r)?",
+                1 => r"\(17000000[0-9]{2}\.[0-9]{5,6}\)  ?[a-z0-9]{3,5} [0-9a-f]{3}#[0-9a-f]{0,17}",
+            ], 1..12),
+            last_newline in proptest::bool::ANY,
+            max_line in 30usize..60,
+            narrow in proptest::bool::ANY,
+        ) {
+            let mut interest = if narrow { Interest::none() } else { Interest::all() };
+            interest.add_standard(0x181);
+            let mut text = lines.join("\n");
+            if last_newline {
+                text.push('\n');
+            }
+            let bytes = text.as_bytes();
+            let mut fast = CandumpLogParser::new();
+            fast.scan(b"(1700000000.000000) can0 080#", &interest);
+            let mut slow = fast;
+            let mut at = 0;
+            // Run after run, as the classifier calls it.
+            for _ in 0..lines.len() + 1 {
+                // It may stop early (a line of another layout), but the lines
+                // it read, read one by one, give the same.
+                let got = fast.run(&bytes[at..], max_line, &interest);
+                let consumed = &bytes[at..at + got.bytes];
+                let want = run_by_lines(&mut slow, consumed, max_line, &interest);
+                proptest::prop_assert_eq!((got.bytes, got.plain, got.frame.clone()), want);
+                at += got.bytes;
+                if got.frame.is_none() {
+                    // The general loop reads the next line; skip it here.
+                    match bytes[at..].iter().position(|b| *b == b'\n') {
+                        Some(i) => {
+                            let line = &bytes[at..at + i];
+                            fast.scan(line, &interest);
+                            slow.scan(line, &interest);
+                            at += i + 1;
+                        }
+                        None => break,
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_layout_is_kept_between_lines_and_replaced_when_it_changes() {
+        let mut p = CandumpLogParser::new();
+        let all = Interest::all();
+        let a = b"(1700000000.000100) can0 383#724F5046";
+        let b = b"(1700000000.000517) can0 604#3684F0716DEF09E6 T";
+        let c = b"(1700000000.000753) vcan12 085#";
+        assert!(p.scan(a, &all) != Scan::Parse);
+        let kept = p.layout;
+        assert!(kept.is_some());
+        assert_eq!(p.scan(b, &all), Scan::Frame(canonical(b, &all).unwrap()));
+        assert_eq!(p.layout, kept, "same layout: not recomputed");
+        assert_eq!(p.scan(c, &all), Scan::Frame(canonical(c, &all).unwrap()));
+        assert_ne!(p.layout, kept, "another interface: a new layout");
+        // A line that fits no layout is left to the full parser.
+        assert_eq!(p.scan(b"(1700000000.000753) can0 085#1", &all), Scan::Parse);
+        // The hot loop takes every line of the layout, and stops at a wanted one.
+        let block = b"(1.000001) can0 181#00\n(1.000002) can0 281#0102 T\n\
+                      (1.000003) can0 381#\n(1.000004) can0 081#10\n(1.000005) can0 181#\n";
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        let mut p = CandumpLogParser::new();
+        assert_eq!(p.run(block, 100, &interest).bytes, 0, "no layout yet");
+        p.scan(b"(9.000000) can0 080#", &interest);
+        let run = p.run(block, 100, &interest);
+        assert_eq!((run.bytes, run.plain), (94, 3));
+        assert_eq!(run.frame.map(|f| f.id), Some(0x81));
+        let run = p.run(&block[94..], 100, &interest);
+        assert_eq!((run.bytes, run.plain, run.frame), (21, 1, None));
+        assert_eq!(p.run(&block[..22], 100, &interest).bytes, 0, "no newline");
+        assert_eq!(p.run(block, 20, &interest).bytes, 0, "longer than max_line");
     }
 
     #[test]

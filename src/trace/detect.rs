@@ -10,7 +10,7 @@
 //! in another one is still read, and [`Detector::take_foreign`] says so, so the
 //! caller warns. No EMCY is lost because a file changed its mind.
 
-use super::{AnyParser, Format, Interest, LineParser, Parsed, Scan};
+use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan};
 
 pub struct Detector {
     parsers: Vec<AnyParser>,
@@ -74,6 +74,16 @@ impl Detector {
     /// the detected one. Cleared by the call.
     pub fn take_foreign(&mut self) -> Option<Format> {
         self.foreign.take()
+    }
+
+    /// See [`LineParser::run`]; only once the format is known (nothing
+    /// read before), and only for the detected format.
+    #[inline]
+    pub fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+        match self.primary.and_then(|i| self.parsers.get_mut(i)) {
+            Some(p) => p.run(bytes, max_line, interest),
+            None => Run::default(),
+        }
     }
 
     /// See [`LineParser::scan`]; only once the format is known, and only

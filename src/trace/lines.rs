@@ -89,12 +89,36 @@ impl<'a> Iterator for BlockLines<'a> {
             }
             None => return None,
         };
-        let line = self.bytes.get(begin..end).unwrap_or_default();
-        if line.len() > self.max_line {
-            return Some(RawLine::TooLong(line.len() as u64));
-        }
-        Some(RawLine::Text(line.strip_suffix(b"\r").unwrap_or(line)))
+        Some(raw_line(
+            self.bytes.get(begin..end).unwrap_or_default(),
+            self.max_line,
+        ))
     }
+}
+
+/// A line without its `\n`: too long, or its text without a final `\r`.
+#[inline]
+fn raw_line(line: &[u8], max_line: usize) -> RawLine<'_> {
+    if line.len() > max_line {
+        return RawLine::TooLong(line.len() as u64);
+    }
+    RawLine::Text(line.strip_suffix(b"\r").unwrap_or(line))
+}
+
+/// The line of a block's `bytes` that starts at `begin`, and where the next
+/// one starts; `None` past the end. For callers that jump ahead (a
+/// parser's run of lines) rather than iterate with [`Block::lines`].
+#[inline]
+pub fn line_at(bytes: &[u8], begin: usize, max_line: usize) -> Option<(RawLine<'_>, usize)> {
+    let rest = bytes.get(begin..).filter(|r| !r.is_empty())?;
+    let (end, next) = match memchr::memchr(b'\n', rest) {
+        Some(i) => (begin + i, begin + i + 1),
+        None => (bytes.len(), bytes.len()),
+    };
+    Some((
+        raw_line(bytes.get(begin..end).unwrap_or_default(), max_line),
+        next,
+    ))
 }
 
 /// Cuts a stream into [`Block`]s at line boundaries.

@@ -111,6 +111,16 @@ impl Payload {
         }
     }
 
+    /// The first `len` (at most 8) of `bytes`.
+    #[inline]
+    pub fn inline(bytes: [u8; 8], len: u8) -> Payload {
+        Payload {
+            inline: bytes,
+            len: len.min(8),
+            long: None,
+        }
+    }
+
     /// Appends a byte; `false` (and nothing stored) when already full.
     #[inline]
     pub fn push(&mut self, b: u8) -> bool {
@@ -284,6 +294,16 @@ pub enum Scan<'a> {
     Parse,
 }
 
+/// What [`LineParser::run`] read from the start of a block's bytes: `bytes`
+/// of whole lines, `plain` frames only to count, then, when `frame` is
+/// set, one wanted frame (the last line read).
+#[derive(Debug, Default)]
+pub struct Run<'a> {
+    pub bytes: usize,
+    pub plain: u64,
+    pub frame: Option<Frame<'a>>,
+}
+
 /// A parser for one text format. Parsers may keep state across lines (ASC
 /// headers set the number base and relative timestamps).
 pub trait LineParser: Send {
@@ -301,6 +321,36 @@ pub trait LineParser: Send {
     #[inline]
     fn scan<'a>(&mut self, _line: &'a [u8], _interest: &Interest) -> Scan<'a> {
         Scan::Parse
+    }
+
+    /// The hot loop: reads lines from the start of `bytes` (whole lines of
+    /// a block) while [`LineParser::scan`] counts them as plain, and stops
+    /// after a wanted frame or before any other line (too long, `\r\n`,
+    /// no newline, or not the common shape), which the caller then reads
+    /// one at a time. Saves the per-line dispatch of the general loop.
+    #[inline]
+    fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+        let mut run = Run::default();
+        while let Some(rest) = bytes.get(run.bytes..)
+            && let Some(len) = memchr::memchr(b'\n', rest)
+            && len <= max_line
+            && let Some(line) = rest.get(..len)
+            && line.last() != Some(&b'\r')
+        {
+            match self.scan(line, interest) {
+                Scan::Plain => {
+                    run.plain += 1;
+                    run.bytes += len + 1;
+                }
+                Scan::Frame(frame) => {
+                    run.bytes += len + 1;
+                    run.frame = Some(frame);
+                    break;
+                }
+                Scan::Parse => break,
+            }
+        }
+        run
     }
 
     /// The state later lines depend on, as a small exact value (below 256):
@@ -355,6 +405,16 @@ impl LineParser for AnyParser {
     }
 
     #[inline]
+    fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+        match self {
+            AnyParser::CandumpLog(p) => p.run(bytes, max_line, interest),
+            AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest),
+            AnyParser::Asc(p) => p.run(bytes, max_line, interest),
+            AnyParser::Trc(p) => p.run(bytes, max_line, interest),
+            AnyParser::Blf(p) => p.run(bytes, max_line, interest),
+        }
+    }
+
     fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
         match self {
             AnyParser::CandumpLog(p) => p.scan(line, interest),

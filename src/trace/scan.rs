@@ -6,8 +6,9 @@ const LO: u64 = 0x0101_0101_0101_0101;
 const HI: u64 = 0x8080_8080_8080_8080;
 const LOW7: u64 = 0x7F7F_7F7F_7F7F_7F7F;
 
+/// The eight bytes at `at` as a little-endian word (first byte lowest).
 #[inline(always)]
-fn word(s: &[u8], at: usize) -> Option<u64> {
+pub fn word(s: &[u8], at: usize) -> Option<u64> {
     let bytes: [u8; 8] = s.get(at..at + 8)?.try_into().ok()?;
     Some(u64::from_le_bytes(bytes))
 }
@@ -27,7 +28,7 @@ fn zero_bytes(x: u64) -> u64 {
 
 /// High bit set in every byte of `x` that is not an ASCII digit.
 #[inline(always)]
-fn non_digits(x: u64) -> u64 {
+pub fn non_digits(x: u64) -> u64 {
     bytes_above(x ^ (LO * u64::from(b'0')), 9)
 }
 
@@ -156,13 +157,60 @@ pub fn all_hex(s: &[u8]) -> bool {
     bad == 0
 }
 
+/// True when every byte of `line[start..end]` is a hex digit. Like
+/// [`all_hex`], but a run shorter than a word is checked with one word
+/// ending at `end` (bytes before `start` masked off) when the line has
+/// eight bytes there: the data field of a frame line.
+#[inline]
+pub fn all_hex_at(line: &[u8], start: usize, end: usize) -> bool {
+    let n = end.wrapping_sub(start);
+    if n <= 16
+        && start <= end
+        && let Some(last) = end.checked_sub(8).and_then(|at| word(line, at))
+    {
+        // The run's last `min(n, 8)` bytes are the top of `last`; a longer
+        // run also has its first eight bytes in a word of its own.
+        let keep = if n == 0 {
+            0
+        } else {
+            HI << (8 * (8 - n.min(8)))
+        };
+        let first = if n > 8 {
+            word(line, start).map_or(HI, non_hex)
+        } else {
+            0
+        };
+        return (non_hex(last) & keep) | first == 0;
+    }
+    line.get(start..end).is_some_and(all_hex)
+}
+
 /// Value of a run of at most 19 ASCII digits (caller validated them).
 #[inline]
 pub fn decimal_u64(digits: &[u8]) -> u64 {
-    digits.iter().fold(0u64, |v, &d| {
+    let mut v = 0u64;
+    let mut rest = digits;
+    while let Some((eight, tail)) = rest.split_first_chunk::<8>() {
+        v = v
+            .wrapping_mul(100_000_000)
+            .wrapping_add(eight_digits(u64::from_le_bytes(*eight)));
+        rest = tail;
+    }
+    rest.iter().fold(v, |v, &d| {
         v.wrapping_mul(10)
             .wrapping_add(u64::from(d.wrapping_sub(b'0')))
     })
+}
+
+/// Eight ASCII digits (first digit in the lowest byte) to their value, in
+/// three multiplications: pairs, then quads, then the two halves.
+#[inline(always)]
+fn eight_digits(w: u64) -> u64 {
+    let w = w.wrapping_sub(LO * u64::from(b'0'));
+    let pairs = w.wrapping_mul(10).wrapping_add(w >> 8);
+    let lo = (pairs & 0x0000_00FF_0000_00FF).wrapping_mul(100 + (1_000_000 << 32));
+    let hi = ((pairs >> 16) & 0x0000_00FF_0000_00FF).wrapping_mul(1 + (10_000 << 32));
+    lo.wrapping_add(hi) >> 32
 }
 
 #[cfg(test)]
@@ -240,6 +288,22 @@ mod tests {
             prop_assert_eq!(token_run(&s, from), naive_run(&s, from, |b| b > b' '));
             prop_assert_eq!(all_hex(&s), s.iter().all(u8::is_ascii_hexdigit));
             prop_assert_eq!(blank_run(&s, from), naive_run(&s, from, |b| b == b' ' || b == b'\t'));
+            let end = from.min(s.len());
+            for start in [0, end / 2, end.saturating_sub(3), end] {
+                prop_assert_eq!(
+                    all_hex_at(&s, start, end),
+                    s[start..end].iter().all(u8::is_ascii_hexdigit),
+                    "{}..{}", start, end
+                );
+            }
+        }
+
+        #[test]
+        fn decimal_equals_the_naive_sum(digits in "[0-9]{0,19}") {
+            let naive = digits.bytes().fold(0u64, |v, d| {
+                v.wrapping_mul(10).wrapping_add(u64::from(d - b'0'))
+            });
+            prop_assert_eq!(decimal_u64(digits.as_bytes()), naive);
         }
     }
 }
