@@ -67,6 +67,9 @@ pub struct AscParser {
     relative: bool,
     /// Time of the last timestamped line (the running sum when relative).
     now: Timestamp,
+    /// The layout of the last canonical line (a cache: results never
+    /// depend on it, only speed).
+    layout: Option<AscLayout>,
 }
 
 impl AscParser {
@@ -77,6 +80,7 @@ impl AscParser {
             base: Base::Hex,
             relative: false,
             now: Timestamp::ZERO,
+            layout: None,
         }
     }
 }
@@ -134,6 +138,7 @@ impl LineParser for AscParser {
 }
 
 /// Where the fields of a canonical classic line are.
+#[derive(Debug, PartialEq, Eq)]
 struct AscShape {
     time: Timestamp,
     channel: std::ops::Range<usize>,
@@ -141,6 +146,55 @@ struct AscShape {
     extended: bool,
     dlc: u8,
     data_start: usize,
+    /// Where the time's first digit, its dot and its end, the id, the
+    /// direction and the DLC are: what the next line's layout is made of.
+    places: Places,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Places {
+    time: usize,
+    dot: usize,
+    time_end: usize,
+    id: usize,
+    dir: usize,
+    dlc: usize,
+}
+
+/// The fixed part of the last canonical line: the right-aligned time's
+/// width, the channel, the id column's width, `Rx   d `. Nearly every line
+/// of a file has them, so a line is compared with the last one's, a few
+/// words, before the general scan. Accepts exactly what the general scan
+/// accepts at these places.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct AscLayout {
+    at: Places,
+    /// The blanks before the time, exactly (none when it starts the line).
+    lead: Option<scan::Fixed>,
+    digits: scan::Decimal,
+    /// Blanks, channel, blanks: from the time's end to the id.
+    gap: scan::Fixed,
+    /// The channel's start and length (inside `gap`).
+    channel: (usize, usize),
+    /// From the direction to the DLC: `Rx   d `.
+    mid: scan::Fixed,
+}
+
+impl AscLayout {
+    fn of(line: &[u8], s: &AscShape) -> Option<AscLayout> {
+        let at = s.places;
+        Some(AscLayout {
+            at,
+            lead: match at.time {
+                0 => None,
+                n => Some(scan::Fixed::of(line, 0, n)?),
+            },
+            digits: scan::Decimal::new(at.time, at.dot, at.time_end)?,
+            gap: scan::Fixed::of(line, at.time_end, at.id - at.time_end)?,
+            channel: (s.channel.start, s.channel.len()),
+            mid: scan::Fixed::of(line, at.dir, at.dlc - at.dir)?,
+        })
+    }
 }
 
 impl AscShape {
@@ -167,6 +221,26 @@ impl AscShape {
         }
         Some(frame)
     }
+}
+
+/// A hex id of 1-8 digits at `at`, `x` after it for extended: the id, its
+/// kind and where it ends; `None` when out of range.
+#[inline]
+fn id_field(line: &[u8], at: usize) -> Option<(u32, bool, usize)> {
+    let len = scan::hex_run(line, at);
+    if len == 0 || len > 8 {
+        return None;
+    }
+    let id = hex::parse_u32(line.get(at..at + len)?)?;
+    let mut end = at + len;
+    let extended = line.get(end) == Some(&b'x');
+    if extended {
+        end += 1;
+    }
+    if id > if extended { 0x1FFF_FFFF } else { 0x7FF } {
+        return None;
+    }
+    Some((id, extended, end))
 }
 
 /// Index after at least one blank following `at`; `None` when there is none.
@@ -240,25 +314,66 @@ impl AscParser {
     /// and the new running time; the caller commits it.
     #[inline]
     fn canonical<'a>(&self, line: &'a [u8], interest: &Interest) -> Option<(Frame<'a>, Timestamp)> {
-        let shape = self.shape(line)?;
+        if self.base != Base::Hex {
+            return None;
+        }
+        let shape = self.shape_general(line)?;
         let frame = shape.frame(line, interest.wants(shape.id, shape.extended))?;
         Some((frame, shape.time))
     }
 
     /// Validates a canonical line (see [`AscParser::canonical`]) without
     /// building a frame; computes the running time.
+    /// The shape of a canonical line: the last line's layout first, then
+    /// the general scan (which then becomes the layout).
     #[inline]
-    fn shape(&self, line: &[u8]) -> Option<AscShape> {
+    fn shape(&mut self, line: &[u8]) -> Option<AscShape> {
         if self.base != Base::Hex {
             return None;
         }
-        let mut i = scan::blank_run(line, 0);
-        if i == 0 && line.first().is_some_and(|b| !b.is_ascii_digit()) {
+        if let Some(layout) = self.layout.as_ref()
+            && let Some(shape) = self.shape_as(layout, line)
+        {
+            return Some(shape);
+        }
+        let shape = self.shape_general(line)?;
+        self.layout = AscLayout::of(line, &shape);
+        Some(shape)
+    }
+
+    /// The shape of a line with `layout`'s fixed part.
+    #[inline]
+    fn shape_as(&self, layout: &AscLayout, line: &[u8]) -> Option<AscShape> {
+        let at = layout.at;
+        if layout.lead.is_some_and(|lead| !lead.matches(line, 0))
+            || line.get(at.dot) != Some(&b'.')
+            || !layout.digits.matches(line)
+            || !layout.gap.matches(line, at.time_end)
+        {
+            return None;
+        }
+        let (id, extended, id_end) = id_field(line, at.id)?;
+        if id_end >= at.dir || !scan::all_spaces_at(line, id_end, at.dir) {
+            return None;
+        }
+        if !layout.mid.matches(line, at.dir) {
+            return None;
+        }
+        let (start, len) = layout.channel;
+        self.finish(line, at, start..start + len, id, extended)
+    }
+
+    /// Validates a canonical line (see [`AscParser::canonical`]) without
+    /// building a frame; computes the running time.
+    #[inline]
+    fn shape_general(&self, line: &[u8]) -> Option<AscShape> {
+        let time_at = scan::blank_run(line, 0);
+        if time_at == 0 && line.first().is_some_and(|b| !b.is_ascii_digit()) {
             return None;
         }
         // Time: digits '.' digits.
-        let int_len = scan::digit_run(line, i);
-        let dot = i + int_len;
+        let int_len = scan::digit_run(line, time_at);
+        let dot = time_at + int_len;
         if int_len == 0 || int_len > 19 || line.get(dot) != Some(&b'.') {
             return None;
         }
@@ -267,56 +382,61 @@ impl AscParser {
         if frac_len == 0 || frac_len > MAX_FRACTION_DIGITS {
             return None;
         }
-        let written = Timestamp::from_parts(
-            scan::decimal_u64(line.get(i..dot)?),
-            scan::decimal_u64(line.get(dot + 1..time_end)?),
-            frac_len as u8,
-        );
-        let time = if self.relative {
-            self.now.checked_add(written)?
-        } else {
-            written
-        };
         // Channel: a small decimal number.
-        i = blanks_after(line, time_end)?;
-        let ch_len = scan::digit_run(line, i);
+        let channel_start = blanks_after(line, time_end)?;
+        let ch_len = scan::digit_run(line, channel_start);
         if ch_len == 0 || ch_len > 3 {
             return None;
         }
-        let channel_start = i;
         // Id, hex, `x` for extended.
-        i = blanks_after(line, i + ch_len)?;
-        let id_len = scan::hex_run(line, i);
-        if id_len == 0 || id_len > 8 {
-            return None;
-        }
-        let id = hex::parse_u32(line.get(i..i + id_len)?)?;
-        let mut j = i + id_len;
-        let extended = line.get(j) == Some(&b'x');
-        if extended {
-            j += 1;
-        }
-        if id > if extended { 0x1FFF_FFFF } else { 0x7FF } {
-            return None;
-        }
+        let id_at = blanks_after(line, channel_start + ch_len)?;
+        let (id, extended, id_end) = id_field(line, id_at)?;
         // Direction, `d`, DLC.
-        i = blanks_after(line, j)?;
-        match line.get(i..i + 2)? {
+        let dir = blanks_after(line, id_end)?;
+        match line.get(dir..dir + 2)? {
             b"Rx" | b"Tx" => {}
             _ => return None,
         }
-        i = blanks_after(line, i + 2)?;
-        if line.get(i) != Some(&b'd') {
+        let d = blanks_after(line, dir + 2)?;
+        if line.get(d) != Some(&b'd') {
             return None;
         }
-        i = blanks_after(line, i + 1)?;
-        let dlc = match line.get(i) {
+        let dlc = blanks_after(line, d + 1)?;
+        let at = Places {
+            time: time_at,
+            dot,
+            time_end,
+            id: id_at,
+            dir,
+            dlc,
+        };
+        self.finish(
+            line,
+            at,
+            channel_start..channel_start + ch_len,
+            id,
+            extended,
+        )
+    }
+
+    /// The time, the DLC and data bytes and the tail, once the fields
+    /// before them are known.
+    #[inline]
+    fn finish(
+        &self,
+        line: &[u8],
+        at: Places,
+        channel: std::ops::Range<usize>,
+        id: u32,
+        extended: bool,
+    ) -> Option<AscShape> {
+        let dlc = match line.get(at.dlc) {
             Some(d @ b'0'..=b'8') => d - b'0',
             _ => return None,
         };
-        i += 1;
         // Bytes: a single blank, then two hex digits, DLC times.
-        let data_start = i;
+        let data_start = at.dlc + 1;
+        let mut i = data_start;
         for _ in 0..dlc {
             if line.get(i) != Some(&b' ') {
                 return None;
@@ -328,13 +448,25 @@ impl AscParser {
         if !canonical_tail(line.get(i..)?) {
             return None;
         }
+        let frac = line.get(at.dot + 1..at.time_end)?;
+        let written = Timestamp::from_parts(
+            scan::decimal_u64(line.get(at.time..at.dot)?),
+            scan::decimal_u64(frac),
+            frac.len() as u8,
+        );
+        let time = if self.relative {
+            self.now.checked_add(written)?
+        } else {
+            written
+        };
         Some(AscShape {
             time,
-            channel: channel_start..channel_start + ch_len,
+            channel,
             id,
             extended,
             dlc,
             data_start,
+            places: at,
         })
     }
 
@@ -1115,6 +1247,40 @@ mod tests {
                     prop_assert_eq!(full.parse_line(line.as_bytes(), &interest), Ok(Some(frame)));
                     prop_assert_eq!(full.now, time);
                 }
+            }
+
+            /// The last line's layout accepts exactly what the general scan
+            /// accepts at the same places, and takes the usual next line.
+            #[test]
+            fn layout_agrees_with_the_general_scan(
+                first in r"[ ]{0,4}[0-9]{1,6}\.[0-9]{6} [1-9]  ([0-7][0-9A-F]{2}|1[0-9A-F]{7}x)[ ]{1,13} (Rx|Tx)   d (0|2 [0-9A-F]{2} [0-9A-F]{2}|8( [0-9A-F]{2}){8})(  Length = [0-9]{1,6} BitCount = [0-9]{2,3} ID = [0-9]{1,9}x?)?",
+                next in r"[ \t]{0,4}[0-9]{0,7}\.?[0-9]{0,7}[ ]{0,2}[0-9]{0,3}[ ]{1,3}[0-9a-fA-FxX]{0,10}[ ]{1,14}(Rx|Tx|rx)[ ]{1,3}[dDr][ ]{1,2}[0-9a-fA-F]{1,2}( [0-9a-fA-F]{1,3}){0,9}( {1,4}Length = [0-9]{0,6} BitCount = [0-9]{1,3} ID = [0-9]{1,9}x?| x)?[ ]{0,2}",
+                at in 0usize..80,
+                byte in proptest::sample::select(b"09aG.x dR\t".to_vec()),
+                relative in any::<bool>(),
+            ) {
+                let mut p = parser(relative, 3);
+                // The DLC and bytes of `first` may disagree: cut to the DLC.
+                let Some(general) = p.shape_general(first.as_bytes()) else {
+                    return Ok(());
+                };
+                let Some(layout) = AscLayout::of(first.as_bytes(), &general) else {
+                    return Ok(());
+                };
+                for line in [next.as_bytes().to_vec(), {
+                    let mut l = first.as_bytes().to_vec();
+                    if let Some(b) = l.get_mut(at) {
+                        *b = byte;
+                    }
+                    l
+                }] {
+                    if let Some(fast) = p.shape_as(&layout, &line) {
+                        prop_assert_eq!(Some(fast), p.shape_general(&line), "{:?}", String::from_utf8_lossy(&line));
+                    }
+                }
+                prop_assert_eq!(p.shape_as(&layout, first.as_bytes()), Some(general));
+                p.layout = Some(layout);
+                prop_assert!(p.shape(first.as_bytes()).is_some());
             }
 
             /// The shape CANoe and log2asc write takes the fast path.

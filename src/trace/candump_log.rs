@@ -229,40 +229,21 @@ impl Shape {
 struct Layout {
     dot: usize,
     close: usize,
-    /// `) DEV ` (at most 16 bytes): its first eight bytes as a word (masked
-    /// to the length when shorter), and when longer its last eight.
-    sep_len: usize,
-    sep_head: u64,
-    sep_tail: u64,
-    /// Words inside the timestamp's digits, and the non-digit mask each
-    /// must show (the dot's byte only).
-    probes: [(usize, u64); 3],
+    time: scan::Decimal,
+    /// `) DEV `.
+    sep: scan::Fixed,
 }
 
 impl Layout {
     fn of(line: &[u8], s: &Shape) -> Option<Layout> {
-        let sep_len = s.channel.end + 1 - s.close;
-        if s.close < 9 || sep_len > 16 || s.kind != FrameKind::Data || s.extended {
+        if s.kind != FrameKind::Data || s.extended {
             return None;
         }
-        let probe = |p: usize| {
-            let mask = match s.dot.checked_sub(p) {
-                Some(k) if k < 8 => 0x80u64 << (8 * k),
-                _ => 0,
-            };
-            (p, mask)
-        };
         Some(Layout {
             dot: s.dot,
             close: s.close,
-            sep_len,
-            sep_head: scan::word(line, s.close)? & head_mask(sep_len),
-            sep_tail: if sep_len > 8 {
-                scan::word(line, s.close + sep_len - 8)?
-            } else {
-                0
-            },
-            probes: [probe(1), probe(9.min(s.close - 8)), probe(s.close - 8)],
+            time: scan::Decimal::new(1, s.dot, s.close)?,
+            sep: scan::Fixed::of(line, s.close, s.channel.end + 1 - s.close)?,
         })
     }
 
@@ -296,22 +277,15 @@ impl Layout {
     /// has this layout up to a `#` after it.
     #[inline]
     fn head(&self, line: &[u8]) -> Option<usize> {
-        if line.first() != Some(&b'(') || line.get(self.dot) != Some(&b'.') {
-            return None;
-        }
-        for (at, expect) in self.probes {
-            if scan::non_digits(scan::word(line, at)?) != expect {
-                return None;
-            }
-        }
         // `)`, a space, the interface, a space: the bytes of the last line.
-        if scan::word(line, self.close)? & head_mask(self.sep_len) != self.sep_head
-            || (self.sep_len > 8
-                && scan::word(line, self.close + self.sep_len - 8)? != self.sep_tail)
+        if line.first() != Some(&b'(')
+            || line.get(self.dot) != Some(&b'.')
+            || !self.time.matches(line)
+            || !self.sep.matches(line, self.close)
         {
             return None;
         }
-        let id_start = self.close + self.sep_len;
+        let id_start = self.close + self.sep.width();
         match line.get(id_start + 3) {
             Some(b'#') => Some(id_start),
             _ => None,
@@ -351,16 +325,6 @@ impl Layout {
             kind: FrameKind::Data,
             data: data_start..data_end,
         })
-    }
-}
-
-/// Keeps the first `n` bytes of a little-endian word (all when `n >= 8`).
-#[inline(always)]
-fn head_mask(n: usize) -> u64 {
-    if n >= 8 {
-        u64::MAX
-    } else {
-        (1u64 << (8 * n)) - 1
     }
 }
 
@@ -735,16 +699,16 @@ mod tests {
             let first = first.as_bytes();
             let general = shape(first).expect("a canonical line");
             let Some(layout) = Layout::of(first, &general) else {
-                // Only short timestamps and long interface names keep none.
+                // Only short or long timestamps and long interface names keep none.
                 let sep_len = general.channel.end + 1 - general.close;
-                proptest::prop_assert!(general.close < 9 || sep_len > 16);
+                proptest::prop_assert!(general.close < 9 || general.close > 25 || sep_len > 16);
                 return Ok(());
             };
             if let Some(fast) = layout.shape(next.as_bytes()) {
                 proptest::prop_assert_eq!(Some(fast), shape(next.as_bytes()), "{}", next);
             }
             // The same timestamp width and interface with another frame.
-            let sep_end = layout.close + layout.sep_len;
+            let sep_end = layout.close + layout.sep.width();
             let mut usual = first[..sep_end].to_vec();
             usual.extend_from_slice(same_layout.as_bytes());
             let fast = layout.shape(&usual);

@@ -185,6 +185,111 @@ pub fn all_hex_at(line: &[u8], start: usize, end: usize) -> bool {
     line.get(start..end).is_some_and(all_hex)
 }
 
+/// Keeps the first `n` bytes of a little-endian word (all when `n >= 8`).
+#[inline(always)]
+fn head_mask(n: usize) -> u64 {
+    if n >= 8 {
+        u64::MAX
+    } else {
+        (1u64 << (8 * n)) - 1
+    }
+}
+
+/// Exactly these bytes (at most 16) at a given place of a line, compared a
+/// word at a time: the fixed separators of a line layout (`) can0 `).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fixed {
+    len: usize,
+    /// The first eight bytes (masked to `len` when shorter); when longer,
+    /// also the last eight.
+    head: u64,
+    tail: u64,
+}
+
+impl Fixed {
+    /// The bytes `line[at..at + len]`; `None` when longer than 16 or when
+    /// the line does not hold eight bytes from `at` (words are read whole).
+    pub fn of(line: &[u8], at: usize, len: usize) -> Option<Fixed> {
+        if len > 16 {
+            return None;
+        }
+        Some(Fixed {
+            len,
+            head: word(line, at)? & head_mask(len),
+            tail: if len > 8 {
+                word(line, at + len - 8)?
+            } else {
+                0
+            },
+        })
+    }
+
+    pub fn width(&self) -> usize {
+        self.len
+    }
+
+    /// Whether `line` has these bytes at `at` (and eight bytes to read there).
+    #[inline]
+    pub fn matches(&self, line: &[u8], at: usize) -> bool {
+        word(line, at).is_some_and(|w| w & head_mask(self.len) == self.head)
+            && (self.len <= 8 || word(line, at + self.len - 8) == Some(self.tail))
+    }
+}
+
+/// A number `DIGITS.DIGITS` at fixed places (at least eight characters):
+/// three overlapping words must show a non-digit at the dot and only there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Decimal {
+    probes: [(usize, u64); 3],
+}
+
+impl Decimal {
+    /// For the number in `start..end` with its dot at `dot`.
+    pub fn new(start: usize, dot: usize, end: usize) -> Option<Decimal> {
+        let last = end
+            .checked_sub(8)
+            .filter(|l| *l >= start && end - start <= 24)?;
+        let probe = |p: usize| {
+            let mask = match dot.checked_sub(p) {
+                Some(k) if k < 8 => 0x80u64 << (8 * k),
+                _ => 0,
+            };
+            (p, mask)
+        };
+        Some(Decimal {
+            probes: [probe(start), probe((start + 8).min(last)), probe(last)],
+        })
+    }
+
+    /// Whether `line` has digits at every place but the dot, and a
+    /// non-digit there (the caller checks it is a dot). Covers up to 24
+    /// characters; longer numbers are never given a layout.
+    #[inline]
+    pub fn matches(&self, line: &[u8]) -> bool {
+        self.probes
+            .iter()
+            .all(|&(at, expect)| word(line, at).map(non_digits) == Some(expect))
+    }
+}
+
+/// True when `line[start..end]` (at most 16 bytes, `end >= 8`) is all spaces.
+#[inline]
+pub fn all_spaces_at(line: &[u8], start: usize, end: usize) -> bool {
+    let n = end.wrapping_sub(start);
+    if start > end || n > 16 {
+        return false;
+    }
+    let spaces = LO * u64::from(b' ');
+    let keep = if n == 0 {
+        0
+    } else {
+        u64::MAX << (8 * (8 - n.min(8)))
+    };
+    let last = end.checked_sub(8).and_then(|at| word(line, at));
+    let first_ok = n <= 8 || word(line, start) == Some(spaces);
+    last.is_some_and(|w| (w ^ spaces) & keep == 0) && first_ok
+}
+
 /// Value of a run of at most 19 ASCII digits (caller validated them).
 #[inline]
 pub fn decimal_u64(digits: &[u8]) -> u64 {
@@ -295,6 +400,30 @@ mod tests {
                     s[start..end].iter().all(u8::is_ascii_hexdigit),
                     "{}..{}", start, end
                 );
+            }
+        }
+
+        #[test]
+        fn layout_pieces_equal_naive_checks(
+            s in prop::collection::vec(prop::sample::select(b"0123456789. )x".to_vec()), 8..40),
+            start in 0usize..20,
+            len in 0usize..20,
+            dot in 0usize..30,
+        ) {
+            let end = start + len;
+            if let Some(f) = Fixed::of(&s, start, len) {
+                prop_assert!(f.matches(&s, start));
+                for at in 0..s.len() {
+                    let naive = s.get(at..at + len) == s.get(start..end) && at + 8 <= s.len();
+                    prop_assert_eq!(f.matches(&s, at), naive, "at {}", at);
+                }
+            }
+            if end <= s.len() && end >= 8 && len <= 16 {
+                prop_assert_eq!(all_spaces_at(&s, start, end), s[start..end].iter().all(|b| *b == b' '));
+            }
+            if let Some(d) = Decimal::new(start, dot, end) && end <= s.len() && dot >= start && dot < end && len <= 24 {
+                let naive = (start..end).all(|i| (i == dot) != s[i].is_ascii_digit());
+                prop_assert_eq!(d.matches(&s), naive);
             }
         }
 
