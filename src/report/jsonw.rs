@@ -9,6 +9,7 @@
 use std::collections::HashMap;
 use std::io;
 
+use super::timefmt;
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
@@ -78,16 +79,19 @@ fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
 /// `"1043080100000000"`
 fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
     out.push(b'"');
-    for &b in bytes {
-        out.push(HEX[usize::from(b >> 4)]);
-        out.push(HEX[usize::from(b & 15)]);
+    for chunk in bytes.chunks(16) {
+        let mut text = [0u8; 32];
+        for (pair, &b) in text.chunks_exact_mut(2).zip(chunk) {
+            pair.copy_from_slice(&[HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]]);
+        }
+        out.extend_from_slice(text.get(..2 * chunk.len()).unwrap_or_default());
     }
     out.push(b'"');
 }
 
 fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
     match t {
-        Some(t) => t.push_decimal(out),
+        Some(t) => timefmt::push_time(out, t),
         None => out.extend_from_slice(b"null"),
     }
 }
@@ -180,6 +184,17 @@ impl<K: PartialEq + Copy, const N: usize> Cache<K, N> {
     }
 }
 
+/// A code's description as a JSON string, from the cache.
+fn describe<'c>(cache: &'c mut Cache<(usize, u16), 256>, profile: &Profile, code: u16) -> &'c [u8] {
+    let key = (profile_key(profile), code);
+    let slot = usize::from(code) ^ usize::from(code >> 8) ^ (key.0 >> 4);
+    cache.get(key, slot, || {
+        let mut v = Vec::new();
+        push_str(&mut v, &profile.describe(code));
+        v
+    })
+}
+
 /// The part of an EMCY event that depends only on its payload: `"code"` to
 /// `"manufacturer"`. Real traces repeat the same few error frames.
 #[derive(Clone, Copy, PartialEq)]
@@ -199,7 +214,7 @@ pub struct JsonWriter {
     /// writing it. `None`: compact (ndjson).
     level: Option<usize>,
     /// Per (profile address, code).
-    descriptions: HashMap<(usize, u16), Vec<u8>>,
+    descriptions: Cache<(usize, u16), 256>,
     warnings: HashMap<Warning, Vec<u8>>,
     payloads: Cache<PayloadKey, 256>,
     /// `{"type":"emcy","file":"…","line":` for the last file seen.
@@ -283,13 +298,7 @@ impl JsonWriter {
     }
 
     fn description(&mut self, out: &mut Vec<u8>, profile: &Profile, code: u16) {
-        let key = (profile_key(profile), code);
-        let text = self.descriptions.entry(key).or_insert_with(|| {
-            let mut v = Vec::new();
-            push_str(&mut v, &profile.describe(code));
-            v
-        });
-        out.extend_from_slice(text);
+        out.extend_from_slice(describe(&mut self.descriptions, profile, code));
     }
 
     fn warning(&mut self, out: &mut Vec<u8>, w: Warning) {
@@ -322,14 +331,7 @@ impl JsonWriter {
                 v.extend_from_slice(b",\"class\":\"");
                 v.extend_from_slice(ev.info.class.slug().as_bytes());
                 v.extend_from_slice(b"\",\"description\":");
-                let d = descriptions
-                    .entry((key.profile, ev.emcy.code))
-                    .or_insert_with(|| {
-                        let mut d = Vec::new();
-                        push_str(&mut d, &profile.describe(ev.emcy.code));
-                        d
-                    });
-                v.extend_from_slice(d);
+                v.extend_from_slice(describe(descriptions, profile, ev.emcy.code));
                 v.extend_from_slice(b",\"register\":");
                 push_u64(&mut v, u64::from(ev.emcy.register.0));
                 v.extend_from_slice(b",\"register_bits\":[");
@@ -496,28 +498,36 @@ impl JsonWriter {
         Ok(())
     }
 
+    /// One error of a node object (a trace can have millions): fixed
+    /// fragments between the values, like [`JsonWriter::emcy`].
     fn interval(&mut self, out: &mut Vec<u8>, profile: &Profile, iv: &Interval) {
         let end_time = iv.end.and_then(|e| e.time);
-        let duration = match (iv.start.time, end_time) {
-            (Some(start), Some(end)) => Some(end.since(start)),
-            _ => None,
-        };
-        let mut o = Obj::new(out);
-        push_code(o.key("code"), iv.code);
-        self.description(o.key("description"), profile, iv.code);
-        push_time(o.key("start"), iv.start.time);
-        push_time(o.key("end"), end_time);
-        push_span(o.key("duration"), duration);
+        out.extend_from_slice(b"{\"code\":");
+        push_code(out, iv.code);
+        out.extend_from_slice(b",\"description\":");
+        self.description(out, profile, iv.code);
+        out.extend_from_slice(b",\"start\":");
+        push_time(out, iv.start.time);
+        out.extend_from_slice(b",\"end\":");
+        push_time(out, end_time);
+        out.extend_from_slice(b",\"duration\":");
+        match (iv.start.time, end_time) {
+            (Some(start), Some(end)) => timefmt::push_duration(out, start, end),
+            _ => out.extend_from_slice(b"null"),
+        }
+        out.extend_from_slice(b",\"cleared_by\":");
         match iv.cleared_by {
-            Some(c) => o.str("cleared_by", c.slug()),
-            None => o.key("cleared_by").extend_from_slice(b"null"),
+            Some(c) => push_str(out, c.slug()),
+            None => out.extend_from_slice(b"null"),
         }
-        o.u64("start_line", iv.start.line);
+        out.extend_from_slice(b",\"start_line\":");
+        push_u64(out, iv.start.line);
+        out.extend_from_slice(b",\"end_line\":");
         match iv.end {
-            Some(e) => o.u64("end_line", e.line),
-            None => o.key("end_line").extend_from_slice(b"null"),
+            Some(e) => push_u64(out, e.line),
+            None => out.extend_from_slice(b"null"),
         }
-        o.end();
+        out.push(b'}');
     }
 
     pub fn input(&mut self, out: &mut Vec<u8>, input: &InputReport) {
