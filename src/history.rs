@@ -8,7 +8,8 @@
 //! anonymous temporary file as one sorted run. Reports read the runs back with
 //! a k-way merge, node by node, so no renderer ever holds the whole history.
 
-use std::cmp::Ordering;
+use std::cmp::{Ordering, Reverse};
+use std::collections::BinaryHeap;
 use std::fs::File;
 use std::io::{self, Write};
 use std::sync::Arc;
@@ -89,8 +90,33 @@ impl History {
         self.len == 0
     }
 
-    fn sort(names: &[String], records: &mut [Record]) {
-        records.sort_by(|a, b| order(names, a, b));
+    /// The records' indices in report order. Records are large and names
+    /// are strings, so what is sorted is an integer key per record (the
+    /// channels' name order computed once per call), not the records.
+    fn order(names: &[String], records: &[Record]) -> Vec<(u128, u32)> {
+        let ranks = Ranks::of(names, records.iter().map(|r| r.channel));
+        let mut keys: Vec<(u128, u32)> = records
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (ranks.key(r), i as u32))
+            .collect();
+        // The index makes keys unique: unstable sorting gives the stable order.
+        keys.sort_unstable();
+        keys
+    }
+
+    /// Sorts in report order.
+    fn sort(names: &[String], records: &mut Vec<Record>) {
+        let keys = Self::order(names, records);
+        if keys.windows(2).all(|w| w[0].1 < w[1].1) {
+            return;
+        }
+        let mut slots: Vec<Option<Record>> =
+            std::mem::take(records).into_iter().map(Some).collect();
+        records.extend(
+            keys.iter()
+                .filter_map(|&(_, i)| slots.get_mut(i as usize).and_then(Option::take)),
+        );
     }
 
     /// Writes the buffer as one sorted run.
@@ -98,7 +124,7 @@ impl History {
         if self.buffer.is_empty() {
             return Ok(());
         }
-        Self::sort(&self.names, &mut self.buffer);
+        let keys = Self::order(&self.names, &self.buffer);
         let file = match &mut self.file {
             Some(f) => f,
             None => self.file.insert(tempfile::tempfile()?),
@@ -109,7 +135,10 @@ impl History {
             .map_or(0, |r| r.offset + r.records * RECORD as u64);
         let mut out = io::BufWriter::with_capacity(64 * 1024, &*file);
         let mut bytes = [0u8; RECORD];
-        for r in &self.buffer {
+        for r in keys
+            .iter()
+            .filter_map(|&(_, i)| self.buffer.get(i as usize))
+        {
             encode(r, &mut bytes);
             out.write_all(&bytes)?;
         }
@@ -135,7 +164,9 @@ impl History {
             self.spill_error = Some(e.to_string());
         }
         Self::sort(&self.names, &mut self.buffer);
+        let ranks = Ranks::of(&self.names, 0..self.names.len() as u32);
         ErrorHistory {
+            ranks: Arc::new(ranks),
             names: Arc::new(self.names),
             memory: self.buffer,
             file: self.file.map(Arc::new),
@@ -145,19 +176,85 @@ impl History {
     }
 }
 
-/// Report order: channel name, node, raise order.
-fn order(names: &[String], a: &Record, b: &Record) -> Ordering {
-    let name = |r: &Record| names.get(r.channel as usize).map_or("", String::as_str);
-    name(a)
-        .cmp(name(b))
-        .then(a.node.cmp(&b.node))
-        .then(a.interval.seq.cmp(&b.interval.seq))
+/// Report order (channel name, node, raise order) as integers: channels
+/// ranked by name (equal names rank equal; a channel the names do not know
+/// reads as `""`, like [`ErrorHistory::channel_name`]).
+#[derive(Debug, Default)]
+struct Ranks {
+    /// (channel, rank), sorted by channel.
+    by_channel: Vec<(u32, u32)>,
+    /// Per rank, a channel with that name.
+    channels: Vec<u32>,
+}
+
+fn name_of(names: &[String], channel: u32) -> &str {
+    names.get(channel as usize).map_or("", String::as_str)
+}
+
+impl Ranks {
+    /// Ranks of the given channels.
+    fn of(names: &[String], channels: impl Iterator<Item = u32>) -> Ranks {
+        let mut ids: Vec<u32> = Vec::new();
+        for c in channels {
+            // Nearly every history has one or two channels.
+            if ids.last() != Some(&c) {
+                ids.push(c);
+            }
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        let mut by_name = ids.clone();
+        by_name.sort_by(|&a, &b| name_of(names, a).cmp(name_of(names, b)));
+        let mut by_channel = Vec::with_capacity(ids.len());
+        let mut channels: Vec<u32> = Vec::new();
+        for &c in &by_name {
+            let same = channels
+                .last()
+                .is_some_and(|&p| name_of(names, p) == name_of(names, c));
+            if !same {
+                channels.push(c);
+            }
+            by_channel.push((c, channels.len().saturating_sub(1) as u32));
+        }
+        by_channel.sort_unstable();
+        Ranks {
+            by_channel,
+            channels,
+        }
+    }
+
+    fn rank(&self, channel: u32) -> u32 {
+        match self.by_channel.binary_search_by_key(&channel, |&(c, _)| c) {
+            Ok(i) => self.by_channel.get(i).map_or(0, |&(_, r)| r),
+            Err(_) => 0,
+        }
+    }
+
+    fn key(&self, r: &Record) -> u128 {
+        let rank = match self.by_channel.as_slice() {
+            [(_, only)] => *only,
+            _ => self.rank(r.channel),
+        };
+        (u128::from(rank) << 72) | (u128::from(r.node) << 64) | u128::from(r.interval.seq)
+    }
+
+    /// Where `name` ranks: `Ok(rank)` if a channel has it, else `Err(rank)`
+    /// of the first channel named after it.
+    fn find(&self, names: &[String], name: &str) -> Result<u32, u32> {
+        let at = self.channels.partition_point(|&c| name_of(names, c) < name);
+        let found = self
+            .channels
+            .get(at)
+            .is_some_and(|&c| name_of(names, c) == name);
+        if found { Ok(at as u32) } else { Err(at as u32) }
+    }
 }
 
 /// A finished history: sorted runs on disk plus a sorted rest in memory.
 #[derive(Clone, Debug)]
 pub struct ErrorHistory {
     names: Arc<Vec<String>>,
+    ranks: Arc<Ranks>,
     memory: Vec<Record>,
     file: Option<Arc<File>>,
     runs: Vec<Run>,
@@ -183,10 +280,17 @@ impl ErrorHistory {
             sources,
             memory: 0,
             heads: Vec::new(),
+            heap: BinaryHeap::new(),
             pending: None,
             error: None,
         };
         m.heads = (0..m.sources.len()).map(|i| m.pull(i)).collect();
+        m.heap = m
+            .heads
+            .iter()
+            .enumerate()
+            .filter_map(|(i, h)| h.as_ref().map(|r| Reverse((self.ranks.key(r), i))))
+            .collect();
         m
     }
 
@@ -271,6 +375,8 @@ pub struct Merge<'h> {
     sources: Vec<RunReader>,
     memory: usize,
     heads: Vec<Option<Record>>,
+    /// The heads' keys and sources, least first.
+    heap: BinaryHeap<Reverse<(u128, usize)>>,
     /// A record read one too far by [`NodeErrors`] (the next node's first).
     pending: Option<Record>,
     error: Option<io::Error>,
@@ -298,21 +404,10 @@ impl<'h> Merge<'h> {
         if let Some(r) = self.pending.take() {
             return Some(r);
         }
-        let names = &self.history.names;
-        let mut best: Option<usize> = None;
-        for (i, head) in self.heads.iter().enumerate() {
-            let Some(h) = head else { continue };
-            let better = match best.and_then(|b| self.heads[b].as_ref()) {
-                Some(current) => order(names, h, current) == Ordering::Less,
-                None => true,
-            };
-            if better {
-                best = Some(i);
-            }
-        }
-        let from_memory = self.history.memory.get(self.memory);
-        let take_memory = match (from_memory, best.and_then(|b| self.heads[b].as_ref())) {
-            (Some(m), Some(h)) => order(names, m, h) != Ordering::Greater,
+        let history = self.history;
+        let from_memory = history.memory.get(self.memory);
+        let take_memory = match (from_memory, self.heap.peek()) {
+            (Some(m), Some(Reverse((head, _)))) => history.ranks.key(m) <= *head,
             (Some(_), None) => true,
             (None, _) => false,
         };
@@ -320,17 +415,22 @@ impl<'h> Merge<'h> {
             self.memory += 1;
             return from_memory.cloned();
         }
-        let i = best?;
-        let record = self.heads[i].take();
-        self.heads[i] = self.pull(i);
+        let Reverse((_, i)) = self.heap.pop()?;
+        let record = self.heads.get_mut(i).and_then(Option::take);
+        let next = self.pull(i);
+        if let (Some(next), Some(head)) = (next, self.heads.get_mut(i)) {
+            self.heap.push(Reverse((history.ranks.key(&next), i)));
+            *head = Some(next);
+        }
         record
     }
 
     /// The intervals of one node, skipping any before it (unselected nodes).
     pub fn node_errors<'m>(&'m mut self, channel: &'m str, node: u8) -> NodeErrors<'m, 'h> {
+        let history = self.history;
         NodeErrors {
             merge: self,
-            channel,
+            channel: history.ranks.find(&history.names, channel),
             node,
         }
     }
@@ -339,7 +439,8 @@ impl<'h> Merge<'h> {
 /// Iterator over one node's intervals from a [`Merge`].
 pub struct NodeErrors<'m, 'h> {
     merge: &'m mut Merge<'h>,
-    channel: &'m str,
+    /// The channel's rank, or where it would rank.
+    channel: Result<u32, u32>,
     node: u8,
 }
 
@@ -349,8 +450,13 @@ impl Iterator for NodeErrors<'_, '_> {
     fn next(&mut self) -> Option<Interval> {
         loop {
             let r = self.merge.next_record()?;
-            let name = self.merge.history.channel_name(r.channel);
-            match (name, r.node).cmp(&(self.channel, self.node)) {
+            let rank = self.merge.history.ranks.rank(r.channel);
+            let order = match self.channel {
+                Ok(channel) => (rank, r.node).cmp(&(channel, self.node)),
+                Err(at) if rank < at => Ordering::Less,
+                Err(_) => Ordering::Greater,
+            };
+            match order {
                 Ordering::Less => continue,
                 Ordering::Equal => return Some(r.interval),
                 Ordering::Greater => {
@@ -567,6 +673,25 @@ mod tests {
         for spill_at in [1, 7, 100, 1000] {
             assert_eq!(roundtrip(spill_at), in_memory, "spill every {spill_at}");
         }
+    }
+
+    #[test]
+    fn node_errors_of_a_channel_without_errors_take_nothing_from_the_next() {
+        let mut h = History::new(2);
+        let c = h.add_channel("c");
+        let a = h.add_channel("a");
+        for seq in 0..5 {
+            h.push(c, 1, interval(seq, 0x2310, true));
+            h.push(a, 1, interval(seq, 0x2310, true));
+        }
+        let hist = h.finish([]);
+        let mut m = hist.merge();
+        assert_eq!(m.node_errors("", 1).count(), 0);
+        assert_eq!(m.node_errors("a", 1).count(), 5);
+        assert_eq!(m.node_errors("b", 1).count(), 0);
+        assert_eq!(m.node_errors("c", 0).count(), 0);
+        assert_eq!(m.node_errors("c", 1).count(), 5);
+        assert!(m.next_record().is_none());
     }
 
     #[test]

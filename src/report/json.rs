@@ -21,7 +21,7 @@ impl<W: Write> JsonDocument<W> {
         JsonDocument {
             out,
             events: 0,
-            json: JsonWriter::new(),
+            json: JsonWriter::pretty(2),
             compact: Vec::new(),
             text: Vec::new(),
         }
@@ -54,8 +54,19 @@ impl<W: Write> JsonDocument<W> {
 
 impl<W: Write> Renderer for JsonDocument<W> {
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
-        self.json.emcy(&mut self.compact, event);
-        self.event()
+        // Written indented as it goes, not re-indented (the hot path).
+        if self.events == 0 {
+            self.out.write_all(b"{\n  \"events\": [")?;
+        }
+        self.text.clear();
+        self.text.extend_from_slice(if self.events == 0 {
+            b"\n    "
+        } else {
+            b",\n    "
+        });
+        self.json.emcy(&mut self.text, event);
+        self.events += 1;
+        self.out.write_all(&self.text)
     }
 
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()> {

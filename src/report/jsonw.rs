@@ -9,6 +9,7 @@
 use std::collections::HashMap;
 use std::io;
 
+use super::timefmt;
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
@@ -78,16 +79,19 @@ fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
 /// `"1043080100000000"`
 fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
     out.push(b'"');
-    for &b in bytes {
-        out.push(HEX[usize::from(b >> 4)]);
-        out.push(HEX[usize::from(b & 15)]);
+    for chunk in bytes.chunks(16) {
+        let mut text = [0u8; 32];
+        for (pair, &b) in text.chunks_exact_mut(2).zip(chunk) {
+            pair.copy_from_slice(&[HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]]);
+        }
+        out.extend_from_slice(text.get(..2 * chunk.len()).unwrap_or_default());
     }
     out.push(b'"');
 }
 
 fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
     match t {
-        Some(t) => t.push_decimal(out),
+        Some(t) => timefmt::push_time(out, t),
         None => out.extend_from_slice(b"null"),
     }
 }
@@ -180,6 +184,17 @@ impl<K: PartialEq + Copy, const N: usize> Cache<K, N> {
     }
 }
 
+/// A code's description as a JSON string, from the cache.
+fn describe<'c>(cache: &'c mut Cache<(usize, u16), 256>, profile: &Profile, code: u16) -> &'c [u8] {
+    let key = (profile_key(profile), code);
+    let slot = usize::from(code) ^ usize::from(code >> 8) ^ (key.0 >> 4);
+    cache.get(key, slot, || {
+        let mut v = Vec::new();
+        push_str(&mut v, &profile.describe(code));
+        v
+    })
+}
+
 /// The part of an EMCY event that depends only on its payload: `"code"` to
 /// `"manufacturer"`. Real traces repeat the same few error frames.
 #[derive(Clone, Copy, PartialEq)]
@@ -194,8 +209,12 @@ struct PayloadKey {
 /// payload fragments, the per-file prefix and channel names.
 #[derive(Default)]
 pub struct JsonWriter {
+    /// Events indented as [`pretty`] at this level would (the JSON
+    /// document), written directly: re-indenting compact text cost more than
+    /// writing it. `None`: compact (ndjson).
+    level: Option<usize>,
     /// Per (profile address, code).
-    descriptions: HashMap<(usize, u16), Vec<u8>>,
+    descriptions: Cache<(usize, u16), 256>,
     warnings: HashMap<Warning, Vec<u8>>,
     payloads: Cache<PayloadKey, 256>,
     /// `{"type":"emcy","file":"…","line":` for the last file seen.
@@ -204,19 +223,82 @@ pub struct JsonWriter {
     channel: (String, Vec<u8>),
 }
 
+/// `,"key":` of a member of the event object, one literal when compact.
+macro_rules! key {
+    ($writer:expr, $out:expr, $key:literal) => {
+        match $writer.level {
+            None => $out.extend_from_slice(concat!(",\"", $key, "\":").as_bytes()),
+            Some(level) => JsonWriter::pretty_key($out, level, $key.as_bytes()),
+        }
+    };
+}
+
 impl JsonWriter {
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// EMCY events come out as `pretty(compact, level)` would give them.
+    pub fn pretty(level: usize) -> Self {
+        JsonWriter {
+            level: Some(level),
+            ..Self::default()
+        }
+    }
+
+    /// A cached fragment in this writer's layout: `compact` as it is, or
+    /// re-indented as it sits in the event (`inside` the object, or the
+    /// object's start).
+    fn layout(level: Option<usize>, inside: bool, compact: Vec<u8>) -> Vec<u8> {
+        match level {
+            None => compact,
+            Some(level) => {
+                let mut v = Vec::with_capacity(compact.len() * 2);
+                Pretty::new(level + usize::from(inside)).feed(&compact, &mut v);
+                v
+            }
+        }
+    }
+
+    /// `,"key": ` of a member of the indented event object.
+    fn pretty_key(out: &mut Vec<u8>, level: usize, key: &[u8]) {
+        out.push(b',');
+        newline(out, level + 1);
+        out.push(b'"');
+        out.extend_from_slice(key);
+        out.extend_from_slice(b"\": ");
+    }
+
+    /// An array member of the event object, items written by `item`.
+    #[inline(always)]
+    fn array<T: Copy>(
+        &mut self,
+        out: &mut Vec<u8>,
+        items: &[T],
+        mut item: impl FnMut(&mut Self, &mut Vec<u8>, T),
+    ) {
+        out.push(b'[');
+        if items.is_empty() {
+            out.push(b']');
+            return;
+        }
+        for (i, t) in items.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            if let Some(level) = self.level {
+                newline(out, level + 2);
+            }
+            item(self, out, *t);
+        }
+        if let Some(level) = self.level {
+            newline(out, level + 1);
+        }
+        out.push(b']');
+    }
+
     fn description(&mut self, out: &mut Vec<u8>, profile: &Profile, code: u16) {
-        let key = (profile_key(profile), code);
-        let text = self.descriptions.entry(key).or_insert_with(|| {
-            let mut v = Vec::new();
-            push_str(&mut v, &profile.describe(code));
-            v
-        });
-        out.extend_from_slice(text);
+        out.extend_from_slice(describe(&mut self.descriptions, profile, code));
     }
 
     fn warning(&mut self, out: &mut Vec<u8>, w: Warning) {
@@ -241,6 +323,7 @@ impl JsonWriter {
             ^ ev.data.get(3).map_or(0, |b| usize::from(*b) * 7);
         let fragment = {
             let descriptions = &mut self.descriptions;
+            let level = self.level;
             self.payloads.get(key, slot, || {
                 let mut v = Vec::with_capacity(256);
                 v.extend_from_slice(b",\"code\":");
@@ -248,14 +331,7 @@ impl JsonWriter {
                 v.extend_from_slice(b",\"class\":\"");
                 v.extend_from_slice(ev.info.class.slug().as_bytes());
                 v.extend_from_slice(b"\",\"description\":");
-                let d = descriptions
-                    .entry((key.profile, ev.emcy.code))
-                    .or_insert_with(|| {
-                        let mut d = Vec::new();
-                        push_str(&mut d, &profile.describe(ev.emcy.code));
-                        d
-                    });
-                v.extend_from_slice(d);
+                v.extend_from_slice(describe(descriptions, profile, ev.emcy.code));
                 v.extend_from_slice(b",\"register\":");
                 push_u64(&mut v, u64::from(ev.emcy.register.0));
                 v.extend_from_slice(b",\"register_bits\":[");
@@ -271,7 +347,7 @@ impl JsonWriter {
                 push_decoded(&mut v, ev.decoded);
                 v.extend_from_slice(b",\"profile\":");
                 push_str(&mut v, profile.name());
-                v
+                Self::layout(level, true, v)
             })
         };
         out.extend_from_slice(fragment);
@@ -282,7 +358,7 @@ impl JsonWriter {
             let mut v = b"{\"type\":\"emcy\",\"file\":".to_vec();
             push_str(&mut v, file);
             v.extend_from_slice(b",\"line\":");
-            self.emcy_prefix = (file.to_string(), v);
+            self.emcy_prefix = (file.to_string(), Self::layout(self.level, false, v));
         }
         out.extend_from_slice(&self.emcy_prefix.1);
     }
@@ -292,47 +368,48 @@ impl JsonWriter {
             let mut v = b",\"channel\":".to_vec();
             push_str(&mut v, channel);
             v.extend_from_slice(b",\"node\":");
-            self.channel = (channel.to_string(), v);
+            self.channel = (channel.to_string(), Self::layout(self.level, true, v));
         }
         out.extend_from_slice(&self.channel.1);
     }
 
     /// The hot path: one event, as fixed fragments between the values.
     pub fn emcy(&mut self, out: &mut Vec<u8>, ev: &EmcyEvent<'_>) {
-        out.reserve(512);
+        out.reserve(1024);
         self.emcy_prefix(out, ev.file);
         push_u64(out, ev.line);
-        out.extend_from_slice(b",\"time\":");
+        key!(self, out, "time");
         push_time(out, ev.time);
         self.channel(out, ev.channel);
         push_u64(out, u64::from(ev.node));
-        out.extend_from_slice(b",\"cob_id\":");
+        key!(self, out, "cob_id");
         push_u64(out, u64::from(ev.cob_id));
-        out.extend_from_slice(b",\"data\":");
+        key!(self, out, "data");
         push_hex(out, ev.data);
         self.payload(out, ev);
-        out.extend_from_slice(b",\"profile_source\":\"");
+        key!(self, out, "profile_source");
+        out.push(b'"');
         out.extend_from_slice(ev.profile.source.slug().as_bytes());
         out.push(b'"');
-        out.extend_from_slice(b",\"transition\":");
+        key!(self, out, "transition");
         match ev.transition {
             Some(t) => push_u64(out, u64::from(t)),
             None => out.extend_from_slice(b"null"),
         }
-        out.extend_from_slice(b",\"state\":\"");
+        key!(self, out, "state");
+        out.push(b'"');
         out.extend_from_slice(ev.state.slug().as_bytes());
-        out.extend_from_slice(b"\",\"active\":");
-        push_codes(out, ev.active);
-        out.extend_from_slice(b",\"cleared\":");
-        push_codes(out, ev.cleared);
-        out.extend_from_slice(b",\"warnings\":[");
-        for (i, warning) in ev.warnings.iter().enumerate() {
-            if i > 0 {
-                out.push(b',');
-            }
-            self.warning(out, *warning);
+        out.push(b'"');
+        key!(self, out, "active");
+        self.array(out, ev.active, |_, out, c| push_code(out, c));
+        key!(self, out, "cleared");
+        self.array(out, ev.cleared, |_, out, c| push_code(out, c));
+        key!(self, out, "warnings");
+        self.array(out, ev.warnings, |w, out, warning| w.warning(out, warning));
+        if let Some(level) = self.level {
+            newline(out, level);
         }
-        out.extend_from_slice(b"]}");
+        out.push(b'}');
     }
 
     pub fn boot(&mut self, out: &mut Vec<u8>, ev: &BootEvent<'_>) {
@@ -421,28 +498,36 @@ impl JsonWriter {
         Ok(())
     }
 
+    /// One error of a node object (a trace can have millions): fixed
+    /// fragments between the values, like [`JsonWriter::emcy`].
     fn interval(&mut self, out: &mut Vec<u8>, profile: &Profile, iv: &Interval) {
         let end_time = iv.end.and_then(|e| e.time);
-        let duration = match (iv.start.time, end_time) {
-            (Some(start), Some(end)) => Some(end.since(start)),
-            _ => None,
-        };
-        let mut o = Obj::new(out);
-        push_code(o.key("code"), iv.code);
-        self.description(o.key("description"), profile, iv.code);
-        push_time(o.key("start"), iv.start.time);
-        push_time(o.key("end"), end_time);
-        push_span(o.key("duration"), duration);
+        out.extend_from_slice(b"{\"code\":");
+        push_code(out, iv.code);
+        out.extend_from_slice(b",\"description\":");
+        self.description(out, profile, iv.code);
+        out.extend_from_slice(b",\"start\":");
+        push_time(out, iv.start.time);
+        out.extend_from_slice(b",\"end\":");
+        push_time(out, end_time);
+        out.extend_from_slice(b",\"duration\":");
+        match (iv.start.time, end_time) {
+            (Some(start), Some(end)) => timefmt::push_duration(out, start, end),
+            _ => out.extend_from_slice(b"null"),
+        }
+        out.extend_from_slice(b",\"cleared_by\":");
         match iv.cleared_by {
-            Some(c) => o.str("cleared_by", c.slug()),
-            None => o.key("cleared_by").extend_from_slice(b"null"),
+            Some(c) => push_str(out, c.slug()),
+            None => out.extend_from_slice(b"null"),
         }
-        o.u64("start_line", iv.start.line);
+        out.extend_from_slice(b",\"start_line\":");
+        push_u64(out, iv.start.line);
+        out.extend_from_slice(b",\"end_line\":");
         match iv.end {
-            Some(e) => o.u64("end_line", e.line),
-            None => o.key("end_line").extend_from_slice(b"null"),
+            Some(e) => push_u64(out, e.line),
+            None => out.extend_from_slice(b"null"),
         }
-        o.end();
+        out.push(b'}');
     }
 
     pub fn input(&mut self, out: &mut Vec<u8>, input: &InputReport) {
@@ -498,6 +583,19 @@ pub fn pretty(compact: &[u8], level: usize, out: &mut Vec<u8>) {
     Pretty::new(level).feed(compact, out);
 }
 
+/// A line break and `level` levels of indentation (two blanks each).
+#[inline(always)]
+fn newline(out: &mut Vec<u8>, level: usize) {
+    const BLANKS: &[u8; 64] = &[b' '; 64];
+    out.push(b'\n');
+    let mut n = 2 * level;
+    while n > 0 {
+        let k = n.min(BLANKS.len());
+        out.extend_from_slice(&BLANKS[..k]);
+        n -= k;
+    }
+}
+
 /// How many bytes of one JSON value are built before they are written.
 pub const FLUSH_AT: usize = 64 * 1024;
 
@@ -521,33 +619,49 @@ impl Pretty {
     }
 
     fn newline(&self, out: &mut Vec<u8>) {
-        out.push(b'\n');
-        out.extend(std::iter::repeat_n(b' ', 2 * self.depth));
+        newline(out, self.depth);
     }
 
+    /// Copies runs of plain bytes at once (string contents, numbers): only
+    /// quotes, backslashes and structural characters stop the scan.
     pub fn feed(&mut self, compact: &[u8], out: &mut Vec<u8>) {
-        for &b in compact {
+        out.reserve(compact.len() + compact.len() / 2);
+        let mut rest = compact;
+        while let Some((&b, tail)) = rest.split_first() {
             if let Some(open) = self.open.take() {
                 let close = if open == b'{' { b'}' } else { b']' };
                 out.push(open);
                 if b == close {
                     out.push(close);
+                    rest = tail;
                     continue;
                 }
                 self.depth += 1;
                 self.newline(out);
             }
             if self.in_string {
-                out.push(b);
                 if self.escaped {
                     self.escaped = false;
-                } else if b == b'\\' {
-                    self.escaped = true;
-                } else if b == b'"' {
-                    self.in_string = false;
+                    out.push(b);
+                    rest = tail;
+                    continue;
+                }
+                let n = memchr::memchr2(b'"', b'\\', rest).unwrap_or(rest.len());
+                let (run, after) = rest.split_at(n);
+                out.extend_from_slice(run);
+                rest = after;
+                if let Some((&q, tail)) = rest.split_first() {
+                    out.push(q);
+                    if q == b'\\' {
+                        self.escaped = true;
+                    } else {
+                        self.in_string = false;
+                    }
+                    rest = tail;
                 }
                 continue;
             }
+            rest = tail;
             match b {
                 b'"' => {
                     self.in_string = true;

@@ -3,13 +3,12 @@
 //! them), then the node states and error timeline; at the end the input counts.
 
 use std::borrow::Cow;
-use std::collections::HashMap;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
-use super::timefmt::{TimeFormat, TimeStyle};
+use super::timefmt::{TimeFormat, TimeStyle, push_duration};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::timeline::Interval;
@@ -57,7 +56,7 @@ impl<W: Write> TableReport<W> {
             times: TimeFormat::default(),
             line: String::new(),
             registers: vec![None; 256],
-            descriptions: HashMap::new(),
+            descriptions: Vec::new(),
         }
     }
 
@@ -198,7 +197,7 @@ impl<W: Write> TableReport<W> {
         node: u8,
     ) {
         let start = line.len();
-        line.push_str(&self.times.show_opt(time));
+        self.times.push_opt(line, time);
         pad_to(line, start + l.time);
         line.push_str("  ");
         let channel = printable(channel);
@@ -227,10 +226,10 @@ impl<W: Write> TableReport<W> {
         let mut rows = 0u64;
         let times = self.times.clone();
         let mut descriptions = std::mem::take(&mut self.descriptions);
-        for_each_timeline_row(input, &times, &mut descriptions, |cells| {
+        for_each_timeline_row(input, &times, &mut descriptions, |_, cell_widths| {
             rows += 1;
-            for (w, c) in widths.iter_mut().zip(cells) {
-                *w = (*w).max(display_width(c));
+            for (w, c) in widths.iter_mut().zip(cell_widths) {
+                *w = (*w).max(*c);
             }
             Ok(())
         })?;
@@ -242,9 +241,12 @@ impl<W: Write> TableReport<W> {
         writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
         write_row(&mut self.out, &TIMELINE_HEADER, &widths, &TIMELINE_RIGHT)?;
         let out = &mut self.out;
-        let written = for_each_timeline_row(input, &times, &mut descriptions, |cells| {
-            write_row(out, cells, &widths, &TIMELINE_RIGHT)
-        });
+        let mut line = String::new();
+        let written =
+            for_each_timeline_row(input, &times, &mut descriptions, |cells, cell_widths| {
+                push_row(&mut line, cells, cell_widths, &widths, &TIMELINE_RIGHT);
+                out.write_all(line.as_bytes())
+            });
         self.descriptions = descriptions;
         written
     }
@@ -288,13 +290,30 @@ fn decoded_text(d: &Decoded) -> String {
     format!("manufacturer: {}", fields.join("; "))
 }
 
-/// Descriptions by (profile address, code): profiles live for the whole run.
-type Descriptions = HashMap<(usize, u16), String>;
+/// Descriptions and their display widths by (profile address, code):
+/// profiles live for the whole run. Direct-mapped by code (a miss
+/// recomputes): no hashing on the per-event path.
+type Descriptions = Vec<Option<((usize, u16), String, usize)>>;
 
-fn describe<'d>(cache: &'d mut Descriptions, profile: &Profile, code: u16) -> &'d str {
-    cache
-        .entry((std::ptr::from_ref(profile) as usize, code))
-        .or_insert_with(|| profile.describe(code))
+const DESCRIPTION_SLOTS: usize = 256;
+
+fn describe<'d>(cache: &'d mut Descriptions, profile: &Profile, code: u16) -> (&'d str, usize) {
+    let key = (std::ptr::from_ref(profile) as usize, code);
+    if cache.len() != DESCRIPTION_SLOTS {
+        *cache = vec![None; DESCRIPTION_SLOTS];
+    }
+    let slot = (usize::from(code) ^ usize::from(code >> 8) ^ (key.0 >> 4)) % DESCRIPTION_SLOTS;
+    match cache.get_mut(slot) {
+        Some(entry) => {
+            if !matches!(entry, Some((k, _, _)) if *k == key) {
+                let text = profile.describe(code);
+                let width = display_width(&text);
+                *entry = Some((key, text, width));
+            }
+            entry.as_ref().map_or(("", 0), |(_, t, w)| (t.as_str(), *w))
+        }
+        None => ("", 0),
+    }
 }
 
 /// Columns a text takes on a terminal; ASCII (nearly every cell) needs no
@@ -309,11 +328,16 @@ fn display_width(s: &str) -> usize {
 
 fn code_text(code: u16) -> String {
     let mut s = String::with_capacity(6);
+    push_code(&mut s, code);
+    s
+}
+
+/// `0x4310`
+fn push_code(s: &mut String, code: u16) {
     s.push_str("0x");
     for shift in [12, 8, 4, 0] {
         s.push(hex_digit((code >> shift) as u8));
     }
-    s
 }
 
 fn hex_digit(nibble: u8) -> char {
@@ -364,11 +388,10 @@ impl<W: Write> Renderer for TableReport<W> {
         let mut line = std::mem::take(&mut self.line);
         line.clear();
         self.push_prefix(&mut line, l, ev.time, ev.channel, ev.node);
-        let code = code_text(ev.emcy.code);
         if self.color {
-            line.push_str(&self.paint(style, &code));
+            line.push_str(&self.paint(style, &code_text(ev.emcy.code)));
         } else {
-            line.push_str(&code);
+            push_code(&mut line, ev.emcy.code);
         }
         line.push_str("  ");
         match ev.transition {
@@ -398,14 +421,15 @@ impl<W: Write> Renderer for TableReport<W> {
         }
         pad_to(&mut line, start + MANUFACTURER_WIDTH);
         line.push_str("  ");
-        line.push_str(describe(
-            &mut self.descriptions,
-            ev.profile.profile,
-            ev.emcy.code,
-        ));
+        line.push_str(describe(&mut self.descriptions, ev.profile.profile, ev.emcy.code).0);
         if !ev.cleared.is_empty() {
             line.push_str(" (cleared ");
-            line.push_str(&codes_list(ev.cleared));
+            for (i, &c) in ev.cleared.iter().enumerate() {
+                if i > 0 {
+                    line.push_str(", ");
+                }
+                push_code(&mut line, c);
+            }
             line.push(')');
         }
         let trimmed = line.trim_end().len();
@@ -519,54 +543,125 @@ const TIMELINE_HEADER: [&str; 8] = [
 ];
 const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
 
-/// Fills the cells of one error timeline row.
+/// Fills the cells of one error timeline row; returns their display widths.
 fn timeline_cells(
     cells: &mut [String; 8],
     times: &TimeFormat,
     descriptions: &mut Descriptions,
     n: &NodeReport,
     iv: &Interval,
-) {
+) -> [usize; 8] {
     let (channel, node) = (n.channel.as_str(), n.node);
-    use std::fmt::Write as _;
     for c in cells.iter_mut() {
         c.clear();
     }
+    let [
+        channel_cell,
+        node_cell,
+        code,
+        description,
+        start,
+        end,
+        duration,
+        cleared_by,
+    ] = cells;
     let end_time = iv.end.and_then(|e| e.time);
-    cells[0].push_str(&printable(channel));
-    let _ = write!(cells[1], "{node}");
-    let _ = write!(cells[2], "0x{:04X}", iv.code);
-    cells[3].push_str(describe(descriptions, n.profile, iv.code));
-    let _ = match iv.start.time {
-        Some(t) => write!(cells[4], "{}", times.show(t)),
-        None => write!(cells[4], "line {}", iv.start.line),
-    };
-    let _ = match (iv.end, iv.start.time, end_time) {
-        (None, _, _) => write!(cells[5], "active").and_then(|_| write!(cells[6], "-")),
-        (Some(_), Some(s), Some(e)) => {
-            write!(cells[5], "{}", times.show(e)).and_then(|_| write!(cells[6], "{}", e.since(s)))
+    channel_cell.push_str(&printable(channel));
+    node_cell.push_str(itoa::Buffer::new().format(node));
+    push_code(code, iv.code);
+    let (text, description_width) = describe(descriptions, n.profile, iv.code);
+    description.push_str(text);
+    match iv.start.time {
+        Some(t) => times.push(start, t),
+        None => {
+            start.push_str("line ");
+            start.push_str(itoa::Buffer::new().format(iv.start.line));
         }
-        (Some(e), _, _) => write!(cells[5], "line {}", e.line).and_then(|_| write!(cells[6], "-")),
-    };
-    cells[7].push_str(iv.cleared_by.map_or("-", |c| c.slug()));
+    }
+    match (iv.end, iv.start.time, end_time) {
+        (None, _, _) => {
+            end.push_str("active");
+            duration.push('-');
+        }
+        (Some(_), Some(s), Some(e)) => {
+            times.push(end, e);
+            let mut text = Vec::with_capacity(32);
+            push_duration(&mut text, s, e);
+            duration.push_str(std::str::from_utf8(&text).unwrap_or_default());
+        }
+        (Some(e), _, _) => {
+            end.push_str("line ");
+            end.push_str(itoa::Buffer::new().format(e.line));
+            duration.push('-');
+        }
+    }
+    cleared_by.push_str(iv.cleared_by.map_or("-", |c| c.slug()));
+    let mut widths = [0; 8];
+    for (i, (w, c)) in widths.iter_mut().zip(cells.iter()).enumerate() {
+        // The description's width is cached with it (it is rarely ASCII).
+        *w = if i == 3 {
+            description_width
+        } else {
+            display_width(c)
+        };
+    }
+    widths
 }
 
-/// Calls `row` for every error of the selected nodes, in report order.
+/// Calls `row` for every error of the selected nodes, in report order,
+/// with the cells' display widths.
 fn for_each_timeline_row(
     input: &InputReport,
     times: &TimeFormat,
     descriptions: &mut Descriptions,
-    mut row: impl FnMut(&[String; 8]) -> io::Result<()>,
+    mut row: impl FnMut(&[String; 8], &[usize; 8]) -> io::Result<()>,
 ) -> io::Result<()> {
     let mut cells: [String; 8] = Default::default();
     let mut merge = input.history.merge();
     for n in &input.nodes {
         for iv in merge.node_errors(&n.channel, n.node) {
-            timeline_cells(&mut cells, times, descriptions, n, &iv);
-            row(&cells)?;
+            let widths = timeline_cells(&mut cells, times, descriptions, n, &iv);
+            row(&cells, &widths)?;
         }
     }
     merge.take_error().map_or(Ok(()), Err)
+}
+
+/// [`write_row`] into `line` (cleared first), with the cells' widths known.
+fn push_row(
+    line: &mut String,
+    cells: &[String],
+    cell_widths: &[usize],
+    widths: &[usize],
+    right: &[bool],
+) {
+    const BLANKS: &str = "                                                                ";
+    fn pad(line: &mut String, mut n: usize) {
+        while n > 0 {
+            let k = n.min(BLANKS.len());
+            line.push_str(BLANKS.get(..k).unwrap_or_default());
+            n -= k;
+        }
+    }
+    line.clear();
+    for (i, cell) in cells.iter().enumerate() {
+        let n = widths
+            .get(i)
+            .copied()
+            .unwrap_or(0)
+            .saturating_sub(cell_widths.get(i).copied().unwrap_or(0));
+        if right.get(i).copied().unwrap_or(false) {
+            pad(line, n);
+            line.push_str(cell);
+        } else {
+            line.push_str(cell);
+            pad(line, n);
+        }
+        line.push_str("  ");
+    }
+    let trimmed = line.trim_end().len();
+    line.truncate(trimmed);
+    line.push('\n');
 }
 
 /// One aligned row: cells padded to their column, two blanks between

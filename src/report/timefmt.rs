@@ -1,7 +1,7 @@
 //! How the table shows times (`--time`): candump's Unix times as UTC
 //! ISO-8601 by default, ASC's seconds since measurement start as written.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 use time::OffsetDateTime;
 
@@ -33,6 +33,8 @@ pub struct TimeFormat {
     /// `YYYY-MM-DDTHH:MM:SS` of the last second shown: consecutive events
     /// share it, and the calendar arithmetic is the costly part.
     iso_second: Cell<Option<(u64, [u8; 19])>>,
+    /// The text being built by [`TimeFormat::push`], kept for its capacity.
+    scratch: RefCell<Vec<u8>>,
 }
 
 impl TimeFormat {
@@ -41,6 +43,7 @@ impl TimeFormat {
             style,
             origin: None,
             iso_second: Cell::new(None),
+            scratch: RefCell::new(Vec::new()),
         }
     }
 
@@ -52,46 +55,73 @@ impl TimeFormat {
     }
 
     pub fn show(&self, t: Timestamp) -> String {
-        match self.style {
-            TimeStyle::Absolute => decimal(t),
-            TimeStyle::Auto if t.secs() < UNIX_FROM => decimal(t),
-            TimeStyle::Auto | TimeStyle::Iso => self.iso(t).unwrap_or_else(|| decimal(t)),
-            TimeStyle::Relative => match self.origin {
-                Some(o) => t.since(o).to_string(),
-                None => t.to_string(),
-            },
-        }
+        let mut s = String::new();
+        self.push(&mut s, t);
+        s
     }
 
     pub fn show_opt(&self, t: Option<Timestamp>) -> String {
-        t.map_or_else(|| "-".to_string(), |t| self.show(t))
+        let mut s = String::new();
+        self.push_opt(&mut s, t);
+        s
+    }
+
+    /// Appends what [`TimeFormat::show`] gives, without allocating (the
+    /// table's hot path: a time per event and two per error).
+    pub fn push(&self, out: &mut String, t: Timestamp) {
+        let mut own = Vec::new();
+        let mut scratch = self.scratch.try_borrow_mut();
+        let text = match &mut scratch {
+            Ok(s) => &mut **s,
+            Err(_) => &mut own,
+        };
+        text.clear();
+        match self.style {
+            TimeStyle::Absolute => push_time(text, t),
+            TimeStyle::Auto if t.secs() < UNIX_FROM => push_time(text, t),
+            TimeStyle::Auto | TimeStyle::Iso => {
+                if !self.push_iso(text, t) {
+                    push_time(text, t);
+                }
+            }
+            TimeStyle::Relative => match self.origin {
+                Some(o) => push_duration(text, o, t),
+                None => push_time(text, t),
+            },
+        }
+        // Digits, `-`, `.`, `:`, `T` and `Z` only.
+        out.push_str(std::str::from_utf8(text).unwrap_or_default());
+    }
+
+    /// [`TimeFormat::push`], `-` for no time.
+    pub fn push_opt(&self, out: &mut String, t: Option<Timestamp>) {
+        match t {
+            Some(t) => self.push(out, t),
+            None => out.push('-'),
+        }
     }
 }
 
 impl TimeFormat {
-    /// `2023-11-14T22:13:21.250000Z`, with the trace's fraction digits.
-    fn iso(&self, t: Timestamp) -> Option<String> {
-        let (secs, _, digits) = t.to_raw();
+    /// `2023-11-14T22:13:21.250000Z`, with the trace's fraction digits;
+    /// `false` (nothing written) beyond the calendar.
+    fn push_iso(&self, out: &mut Vec<u8>, t: Timestamp) -> bool {
+        let (secs, atto, digits) = t.to_raw();
         let second = match self.iso_second.get() {
             Some((s, text)) if s == secs => text,
             _ => {
-                let text = calendar_second(secs)?;
+                let Some(text) = calendar_second(secs) else {
+                    return false;
+                };
                 self.iso_second.set(Some((secs, text)));
                 text
             }
         };
-        let mut out = Vec::with_capacity(32);
         out.extend_from_slice(&second);
-        if digits > 0 {
-            // The fraction exactly as the trace wrote it: `secs.frac`.
-            let mut d = Vec::with_capacity(24);
-            t.push_decimal(&mut d);
-            if let Some(dot) = d.iter().position(|&b| b == b'.') {
-                out.extend_from_slice(&d[dot..]);
-            }
-        }
+        // The fraction exactly as the trace wrote it: `secs.frac`.
+        push_fraction(out, atto, digits);
         out.push(b'Z');
-        String::from_utf8(out).ok()
+        true
     }
 }
 
@@ -110,16 +140,104 @@ fn calendar_second(secs: u64) -> Option<[u8; 19]> {
     text.as_bytes().try_into().ok()
 }
 
-/// The seconds as the trace wrote them, without `core::fmt`.
-fn decimal(t: Timestamp) -> String {
-    let mut v = Vec::with_capacity(24);
-    t.push_decimal(&mut v);
-    String::from_utf8(v).unwrap_or_default()
+const ATTO_PER_SEC: u64 = 1_000_000_000_000_000_000;
+
+/// 10^0 ..= 10^18.
+const POW10: [u64; 19] = {
+    let mut t = [1u64; 19];
+    let mut i = 1;
+    while i < t.len() {
+        t[i] = t[i - 1] * 10;
+        i += 1;
+    }
+    t
+};
+
+/// `secs.fraction` with `digits` fraction digits: the text of
+/// `Timestamp`/`Span` `Display`, from the parts, in 64-bit arithmetic (the
+/// `u128` division behind `push_decimal` is the costly part of it).
+fn push_parts(out: &mut Vec<u8>, secs: u64, atto: u64, digits: u8) {
+    out.extend_from_slice(itoa::Buffer::new().format(secs).as_bytes());
+    push_fraction(out, atto, digits);
+}
+
+/// `.fraction` with `digits` digits (nothing for none).
+fn push_fraction(out: &mut Vec<u8>, atto: u64, digits: u8) {
+    let digits = usize::from(digits).min(POW10.len() - 1);
+    if digits == 0 {
+        return;
+    }
+    let scale = POW10.get(POW10.len() - 1 - digits).copied().unwrap_or(1);
+    let mut frac = (atto % ATTO_PER_SEC) / scale;
+    let mut text = [b'0'; 19];
+    text[0] = b'.';
+    for d in text[1..=digits].iter_mut().rev() {
+        *d = b'0' + (frac % 10) as u8;
+        frac /= 10;
+    }
+    out.extend_from_slice(&text[..=digits]);
+}
+
+/// Appends `t` as `Timestamp`'s `Display` writes it.
+pub fn push_time(out: &mut Vec<u8>, t: Timestamp) {
+    let (secs, atto, digits) = t.to_raw();
+    push_parts(out, secs, atto, digits);
+}
+
+/// Appends `end.since(start)` as `Span`'s `Display` writes it.
+pub fn push_duration(out: &mut Vec<u8>, start: Timestamp, end: Timestamp) {
+    let (s0, a0, d0) = start.to_raw();
+    let (s1, a1, d1) = end.to_raw();
+    let (negative, (hi_s, hi_a), (lo_s, lo_a)) = if (s1, a1) >= (s0, a0) {
+        (false, (s1, a1), (s0, a0))
+    } else {
+        (true, (s0, a0), (s1, a1))
+    };
+    let (secs, atto) = if hi_a >= lo_a {
+        (hi_s - lo_s, hi_a - lo_a)
+    } else {
+        (hi_s - lo_s - 1, hi_a + ATTO_PER_SEC - lo_a)
+    };
+    if negative {
+        out.push(b'-');
+    }
+    push_parts(out, secs, atto, d0.max(d1));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_times_and_durations_equal_display() {
+        let samples = [
+            Timestamp::from_raw(0, 0, 0),
+            Timestamp::from_raw(0, 0, 6),
+            Timestamp::from_raw(1_700_000_000, 1_219_000_000_000_000, 6),
+            Timestamp::from_raw(1_700_000_000, 999_999_000_000_000_000, 6),
+            Timestamp::from_raw(12, 500_000_000_000_000_000, 3),
+            Timestamp::from_raw(3, 98_426_000_000_000_000, 6),
+            Timestamp::from_raw(u64::MAX, 999_999_999_999_999_999, 18),
+            Timestamp::from_raw(u64::MAX, 0, 18),
+            Timestamp::from_raw(5, 1, 18),
+            Timestamp::from_raw(7, 100_000_000_000_000_000, 1),
+        ]
+        .map(Option::unwrap);
+        for a in samples {
+            let mut v = Vec::new();
+            push_time(&mut v, a);
+            assert_eq!(String::from_utf8(v).unwrap(), a.to_string());
+            for b in samples {
+                let mut v = Vec::new();
+                push_duration(&mut v, a, b);
+                assert_eq!(
+                    String::from_utf8(v).unwrap(),
+                    b.since(a).to_string(),
+                    "{a} -> {b}"
+                );
+            }
+        }
+    }
 
     fn ts(s: &str) -> Timestamp {
         Timestamp::parse(s.as_bytes()).unwrap()
