@@ -25,7 +25,9 @@ use crate::trace::blf;
 use crate::trace::detect::Detector;
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::{self, Block, BlockReader, DEFAULT_BLOCK, RawLine};
-use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Scan, Timestamp};
+use crate::trace::{
+    ContentFilter, Format, Frame, FrameKind, Interest, Parsed, Payload, Reason, Scan, Timestamp,
+};
 
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
@@ -152,63 +154,72 @@ impl<E: Write> DiagnosticLog<E> {
 
 /// The ids whose frames are decoded; everything else is only counted:
 /// EMCY, NMT error control (boot-up), SDO (identity, moved EMCY ids) and
-/// EMCY ids given on the command line.
+/// EMCY ids given on the command line. On the NMT and SDO ids only some
+/// frames matter ([`content_matters`]); the readers only time the others.
 pub(crate) fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
+    let filter = ContentFilter(content_matters);
+    let nmt = emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127;
+    let responses = sdo::RESPONSE_BASE + 1..=sdo::RESPONSE_BASE + 127;
+    let requests = sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127;
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
-    i.add_standard_range(emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127);
-    i.add_standard_range(sdo::RESPONSE_BASE + 1..=sdo::RESPONSE_BASE + 127);
-    i.add_standard_range(sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127);
+    for ids in [nmt, responses, requests] {
+        i.add_standard_range(ids.clone());
+        i.filter_content(ids, filter);
+    }
     for e in &opts.emcy_ids {
-        add_id(&mut i, e.id, e.extended);
+        add_emcy_id(&mut i, e.id, e.extended);
     }
     i
 }
 
-/// The ids whose frames are decoded ([`interest`]), and which of them are
-/// EMCY ids other than the pre-defined 0x80 + node (`--emcy-id`, or moved by
-/// object 0x1014): those are decoded as EMCY whatever range they are in.
+/// Whether a frame on an NMT error control or SDO id can change more than
+/// the input's first and last time: only boot-ups, and only SDO frames
+/// naming an object the decoder follows. Heartbeats and SDO traffic for
+/// other objects, most frames on those ids, skip all further work.
+fn content_matters(id: u32, data: &[u8]) -> bool {
+    if emcy::is_nmt_error_control(id) {
+        emcy::boot_node(id, data).is_some()
+    } else if sdo::is_sdo_id(id) {
+        sdo::names_followed_object(id, data)
+    } else {
+        true
+    }
+}
+
+/// An EMCY id besides 0x80 + node (`--emcy-id`, or moved by object
+/// 0x1014): decoded, and every frame on it matters whatever range it is in.
+fn add_emcy_id(interest: &mut Interest, id: u32, extended: bool) {
+    add_id(interest, id, extended);
+    if !extended {
+        interest.unfilter(id);
+    }
+}
+
+/// The ids to decode, as the consumer and the workers share them.
 #[derive(Clone, Debug)]
 pub(crate) struct Wanted {
     pub ids: Interest,
-    other_emcy: Interest,
 }
 
 impl Wanted {
     fn new(opts: &Options) -> Self {
-        let mut other_emcy = Interest::none();
-        for e in &opts.emcy_ids {
-            add_id(&mut other_emcy, e.id, e.extended);
-        }
         Wanted {
             ids: interest(opts),
-            other_emcy,
         }
     }
 
     fn add_emcy(&mut self, id: u32, extended: bool) {
-        add_id(&mut self.ids, id, extended);
-        add_id(&mut self.other_emcy, id, extended);
+        add_emcy_id(&mut self.ids, id, extended);
     }
 
     /// Whether a data frame on a wanted id can change more than the input's
-    /// first and last time: EMCY frames always; on the NMT error control ids
-    /// only boot-ups, on the SDO ids only frames naming an object the
-    /// decoder follows. Most frames on those ids are heartbeats and SDO
-    /// traffic for other objects; they skip the consumer's work.
+    /// first and last time (frames the readers did not already only time).
     #[inline]
     fn matters(&self, frame: &Frame<'_>) -> bool {
-        if frame.extended || self.other_emcy.wants(frame.id, false) {
-            return true;
-        }
-        let data = frame.data.as_slice();
-        if emcy::is_nmt_error_control(frame.id) {
-            emcy::boot_node(frame.id, data).is_some()
-        } else if sdo::is_sdo_id(frame.id) {
-            sdo::names_followed_object(frame.id, data)
-        } else {
-            true
-        }
+        !self
+            .ids
+            .timed_only(frame.id, frame.extended, frame.data.as_slice())
     }
 }
 
@@ -240,6 +251,9 @@ trait LineSink {
     fn wanted(&self) -> &Wanted;
     /// Valid frames the consumer has no use for: counted only.
     fn plain_frames(&mut self, n: u64);
+    /// `n` wanted frames that only move the input's first/last time (see
+    /// [`Wanted::matters`]), the first and last of their times.
+    fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     fn malformed(&mut self, idx: u64, reason: Reason);
@@ -277,6 +291,10 @@ fn classify_block(
             sink.plain_frames(run.plain);
             idx += run.plain;
         }
+        if let (Some(first), Some(last)) = (run.first_time, run.last_time) {
+            sink.timed_frames(run.timed, first, last);
+            idx += run.timed;
+        }
         if let Some(frame) = run.frame {
             sink.frame(idx, &frame, None)?;
             idx += 1;
@@ -290,6 +308,7 @@ fn classify_block(
             RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
             RawLine::Text(text) => match detector.scan(text, &sink.wanted().ids) {
                 Scan::Plain => sink.plain_frames(1),
+                Scan::Timed(t) => sink.timed_frames(1, t, t),
                 Scan::Frame(frame) => sink.frame(idx, &frame, None)?,
                 Scan::Parse => match detector.parse(text, &sink.wanted().ids) {
                     Parsed::Frame(frame) => {
@@ -589,6 +608,12 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         self.counts.frames += n;
     }
 
+    fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
+        self.counts.frames += n;
+        self.time(first);
+        self.time(last);
+    }
+
     fn lines(&mut self, n: u64) {
         self.counts.lines += n;
         self.line_base += n;
@@ -809,6 +834,12 @@ impl LineSink for Recorder {
         self.result.plain_frames += n;
     }
 
+    fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
+        self.result.plain_frames += n;
+        self.time_only(first);
+        self.time_only(last);
+    }
+
     fn lines(&mut self, n: u64) {
         self.result.lines += n;
     }
@@ -840,12 +871,7 @@ impl LineSink for Recorder {
         if candidate && foreign.is_none() && !self.wanted.matters(frame) {
             self.result.plain_frames += 1;
             if let Some(t) = frame.time {
-                if self.time_kept {
-                    self.time_pending = Some(t);
-                } else {
-                    self.time_kept = true;
-                    self.result.records.push(BlockRecord::Time(t));
-                }
+                self.time_only(t);
             }
             return Ok(());
         }
@@ -871,6 +897,17 @@ impl LineSink for Recorder {
 }
 
 impl Recorder {
+    /// A time-only frame's time: the block's first is recorded, of each
+    /// later run only the last (see [`Recorder::flush_time`]).
+    fn time_only(&mut self, t: Timestamp) {
+        if self.time_kept {
+            self.time_pending = Some(t);
+        } else {
+            self.time_kept = true;
+            self.result.records.push(BlockRecord::Time(t));
+        }
+    }
+
     /// Records the last time of a run of time-only frames (before the next
     /// frame record, and at the end of the block).
     fn flush_time(&mut self) {

@@ -461,12 +461,30 @@ fn lines_agree(format: Format, data: &[u8]) {
         };
         let a = p_all.parse(line, &all);
         let w = p_wanted.parse(line, &wanted);
+        let mut timed = None;
         let q = match p_scan.scan(line, &wanted) {
             Scan::Plain => None,
+            Scan::Timed(t) => {
+                timed = Some(t);
+                Some(w.clone())
+            }
             Scan::Frame(f) => Some(Parsed::Frame(f)),
             Scan::Parse => Some(p_scan.parse(line, &wanted)),
         };
         let shown = || String::from_utf8_lossy(line).into_owned();
+        if let Some(t) = timed {
+            // Only a frame on a filtered id whose data the filter rejects,
+            // at the time the full parser reads.
+            let Parsed::Frame(f) = &w else {
+                panic!("scan timed a line that is not a frame: {:?}", shown());
+            };
+            assert!(
+                wanted.timed_only(f.id, f.extended, f.data.as_slice()),
+                "{:?}",
+                shown()
+            );
+            assert_eq!(f.time, Some(t), "{:?}", shown());
+        }
         match (&a, &w) {
             (Parsed::Frame(fa), Parsed::Frame(fw)) => {
                 assert_eq!(

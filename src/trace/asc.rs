@@ -108,7 +108,11 @@ impl LineParser for AscParser {
         match shape.frame(line, true) {
             Some(frame) => {
                 self.now = shape.time;
-                Scan::Frame(frame)
+                if interest.timed_only(frame.id, frame.extended, frame.data.as_slice()) {
+                    Scan::Timed(shape.time)
+                } else {
+                    Scan::Frame(frame)
+                }
             }
             None => Scan::Parse,
         }
@@ -1220,6 +1224,22 @@ mod tests {
                 "6.000",
                 "a declined line leaves the clock"
             );
+        }
+
+        #[test]
+        fn frames_the_content_filter_rejects_are_only_timed() {
+            let mut interest = Interest::none();
+            interest.add_standard(0x705);
+            interest.filter_content(0x705..=0x705, crate::trace::ContentFilter(|_, d| d == [0]));
+            let mut p = parser(false, 0);
+            assert_eq!(
+                p.scan(b"   2.500000 1  705             Rx   d 1 05", &interest),
+                Scan::Timed(Timestamp::from_parts(2, 500_000, 6))
+            );
+            assert!(matches!(
+                p.scan(b"   3.000000 1  705             Rx   d 1 00", &interest),
+                Scan::Frame(f) if f.data.as_slice() == [0]
+            ));
         }
 
         fn parser(relative: bool, now: u64) -> AscParser {

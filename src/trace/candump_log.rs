@@ -58,14 +58,8 @@ impl LineParser for CandumpLogParser {
 
     #[inline]
     fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
-        let Some(shape) = self.shape(line) else {
-            return Scan::Parse;
-        };
-        if !interest.wants(shape.id, shape.extended) {
-            return Scan::Plain;
-        }
-        match shape.frame(line, true) {
-            Some(frame) => Scan::Frame(frame),
+        match self.shape(line) {
+            Some(shape) => shape.scan(line, interest),
             None => Scan::Parse,
         }
     }
@@ -78,19 +72,33 @@ impl LineParser for CandumpLogParser {
         let Some(layout) = self.layout.as_ref() else {
             return run;
         };
+        let mut last_timed = None;
         while let Some(rest) = bytes.get(run.bytes..)
             && let Some((shape, len)) = layout.line(rest)
             && len <= max_line
         {
-            if interest.wants(shape.id, shape.extended) {
-                if let Some(frame) = rest.get(..len).and_then(|l| shape.frame(l, true)) {
+            let line = rest.get(..len).unwrap_or_default();
+            match shape.kind(line, interest) {
+                Kind::Plain => run.plain += 1,
+                Kind::Timed => {
+                    // Of a run of these only the first and last time count.
+                    if run.first_time.is_none() {
+                        run.first_time = shape.time(line);
+                    }
+                    run.timed += 1;
+                    last_timed = Some((line, shape));
+                }
+                Kind::Frame(frame) => {
                     run.bytes += len + 1;
                     run.frame = Some(frame);
+                    break;
                 }
-                break;
+                Kind::Parse => break,
             }
-            run.plain += 1;
             run.bytes += len + 1;
+        }
+        if let Some((line, shape)) = last_timed {
+            run.last_time = shape.time(line);
         }
         run
     }
@@ -201,24 +209,75 @@ impl Shape {
             data: Payload::new(),
         };
         if wanted {
-            // At most 19 digits: always fits in u64.
-            let secs = scan::decimal_u64(line.get(1..self.dot)?);
-            let frac = line.get(self.dot + 1..self.close)?;
-            frame.time = Some(Timestamp::from_parts(
-                secs,
-                scan::decimal_u64(frac),
-                frac.len() as u8,
-            ));
-            // At most 8 bytes (the shape checked it).
-            let text = line.get(self.data.clone())?;
-            let mut bytes = [0u8; 8];
-            for (b, pair) in bytes.iter_mut().zip(text.chunks_exact(2)) {
-                *b = hex::parse_byte(pair[0], pair[1])?;
-            }
-            frame.data = Payload::inline(bytes, (text.len() / 2) as u8);
+            frame.time = Some(self.time(line)?);
+            frame.data = self.data(line)?;
         }
         Some(frame)
     }
+
+    #[inline]
+    fn time(&self, line: &[u8]) -> Option<Timestamp> {
+        // At most 19 digits: always fits in u64.
+        let secs = scan::decimal_u64(line.get(1..self.dot)?);
+        let frac = line.get(self.dot + 1..self.close)?;
+        Some(Timestamp::from_parts(
+            secs,
+            scan::decimal_u64(frac),
+            frac.len() as u8,
+        ))
+    }
+
+    #[inline]
+    fn data(&self, line: &[u8]) -> Option<Payload> {
+        // At most 8 bytes (the shape checked it).
+        let text = line.get(self.data.clone())?;
+        let mut bytes = [0u8; 8];
+        for (b, pair) in bytes.iter_mut().zip(text.chunks_exact(2)) {
+            *b = hex::parse_byte(pair[0], pair[1])?;
+        }
+        Some(Payload::inline(bytes, (text.len() / 2) as u8))
+    }
+
+    /// What a line of this shape is to a caller with `interest`.
+    #[inline]
+    fn scan<'a>(&self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        match self.kind(line, interest) {
+            Kind::Plain => Scan::Plain,
+            Kind::Timed => self.time(line).map_or(Scan::Parse, Scan::Timed),
+            Kind::Frame(frame) => Scan::Frame(frame),
+            Kind::Parse => Scan::Parse,
+        }
+    }
+
+    /// [`Shape::scan`] without converting the time of a frame only to be
+    /// timed (a run needs only the first and last of those).
+    #[inline]
+    fn kind<'a>(&self, line: &'a [u8], interest: &Interest) -> Kind<'a> {
+        if !interest.wants(self.id, self.extended) {
+            return Kind::Plain;
+        }
+        if self.kind == FrameKind::Data && interest.filters(self.id) {
+            // Only the data decides; the frame is built only if it matters.
+            let Some(data) = self.data(line) else {
+                return Kind::Parse;
+            };
+            if interest.timed_only(self.id, self.extended, data.as_slice()) {
+                return Kind::Timed;
+            }
+        }
+        match self.frame(line, true) {
+            Some(frame) => Kind::Frame(frame),
+            None => Kind::Parse,
+        }
+    }
+}
+
+/// [`Scan`] with a timed frame's time not yet converted.
+enum Kind<'a> {
+    Plain,
+    Timed,
+    Frame(Frame<'a>),
+    Parse,
 }
 
 /// The fixed part of a canonical line: nearly every line of a log has the
@@ -510,6 +569,7 @@ pub(crate) fn parse_data(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::ContentFilter;
 
     fn parse(line: &str) -> Parsed<'_> {
         CandumpLogParser::new().parse(line.as_bytes(), &Interest::all())
@@ -731,21 +791,46 @@ mod tests {
         bytes: &'a [u8],
         max_line: usize,
         interest: &Interest,
-    ) -> (usize, u64, Option<Frame<'a>>) {
-        let (mut at, mut plain) = (0, 0);
-        while let Some(rest) = bytes.get(at..)
+    ) -> Run<'a> {
+        let mut run = Run::default();
+        while let Some(rest) = bytes.get(run.bytes..)
             && let Some(len) = rest.iter().position(|b| *b == b'\n')
             && len <= max_line
             && !rest[..len].ends_with(b"\r")
         {
             match p.scan(&rest[..len], interest) {
-                Scan::Plain => plain += 1,
-                Scan::Frame(f) => return (at + len + 1, plain, Some(f)),
+                Scan::Plain => run.plain += 1,
+                Scan::Timed(t) => run.timed(t),
+                Scan::Frame(f) => {
+                    run.bytes += len + 1;
+                    run.frame = Some(f);
+                    break;
+                }
                 Scan::Parse => break,
             }
-            at += len + 1;
+            run.bytes += len + 1;
         }
-        (at, plain, None)
+        run
+    }
+
+    fn fields<'a>(
+        r: &Run<'a>,
+    ) -> (
+        usize,
+        u64,
+        u64,
+        Option<Timestamp>,
+        Option<Timestamp>,
+        Option<Frame<'a>>,
+    ) {
+        (
+            r.bytes,
+            r.plain,
+            r.timed,
+            r.first_time,
+            r.last_time,
+            r.frame.clone(),
+        )
     }
 
     proptest::proptest! {
@@ -760,9 +845,15 @@ mod tests {
             last_newline in proptest::bool::ANY,
             max_line in 30usize..60,
             narrow in proptest::bool::ANY,
+            filtered in proptest::bool::ANY,
         ) {
             let mut interest = if narrow { Interest::none() } else { Interest::all() };
             interest.add_standard(0x181);
+            if filtered {
+                // Frames on 0x100-0x3FF matter only when their data starts with 00.
+                interest.add_standard_range(0x100..=0x3FF);
+                interest.filter_content(0x100..=0x3FF, ContentFilter(|_, d| d.first() == Some(&0)));
+            }
             let mut text = lines.join("\n");
             if last_newline {
                 text.push('\n');
@@ -779,7 +870,7 @@ mod tests {
                 let got = fast.run(&bytes[at..], max_line, &interest);
                 let consumed = &bytes[at..at + got.bytes];
                 let want = run_by_lines(&mut slow, consumed, max_line, &interest);
-                proptest::prop_assert_eq!((got.bytes, got.plain, got.frame.clone()), want);
+                proptest::prop_assert_eq!(fields(&got), fields(&want));
                 at += got.bytes;
                 if got.frame.is_none() {
                     // The general loop reads the next line; skip it here.

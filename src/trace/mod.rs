@@ -214,6 +214,10 @@ pub struct Frame<'a> {
 
 /// Which identifiers the caller wants decoded. Parsers read the id first and
 /// skip decoding time and data for everything else.
+///
+/// Some wanted standard ids can be given a content filter: a frame on them
+/// whose data the filter rejects is only timed ([`Scan::Timed`]): the caller
+/// needs its time but nothing else (a heartbeat, when only boot-ups matter).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Interest {
     standard: [u64; 32],
@@ -221,6 +225,40 @@ pub struct Interest {
     all_extended: bool,
     /// Single extended ids (a node whose 0x1014 moved its EMCY to 29 bits).
     extended: Vec<u32>,
+    /// Standard ids under `content`.
+    filtered: [u64; 32],
+    content: ContentFilter,
+}
+
+/// Whether a frame's data matters (see [`Interest`]).
+#[derive(Clone, Copy)]
+pub struct ContentFilter(pub fn(u32, &[u8]) -> bool);
+
+impl ContentFilter {
+    fn any(_: u32, _: &[u8]) -> bool {
+        true
+    }
+}
+
+impl PartialEq for ContentFilter {
+    fn eq(&self, other: &Self) -> bool {
+        // Same function, same filter (only ever compared in tests).
+        self.0 as usize == other.0 as usize
+    }
+}
+
+impl Eq for ContentFilter {}
+
+impl fmt::Debug for ContentFilter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ContentFilter")
+    }
+}
+
+#[inline]
+fn bit(set: &[u64; 32], id: u32) -> bool {
+    set.get((id >> 6) as usize)
+        .is_some_and(|word| word & (1 << (id & 63)) != 0)
 }
 
 impl Interest {
@@ -230,6 +268,8 @@ impl Interest {
             standard: [u64::MAX; 32],
             all_extended: true,
             extended: Vec::new(),
+            filtered: [0; 32],
+            content: ContentFilter(ContentFilter::any),
         }
     }
 
@@ -238,7 +278,39 @@ impl Interest {
             standard: [0; 32],
             all_extended: false,
             extended: Vec::new(),
+            filtered: [0; 32],
+            content: ContentFilter(ContentFilter::any),
         }
+    }
+
+    /// Puts wanted standard ids under a content filter (one for all).
+    pub fn filter_content(&mut self, ids: std::ops::RangeInclusive<u32>, content: ContentFilter) {
+        self.content = content;
+        for id in ids {
+            if let Some(word) = self.filtered.get_mut((id >> 6) as usize) {
+                *word |= 1 << (id & 63);
+            }
+        }
+    }
+
+    /// Takes a standard id out of the content filter: all its frames matter.
+    pub fn unfilter(&mut self, id: u32) {
+        if let Some(word) = self.filtered.get_mut((id >> 6) as usize) {
+            *word &= !(1 << (id & 63));
+        }
+    }
+
+    /// Whether a frame on a wanted id is only to be timed: a standard id
+    /// under the content filter, and data it rejects.
+    #[inline]
+    pub fn timed_only(&self, id: u32, extended: bool, data: &[u8]) -> bool {
+        !extended && bit(&self.filtered, id) && !(self.content.0)(id, data)
+    }
+
+    /// Whether frames on a standard id are under the content filter.
+    #[inline]
+    pub fn filters(&self, id: u32) -> bool {
+        bit(&self.filtered, id)
     }
 
     pub fn add_extended(&mut self, id: u32) {
@@ -290,18 +362,35 @@ pub enum Scan<'a> {
     Plain,
     /// A valid frame on a wanted id, as `parse` returns it.
     Frame(Frame<'a>),
+    /// A valid frame on a wanted id whose data the content filter rejects:
+    /// only its time is needed.
+    Timed(Timestamp),
     /// Not the common shape: call `parse`.
     Parse,
 }
 
 /// What [`LineParser::run`] read from the start of a block's bytes: `bytes`
-/// of whole lines, `plain` frames only to count, then, when `frame` is
-/// set, one wanted frame (the last line read).
+/// of whole lines, `plain` frames only to count and `timed` frames only to
+/// time (the first and last of their times), then, when `frame` is set, one
+/// wanted frame (the last line read).
 #[derive(Debug, Default)]
 pub struct Run<'a> {
     pub bytes: usize,
     pub plain: u64,
+    pub timed: u64,
+    pub first_time: Option<Timestamp>,
+    pub last_time: Option<Timestamp>,
     pub frame: Option<Frame<'a>>,
+}
+
+impl Run<'_> {
+    /// Counts a frame that is only timed.
+    #[inline]
+    pub fn timed(&mut self, t: Timestamp) {
+        self.timed += 1;
+        self.first_time.get_or_insert(t);
+        self.last_time = Some(t);
+    }
 }
 
 /// A parser for one text format. Parsers may keep state across lines (ASC
@@ -340,6 +429,10 @@ pub trait LineParser: Send {
             match self.scan(line, interest) {
                 Scan::Plain => {
                     run.plain += 1;
+                    run.bytes += len + 1;
+                }
+                Scan::Timed(t) => {
+                    run.timed(t);
                     run.bytes += len + 1;
                 }
                 Scan::Frame(frame) => {

@@ -208,8 +208,14 @@ impl LineParser for TrcParser {
             return Scan::Parse;
         }
         match self.row(line, interest) {
-            Ok(Some(f)) if interest.wants(f.id, f.extended) => Scan::Frame(f),
-            Ok(Some(_)) => Scan::Plain,
+            Ok(Some(f)) if !interest.wants(f.id, f.extended) => Scan::Plain,
+            Ok(Some(f))
+                if f.kind == FrameKind::Data
+                    && interest.timed_only(f.id, f.extended, f.data.as_slice()) =>
+            {
+                f.time.map_or(Scan::Parse, Scan::Timed)
+            }
+            Ok(Some(f)) => Scan::Frame(f),
             _ => Scan::Parse,
         }
     }
@@ -816,6 +822,22 @@ mod tests {
         assert!(bad(&mut p, "1 10 RR 1 0081 Rx - 1 00").contains("no data"));
         assert!(bad(&mut p, ";$COLUMNS=N,O,T,I,D,L").contains("last"));
         assert!(bad(&mut p, ";$COLUMNS=N,O,T,X").contains("unknown column"));
+    }
+
+    #[test]
+    fn frames_the_content_filter_rejects_are_only_timed() {
+        let mut interest = Interest::none();
+        interest.add_standard(0x705);
+        interest.filter_content(0x705..=0x705, crate::trace::ContentFilter(|_, d| d == [0]));
+        let mut p = TrcParser::new();
+        let Scan::Timed(t) = p.scan(b"     1)      1841      0705  1  05", &interest) else {
+            panic!("a heartbeat is only timed");
+        };
+        assert_eq!(t.to_string(), "1.841");
+        assert!(matches!(
+            p.scan(b"     2)      1842      0705  1  00", &interest),
+            Scan::Frame(f) if f.data.as_slice() == [0]
+        ));
     }
 
     #[test]
