@@ -600,6 +600,39 @@ fn emcy_id_flag_decodes_a_moved_id_from_the_first_line() {
     assert_eq!(lines, [(2, 5), (7, 5), (10, 6), (11, 5), (12, 5)]);
 }
 
+/// Issue 4: frames on the heartbeat and SDO ids are only timed unless they
+/// can matter; an EMCY id given there makes every frame on it matter.
+#[test]
+fn emcy_id_on_a_heartbeat_id_decodes_every_frame_on_it() {
+    let trace = "(1.000000) can0 705#1043090100000000\n(2.000000) can0 705#05\n\
+                 (3.000000) can0 706#05\n";
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("heartbeat-id.log");
+    std::fs::write(&path, trace).unwrap();
+    for threads in ["1", "2"] {
+        let out = emcy_decode()
+            .args(["--emcy-id", "0x705=5", "--format", "ndjson", "-j", threads])
+            .arg(&path)
+            .output()
+            .unwrap();
+        let objects = ndjson_objects(&out.stdout);
+        assert_eq!(of_type(&objects, "emcy").len(), 1);
+        let input = of_type(&objects, "input")[0];
+        assert_eq!(
+            (input["frames"].as_u64(), input["emcy_invalid"].as_u64()),
+            (Some(3), Some(1))
+        );
+        assert_eq!(
+            input["last_time"].as_f64(),
+            Some(3.0),
+            "the heartbeat of node 6 is timed"
+        );
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(":2: node 5: EMCY frame has 1 data byte")
+        );
+    }
+}
+
 #[test]
 fn emcy_id_flag_rejects_nonsense_with_exit_2() {
     emcy_decode()
