@@ -31,8 +31,9 @@ use crate::trace::{Format, FrameKind, Interest, LineParser, Parsed, Scan, Timest
 /// forced as with `--input-format`), and the plain-bytes half of `detect`.
 ///
 /// Checks, per line, that the parser classifies the same whatever the
-/// wanted ids (id-first filtering only skips decoding) and that the quick
-/// path only ever skips valid frames nobody wants; then, through the whole
+/// wanted ids (id-first filtering only skips decoding) and that the scan
+/// shortcut only ever skips valid frames nobody wants and only times frames
+/// the content filter rejects; then, through the whole
 /// pipeline, the count, event, node and history invariants of [`check_run`].
 pub fn reader(format: Option<Format>, data: &[u8]) {
     if let Some(format) = format {
