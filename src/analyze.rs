@@ -196,33 +196,6 @@ fn add_emcy_id(interest: &mut Interest, id: u32, extended: bool) {
     }
 }
 
-/// The ids to decode, as the consumer and the workers share them.
-#[derive(Clone, Debug)]
-pub(crate) struct Wanted {
-    pub ids: Interest,
-}
-
-impl Wanted {
-    fn new(opts: &Options) -> Self {
-        Wanted {
-            ids: interest(opts),
-        }
-    }
-
-    fn add_emcy(&mut self, id: u32, extended: bool) {
-        add_emcy_id(&mut self.ids, id, extended);
-    }
-
-    /// Whether a data frame on a wanted id can change more than the input's
-    /// first and last time (frames the readers did not already only time).
-    #[inline]
-    fn matters(&self, frame: &Frame<'_>) -> bool {
-        !self
-            .ids
-            .timed_only(frame.id, frame.extended, frame.data.as_slice())
-    }
-}
-
 fn add_id(interest: &mut Interest, id: u32, extended: bool) {
     if extended {
         interest.add_extended(id);
@@ -236,9 +209,9 @@ fn is_cob_id_emcy_access(frame: &Frame<'_>) -> bool {
     !frame.extended && sdo::names_object(frame.id, frame.data.as_slice(), sdo::COB_ID_EMCY)
 }
 
-/// The current wanted ids and their generation, shared with workers: a block
+/// The current interest and its generation, shared with workers: a block
 /// parsed with an older generation is parsed again in order.
-type SharedInterest = Arc<RwLock<(u64, Wanted)>>;
+type SharedInterest = Arc<RwLock<(u64, Interest)>>;
 
 // ---- classification -----------------------------------------------------------
 
@@ -248,11 +221,11 @@ type Foreign = Option<(Format, Format)>;
 /// Receives classified lines; `idx` is the line's 0-based index in its block.
 trait LineSink {
     /// The ids to decode now (the consumer's can change mid-input).
-    fn wanted(&self) -> &Wanted;
+    fn interest(&self) -> &Interest;
     /// Valid frames the consumer has no use for: counted only.
     fn plain_frames(&mut self, n: u64);
     /// `n` wanted frames that only move the input's first/last time (see
-    /// [`Wanted::matters`]), the first and last of their times.
+    /// [`content_matters`]), the first and last of their times.
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
@@ -284,7 +257,7 @@ fn classify_block(
         let run = detector.run(
             bytes.get(pos..).unwrap_or_default(),
             max_line,
-            &sink.wanted().ids,
+            sink.interest(),
         );
         pos += run.bytes;
         if run.plain > 0 {
@@ -296,7 +269,7 @@ fn classify_block(
             idx += run.timed;
         }
         if let Some(frame) = run.frame {
-            sink.frame(idx, &frame, None)?;
+            deliver(sink, idx, &frame, None)?;
             idx += 1;
             continue;
         }
@@ -306,14 +279,14 @@ fn classify_block(
         pos = next;
         match raw {
             RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
-            RawLine::Text(text) => match detector.scan(text, &sink.wanted().ids) {
+            RawLine::Text(text) => match detector.scan(text, sink.interest()) {
                 Scan::Plain => sink.plain_frames(1),
                 Scan::Timed(t) => sink.timed_frames(1, t, t),
-                Scan::Frame(frame) => sink.frame(idx, &frame, None)?,
-                Scan::Parse => match detector.parse(text, &sink.wanted().ids) {
+                Scan::Frame(frame) => deliver(sink, idx, &frame, None)?,
+                Scan::Parse => match detector.parse(text, sink.interest()) {
                     Parsed::Frame(frame) => {
                         let foreign = detector.take_foreign().zip(detector.format());
-                        sink.frame(idx, &frame, foreign)?;
+                        deliver(sink, idx, &frame, foreign)?;
                     }
                     Parsed::Skipped => sink.skipped(),
                     Parsed::Malformed(reason) => sink.malformed(idx, reason),
@@ -324,6 +297,33 @@ fn classify_block(
     }
     sink.lines(idx);
     Ok(())
+}
+
+/// Hands a frame on as the consumer treats it: one it has no use for is
+/// only counted, one that only moves the input's first/last time only timed
+/// (so workers record neither); the rest, and every frame in another format
+/// than the file's (its line gets a diagnostic), go to `frame`, which
+/// applies the same rules in full.
+fn deliver(
+    sink: &mut impl LineSink,
+    idx: u64,
+    frame: &Frame<'_>,
+    foreign: Foreign,
+) -> Result<(), OutputError> {
+    if foreign.is_none() {
+        let interest = sink.interest();
+        if frame.kind != FrameKind::Data || !interest.wants(frame.id, frame.extended) {
+            sink.plain_frames(1);
+            return Ok(());
+        }
+        if let Some(t) = frame.time
+            && interest.timed_only(frame.id, frame.extended, frame.data.as_slice())
+        {
+            sink.timed_frames(1, t, t);
+            return Ok(());
+        }
+    }
+    sink.frame(idx, frame, foreign)
 }
 
 // ---- the consumer: timelines, events, counts, diagnostics ---------------------------
@@ -521,7 +521,7 @@ struct Consumer<'r, 'l, E: Write> {
     /// First and last time of a decoded frame.
     first_time: Option<Timestamp>,
     last_time: Option<Timestamp>,
-    wanted: Wanted,
+    interest: Interest,
     interest_gen: u64,
     /// Set while workers run: where they read the interest from.
     shared_interest: Option<SharedInterest>,
@@ -562,12 +562,20 @@ impl<E: Write> Consumer<'_, '_, E> {
         if self.emcy_ids.insert((id, extended), node) == Some(node) {
             return;
         }
-        self.wanted.add_emcy(id, extended);
+        add_emcy_id(&mut self.interest, id, extended);
         self.interest_gen += 1;
         if let Some(shared) = &self.shared_interest
             && let Ok(mut w) = shared.write()
         {
-            *w = (self.interest_gen, self.wanted.clone());
+            *w = (self.interest_gen, self.interest.clone());
+        }
+    }
+
+    /// A frame was read: the format is known, held diagnostics go out.
+    fn decide(&mut self) {
+        if !self.decided {
+            self.decided = true;
+            self.diags.release(self.log);
         }
     }
 
@@ -600,16 +608,18 @@ impl<E: Write> Consumer<'_, '_, E> {
 }
 
 impl<E: Write> LineSink for Consumer<'_, '_, E> {
-    fn wanted(&self) -> &Wanted {
-        &self.wanted
+    fn interest(&self) -> &Interest {
+        &self.interest
     }
 
     fn plain_frames(&mut self, n: u64) {
         self.counts.frames += n;
+        self.decide();
     }
 
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
         self.counts.frames += n;
+        self.decide();
         self.time(first);
         self.time(last);
     }
@@ -633,10 +643,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         self.counts.frames += 1;
         let line_no = self.line_no(idx);
-        if !self.decided {
-            self.decided = true;
-            self.diags.release(self.log);
-        }
+        self.decide();
         if let Some((other, primary)) = foreign {
             self.counts.other_format += 1;
             let msg = format!(
@@ -651,13 +658,16 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         }
         // Only wanted ids count: workers may hand over frames the sequential
         // reader only counts, and the result must not depend on the path.
-        if !self.wanted.ids.wants(frame.id, frame.extended) {
+        if !self.interest.wants(frame.id, frame.extended) {
             return Ok(());
         }
         if let Some(t) = frame.time {
             self.time(t);
         }
-        if !self.wanted.matters(frame) {
+        if self
+            .interest
+            .timed_only(frame.id, frame.extended, frame.data.as_slice())
+        {
             return Ok(());
         }
         let at = At {
@@ -815,7 +825,7 @@ struct BlockResult {
 
 /// The worker-side sink: keeps only what the consumer needs.
 struct Recorder {
-    wanted: Wanted,
+    interest: Interest,
     /// Frames that only move the input's first/last time are collapsed: the
     /// block's first one is recorded, of each later run only the last.
     time_kept: bool,
@@ -826,8 +836,8 @@ struct Recorder {
 }
 
 impl LineSink for Recorder {
-    fn wanted(&self) -> &Wanted {
-        &self.wanted
+    fn interest(&self) -> &Interest {
+        &self.interest
     }
 
     fn plain_frames(&mut self, n: u64) {
@@ -862,19 +872,6 @@ impl LineSink for Recorder {
     }
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
-        let candidate =
-            frame.kind == FrameKind::Data && self.wanted.ids.wants(frame.id, frame.extended);
-        if !candidate && foreign.is_none() {
-            self.result.plain_frames += 1;
-            return Ok(());
-        }
-        if candidate && foreign.is_none() && !self.wanted.matters(frame) {
-            self.result.plain_frames += 1;
-            if let Some(t) = frame.time {
-                self.time_only(t);
-            }
-            return Ok(());
-        }
         self.flush_time();
         if is_cob_id_emcy_access(frame) {
             self.result.moves_emcy_id = true;
@@ -1044,7 +1041,7 @@ pub fn analyze<R: Read + Send, E: Write>(
             .iter()
             .map(|e| ((e.id, e.extended), e.node))
             .collect(),
-        wanted: Wanted::new(opts),
+        interest: interest(opts),
         interest_gen: 0,
         shared_interest: None,
         warnings: Vec::new(),
@@ -1107,11 +1104,7 @@ fn read_blf<R: Read, E: Write>(
     loop {
         match reader.next_object() {
             Ok(Some(Parsed::Frame(f))) => {
-                if f.kind == FrameKind::Data && !consumer.wanted.ids.wants(f.id, f.extended) {
-                    consumer.plain_frames(1);
-                } else {
-                    consumer.frame(0, &f, None)?;
-                }
+                deliver(consumer, 0, &f, None)?;
             }
             Ok(Some(Parsed::Skipped)) => consumer.skipped(),
             Ok(Some(Parsed::Malformed(reason))) => consumer.malformed(0, reason),
@@ -1201,7 +1194,7 @@ fn parallel<R: Read + Send, E: Write>(
     let mut current = detector;
     let shared: SharedInterest = Arc::new(RwLock::new((
         consumer.interest_gen,
-        consumer.wanted.clone(),
+        consumer.interest.clone(),
     )));
     consumer.shared_interest = Some(Arc::clone(&shared));
     let outcome = std::thread::scope(|scope| {
@@ -1266,11 +1259,11 @@ fn parallel<R: Read + Send, E: Write>(
             scope.spawn(move || {
                 while let Some((seq, block)) = next_job(&rx) {
                     let start_context = det.context();
-                    let Ok((interest_gen, wanted)) = shared.read().map(|g| g.clone()) else {
+                    let Ok((interest_gen, interest)) = shared.read().map(|g| g.clone()) else {
                         return;
                     };
                     let mut rec = Recorder {
-                        wanted,
+                        interest,
                         limit,
                         time_kept: false,
                         time_pending: None,

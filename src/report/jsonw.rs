@@ -9,7 +9,6 @@
 use std::collections::HashMap;
 use std::io;
 
-use super::timefmt;
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
@@ -91,7 +90,7 @@ fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
 
 fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
     match t {
-        Some(t) => timefmt::push_time(out, t),
+        Some(t) => t.push_decimal(out),
         None => out.extend_from_slice(b"null"),
     }
 }
@@ -512,7 +511,7 @@ impl JsonWriter {
         push_time(out, end_time);
         out.extend_from_slice(b",\"duration\":");
         match (iv.start.time, end_time) {
-            (Some(start), Some(end)) => timefmt::push_duration(out, start, end),
+            (Some(start), Some(end)) => end.push_since(start, out),
             _ => out.extend_from_slice(b"null"),
         }
         out.extend_from_slice(b",\"cleared_by\":");

@@ -8,7 +8,7 @@ use std::io::{self, Write};
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
-use super::timefmt::{TimeFormat, TimeStyle, push_duration};
+use super::timefmt::{TimeFormat, TimeStyle};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::timeline::Interval;
@@ -586,7 +586,7 @@ fn timeline_cells(
         (Some(_), Some(s), Some(e)) => {
             times.push(end, e);
             let mut text = Vec::with_capacity(32);
-            push_duration(&mut text, s, e);
+            e.push_since(s, &mut text);
             duration.push_str(std::str::from_utf8(&text).unwrap_or_default());
         }
         (Some(e), _, _) => {

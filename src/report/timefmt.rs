@@ -77,16 +77,16 @@ impl TimeFormat {
         };
         text.clear();
         match self.style {
-            TimeStyle::Absolute => push_time(text, t),
-            TimeStyle::Auto if t.secs() < UNIX_FROM => push_time(text, t),
+            TimeStyle::Absolute => t.push_decimal(text),
+            TimeStyle::Auto if t.secs() < UNIX_FROM => t.push_decimal(text),
             TimeStyle::Auto | TimeStyle::Iso => {
                 if !self.push_iso(text, t) {
-                    push_time(text, t);
+                    t.push_decimal(text);
                 }
             }
             TimeStyle::Relative => match self.origin {
-                Some(o) => push_duration(text, o, t),
-                None => push_time(text, t),
+                Some(o) => t.push_since(o, text),
+                None => t.push_decimal(text),
             },
         }
         // Digits, `-`, `.`, `:`, `T` and `Z` only.
@@ -119,7 +119,7 @@ impl TimeFormat {
         };
         out.extend_from_slice(&second);
         // The fraction exactly as the trace wrote it: `secs.frac`.
-        push_fraction(out, atto, digits);
+        crate::trace::time::push_fraction(out, atto, digits);
         out.push(b'Z');
         true
     }
@@ -140,104 +140,9 @@ fn calendar_second(secs: u64) -> Option<[u8; 19]> {
     text.as_bytes().try_into().ok()
 }
 
-const ATTO_PER_SEC: u64 = 1_000_000_000_000_000_000;
-
-/// 10^0 ..= 10^18.
-const POW10: [u64; 19] = {
-    let mut t = [1u64; 19];
-    let mut i = 1;
-    while i < t.len() {
-        t[i] = t[i - 1] * 10;
-        i += 1;
-    }
-    t
-};
-
-/// `secs.fraction` with `digits` fraction digits: the text of
-/// `Timestamp`/`Span` `Display`, from the parts, in 64-bit arithmetic (the
-/// `u128` division behind `push_decimal` is the costly part of it).
-fn push_parts(out: &mut Vec<u8>, secs: u64, atto: u64, digits: u8) {
-    out.extend_from_slice(itoa::Buffer::new().format(secs).as_bytes());
-    push_fraction(out, atto, digits);
-}
-
-/// `.fraction` with `digits` digits (nothing for none).
-fn push_fraction(out: &mut Vec<u8>, atto: u64, digits: u8) {
-    let digits = usize::from(digits).min(POW10.len() - 1);
-    if digits == 0 {
-        return;
-    }
-    let scale = POW10.get(POW10.len() - 1 - digits).copied().unwrap_or(1);
-    let mut frac = (atto % ATTO_PER_SEC) / scale;
-    let mut text = [b'0'; 19];
-    text[0] = b'.';
-    for d in text[1..=digits].iter_mut().rev() {
-        *d = b'0' + (frac % 10) as u8;
-        frac /= 10;
-    }
-    out.extend_from_slice(&text[..=digits]);
-}
-
-/// Appends `t` as `Timestamp`'s `Display` writes it.
-pub fn push_time(out: &mut Vec<u8>, t: Timestamp) {
-    let (secs, atto, digits) = t.to_raw();
-    push_parts(out, secs, atto, digits);
-}
-
-/// Appends `end.since(start)` as `Span`'s `Display` writes it.
-pub fn push_duration(out: &mut Vec<u8>, start: Timestamp, end: Timestamp) {
-    let (s0, a0, d0) = start.to_raw();
-    let (s1, a1, d1) = end.to_raw();
-    let (negative, (hi_s, hi_a), (lo_s, lo_a)) = if (s1, a1) >= (s0, a0) {
-        (false, (s1, a1), (s0, a0))
-    } else {
-        (true, (s0, a0), (s1, a1))
-    };
-    let (secs, atto) = if hi_a >= lo_a {
-        (hi_s - lo_s, hi_a - lo_a)
-    } else {
-        (hi_s - lo_s - 1, hi_a + ATTO_PER_SEC - lo_a)
-    };
-    if negative {
-        out.push(b'-');
-    }
-    push_parts(out, secs, atto, d0.max(d1));
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fast_times_and_durations_equal_display() {
-        let samples = [
-            Timestamp::from_raw(0, 0, 0),
-            Timestamp::from_raw(0, 0, 6),
-            Timestamp::from_raw(1_700_000_000, 1_219_000_000_000_000, 6),
-            Timestamp::from_raw(1_700_000_000, 999_999_000_000_000_000, 6),
-            Timestamp::from_raw(12, 500_000_000_000_000_000, 3),
-            Timestamp::from_raw(3, 98_426_000_000_000_000, 6),
-            Timestamp::from_raw(u64::MAX, 999_999_999_999_999_999, 18),
-            Timestamp::from_raw(u64::MAX, 0, 18),
-            Timestamp::from_raw(5, 1, 18),
-            Timestamp::from_raw(7, 100_000_000_000_000_000, 1),
-        ]
-        .map(Option::unwrap);
-        for a in samples {
-            let mut v = Vec::new();
-            push_time(&mut v, a);
-            assert_eq!(String::from_utf8(v).unwrap(), a.to_string());
-            for b in samples {
-                let mut v = Vec::new();
-                push_duration(&mut v, a, b);
-                assert_eq!(
-                    String::from_utf8(v).unwrap(),
-                    b.since(a).to_string(),
-                    "{a} -> {b}"
-                );
-            }
-        }
-    }
 
     fn ts(s: &str) -> Timestamp {
         Timestamp::parse(s.as_bytes()).unwrap()

@@ -198,64 +198,93 @@ fn digit(b: u8) -> Option<u8> {
     b.is_ascii_digit().then(|| b - b'0')
 }
 
-fn write_decimal(f: &mut fmt::Formatter<'_>, atto: u128, digits: u8) -> fmt::Result {
-    let secs = atto / ATTO_PER_SEC;
-    if digits == 0 {
-        return write!(f, "{secs}");
-    }
-    let frac = (atto % ATTO_PER_SEC) / u128::from(pow10(MAX_FRACTION_DIGITS - usize::from(digits)));
-    write!(f, "{secs}.{frac:0width$}", width = usize::from(digits))
+/// Appends `secs.fraction` with `digits` fraction digits: the one way times
+/// and spans become text (JSON, table, `Display`), in 64-bit arithmetic.
+fn push_parts(out: &mut Vec<u8>, secs: u64, atto: u64, digits: u8) {
+    out.extend_from_slice(itoa::Buffer::new().format(secs).as_bytes());
+    push_fraction(out, atto, digits);
 }
 
-/// Appends `secs.frac` (the trace's digit count) without `core::fmt`.
-fn push_decimal(out: &mut Vec<u8>, atto: u128, digits: u8) {
-    let secs = (atto / ATTO_PER_SEC) as u64;
-    let mut b = itoa::Buffer::new();
-    out.extend_from_slice(b.format(secs).as_bytes());
+/// `.fraction` of `atto` attoseconds with `digits` digits (nothing for none).
+pub fn push_fraction(out: &mut Vec<u8>, atto: u64, digits: u8) {
+    let digits = usize::from(digits).min(MAX_FRACTION_DIGITS);
     if digits == 0 {
         return;
     }
-    let frac = ((atto % ATTO_PER_SEC)
-        / u128::from(pow10(MAX_FRACTION_DIGITS - usize::from(digits)))) as u64;
-    out.push(b'.');
-    let text = b.format(frac).as_bytes();
-    out.extend(std::iter::repeat_n(
-        b'0',
-        usize::from(digits).saturating_sub(text.len()),
-    ));
-    out.extend_from_slice(text);
+    let per_sec = pow10(MAX_FRACTION_DIGITS);
+    let mut frac = (atto % per_sec) / pow10(MAX_FRACTION_DIGITS - digits);
+    let mut text = [b'0'; MAX_FRACTION_DIGITS + 1];
+    text[0] = b'.';
+    for d in text[1..=digits].iter_mut().rev() {
+        *d = b'0' + (frac % 10) as u8;
+        frac /= 10;
+    }
+    out.extend_from_slice(&text[..=digits]);
 }
 
 impl Timestamp {
-    /// Appends the same text as `Display`, faster (the JSON hot path).
+    /// Appends the text `Display` writes (the JSON and table hot paths).
     pub fn push_decimal(self, out: &mut Vec<u8>) {
-        push_decimal(out, self.total(), self.digits);
+        push_parts(out, self.secs, self.atto, self.digits);
+    }
+
+    /// Appends `self.since(earlier)` as text, without the 128-bit division
+    /// of [`Span::push_decimal`] (a duration per error in every report).
+    pub fn push_since(self, earlier: Timestamp, out: &mut Vec<u8>) {
+        let per_sec = pow10(MAX_FRACTION_DIGITS);
+        let (later, sooner, negative) = if (self.secs, self.atto) >= (earlier.secs, earlier.atto) {
+            (self, earlier, false)
+        } else {
+            (earlier, self, true)
+        };
+        let (secs, atto) = if later.atto >= sooner.atto {
+            (later.secs - sooner.secs, later.atto - sooner.atto)
+        } else {
+            (
+                later.secs - sooner.secs - 1,
+                later.atto + per_sec - sooner.atto,
+            )
+        };
+        if negative {
+            out.push(b'-');
+        }
+        push_parts(out, secs, atto, self.digits.max(earlier.digits));
     }
 }
 
 impl Span {
-    /// Appends the same text as `Display`, faster (the JSON hot path).
+    /// Appends the text `Display` writes.
     pub fn push_decimal(self, out: &mut Vec<u8>) {
         if self.atto < 0 {
             out.push(b'-');
         }
-        push_decimal(out, self.atto.unsigned_abs(), self.digits);
+        let abs = self.atto.unsigned_abs();
+        push_parts(
+            out,
+            (abs / ATTO_PER_SEC) as u64,
+            (abs % ATTO_PER_SEC) as u64,
+            self.digits,
+        );
     }
+}
+
+/// Writes what `push` appends (ASCII digits, `-` and `.` only).
+fn display(f: &mut fmt::Formatter<'_>, push: impl FnOnce(&mut Vec<u8>)) -> fmt::Result {
+    let mut text = Vec::with_capacity(40);
+    push(&mut text);
+    f.write_str(std::str::from_utf8(&text).map_err(|_| fmt::Error)?)
 }
 
 /// Prints as a JSON-compatible decimal number with the trace's digit count.
 impl fmt::Display for Timestamp {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write_decimal(f, self.total(), self.digits)
+        display(f, |out| self.push_decimal(out))
     }
 }
 
 impl fmt::Display for Span {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.atto < 0 {
-            f.write_str("-")?;
-        }
-        write_decimal(f, self.atto.unsigned_abs(), self.digits)
+        display(f, |out| self.push_decimal(out))
     }
 }
 
@@ -282,23 +311,23 @@ mod tests {
     }
 
     #[test]
-    fn push_decimal_equals_display() {
-        for s in [
-            "0",
-            "0.000100",
-            "1469439874.299654123",
-            "12.5",
-            "18446744073709551615.999999999999999999",
+    fn spans_print_with_the_finer_precision_and_a_sign() {
+        for (a, b, text) in [
+            ("2.5", "1.25", "1.25"),
+            ("1.0", "2.5", "-1.5"),
+            ("3", "3", "0"),
+            ("1700000003.000000", "1700000001.250000", "1.750000"),
+            (
+                "0",
+                "18446744073709551615.999999999999999999",
+                "-18446744073709551615.999999999999999999",
+            ),
         ] {
+            let (a, b) = (ts(a), ts(b));
+            assert_eq!(a.since(b).to_string(), text);
             let mut v = Vec::new();
-            ts(s).push_decimal(&mut v);
-            assert_eq!(String::from_utf8(v).unwrap(), ts(s).to_string());
-        }
-        for (a, b) in [("2.5", "1.25"), ("1.0", "2.5"), ("3", "3")] {
-            let span = ts(a).since(ts(b));
-            let mut v = Vec::new();
-            span.push_decimal(&mut v);
-            assert_eq!(String::from_utf8(v).unwrap(), span.to_string());
+            a.push_since(b, &mut v);
+            assert_eq!(String::from_utf8(v).unwrap(), text, "push_since");
         }
     }
 
