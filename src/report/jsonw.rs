@@ -9,6 +9,7 @@
 use std::collections::HashMap;
 use std::io;
 
+use super::cache::{Cache, description_key, profile_key};
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
@@ -95,11 +96,6 @@ fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
     }
 }
 
-/// A profile's identity for caches: profiles live for the whole run.
-fn profile_key(profile: &Profile) -> usize {
-    std::ptr::from_ref(profile) as usize
-}
-
 /// `{"category":1,"category_text":"..."}` or `null`.
 fn push_decoded(out: &mut Vec<u8>, decoded: Option<&Decoded>) {
     let Some(d) = decoded else {
@@ -159,39 +155,20 @@ impl<'a> Obj<'a> {
     }
 }
 
-/// A direct-mapped cache: the slot is chosen by the key's low bits; a miss
-/// recomputes and replaces. No hashing, bounded size.
-struct Cache<K, const N: usize> {
-    slots: Vec<Option<(K, Vec<u8>)>>,
-}
-
-impl<K: PartialEq + Copy, const N: usize> Default for Cache<K, N> {
-    fn default() -> Self {
-        Cache {
-            slots: (0..N).map(|_| None).collect(),
-        }
-    }
-}
-
-impl<K: PartialEq + Copy, const N: usize> Cache<K, N> {
-    fn get(&mut self, key: K, slot: usize, make: impl FnOnce() -> Vec<u8>) -> &[u8] {
-        let entry = &mut self.slots[slot % N];
-        if !matches!(entry, Some((k, _)) if *k == key) {
-            *entry = Some((key, make()));
-        }
-        entry.as_ref().map_or(&[], |(_, v)| v.as_slice())
-    }
-}
-
 /// A code's description as a JSON string, from the cache.
-fn describe<'c>(cache: &'c mut Cache<(usize, u16), 256>, profile: &Profile, code: u16) -> &'c [u8] {
-    let key = (profile_key(profile), code);
-    let slot = usize::from(code) ^ usize::from(code >> 8) ^ (key.0 >> 4);
-    cache.get(key, slot, || {
-        let mut v = Vec::new();
-        push_str(&mut v, &profile.describe(code));
-        v
-    })
+fn describe<'c>(
+    cache: &'c mut Cache<(usize, u16), Vec<u8>, 256>,
+    profile: &Profile,
+    code: u16,
+) -> &'c [u8] {
+    let (key, slot) = description_key(profile, code);
+    cache
+        .get(key, slot, || {
+            let mut v = Vec::new();
+            push_str(&mut v, &profile.describe(code));
+            v
+        })
+        .map_or(&[], Vec::as_slice)
 }
 
 /// The part of an EMCY event that depends only on its payload: `"code"` to
@@ -213,9 +190,9 @@ pub struct JsonWriter {
     /// writing it. `None`: compact (ndjson).
     level: Option<usize>,
     /// Per (profile address, code).
-    descriptions: Cache<(usize, u16), 256>,
+    descriptions: Cache<(usize, u16), Vec<u8>, 256>,
     warnings: HashMap<Warning, Vec<u8>>,
-    payloads: Cache<PayloadKey, 256>,
+    payloads: Cache<PayloadKey, Vec<u8>, 256>,
     /// `{"type":"emcy","file":"…","line":` for the last file seen.
     emcy_prefix: (String, Vec<u8>),
     /// `,"channel":"…","node":` for the last channel seen.
@@ -349,7 +326,7 @@ impl JsonWriter {
                 Self::layout(level, true, v)
             })
         };
-        out.extend_from_slice(fragment);
+        out.extend_from_slice(fragment.map_or(&[], Vec::as_slice));
     }
 
     fn emcy_prefix(&mut self, out: &mut Vec<u8>, file: &str) {

@@ -8,6 +8,7 @@ use std::io::{self, Write};
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
+use super::cache::{Cache, description_key};
 use super::timefmt::{TimeFormat, TimeStyle};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
@@ -56,7 +57,7 @@ impl<W: Write> TableReport<W> {
             times: TimeFormat::default(),
             line: String::new(),
             registers: vec![None; 256],
-            descriptions: Vec::new(),
+            descriptions: Descriptions::default(),
         }
     }
 
@@ -290,30 +291,18 @@ fn decoded_text(d: &Decoded) -> String {
     format!("manufacturer: {}", fields.join("; "))
 }
 
-/// Descriptions and their display widths by (profile address, code):
-/// profiles live for the whole run. Direct-mapped by code (a miss
-/// recomputes): no hashing on the per-event path.
-type Descriptions = Vec<Option<((usize, u16), String, usize)>>;
-
-const DESCRIPTION_SLOTS: usize = 256;
+/// Descriptions and their display widths by (profile, code).
+type Descriptions = Cache<(usize, u16), (String, usize), 256>;
 
 fn describe<'d>(cache: &'d mut Descriptions, profile: &Profile, code: u16) -> (&'d str, usize) {
-    let key = (std::ptr::from_ref(profile) as usize, code);
-    if cache.len() != DESCRIPTION_SLOTS {
-        *cache = vec![None; DESCRIPTION_SLOTS];
-    }
-    let slot = (usize::from(code) ^ usize::from(code >> 8) ^ (key.0 >> 4)) % DESCRIPTION_SLOTS;
-    match cache.get_mut(slot) {
-        Some(entry) => {
-            if !matches!(entry, Some((k, _, _)) if *k == key) {
-                let text = profile.describe(code);
-                let width = display_width(&text);
-                *entry = Some((key, text, width));
-            }
-            entry.as_ref().map_or(("", 0), |(_, t, w)| (t.as_str(), *w))
-        }
-        None => ("", 0),
-    }
+    let (key, slot) = description_key(profile, code);
+    cache
+        .get(key, slot, || {
+            let text = profile.describe(code);
+            let width = display_width(&text);
+            (text, width)
+        })
+        .map_or(("", 0), |(t, w)| (t.as_str(), *w))
 }
 
 /// Columns a text takes on a terminal; ASCII (nearly every cell) needs no
