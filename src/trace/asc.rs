@@ -318,9 +318,6 @@ impl AscParser {
     /// and the new running time; the caller commits it.
     #[inline]
     fn canonical<'a>(&self, line: &'a [u8], interest: &Interest) -> Option<(Frame<'a>, Timestamp)> {
-        if self.base != Base::Hex {
-            return None;
-        }
         let shape = self.shape_general(line)?;
         let frame = shape.frame(line, interest.wants(shape.id, shape.extended))?;
         Some((frame, shape.time))
@@ -371,6 +368,10 @@ impl AscParser {
     /// building a frame; computes the running time.
     #[inline]
     fn shape_general(&self, line: &[u8]) -> Option<AscShape> {
+        // The fast path reads hex numbers only.
+        if self.base != Base::Hex {
+            return None;
+        }
         let time_at = scan::blank_run(line, 0);
         if time_at == 0 && line.first().is_some_and(|b| !b.is_ascii_digit()) {
             return None;
