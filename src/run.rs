@@ -142,8 +142,7 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
     } else {
         ReadMode::Finite
     };
-    let stdout = io::stdout();
-    let out = io::BufWriter::with_capacity(64 * 1024, stdout.lock());
+    let out = io::BufWriter::with_capacity(64 * 1024, report_stdout());
     let summary = args.view == View::Summary;
     let mut renderer: Box<dyn Renderer> = match args.format {
         OutputFormat::Table => {
@@ -187,6 +186,21 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         return Ok(ExitCode::from(interrupt::EXIT_INTERRUPTED));
     }
     Ok(ExitCode::from(code))
+}
+
+/// Standard output for a report, written in 64 KiB chunks by the caller's
+/// buffer. Std's stdout puts a line buffer behind that, which searches every
+/// chunk for its last newline (2% of a run that prints an event for 30% of
+/// the lines); on Unix the descriptor is duplicated and written directly.
+fn report_stdout() -> Box<dyn Write> {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsFd;
+        if let Ok(fd) = io::stdout().as_fd().try_clone_to_owned() {
+            return Box::new(std::fs::File::from(fd));
+        }
+    }
+    Box::new(io::stdout().lock())
 }
 
 /// FILE arguments to sources: `-` is stdin, none is stdin; a directory is
