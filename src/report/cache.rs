@@ -32,16 +32,39 @@ pub fn profile_key(profile: &Profile) -> usize {
     std::ptr::from_ref(profile) as usize
 }
 
+/// A slot for a key from all of its bits (Fibonacci hashing: the multiply
+/// carries every bit into the ones kept). Keys that differ in a few bits,
+/// like error codes 0x2310/0x3210/0x4310, must not share a slot: a formula
+/// that dropped the high byte made them evict each other on every event.
+pub fn slot(bits: u64) -> usize {
+    (bits.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as usize
+}
+
 /// Key and slot of a code's description under a profile.
 pub fn description_key(profile: &Profile, code: u16) -> ((usize, u16), usize) {
     let key = (profile_key(profile), code);
-    let slot = usize::from(code) ^ usize::from(code >> 8) ^ (key.0 >> 4);
-    (key, slot)
+    (key, slot(u64::from(code) ^ ((key.0 as u64) << 16)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn similar_keys_spread_over_the_slots() {
+        // Four common codes, each with 16 manufacturer byte values.
+        let mut used = std::collections::HashSet::new();
+        for code in [0x2310u64, 0x3210, 0x4310, 0x8611] {
+            for m in 0..16u64 {
+                used.insert(slot(code | (m << 24)) % 256);
+            }
+        }
+        assert!(
+            used.len() >= 48,
+            "{} of 64 keys got their own slot",
+            used.len()
+        );
+    }
 
     #[test]
     fn a_hit_is_not_remade_and_a_collision_replaces() {

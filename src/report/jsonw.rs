@@ -9,7 +9,7 @@
 use std::collections::HashMap;
 use std::io;
 
-use super::cache::{Cache, description_key, profile_key};
+use super::cache::{Cache, description_key, profile_key, slot};
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
@@ -58,11 +58,11 @@ fn push_u64(out: &mut Vec<u8>, v: u64) {
 
 /// `"0x4310"`
 fn push_code(out: &mut Vec<u8>, code: u16) {
-    out.extend_from_slice(b"\"0x");
-    for shift in [12, 8, 4, 0] {
-        out.push(HEX[usize::from((code >> shift) & 15)]);
+    let mut text = *b"\"0x0000\"";
+    for (d, shift) in text[3..7].iter_mut().zip([12, 8, 4, 0]) {
+        *d = HEX[usize::from((code >> shift) & 15)];
     }
-    out.push(b'"');
+    out.extend_from_slice(&text);
 }
 
 fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
@@ -78,6 +78,15 @@ fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
 
 /// `"1043080100000000"`
 fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
+    if let Ok(classic) = <&[u8; 8]>::try_from(bytes) {
+        // The usual EMCY payload: one constant-size copy.
+        let mut text = [b'"'; 18];
+        for (pair, &b) in text[1..17].chunks_exact_mut(2).zip(classic) {
+            pair.copy_from_slice(&[HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]]);
+        }
+        out.extend_from_slice(&text);
+        return;
+    }
     out.push(b'"');
     for chunk in bytes.chunks(16) {
         let mut text = [0u8; 32];
@@ -295,8 +304,8 @@ impl JsonWriter {
             profile: profile_key(profile),
         };
         key.bytes[..usize::from(key.len)].copy_from_slice(&ev.data[..usize::from(key.len)]);
-        let slot = usize::from(ev.emcy.code ^ (u16::from(ev.emcy.register.0) << 8))
-            ^ ev.data.get(3).map_or(0, |b| usize::from(*b) * 7);
+        let slot =
+            slot(u64::from_le_bytes(key.bytes) ^ u64::from(key.len) ^ ((key.profile as u64) << 8));
         let fragment = {
             let descriptions = &mut self.descriptions;
             let level = self.level;
@@ -493,7 +502,12 @@ impl JsonWriter {
         }
         out.extend_from_slice(b",\"cleared_by\":");
         match iv.cleared_by {
-            Some(c) => push_str(out, c.slug()),
+            // Slugs are plain ASCII words: nothing to escape.
+            Some(c) => {
+                out.push(b'"');
+                out.extend_from_slice(c.slug().as_bytes());
+                out.push(b'"');
+            }
             None => out.extend_from_slice(b"null"),
         }
         out.extend_from_slice(b",\"start_line\":");
