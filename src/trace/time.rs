@@ -207,12 +207,20 @@ fn push_parts(out: &mut Vec<u8>, secs: u64, atto: u64, digits: u8) {
 
 /// `.fraction` of `atto` attoseconds with `digits` digits (nothing for none).
 pub fn push_fraction(out: &mut Vec<u8>, atto: u64, digits: u8) {
+    let atto = atto % pow10(MAX_FRACTION_DIGITS);
+    // Traces write milli-, micro- or nanoseconds: those widths divide by
+    // constants (a multiply) and copy a constant length.
+    match digits {
+        3 => return push_fraction_of::<3>(out, atto),
+        6 => return push_fraction_of::<6>(out, atto),
+        9 => return push_fraction_of::<9>(out, atto),
+        _ => {}
+    }
     let digits = usize::from(digits).min(MAX_FRACTION_DIGITS);
     if digits == 0 {
         return;
     }
-    let per_sec = pow10(MAX_FRACTION_DIGITS);
-    let mut frac = (atto % per_sec) / pow10(MAX_FRACTION_DIGITS - digits);
+    let mut frac = atto / pow10(MAX_FRACTION_DIGITS - digits);
     let mut text = [b'0'; MAX_FRACTION_DIGITS + 1];
     text[0] = b'.';
     for d in text[1..=digits].iter_mut().rev() {
@@ -220,6 +228,34 @@ pub fn push_fraction(out: &mut Vec<u8>, atto: u64, digits: u8) {
         frac /= 10;
     }
     out.extend_from_slice(&text[..=digits]);
+}
+
+/// `"00"` to `"99"`.
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// [`push_fraction`] for `D` (at most 9) digits of `atto` (below 10^18).
+fn push_fraction_of<const D: usize>(out: &mut Vec<u8>, atto: u64) {
+    let mut frac = atto / pow10(MAX_FRACTION_DIGITS - D);
+    let mut text = [b'.'; 10];
+    let mut at = D + 1;
+    while at > 2 {
+        let pair = (frac % 100) as usize * 2;
+        frac /= 100;
+        at -= 2;
+        if let (Some(d), Some(p)) = (text.get_mut(at..at + 2), PAIRS.get(pair..pair + 2)) {
+            d.copy_from_slice(p);
+        }
+    }
+    if at == 2
+        && let Some(d) = text.get_mut(1)
+    {
+        *d = b'0' + (frac % 10) as u8;
+    }
+    out.extend_from_slice(text.get(..=D).unwrap_or_default());
 }
 
 impl Timestamp {
@@ -396,5 +432,22 @@ mod tests {
     fn ordering_follows_time() {
         assert!(ts("1.5") < ts("1.6"));
         assert!(ts("10") > ts("9.999999"));
+    }
+
+    proptest::proptest! {
+        /// Every width, the constant-division ones (3, 6, 9) included,
+        /// writes the leading digits of the fraction, zero-padded.
+        #[test]
+        fn fraction_text_is_the_leading_digits(atto in 0u64..1_000_000_000_000_000_000, digits in 0u8..=18) {
+            let mut out = Vec::new();
+            push_fraction(&mut out, atto, digits);
+            let d = usize::from(digits);
+            let want = if d == 0 {
+                String::new()
+            } else {
+                format!(".{:0d$}", atto / 10u64.pow(18 - u32::from(digits)))
+            };
+            proptest::prop_assert_eq!(String::from_utf8(out).unwrap(), want);
+        }
     }
 }
