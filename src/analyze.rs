@@ -707,6 +707,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 history.push(channel_id, node, iv.clone());
             }
             if !self.opts.selects(channel, node) {
+                timeline.recycle(step);
                 return Ok(());
             }
             if !emcy.is_reset() {
@@ -740,6 +741,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 decoded: decoded.as_ref(),
             };
             self.renderer.emcy(&event).map_err(OutputError)?;
+            timeline.recycle(step);
         } else if frame.extended {
             return Ok(());
         } else if let Some(access) = sdo::parse(frame.id, data) {

@@ -104,6 +104,9 @@ pub struct NodeTimeline {
     next_seq: u64,
     emcy_count: u64,
     stats: NodeStats,
+    /// Buffers of a [`Step`] given back by [`NodeTimeline::recycle`]: a
+    /// clearing frame per error would otherwise allocate two vectors.
+    spare: (Vec<Interval>, Vec<u16>),
 }
 
 /// Running totals for the summary view, kept as the trace goes (bounded
@@ -184,7 +187,7 @@ impl NodeTimeline {
     pub fn emcy(&mut self, emcy: &Emcy, at: At, warnings: &mut Vec<Warning>) -> Step {
         self.emcy_count += 1;
         let was = self.state;
-        let mut closed = Vec::new();
+        let mut closed = std::mem::take(&mut self.spare.0);
         let transition = if !emcy.is_reset() {
             if !self.active_codes().any(|c| c == emcy.code) {
                 self.active.push(Interval {
@@ -230,12 +233,7 @@ impl NodeTimeline {
             }
         };
         self.account(was, at, true, &closed);
-        Step {
-            transition,
-            state: self.state,
-            cleared: closed.iter().map(|iv| iv.code).collect(),
-            closed,
-        }
+        self.step(transition, closed)
     }
 
     /// Applies one EMCY from a node whose profile names an error status bit in
@@ -261,7 +259,7 @@ impl NodeTimeline {
         }
         self.emcy_count += 1;
         let was = self.state;
-        let mut closed = Vec::new();
+        let mut closed = std::mem::take(&mut self.spare.0);
         self.close_where(at, ClearedBy::StatusBit, &mut closed, |iv| {
             iv.status_bit == Some(bit)
         });
@@ -274,12 +272,25 @@ impl NodeTimeline {
             Some(2)
         };
         self.account(was, at, true, &closed);
+        self.step(transition, closed)
+    }
+
+    fn step(&mut self, transition: Option<u8>, closed: Vec<Interval>) -> Step {
+        let mut cleared = std::mem::take(&mut self.spare.1);
+        cleared.extend(closed.iter().map(|iv| iv.code));
         Step {
             transition,
             state: self.state,
-            cleared: closed.iter().map(|iv| iv.code).collect(),
+            cleared,
             closed,
         }
+    }
+
+    /// Gives a step's buffers back for the next one to fill.
+    pub fn recycle(&mut self, mut step: Step) {
+        step.closed.clear();
+        step.cleared.clear();
+        self.spare = (step.closed, step.cleared);
     }
 
     /// Applies an NMT boot-up; returns the intervals it closed.
@@ -642,5 +653,22 @@ mod tests {
         assert_eq!(step.closed[0].cleared_by, Some(ClearedBy::Reset));
         assert_eq!(step.state, State::ErrorFree);
         assert!(t.active().is_empty());
+    }
+
+    #[test]
+    fn a_recycled_step_keeps_nothing_of_the_last_one() {
+        let mut t = NodeTimeline::new();
+        let mut w = Vec::new();
+        t.emcy(&emcy(0x4310, 0x09), at(1), &mut w);
+        let first = t.emcy(&emcy(0, 0), at(2), &mut w);
+        assert_eq!(first.cleared, [0x4310]);
+        t.recycle(first);
+        let raise = t.emcy(&emcy(0x2310, 0x03), at(3), &mut w);
+        assert!(raise.cleared.is_empty() && raise.closed.is_empty());
+        t.recycle(raise);
+        let second = t.emcy(&emcy(0, 0), at(4), &mut w);
+        assert_eq!(second.cleared, [0x2310]);
+        assert_eq!(second.closed.len(), 1);
+        assert_eq!(second.closed[0].start.line, 3);
     }
 }
