@@ -9,12 +9,13 @@
 use std::collections::HashMap;
 use std::io;
 
-use super::cache::{Cache, description_key, profile_key, slot};
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
+use super::cache::{Cache, description_key, profile_key, slot};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
+use crate::trace::time::SecondsText;
 use crate::trace::{Format, Span, Timestamp};
 
 const HEX: &[u8; 16] = b"0123456789ABCDEF";
@@ -206,6 +207,7 @@ pub struct JsonWriter {
     emcy_prefix: (String, Vec<u8>),
     /// `,"channel":"…","node":` for the last channel seen.
     channel: (String, Vec<u8>),
+    seconds: SecondsText,
 }
 
 /// `,"key":` of a member of the event object, one literal when compact.
@@ -280,6 +282,14 @@ impl JsonWriter {
             newline(out, level + 1);
         }
         out.push(b']');
+    }
+
+    /// A time of an event or error (the same text as [`push_time`]).
+    fn time(&mut self, out: &mut Vec<u8>, t: Option<Timestamp>) {
+        match t {
+            Some(t) => t.push_decimal_with(out, &mut self.seconds),
+            None => out.extend_from_slice(b"null"),
+        }
     }
 
     fn description(&mut self, out: &mut Vec<u8>, profile: &Profile, code: u16) {
@@ -364,7 +374,7 @@ impl JsonWriter {
         self.emcy_prefix(out, ev.file);
         push_u64(out, ev.line);
         key!(self, out, "time");
-        push_time(out, ev.time);
+        self.time(out, ev.time);
         self.channel(out, ev.channel);
         push_u64(out, u64::from(ev.node));
         key!(self, out, "cob_id");
@@ -492,9 +502,9 @@ impl JsonWriter {
         out.extend_from_slice(b",\"description\":");
         self.description(out, profile, iv.code);
         out.extend_from_slice(b",\"start\":");
-        push_time(out, iv.start.time);
+        self.time(out, iv.start.time);
         out.extend_from_slice(b",\"end\":");
-        push_time(out, end_time);
+        self.time(out, end_time);
         out.extend_from_slice(b",\"duration\":");
         match (iv.start.time, end_time) {
             (Some(start), Some(end)) => end.push_since(start, out),

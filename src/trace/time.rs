@@ -258,10 +258,44 @@ fn push_fraction_of<const D: usize>(out: &mut Vec<u8>, atto: u64) {
     out.extend_from_slice(text.get(..=D).unwrap_or_default());
 }
 
+/// The text of the last whole second written, for the next time: events
+/// come in time order, most in the same second as the one before.
+#[derive(Clone, Debug, Default)]
+pub struct SecondsText {
+    secs: u64,
+    text: [u8; 20],
+    /// 0 until a second is kept.
+    len: u8,
+}
+
+impl SecondsText {
+    fn push(&mut self, out: &mut Vec<u8>, secs: u64) {
+        if self.len == 0 || self.secs != secs {
+            let mut b = itoa::Buffer::new();
+            let digits = b.format(secs).as_bytes();
+            if let Some(to) = self.text.get_mut(..digits.len()) {
+                to.copy_from_slice(digits);
+            }
+            self.secs = secs;
+            self.len = digits.len() as u8;
+        }
+        // A constant-size copy cut back (no call for a variable length).
+        let keep = out.len() + usize::from(self.len);
+        out.extend_from_slice(&self.text);
+        out.truncate(keep);
+    }
+}
+
 impl Timestamp {
     /// Appends the text `Display` writes (the JSON and table hot paths).
     pub fn push_decimal(self, out: &mut Vec<u8>) {
         push_parts(out, self.secs, self.atto, self.digits);
+    }
+
+    /// [`Timestamp::push_decimal`], the seconds' text kept in `seconds`.
+    pub fn push_decimal_with(self, out: &mut Vec<u8>, seconds: &mut SecondsText) {
+        seconds.push(out, self.secs);
+        push_fraction(out, self.atto, self.digits);
     }
 
     /// Appends `self.since(earlier)` as text, without the 128-bit division
@@ -448,6 +482,28 @@ mod tests {
                 format!(".{:0d$}", atto / 10u64.pow(18 - u32::from(digits)))
             };
             proptest::prop_assert_eq!(String::from_utf8(out).unwrap(), want);
+        }
+    }
+
+    #[test]
+    fn kept_seconds_write_what_push_decimal_writes() {
+        let mut kept = SecondsText::default();
+        let times = [
+            Timestamp::from_raw(1_700_000_000, 1_219_000_000_000_000, 6),
+            Timestamp::from_raw(1_700_000_000, 999_999_000_000_000_000, 6),
+            Timestamp::from_raw(1_700_000_001, 0, 6),
+            Timestamp::from_raw(0, 5, 18),
+            Timestamp::from_raw(u64::MAX, 0, 0),
+            Timestamp::from_raw(7, 500_000_000_000_000_000, 1),
+        ];
+        for t in times.into_iter().map(Option::unwrap) {
+            let (mut want, mut got) = (b"x".to_vec(), b"x".to_vec());
+            t.push_decimal(&mut want);
+            t.push_decimal_with(&mut got, &mut kept);
+            assert_eq!(
+                String::from_utf8(got).unwrap(),
+                String::from_utf8(want).unwrap()
+            );
         }
     }
 }
