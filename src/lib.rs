@@ -9,6 +9,7 @@
 pub mod analyze;
 pub mod baseline;
 pub mod batch;
+pub mod cache;
 pub mod canopen;
 pub mod cli;
 pub mod explain;

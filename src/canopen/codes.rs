@@ -583,7 +583,8 @@ pub fn lookup_in_cached(code: u16, tables: Tables) -> CodeInfo {
         let Ok(mut cache) = cache.try_borrow_mut() else {
             return lookup_in(code, tables);
         };
-        let slot = &mut cache[usize::from(code) % SLOTS];
+        // Not `code % SLOTS`: 0x2310, 0x3210 and 0x4310 would share a slot.
+        let slot = &mut cache[crate::cache::slot(u64::from(code)) % SLOTS];
         match *slot {
             Some(info) if info.code == code && info.tables == tables => info,
             _ => *slot.insert(lookup_in(code, tables)),

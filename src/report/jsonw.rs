@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::io;
 
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
-use super::cache::{Cache, description_key, profile_key, slot};
+use crate::cache::{Cache, description_key, profile_key, slot};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::canopen::register::Register;

@@ -1,7 +1,6 @@
 //! What a run reports (events, nodes, inputs, diagnostics) and the renderers
 //! that print it. The JSON key names here are a public contract (README).
 
-pub mod cache;
 pub mod chart;
 pub mod html;
 pub mod json;

@@ -8,9 +8,9 @@ use std::io::{self, Write};
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
-use super::cache::{Cache, description_key};
 use super::timefmt::{TimeFormat, TimeStyle};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
+use crate::cache::{Cache, description_key};
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::timeline::Interval;
 use crate::trace::Timestamp;

@@ -1,6 +1,7 @@
-//! A direct-mapped cache for the texts renderers write on every event
-//! (descriptions, payload fragments): the slot is chosen by the caller from
-//! the key's bits; a miss recomputes and replaces. No hashing, bounded size.
+//! Direct-mapped caches for what an EMCY-heavy trace looks up on every
+//! event (code tables, descriptions, payload fragments): the slot comes
+//! from the key's bits ([`slot`]); a miss recomputes and replaces. Bounded
+//! size, no hash map.
 
 use crate::canopen::profile::Profile;
 
