@@ -144,6 +144,12 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
     };
     let out = io::BufWriter::with_capacity(64 * 1024, report_stdout());
     let summary = args.view == View::Summary;
+    // Threads for the node objects at the end: -j, or every core.
+    let report_threads = if args.threads > 0 {
+        args.threads
+    } else {
+        cores()
+    };
     let mut renderer: Box<dyn Renderer> = match args.format {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
@@ -153,8 +159,10 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
         OutputFormat::Json => Box::new(JsonDocument::new(out)),
-        OutputFormat::Ndjson if summary => Box::new(WithoutEvents(Ndjson::new(out, live))),
-        OutputFormat::Ndjson => Box::new(Ndjson::new(out, live)),
+        OutputFormat::Ndjson if summary => Box::new(WithoutEvents(
+            Ndjson::new(out, live).threads(report_threads),
+        )),
+        OutputFormat::Ndjson => Box::new(Ndjson::new(out, live).threads(report_threads)),
         OutputFormat::Svg => Box::new(SvgReport::new(out)),
         OutputFormat::Html => Box::new(HtmlReport::new(out)),
     };

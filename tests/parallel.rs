@@ -235,6 +235,68 @@ fn error_history_on_disk_reads_back_identically() {
     assert_eq!(table(2), table(usize::MAX));
 }
 
+/// Node objects list every error; with more than one thread their errors
+/// are rendered by helpers in batches (1024 errors each) and written in
+/// order: byte for byte what one thread writes, also from a spilled history.
+#[test]
+fn node_errors_rendered_on_helper_threads_are_identical() {
+    let mut trace = Vec::new();
+    for i in 0..12_000u32 {
+        // Node 3 raises and clears ~3000 errors (three batches and a bit),
+        // nodes 4 and 5 a few, on two channels.
+        let (node, ch) = match i % 10 {
+            0 => (4, "can1"),
+            1 => (5, "can0"),
+            _ => (3, "can0"),
+        };
+        let data = match i % 4 {
+            0 => "1043090100000000",
+            1 => "1023030000000000",
+            2 => "0000090000000000",
+            _ => "0000000000000000",
+        };
+        trace.extend(
+            format!(
+                "({}.{:06}) {ch} {:03X}#{data}\n",
+                1000 + i / 10,
+                i,
+                0x80 + node
+            )
+            .bytes(),
+        );
+    }
+    let render = |threads: usize, spill_at: usize| {
+        let opts = Options {
+            spill_at,
+            ..base_options()
+        };
+        let mut out = Vec::new();
+        let mut err = Vec::new();
+        {
+            let mut r = Ndjson::new(&mut out, false).threads(threads);
+            let mut log = DiagnosticLog::new(&mut err);
+            let a = analyze("trace", &trace[..], false, &opts, &mut r, &mut log).unwrap();
+            r.finish(&[a.report], &[]).unwrap();
+        }
+        String::from_utf8(out).unwrap()
+    };
+    let reference = render(1, usize::MAX);
+    let node3 = reference
+        .lines()
+        .find(|l| l.contains("\"type\":\"node\"") && l.contains("\"node\":3,"))
+        .expect("node 3");
+    let errors = node3.matches("\"cleared_by\":").count();
+    assert!(errors > 3 * 1024, "only {errors} errors for node 3");
+    for threads in [2, 3] {
+        for spill_at in [usize::MAX, 500] {
+            assert!(
+                render(threads, spill_at) == reference,
+                "{threads} threads, spill every {spill_at}"
+            );
+        }
+    }
+}
+
 /// An SDO write to 0x1014 moves node 5's EMCY id mid-trace: frames on the new
 /// id before the confirmation are plain frames, after it EMCYs, however the
 /// blocks fall (workers parse with the old set of wanted ids and the block

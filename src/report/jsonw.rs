@@ -432,6 +432,23 @@ impl JsonWriter {
         errors: impl IntoIterator<Item = Interval>,
         flush: &mut dyn FnMut(&mut Vec<u8>) -> io::Result<()>,
     ) -> io::Result<()> {
+        self.node_head(out, input, node);
+        for (i, iv) in errors.into_iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            self.interval(out, node.profile, &iv);
+            if out.len() >= FLUSH_AT {
+                flush(out)?;
+            }
+        }
+        out.extend_from_slice(NODE_END);
+        Ok(())
+    }
+
+    /// A node object up to its errors: `{"type":"node",…,"errors":[`. The
+    /// errors follow ([`JsonWriter::errors`]), then [`NODE_END`].
+    pub fn node_head(&mut self, out: &mut Vec<u8>, input: &InputReport, node: &NodeReport) {
         let file = input.file.as_str();
         let mut o = Obj::new(out);
         o.str("type", "node");
@@ -477,20 +494,23 @@ impl JsonWriter {
             o.key("last_emcy"),
             node.stats.last_emcy.and_then(|a| a.time),
         );
-        let e = o.key("errors");
-        e.push(b'[');
-        for (i, iv) in errors.into_iter().enumerate() {
-            if i > 0 {
-                e.push(b',');
+        o.key("errors").push(b'[');
+    }
+
+    /// Errors of a node object, after `first` or not (a comma before).
+    pub fn errors(
+        &mut self,
+        out: &mut Vec<u8>,
+        profile: &Profile,
+        errors: &[Interval],
+        first: bool,
+    ) {
+        for (i, iv) in errors.iter().enumerate() {
+            if i > 0 || !first {
+                out.push(b',');
             }
-            self.interval(e, node.profile, &iv);
-            if e.len() >= FLUSH_AT {
-                flush(e)?;
-            }
+            self.interval(out, profile, iv);
         }
-        e.push(b']');
-        o.end();
-        Ok(())
     }
 
     /// One error of a node object (a trace can have millions): fixed
@@ -598,6 +618,9 @@ fn newline(out: &mut Vec<u8>, level: usize) {
 
 /// How many bytes of one JSON value are built before they are written.
 pub const FLUSH_AT: usize = 64 * 1024;
+
+/// The end of a node object after its errors.
+pub const NODE_END: &[u8] = b"]}";
 
 /// [`pretty`] in pieces: compact JSON may be fed in chunks split anywhere.
 pub struct Pretty {

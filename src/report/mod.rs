@@ -6,6 +6,7 @@ pub mod html;
 pub mod json;
 pub mod jsonw;
 pub mod ndjson;
+pub mod ordered;
 pub mod svg;
 pub mod table;
 pub mod timefmt;

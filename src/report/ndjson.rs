@@ -3,8 +3,11 @@
 
 use std::io::{self, Write};
 
-use super::jsonw::JsonWriter;
+use super::jsonw::{JsonWriter, NODE_END};
+use super::ordered::Ordered;
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::canopen::profile::Profile;
+use crate::timeline::Interval;
 
 pub struct Ndjson<W: Write> {
     out: W,
@@ -12,6 +15,7 @@ pub struct Ndjson<W: Write> {
     flush_each: bool,
     json: JsonWriter,
     buf: Vec<u8>,
+    threads: usize,
 }
 
 impl<W: Write> Ndjson<W> {
@@ -21,7 +25,64 @@ impl<W: Write> Ndjson<W> {
             flush_each,
             json: JsonWriter::new(),
             buf: Vec::with_capacity(1024),
+            threads: 1,
         }
+    }
+
+    /// Threads for the node objects' errors (1: this one only).
+    pub fn threads(mut self, threads: usize) -> Self {
+        self.threads = threads;
+        self
+    }
+
+    /// The node objects, their errors rendered by helper threads in
+    /// batches while this one reads the history back (the same bytes as one
+    /// thread writes).
+    fn nodes_in_parallel(&mut self, inputs: &[InputReport]) -> io::Result<()> {
+        let out: &mut dyn Write = &mut self.out;
+        let (json, buf) = (&mut self.json, &mut self.buf);
+        std::thread::scope(|scope| {
+            let mut pool = Ordered::start(
+                scope,
+                self.threads,
+                JsonWriter::new,
+                |json: &mut JsonWriter, (profile, errors, first): ErrorBatch, out: &mut Vec<u8>| {
+                    json.errors(out, profile, &errors, first);
+                },
+            );
+            for input in inputs {
+                let mut merge = input.history.merge();
+                for node in &input.nodes {
+                    buf.clear();
+                    json.node_head(buf, input, node);
+                    pool.text(buf, out)?;
+                    let mut first = true;
+                    let mut batch = Vec::with_capacity(ERROR_BATCH);
+                    for iv in merge.node_errors(&node.channel, node.node) {
+                        batch.push(iv);
+                        if batch.len() == ERROR_BATCH {
+                            let full =
+                                std::mem::replace(&mut batch, Vec::with_capacity(ERROR_BATCH));
+                            pool.job((node.profile, full, first), out)?;
+                            first = false;
+                        }
+                    }
+                    if !batch.is_empty() {
+                        pool.job((node.profile, batch, first), out)?;
+                    }
+                    buf.clear();
+                    buf.extend_from_slice(NODE_END);
+                    buf.push(b'\n');
+                    pool.text(buf, out)?;
+                }
+                if let Some(e) = merge.take_error() {
+                    return Err(e);
+                }
+            }
+            pool.finish(out)
+        })?;
+        self.buf.clear();
+        Ok(())
     }
 
     /// Writes the line built in `buf`.
@@ -36,6 +97,13 @@ impl<W: Write> Ndjson<W> {
     }
 }
 
+/// Errors of one node for a helper: its profile (descriptions), the
+/// errors, and whether they open the node's list.
+type ErrorBatch = (&'static Profile, Vec<Interval>, bool);
+
+/// Errors per batch: ~200 KiB of text.
+const ERROR_BATCH: usize = 1024;
+
 impl<W: Write> Renderer for Ndjson<W> {
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
         self.json.emcy(&mut self.buf, event);
@@ -48,21 +116,25 @@ impl<W: Write> Renderer for Ndjson<W> {
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
-        for input in inputs {
-            let mut merge = input.history.merge();
-            for node in &input.nodes {
-                let errors = merge.node_errors(&node.channel, node.node);
-                let out = &mut self.out;
-                self.json
-                    .node(&mut self.buf, input, node, errors, &mut |part| {
-                        out.write_all(part)?;
-                        part.clear();
-                        Ok(())
-                    })?;
-                self.line()?;
-            }
-            if let Some(e) = merge.take_error() {
-                return Err(e);
+        if self.threads > 1 {
+            self.nodes_in_parallel(inputs)?;
+        } else {
+            for input in inputs {
+                let mut merge = input.history.merge();
+                for node in &input.nodes {
+                    let errors = merge.node_errors(&node.channel, node.node);
+                    let out = &mut self.out;
+                    self.json
+                        .node(&mut self.buf, input, node, errors, &mut |part| {
+                            out.write_all(part)?;
+                            part.clear();
+                            Ok(())
+                        })?;
+                    self.line()?;
+                }
+                if let Some(e) = merge.take_error() {
+                    return Err(e);
+                }
             }
         }
         for input in inputs {
