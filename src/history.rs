@@ -326,7 +326,7 @@ impl ErrorHistory {
         let sources = self
             .runs
             .iter()
-            .map(|run| RunReader::new(self.file.clone(), *run))
+            .map(|run| RunReader::new(self.file.clone(), *run, chunk_records(self.runs.len())))
             .collect();
         let mut m = Merge {
             history: self,
@@ -359,6 +359,8 @@ impl ErrorHistory {
 
 /// Reads one run back in chunks with positional reads (the file is shared).
 struct RunReader {
+    /// Records per read.
+    chunk: usize,
     file: Option<Arc<File>>,
     next: u64,
     end: u64,
@@ -366,11 +368,21 @@ struct RunReader {
     pos: usize,
 }
 
+/// Records per read: 512 (36 KiB) while there are few runs, fewer when
+/// there are many, so that the read buffers of all runs together stay
+/// within [`READ_BUDGET`] (a trace's length only adds runs).
 const CHUNK_RECORDS: usize = 512;
+const MIN_CHUNK_RECORDS: usize = 16;
+const READ_BUDGET: usize = 4 << 20;
+
+fn chunk_records(runs: usize) -> usize {
+    (READ_BUDGET / RECORD / runs.max(1)).clamp(MIN_CHUNK_RECORDS, CHUNK_RECORDS)
+}
 
 impl RunReader {
-    fn new(file: Option<Arc<File>>, run: Run) -> Self {
+    fn new(file: Option<Arc<File>>, run: Run, chunk: usize) -> Self {
         RunReader {
+            chunk,
             file,
             next: run.offset,
             end: run.offset + run.records * RECORD as u64,
@@ -385,7 +397,7 @@ impl RunReader {
             if left == 0 {
                 return Ok(None);
             }
-            let n = left.min((CHUNK_RECORDS * RECORD) as u64) as usize;
+            let n = left.min((self.chunk * RECORD) as u64) as usize;
             self.buf.resize(n, 0);
             let Some(file) = &self.file else {
                 return Ok(None);
@@ -829,5 +841,16 @@ mod tests {
         ) {
             merged_in_report_order(&pushes, channels, spill_at);
         }
+    }
+
+    #[test]
+    fn read_buffers_stay_within_the_budget_whatever_the_run_count() {
+        assert_eq!(chunk_records(1), CHUNK_RECORDS);
+        for runs in [100, 134, 268, 1000, 3000] {
+            let n = chunk_records(runs);
+            assert!((MIN_CHUNK_RECORDS..=CHUNK_RECORDS).contains(&n));
+            assert!(n * RECORD * runs <= READ_BUDGET, "{runs} runs");
+        }
+        assert_eq!(chunk_records(1_000_000), MIN_CHUNK_RECORDS);
     }
 }
