@@ -123,8 +123,10 @@ pub struct DecodeArgs {
     #[arg(long, default_value_t = 20, value_name = "N")]
     pub max_diagnostics: usize,
 
-    /// Threads for reading large inputs (0 = automatic: all cores for files
-    /// over 16 MiB and gzip input, one for small files and live streams)
+    /// Threads for reading large inputs, and for writing the errors listed
+    /// in ndjson node objects (0 = automatic: all cores for files over 16 MiB
+    /// and gzip input, one for small files and live streams; all cores for
+    /// the node objects)
     #[arg(long, short = 'j', default_value_t = 0, value_name = "N")]
     pub threads: usize,
 
