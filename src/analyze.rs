@@ -20,7 +20,7 @@ use crate::canopen::sdo;
 use crate::history::{DEFAULT_SPILL_AT, ErrorHistory, History, Record};
 use crate::profile_choice::{NodeProfiles, ProfileChoice, ProfileSource, default_profile};
 use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
-use crate::timeline::{At, NodeTimeline};
+use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::blf;
 use crate::trace::detect::Detector;
 use crate::trace::input::{self, Opened, ReadMode, Source};
@@ -529,6 +529,8 @@ struct Consumer<'r, 'l, E: Write> {
     active: Vec<u16>,
     sdo: sdo::Tracker,
     profiles: NodeProfiles<'r>,
+    /// The last timeline step, handed back for its vectors.
+    step_buffers: Step,
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
@@ -699,15 +701,18 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 timeline,
                 history,
             } = self.nodes.get(frame.channel, node);
-            let step = match profile.status_bit(&emcy) {
-                Some(bit) => timeline.emcy_with_status_bit(&emcy, at, bit, &mut self.warnings),
-                None => timeline.emcy(&emcy, at, &mut self.warnings),
-            };
+            let step = timeline.apply(
+                &emcy,
+                at,
+                profile.status_bit(&emcy),
+                &mut self.warnings,
+                std::mem::take(&mut self.step_buffers),
+            );
             for iv in &step.closed {
                 history.push(channel_id, node, iv.clone());
             }
             if !self.opts.selects(channel, node) {
-                timeline.recycle(step);
+                self.step_buffers = step;
                 return Ok(());
             }
             if !emcy.is_reset() {
@@ -741,7 +746,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 decoded: decoded.as_ref(),
             };
             self.renderer.emcy(&event).map_err(OutputError)?;
-            timeline.recycle(step);
+            self.step_buffers = step;
         } else if frame.extended {
             return Ok(());
         } else if let Some(access) = sdo::parse(frame.id, data) {
@@ -1050,6 +1055,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         active: Vec::new(),
         sdo: sdo::Tracker::default(),
         profiles: NodeProfiles::new(&opts.profiles),
+        step_buffers: Step::default(),
     };
 
     // BLF is binary: known by its magic (or forced), read object by object.

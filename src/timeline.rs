@@ -83,7 +83,7 @@ pub struct Interval {
 }
 
 /// What one EMCY did to its node.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Step {
     /// 1-4, or `None` for a reset that changed nothing.
     pub transition: Option<u8>,
@@ -104,9 +104,6 @@ pub struct NodeTimeline {
     next_seq: u64,
     emcy_count: u64,
     stats: NodeStats,
-    /// Buffers of a [`Step`] given back by [`NodeTimeline::recycle`]: a
-    /// clearing frame per error would otherwise allocate two vectors.
-    spare: (Vec<Interval>, Vec<u16>),
 }
 
 /// Running totals for the summary view, kept as the trace goes (bounded
@@ -185,9 +182,40 @@ impl NodeTimeline {
     /// Applies one EMCY. Warnings that depend on the node's history are
     /// appended to `warnings`.
     pub fn emcy(&mut self, emcy: &Emcy, at: At, warnings: &mut Vec<Warning>) -> Step {
+        self.emcy_reusing(emcy, at, warnings, Step::default())
+    }
+
+    /// [`NodeTimeline::emcy`] or, with the profile's status bit,
+    /// [`NodeTimeline::emcy_with_status_bit`], filling `reuse`'s vectors
+    /// (emptied first) instead of new ones: a caller that hands each step
+    /// back allocates nothing per clearing frame. (The buffers stay with the
+    /// caller, not in every timeline: a trace can have thousands of nodes.)
+    pub fn apply(
+        &mut self,
+        emcy: &Emcy,
+        at: At,
+        status_bit: Option<u8>,
+        warnings: &mut Vec<Warning>,
+        reuse: Step,
+    ) -> Step {
+        match status_bit {
+            Some(bit) => self.status_bit_reusing(emcy, at, bit, warnings, reuse),
+            None => self.emcy_reusing(emcy, at, warnings, reuse),
+        }
+    }
+
+    fn emcy_reusing(
+        &mut self,
+        emcy: &Emcy,
+        at: At,
+        warnings: &mut Vec<Warning>,
+        mut reuse: Step,
+    ) -> Step {
         self.emcy_count += 1;
         let was = self.state;
-        let mut closed = std::mem::take(&mut self.spare.0);
+        reuse.closed.clear();
+        reuse.cleared.clear();
+        let mut closed = reuse.closed;
         let transition = if !emcy.is_reset() {
             if !self.active_codes().any(|c| c == emcy.code) {
                 self.active.push(Interval {
@@ -233,7 +261,7 @@ impl NodeTimeline {
             }
         };
         self.account(was, at, true, &closed);
-        self.step(transition, closed)
+        self.step(transition, closed, reuse.cleared)
     }
 
     /// Applies one EMCY from a node whose profile names an error status bit in
@@ -250,8 +278,19 @@ impl NodeTimeline {
         bit: u8,
         warnings: &mut Vec<Warning>,
     ) -> Step {
+        self.status_bit_reusing(emcy, at, bit, warnings, Step::default())
+    }
+
+    fn status_bit_reusing(
+        &mut self,
+        emcy: &Emcy,
+        at: At,
+        bit: u8,
+        warnings: &mut Vec<Warning>,
+        mut reuse: Step,
+    ) -> Step {
         if !emcy.is_reset() {
-            let step = self.emcy(emcy, at, warnings);
+            let step = self.emcy_reusing(emcy, at, warnings, reuse);
             if let Some(iv) = self.active.iter_mut().find(|iv| iv.code == emcy.code) {
                 iv.status_bit.get_or_insert(bit);
             }
@@ -259,7 +298,9 @@ impl NodeTimeline {
         }
         self.emcy_count += 1;
         let was = self.state;
-        let mut closed = std::mem::take(&mut self.spare.0);
+        reuse.closed.clear();
+        reuse.cleared.clear();
+        let mut closed = reuse.closed;
         self.close_where(at, ClearedBy::StatusBit, &mut closed, |iv| {
             iv.status_bit == Some(bit)
         });
@@ -272,11 +313,15 @@ impl NodeTimeline {
             Some(2)
         };
         self.account(was, at, true, &closed);
-        self.step(transition, closed)
+        self.step(transition, closed, reuse.cleared)
     }
 
-    fn step(&mut self, transition: Option<u8>, closed: Vec<Interval>) -> Step {
-        let mut cleared = std::mem::take(&mut self.spare.1);
+    fn step(
+        &mut self,
+        transition: Option<u8>,
+        closed: Vec<Interval>,
+        mut cleared: Vec<u16>,
+    ) -> Step {
         cleared.extend(closed.iter().map(|iv| iv.code));
         Step {
             transition,
@@ -284,13 +329,6 @@ impl NodeTimeline {
             cleared,
             closed,
         }
-    }
-
-    /// Gives a step's buffers back for the next one to fill.
-    pub fn recycle(&mut self, mut step: Step) {
-        step.closed.clear();
-        step.cleared.clear();
-        self.spare = (step.closed, step.cleared);
     }
 
     /// Applies an NMT boot-up; returns the intervals it closed.
@@ -656,17 +694,15 @@ mod tests {
     }
 
     #[test]
-    fn a_recycled_step_keeps_nothing_of_the_last_one() {
+    fn a_reused_step_keeps_nothing_of_the_last_one() {
         let mut t = NodeTimeline::new();
         let mut w = Vec::new();
         t.emcy(&emcy(0x4310, 0x09), at(1), &mut w);
-        let first = t.emcy(&emcy(0, 0), at(2), &mut w);
+        let first = t.apply(&emcy(0, 0), at(2), None, &mut w, Step::default());
         assert_eq!(first.cleared, [0x4310]);
-        t.recycle(first);
-        let raise = t.emcy(&emcy(0x2310, 0x03), at(3), &mut w);
+        let raise = t.apply(&emcy(0x2310, 0x03), at(3), Some(0x1B), &mut w, first);
         assert!(raise.cleared.is_empty() && raise.closed.is_empty());
-        t.recycle(raise);
-        let second = t.emcy(&emcy(0, 0), at(4), &mut w);
+        let second = t.apply(&emcy(0, 0), at(4), None, &mut w, raise);
         assert_eq!(second.cleared, [0x2310]);
         assert_eq!(second.closed.len(), 1);
         assert_eq!(second.closed[0].start.line, 3);
