@@ -15,6 +15,8 @@ use std::ops::Range;
 use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex, RwLock};
 
+use crate::cache::{Cache, description_key};
+use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::canopen::sdo;
 use crate::history::{DEFAULT_SPILL_AT, ErrorHistory, History, Record};
@@ -531,6 +533,10 @@ struct Consumer<'r, 'l, E: Write> {
     profiles: NodeProfiles<'r>,
     /// The last timeline step, handed back for its vectors.
     step_buffers: Step,
+    /// Code table entries by (profile, code): the profile's lookup goes
+    /// through a thread-local cache whose access and by-value copy showed
+    /// as stalls on this thread.
+    infos: Cache<(usize, u16), CodeInfo, 64>,
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
@@ -691,9 +697,17 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             self.check_clock(at);
             let chosen = self.profiles.get(node);
             let profile = chosen.profile;
-            let info = profile.info(emcy.code);
+            let (key, slot) = description_key(profile, emcy.code);
+            let looked_up;
+            let info = match self.infos.get(key, slot, || profile.info(emcy.code)) {
+                Some(info) => info,
+                None => {
+                    looked_up = profile.info(emcy.code);
+                    &looked_up
+                }
+            };
             self.warnings.clear();
-            emcy.frame_warnings(&info, &mut self.warnings);
+            emcy.frame_warnings(info, &mut self.warnings);
             profile.frame_warnings(&emcy, &mut self.warnings);
             let NodeSlot {
                 channel,
@@ -736,7 +750,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 cob_id: frame.id,
                 data,
                 emcy: &emcy,
-                info: &info,
+                info,
                 transition: step.transition,
                 state: step.state,
                 active: &self.active,
@@ -1056,6 +1070,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         sdo: sdo::Tracker::default(),
         profiles: NodeProfiles::new(&opts.profiles),
         step_buffers: Step::default(),
+        infos: Cache::default(),
     };
 
     // BLF is binary: known by its magic (or forced), read object by object.
