@@ -196,7 +196,9 @@ fn run(data: &[u8], gzip: bool, opts: &Options, output: Output) -> Run {
     let mut out = Vec::new();
     let mut err = Vec::new();
     let mut renderer: Box<dyn Renderer + '_> = match output {
-        Output::Ndjson => Box::new(Ndjson::new(&mut out, false)),
+        // The node objects' errors on as many helpers as the read has
+        // threads: the parallel run's ndjson must equal the sequential one.
+        Output::Ndjson => Box::new(Ndjson::new(&mut out, false).threads(opts.threads)),
         Output::Json => Box::new(JsonDocument::new(&mut out)),
         Output::Table => Box::new(TableReport::new(&mut out, false, false)),
     };
