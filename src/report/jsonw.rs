@@ -99,13 +99,6 @@ fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
     out.push(b'"');
 }
 
-fn push_time(out: &mut Vec<u8>, t: Option<Timestamp>) {
-    match t {
-        Some(t) => t.push_decimal(out),
-        None => out.extend_from_slice(b"null"),
-    }
-}
-
 /// `{"category":1,"category_text":"..."}` or `null`.
 fn push_decoded(out: &mut Vec<u8>, decoded: Option<&Decoded>) {
     let Some(d) = decoded else {
@@ -284,7 +277,7 @@ impl JsonWriter {
         out.push(b']');
     }
 
-    /// A time of an event or error (the same text as [`push_time`]).
+    /// A time, `null` for none; the seconds' text is kept for the next one.
     fn time(&mut self, out: &mut Vec<u8>, t: Option<Timestamp>) {
         match t {
             Some(t) => t.push_decimal_with(out, &mut self.seconds),
@@ -412,7 +405,7 @@ impl JsonWriter {
         o.str("type", "boot");
         o.str("file", ev.file);
         o.u64("line", ev.line);
-        push_time(o.key("time"), ev.time);
+        self.time(o.key("time"), ev.time);
         o.str("channel", ev.channel);
         o.u64("node", u64::from(ev.node));
         push_codes(o.key("cleared"), ev.cleared);
@@ -486,11 +479,11 @@ impl JsonWriter {
             }
             None => o.key("longest_error").extend_from_slice(b"null"),
         }
-        push_time(
+        self.time(
             o.key("first_emcy"),
             node.stats.first_emcy.and_then(|a| a.time),
         );
-        push_time(
+        self.time(
             o.key("last_emcy"),
             node.stats.last_emcy.and_then(|a| a.time),
         );
@@ -578,8 +571,8 @@ impl JsonWriter {
         o.u64("boot", boot);
         o.u64("emcy_invalid", emcy_invalid);
         o.u64("other_format", other_format);
-        push_time(o.key("first_time"), input.first_time);
-        push_time(o.key("last_time"), input.last_time);
+        self.time(o.key("first_time"), input.first_time);
+        self.time(o.key("last_time"), input.last_time);
         match &input.error {
             Some(e) => o.str("error", e),
             None => o.key("error").extend_from_slice(b"null"),
