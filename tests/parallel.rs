@@ -181,12 +181,12 @@ fn asc_with_relative_times() {
 
 /// The error history goes to a temporary file past a threshold; what is
 /// reported must not change. Table and ndjson both read it back.
-#[test]
-fn error_history_on_disk_reads_back_identically() {
+/// EMCY frames that raise and clear errors in turn (register and code
+/// change with `i % 4`); `at(i)` gives the node and channel of line `i`.
+fn raising_and_clearing(lines: u32, at: impl Fn(u32) -> (u32, &'static str)) -> Vec<u8> {
     let mut trace = Vec::new();
-    for i in 0..2000u32 {
-        let node = 1 + i % 7;
-        let ch = if i % 3 == 0 { "can1" } else { "can0" };
+    for i in 0..lines {
+        let (node, ch) = at(i);
         let data = match i % 4 {
             0 => "1043090100000000",
             1 => "1023030000000000",
@@ -203,33 +203,50 @@ fn error_history_on_disk_reads_back_identically() {
             .bytes(),
         );
     }
+    trace
+}
+
+/// Stdout of `renderer` (made over the output buffer) after reading `trace`.
+fn report_with<'o>(
+    trace: &[u8],
+    opts: &Options,
+    out: &'o mut Vec<u8>,
+    renderer: impl FnOnce(&'o mut Vec<u8>) -> Box<dyn Renderer + 'o>,
+) {
+    let mut err = Vec::new();
+    let mut r = renderer(out);
+    let mut log = DiagnosticLog::new(&mut err);
+    let a = analyze("trace", trace, false, opts, r.as_mut(), &mut log).unwrap();
+    r.finish(&[a.report], &[]).unwrap();
+}
+
+fn spilling_every(spill_at: usize) -> Options {
+    Options {
+        spill_at,
+        ..base_options()
+    }
+}
+
+#[test]
+fn error_history_on_disk_reads_back_identically() {
+    let trace = raising_and_clearing(2000, |i| {
+        (1 + i % 7, if i % 3 == 0 { "can1" } else { "can0" })
+    });
     let reference = run_with(&trace, base_options());
     let closed = reference.0.matches("\"cleared_by\":\"").count();
     assert!(closed > 300, "only {closed} closed errors");
     for spill_at in [1, 3, 100] {
-        let got = run_with(
-            &trace,
-            Options {
-                spill_at,
-                ..base_options()
-            },
-        );
+        let got = run_with(&trace, spilling_every(spill_at));
         assert_eq!(got, reference, "spill every {spill_at}");
     }
     // The table reads the history twice (widths, then rows).
     let table = |spill_at| {
-        let opts = Options {
-            spill_at,
-            ..base_options()
-        };
         let mut out = Vec::new();
-        let mut err = Vec::new();
-        {
-            let mut r = emcy_decode::report::table::TableReport::new(&mut out, false, false);
-            let mut log = DiagnosticLog::new(&mut err);
-            let a = analyze("trace", &trace[..], false, &opts, &mut r, &mut log).unwrap();
-            r.finish(&[a.report], &[]).unwrap();
-        }
+        report_with(&trace, &spilling_every(spill_at), &mut out, |o| {
+            Box::new(emcy_decode::report::table::TableReport::new(
+                o, false, false,
+            ))
+        });
         String::from_utf8(out).unwrap()
     };
     assert_eq!(table(2), table(usize::MAX));
@@ -240,44 +257,18 @@ fn error_history_on_disk_reads_back_identically() {
 /// order: byte for byte what one thread writes, also from a spilled history.
 #[test]
 fn node_errors_rendered_on_helper_threads_are_identical() {
-    let mut trace = Vec::new();
-    for i in 0..12_000u32 {
-        // Node 3 raises and clears ~3000 errors (three batches and a bit),
-        // nodes 4 and 5 a few, on two channels.
-        let (node, ch) = match i % 10 {
-            0 => (4, "can1"),
-            1 => (5, "can0"),
-            _ => (3, "can0"),
-        };
-        let data = match i % 4 {
-            0 => "1043090100000000",
-            1 => "1023030000000000",
-            2 => "0000090000000000",
-            _ => "0000000000000000",
-        };
-        trace.extend(
-            format!(
-                "({}.{:06}) {ch} {:03X}#{data}\n",
-                1000 + i / 10,
-                i,
-                0x80 + node
-            )
-            .bytes(),
-        );
-    }
+    // Node 3 raises and clears ~3000 errors (three batches and a bit),
+    // nodes 4 and 5 a few, on two channels.
+    let trace = raising_and_clearing(12_000, |i| match i % 10 {
+        0 => (4, "can1"),
+        1 => (5, "can0"),
+        _ => (3, "can0"),
+    });
     let render = |threads: usize, spill_at: usize| {
-        let opts = Options {
-            spill_at,
-            ..base_options()
-        };
         let mut out = Vec::new();
-        let mut err = Vec::new();
-        {
-            let mut r = Ndjson::new(&mut out, false).threads(threads);
-            let mut log = DiagnosticLog::new(&mut err);
-            let a = analyze("trace", &trace[..], false, &opts, &mut r, &mut log).unwrap();
-            r.finish(&[a.report], &[]).unwrap();
-        }
+        report_with(&trace, &spilling_every(spill_at), &mut out, |o| {
+            Box::new(Ndjson::new(o, false).threads(threads))
+        });
         String::from_utf8(out).unwrap()
     };
     let reference = render(1, usize::MAX);
