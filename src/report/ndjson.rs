@@ -35,54 +35,62 @@ impl<W: Write> Ndjson<W> {
         self
     }
 
-    /// The node objects, their errors rendered by helper threads in
-    /// batches while this one reads the history back (the same bytes as one
-    /// thread writes).
-    fn nodes_in_parallel(&mut self, inputs: &[InputReport]) -> io::Result<()> {
+    /// The node objects. Errors go in batches; with more than one thread,
+    /// helpers render the batches while this thread reads the history back,
+    /// and the text is written in order (the same bytes either way).
+    fn nodes(&mut self, inputs: &[InputReport]) -> io::Result<()> {
         let out: &mut dyn Write = &mut self.out;
         let (json, buf) = (&mut self.json, &mut self.buf);
         std::thread::scope(|scope| {
-            let mut pool = Ordered::start(
-                scope,
-                self.threads,
-                JsonWriter::new,
-                |json: &mut JsonWriter, (profile, errors, first): ErrorBatch, out: &mut Vec<u8>| {
-                    json.errors(out, profile, &errors, first);
-                },
-            );
+            let mut helpers = (self.threads > 1).then(|| {
+                Ordered::start(
+                    scope,
+                    self.threads,
+                    JsonWriter::new,
+                    |json: &mut JsonWriter,
+                     (profile, errors, first): ErrorBatch,
+                     out: &mut Vec<u8>| {
+                        json.errors(out, profile, &errors, first);
+                    },
+                )
+            });
             for input in inputs {
                 let mut merge = input.history.merge();
                 for node in &input.nodes {
-                    buf.clear();
                     json.node_head(buf, input, node);
-                    pool.text(buf, out)?;
+                    put(&mut helpers, buf, out)?;
                     let mut first = true;
                     let mut batch = Vec::with_capacity(ERROR_BATCH);
-                    for iv in merge.node_errors(&node.channel, node.node) {
-                        batch.push(iv);
-                        if batch.len() == ERROR_BATCH {
-                            let full =
-                                std::mem::replace(&mut batch, Vec::with_capacity(ERROR_BATCH));
-                            pool.job((node.profile, full, first), out)?;
-                            first = false;
+                    let mut errors = merge.node_errors(&node.channel, node.node).peekable();
+                    while errors.peek().is_some() {
+                        batch.extend(errors.by_ref().take(ERROR_BATCH));
+                        match &mut helpers {
+                            Some(h) => {
+                                let full =
+                                    std::mem::replace(&mut batch, Vec::with_capacity(ERROR_BATCH));
+                                h.job((node.profile, full, first), out)?;
+                            }
+                            None => {
+                                json.errors(buf, node.profile, &batch, first);
+                                batch.clear();
+                                put(&mut helpers, buf, out)?;
+                            }
                         }
+                        first = false;
                     }
-                    if !batch.is_empty() {
-                        pool.job((node.profile, batch, first), out)?;
-                    }
-                    buf.clear();
                     buf.extend_from_slice(NODE_END);
                     buf.push(b'\n');
-                    pool.text(buf, out)?;
+                    put(&mut helpers, buf, out)?;
                 }
                 if let Some(e) = merge.take_error() {
                     return Err(e);
                 }
             }
-            pool.finish(out)
-        })?;
-        self.buf.clear();
-        Ok(())
+            match helpers {
+                Some(h) => h.finish(out),
+                None => Ok(()),
+            }
+        })
     }
 
     /// Writes the line built in `buf`.
@@ -95,6 +103,21 @@ impl<W: Write> Ndjson<W> {
         }
         Ok(())
     }
+}
+
+/// Text made on this thread (`buf`, emptied): written now, or in its place
+/// among the helpers' jobs.
+fn put(
+    helpers: &mut Option<Ordered<ErrorBatch>>,
+    buf: &mut Vec<u8>,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let done = match helpers {
+        Some(h) => h.text(buf, out),
+        None => out.write_all(buf),
+    };
+    buf.clear();
+    done
 }
 
 /// Errors of one node for a helper: its profile (descriptions), the
@@ -116,27 +139,7 @@ impl<W: Write> Renderer for Ndjson<W> {
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
-        if self.threads > 1 {
-            self.nodes_in_parallel(inputs)?;
-        } else {
-            for input in inputs {
-                let mut merge = input.history.merge();
-                for node in &input.nodes {
-                    let errors = merge.node_errors(&node.channel, node.node);
-                    let out = &mut self.out;
-                    self.json
-                        .node(&mut self.buf, input, node, errors, &mut |part| {
-                            out.write_all(part)?;
-                            part.clear();
-                            Ok(())
-                        })?;
-                    self.line()?;
-                }
-                if let Some(e) = merge.take_error() {
-                    return Err(e);
-                }
-            }
-        }
+        self.nodes(inputs)?;
         for input in inputs {
             self.json.input(&mut self.buf, input);
             self.line()?;
