@@ -15,7 +15,7 @@ use std::ops::Range;
 use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex, RwLock};
 
-use crate::cache::{Cache, description_key};
+use crate::cache::{Cache, profile_code_key};
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::canopen::sdo;
@@ -697,7 +697,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             self.check_clock(at);
             let chosen = self.profiles.get(node);
             let profile = chosen.profile;
-            let (key, slot) = description_key(profile, emcy.code);
+            let (key, slot) = profile_code_key(profile, emcy.code);
             let looked_up;
             let info = match self.infos.get(key, slot, || profile.info(emcy.code)) {
                 Some(info) => info,

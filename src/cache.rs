@@ -41,8 +41,8 @@ pub fn slot(bits: u64) -> usize {
     (bits.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as usize
 }
 
-/// Key and slot of a code's description under a profile.
-pub fn description_key(profile: &Profile, code: u16) -> ((usize, u16), usize) {
+/// Key and slot of a code under a profile (its description, its table entry).
+pub fn profile_code_key(profile: &Profile, code: u16) -> ((usize, u16), usize) {
     let key = (profile_key(profile), code);
     (key, slot(u64::from(code) ^ ((key.0 as u64) << 16)))
 }

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::io;
 
 use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
-use crate::cache::{Cache, description_key, profile_key, slot};
+use crate::cache::{Cache, profile_code_key, profile_key, slot};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::canopen::register::Register;
@@ -164,7 +164,7 @@ fn describe<'c>(
     profile: &Profile,
     code: u16,
 ) -> &'c [u8] {
-    let (key, slot) = description_key(profile, code);
+    let (key, slot) = profile_code_key(profile, code);
     cache
         .get(key, slot, || {
             let mut v = Vec::new();

@@ -10,7 +10,7 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
-use crate::cache::{Cache, description_key};
+use crate::cache::{Cache, profile_code_key};
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::timeline::Interval;
 use crate::trace::Timestamp;
@@ -295,7 +295,7 @@ fn decoded_text(d: &Decoded) -> String {
 type Descriptions = Cache<(usize, u16), (String, usize), 256>;
 
 fn describe<'d>(cache: &'d mut Descriptions, profile: &Profile, code: u16) -> (&'d str, usize) {
-    let (key, slot) = description_key(profile, code);
+    let (key, slot) = profile_code_key(profile, code);
     cache
         .get(key, slot, || {
             let text = profile.describe(code);
