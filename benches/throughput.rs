@@ -10,7 +10,7 @@
 mod tracegen;
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -50,11 +50,24 @@ fn ensure(path: &Path, format: TraceFormat, mb: u64, emcy_per_mille: u64, gzip: 
     std::fs::rename(&tmp, path).expect("rename");
 }
 
+/// Reads `path` through, so a run finds it in the page cache. Needed before
+/// every run: the CI machine keeps only ~1.7 GB of page cache, less than
+/// the bench's files, and drops pages over seconds even when idle.
+fn warm(path: &str) {
+    let mut buf = vec![0u8; 1 << 20];
+    if let Ok(mut f) = File::open(path) {
+        while matches!(f.read(&mut buf), Ok(n) if n > 0) {}
+    }
+}
+
 /// Best wall time of `runs` runs and the highest peak RSS (KiB) seen.
 fn measure(runs: u64, program: &str, args: &[&str]) -> (Duration, u64) {
     let mut best = Duration::MAX;
     let mut peak = 0;
     for _ in 0..runs {
+        if let Some(file) = args.last() {
+            warm(file);
+        }
         let start = Instant::now();
         let mut child = Command::new(program)
             .args(args)

@@ -248,7 +248,7 @@ fn classify_block(
     detector: &mut Detector,
     sink: &mut impl LineSink,
 ) -> Result<(), OutputError> {
-    let bytes = block.bytes.as_slice();
+    let bytes = block.text();
     let mut idx = 0u64;
     let mut pos = 0usize;
     if let Some(n) = block.too_long_before {
@@ -1195,7 +1195,7 @@ fn finish<E: Write>(
 }
 
 enum Message {
-    Result(BlockResult),
+    Result(Box<BlockResult>),
     /// Reading failed after `seq` blocks.
     ReadError(u64, io::Error),
 }
@@ -1312,7 +1312,7 @@ fn parallel<R: Read + Send, E: Write>(
                     let mut result = rec.result;
                     result.end = det.fork();
                     result.block = block;
-                    if tx.send(Message::Result(result)).is_err() {
+                    if tx.send(Message::Result(Box::new(result))).is_err() {
                         return;
                     }
                 }
@@ -1343,7 +1343,7 @@ fn consume_in_order<E: Write>(
     for message in results {
         match message {
             Message::Result(r) => {
-                pending.insert(r.seq, r);
+                pending.insert(r.seq, *r);
             }
             Message::ReadError(seq, e) => read_error = Some((seq, e)),
         }

@@ -453,11 +453,7 @@ fn lines_agree(format: Format, data: &[u8]) {
     let mut p_all = format.parser();
     let mut p_wanted = format.parser();
     let mut p_scan = format.parser();
-    let block = Block {
-        bytes: data.to_vec(),
-        too_long_before: None,
-        last: true,
-    };
+    let block = Block::of(data, true);
     for raw in block.lines(512) {
         let crate::trace::lines::RawLine::Text(line) = raw else {
             continue;
