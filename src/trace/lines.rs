@@ -209,6 +209,7 @@ impl<R: Read> BlockReader<R> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
+        let mut into_buf = true;
         loop {
             if self.skipping.is_some() {
                 self.skip_long_line()?;
@@ -266,6 +267,21 @@ impl<R: Read> BlockReader<R> {
                 self.begin = 0;
                 self.filled = 0;
                 continue;
+            }
+            if into_buf && self.filled - self.begin <= PAGE {
+                // The read goes into the caller's buffer, the one it just
+                // finished with and so likely in its core's cache (blocks
+                // are read by the thread that parses them); the unfinished
+                // line moves along.
+                into_buf = false;
+                let kept = self.filled - self.begin;
+                if buf.len() < kept {
+                    buf.resize(kept, 0);
+                }
+                buf[..kept].copy_from_slice(&self.carry[self.begin..self.filled]);
+                std::mem::swap(&mut buf, &mut self.carry);
+                self.begin = 0;
+                self.filled = kept;
             }
             if let Err(e) = self.read_more() {
                 // A too-long line that ended before the error is a complete
