@@ -82,9 +82,7 @@ fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
     if let Ok(classic) = <&[u8; 8]>::try_from(bytes) {
         // The usual EMCY payload: one constant-size copy.
         let mut text = [b'"'; 18];
-        for (pair, &b) in text[1..17].chunks_exact_mut(2).zip(classic) {
-            pair.copy_from_slice(&[HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]]);
-        }
+        text[1..17].copy_from_slice(&hex16(u64::from_be_bytes(*classic)));
         out.extend_from_slice(&text);
         return;
     }
@@ -97,6 +95,22 @@ fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
         out.extend_from_slice(text.get(..2 * chunk.len()).unwrap_or_default());
     }
     out.push(b'"');
+}
+
+/// The 16 upper-case hex digits of `v`, all at once: each nibble moved into
+/// a byte of its own, then `0`..`9` and `A`..`F` chosen per byte.
+fn hex16(v: u64) -> [u8; 16] {
+    const LANES: u128 = 0x0101_0101_0101_0101_0101_0101_0101_0101;
+    let mut x = u128::from(v);
+    // Byte i of v into 16-bit lane i, then its nibbles into the lane's two bytes.
+    x = (x | x << 32) & 0x0000_0000_FFFF_FFFF_0000_0000_FFFF_FFFF;
+    x = (x | x << 16) & 0x0000_FFFF_0000_FFFF_0000_FFFF_0000_FFFF;
+    x = (x | x << 8) & 0x00FF_00FF_00FF_00FF_00FF_00FF_00FF_00FF;
+    const HI: u128 = 0x0F00_0F00_0F00_0F00_0F00_0F00_0F00_0F00;
+    x = ((x << 4) & HI) | (x & (HI >> 8));
+    // A nibble of 10 or more has bit 4 set after adding 6: 7 more for A..F.
+    let letters = ((x + LANES * 6) >> 4) & LANES;
+    (x + LANES * u128::from(b'0') + letters * 7).to_be_bytes()
 }
 
 /// `{"category":1,"category_text":"..."}` or `null`.
@@ -703,11 +717,43 @@ impl Pretty {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     fn json_str(s: &str) -> String {
         let mut v = Vec::new();
         push_str(&mut v, s);
         String::from_utf8(v).unwrap()
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn numbers_are_written_as_std_writes_them(v in prop_oneof![
+            0u64..1000,
+            proptest::num::u64::ANY,
+            (0u32..20).prop_map(|e| 10u64.pow(e)),
+            (1u32..20).prop_map(|e| 10u64.pow(e) - 1),
+        ]) {
+            let mut out = b"x".to_vec();
+            push_u64(&mut out, v);
+            proptest::prop_assert_eq!(out, format!("x{v}").into_bytes());
+        }
+
+        #[test]
+        fn hex_is_written_as_std_writes_it(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..20)) {
+            let mut out = Vec::new();
+            push_hex(&mut out, &bytes);
+            let want: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+            proptest::prop_assert_eq!(String::from_utf8(out).unwrap(), format!("\"{want}\""));
+        }
+    }
+
+    #[test]
+    fn every_byte_of_a_classic_payload_in_hex() {
+        for b in 0..=255u8 {
+            let mut out = Vec::new();
+            push_hex(&mut out, &[b, 0, 0, 0, 0, 0, 0, b]);
+            assert_eq!(out, format!("\"{b:02X}000000000000{b:02X}\"").into_bytes());
+        }
     }
 
     #[test]
