@@ -821,6 +821,7 @@ pub fn decode_timeline(data: &[u8]) {
     ndjson.finish(inputs, &[]).expect("Vec");
     table.end_input(&report).expect("Vec");
     table.finish(inputs, &[]).expect("Vec");
+    drop(ndjson);
     let values = ndjson_values(&ndjson_out);
     let mut rendered_events = 0;
     for v in &values {

@@ -561,6 +561,7 @@ fn check(case: &Case) -> Result<(), TestCaseError> {
     }
 
     // What the pipeline reported.
+    drop(renderer);
     let text = String::from_utf8(out).unwrap();
     let mut got = Vec::new();
     let mut inputs = Vec::new();

@@ -24,7 +24,7 @@ impl<W: Write> Ndjson<W> {
             out,
             flush_each,
             json: JsonWriter::new(),
-            buf: Vec::with_capacity(1024),
+            buf: Vec::with_capacity(CHUNK + 4096),
             threads: 1,
         }
     }
@@ -93,15 +93,36 @@ impl<W: Write> Ndjson<W> {
         })
     }
 
-    /// Writes the line built in `buf`.
+    /// Ends the line built in `buf`. Lines collect there and go out in
+    /// chunks of [`CHUNK`] (written past the output's buffer, not copied
+    /// into it once more), or one by one when live.
     fn line(&mut self) -> io::Result<()> {
         self.buf.push(b'\n');
-        self.out.write_all(&self.buf)?;
-        self.buf.clear();
         if self.flush_each {
+            self.drain()?;
             self.out.flush()?;
+        } else if self.buf.len() >= CHUNK {
+            self.drain()?;
         }
         Ok(())
+    }
+
+    /// Writes the lines collected in `buf`.
+    fn drain(&mut self) -> io::Result<()> {
+        if !self.buf.is_empty() {
+            self.out.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+}
+
+/// Lines still collected are written even when the report is not finished
+/// (an output error or an interrupt ends the run early).
+impl<W: Write> Drop for Ndjson<W> {
+    fn drop(&mut self) {
+        let _ = self.drain();
+        let _ = self.out.flush();
     }
 }
 
@@ -124,6 +145,10 @@ fn put(
 /// errors, and whether they open the node's list.
 type ErrorBatch = (&'static Profile, Vec<Interval>, bool);
 
+/// Events are written in chunks of about this many bytes (the size of the
+/// output's buffer, so a chunk bypasses it).
+const CHUNK: usize = 64 * 1024;
+
 /// Errors per batch: ~200 KiB of text.
 const ERROR_BATCH: usize = 1024;
 
@@ -139,11 +164,13 @@ impl<W: Write> Renderer for Ndjson<W> {
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
+        self.drain()?;
         self.nodes(inputs)?;
         for input in inputs {
             self.json.input(&mut self.buf, input);
             self.line()?;
         }
+        self.drain()?;
         self.out.flush()
     }
 }
