@@ -251,7 +251,7 @@ impl Shape {
 
     /// [`Shape::scan`] without converting the time of a frame only to be
     /// timed (a run needs only the first and last of those).
-    #[inline]
+    #[inline(always)]
     fn kind<'a>(&self, line: &'a [u8], interest: &Interest) -> Kind<'a> {
         if !interest.wants(self.id, self.extended) {
             return Kind::Plain;
@@ -308,7 +308,7 @@ impl Layout {
 
     /// The shape and length of the line at the start of `bytes` when it
     /// has this layout and ends with a newline right after its frame.
-    #[inline]
+    #[inline(always)]
     fn line(&self, bytes: &[u8]) -> Option<(Shape, usize)> {
         let id_start = self.head(bytes)?;
         let data_start = id_start + 4;
@@ -334,7 +334,7 @@ impl Layout {
 
     /// Through the id: the index where the 3-digit id starts, when `line`
     /// has this layout up to a `#` after it.
-    #[inline]
+    #[inline(always)]
     fn head(&self, line: &[u8]) -> Option<usize> {
         // `)`, a space, the interface, a space: the bytes of the last line.
         if line.first() != Some(&b'(')
@@ -368,7 +368,7 @@ impl Layout {
     }
 
     /// The shape once the layout matched and the data was checked.
-    #[inline]
+    #[inline(always)]
     fn shape_at(&self, id_start: usize, line: &[u8], data_end: usize) -> Option<Shape> {
         let id = hex::parse_u32(line.get(id_start..id_start + 3)?)?;
         if id > 0x7FF {
