@@ -209,6 +209,9 @@ impl<R: Read> BlockReader<R> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
+        // The first read of a call goes into the caller's buffer: the one it
+        // just finished with, so likely in its core's cache (blocks are read
+        // by the thread that parses them).
         let mut into_buf = true;
         loop {
             if self.skipping.is_some() {
@@ -268,22 +271,8 @@ impl<R: Read> BlockReader<R> {
                 self.filled = 0;
                 continue;
             }
-            if into_buf && self.filled - self.begin <= PAGE {
-                // The read goes into the caller's buffer, the one it just
-                // finished with and so likely in its core's cache (blocks
-                // are read by the thread that parses them); the unfinished
-                // line moves along.
-                into_buf = false;
-                let kept = self.filled - self.begin;
-                if buf.len() < kept {
-                    buf.resize(kept, 0);
-                }
-                buf[..kept].copy_from_slice(&self.carry[self.begin..self.filled]);
-                std::mem::swap(&mut buf, &mut self.carry);
-                self.begin = 0;
-                self.filled = kept;
-            }
-            if let Err(e) = self.read_more() {
+            let spare = std::mem::take(&mut into_buf).then_some(&mut buf);
+            if let Err(e) = self.read_more(spare) {
                 // A too-long line that ended before the error is a complete
                 // line: hand it out first, as when it came in the same read
                 // as the lines before it, so the count never depends on
@@ -306,11 +295,16 @@ impl<R: Read> BlockReader<R> {
     /// One read appended to `carry[begin..filled]` (a pipe returns what it
     /// has, so live lines are not held back waiting for a full block). A
     /// short unfinished line is first moved so the read lands page-aligned
-    /// with the input (see [`BlockReader`]).
-    fn read_more(&mut self) -> io::Result<()> {
+    /// with the input (see [`BlockReader`]); with a `spare` buffer, it moves
+    /// there and the spare becomes `carry` (the old one goes back in its place).
+    fn read_more(&mut self, spare: Option<&mut Vec<u8>>) -> io::Result<()> {
         let kept = self.filled - self.begin;
         let want = self.read_size.min(self.block).max(self.max_line + 1).max(1);
         if kept <= PAGE {
+            let mut old = spare;
+            if let Some(spare) = old.as_deref_mut() {
+                std::mem::swap(spare, &mut self.carry);
+            }
             // Grown first: growing may move the buffer.
             let end = PAGE + kept + want;
             if self.carry.len() < end {
@@ -319,7 +313,13 @@ impl<R: Read> BlockReader<R> {
             }
             let at = self.carry.as_ptr() as usize + kept;
             let begin = (self.bytes_read as usize).wrapping_sub(at) % PAGE;
-            self.carry.copy_within(self.begin..self.filled, begin);
+            let from = self.begin..self.filled;
+            match old {
+                Some(old) => {
+                    self.carry[begin..begin + kept].copy_from_slice(&old[from]);
+                }
+                None => self.carry.copy_within(from, begin),
+            }
             self.begin = begin;
             self.filled = begin + kept;
         }
@@ -354,7 +354,7 @@ impl<R: Read> BlockReader<R> {
         };
         self.begin = 0;
         self.filled = 0;
-        self.read_more()?;
+        self.read_more(None)?;
         let data = self.carry.get(self.begin..self.filled).unwrap_or_default();
         match memchr::memchr(b'\n', data) {
             Some(pos) => {
