@@ -87,11 +87,10 @@ fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
         return;
     }
     out.push(b'"');
-    for chunk in bytes.chunks(16) {
-        let mut text = [0u8; 32];
-        for (pair, &b) in text.chunks_exact_mut(2).zip(chunk) {
-            pair.copy_from_slice(&[HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]]);
-        }
+    for chunk in bytes.chunks(8) {
+        let mut word = [0u8; 8];
+        word[..chunk.len()].copy_from_slice(chunk);
+        let text = hex16(u64::from_be_bytes(word));
         out.extend_from_slice(text.get(..2 * chunk.len()).unwrap_or_default());
     }
     out.push(b'"');
