@@ -839,6 +839,8 @@ mod tests {
         fn run_equals_line_by_line(
             lines in proptest::collection::vec(proptest::prop_oneof![
                 4 => r"\(1700000000\.[0-9]{6}\) can0 [0-7][0-9A-F]{2}#([0-9A-F]{2}){0,8}( T)?",
+                // The layout with any id and data: odd lengths and near misses.
+                3 => r"\(1700000000\.[0-9]{6}\) can0 [0-9A-Fa-fg]{3}#[0-9A-Fa-f]{0,18}[g ]?( T| R|\r| X)?",
                 1 => r"\(1700000000\.[0-9]{6}\) can[01] [0-9A-Fa-f]{3,8}#[0-9A-Fa-fR._]{0,18}( T| R|\r)?",
                 1 => r"\(17000000[0-9]{2}\.[0-9]{5,6}\)  ?[a-z0-9]{3,5} [0-9a-f]{3}#[0-9a-f]{0,17}",
             ], 1..12),
