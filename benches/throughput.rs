@@ -61,12 +61,13 @@ fn warm(path: &str) {
 }
 
 /// Best wall time of `runs` runs and the highest peak RSS (KiB) seen.
+/// The input is the last argument (`if=` stripped, for dd).
 fn measure(runs: u64, program: &str, args: &[&str]) -> (Duration, u64) {
     let mut best = Duration::MAX;
     let mut peak = 0;
     for _ in 0..runs {
         if let Some(file) = args.last() {
-            warm(file);
+            warm(file.strip_prefix("if=").unwrap_or(file));
         }
         let start = Instant::now();
         let mut child = Command::new(program)
@@ -170,7 +171,17 @@ fn main() {
     ] {
         let bytes = size(file);
         let f = path(file);
+        // Only reading the file (one thread, 1 MiB reads): how much of the
+        // ceiling is the kernel's copy out of the page cache.
+        let (dd, dd_peak) = measure(runs, "dd", &["bs=1M", "of=/dev/null", &format!("if={f}")]);
         let (wc, wc_peak) = measure(runs, "wc", &["-l", &f]);
+        row(
+            &format!("dd, read only ({label})"),
+            bytes,
+            dd,
+            Some(wc),
+            dd_peak,
+        );
         row(&format!("wc -l ({label})"), bytes, wc, None, wc_peak);
         for (case, args) in [
             ("ndjson", vec!["--format", "ndjson", &f]),
