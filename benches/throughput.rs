@@ -60,15 +60,13 @@ fn warm(path: &str) {
     }
 }
 
-/// Best wall time of `runs` runs and the highest peak RSS (KiB) seen.
-/// The input is the last argument (`if=` stripped, for dd).
-fn measure(runs: u64, program: &str, args: &[&str]) -> (Duration, u64) {
+/// Best wall time of `runs` runs of `program` on `input` (warmed before
+/// each run) and the highest peak RSS (KiB) seen.
+fn measure(runs: u64, input: &str, program: &str, args: &[&str]) -> (Duration, u64) {
     let mut best = Duration::MAX;
     let mut peak = 0;
     for _ in 0..runs {
-        if let Some(file) = args.last() {
-            warm(file.strip_prefix("if=").unwrap_or(file));
-        }
+        warm(input);
         let start = Instant::now();
         let mut child = Command::new(program)
             .args(args)
@@ -173,8 +171,13 @@ fn main() {
         let f = path(file);
         // Only reading the file (one thread, 1 MiB reads): how much of the
         // ceiling is the kernel's copy out of the page cache.
-        let (dd, dd_peak) = measure(runs, "dd", &["bs=1M", "of=/dev/null", &format!("if={f}")]);
-        let (wc, wc_peak) = measure(runs, "wc", &["-l", &f]);
+        let (dd, dd_peak) = measure(
+            runs,
+            &f,
+            "dd",
+            &["bs=1M", "of=/dev/null", &format!("if={f}")],
+        );
+        let (wc, wc_peak) = measure(runs, &f, "wc", &["-l", &f]);
         row(
             &format!("dd, read only ({label})"),
             bytes,
@@ -188,7 +191,7 @@ fn main() {
             ("table", vec!["--format", "table", &f]),
             ("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]),
         ] {
-            let (t, peak) = measure(runs, bin, &args);
+            let (t, peak) = measure(runs, &f, bin, &args);
             row(
                 &format!("emcy-decode {case} ({label})"),
                 bytes,
@@ -202,9 +205,9 @@ fn main() {
 
     let bytes = size(&gz);
     let g = path(&gz);
-    let (gunzip, gpeak) = measure(runs, "gzip", &["-dc", &g]);
+    let (gunzip, gpeak) = measure(runs, &g, "gzip", &["-dc", &g]);
     row("gzip -dc (gzip candump)", bytes, gunzip, None, gpeak);
-    let (t, peak) = measure(runs, bin, &["--format", "ndjson", &g]);
+    let (t, peak) = measure(runs, &g, bin, &["--format", "ndjson", &g]);
     row(
         "emcy-decode ndjson (gzip candump)",
         bytes,
