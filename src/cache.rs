@@ -3,8 +3,6 @@
 //! from the key's bits ([`slot`]); a miss recomputes and replaces. Bounded
 //! size, no hash map.
 
-use crate::canopen::profile::Profile;
-
 pub struct Cache<K, V, const N: usize> {
     slots: Vec<Option<(K, V)>>,
 }
@@ -28,8 +26,9 @@ impl<K: PartialEq + Copy, V, const N: usize> Cache<K, V, N> {
     }
 }
 
-/// A profile's identity for caches: profiles live for the whole run.
-pub fn profile_key(profile: &Profile) -> usize {
+/// A profile's identity for caches, by address: profiles live for the whole
+/// run. Generic, so this module depends on nothing.
+pub fn profile_key<P>(profile: &P) -> usize {
     std::ptr::from_ref(profile) as usize
 }
 
@@ -42,7 +41,7 @@ pub fn slot(bits: u64) -> usize {
 }
 
 /// Key and slot of a code under a profile (its description, its table entry).
-pub fn profile_code_key(profile: &Profile, code: u16) -> ((usize, u16), usize) {
+pub fn profile_code_key<P>(profile: &P, code: u16) -> ((usize, u16), usize) {
     let key = (profile_key(profile), code);
     (key, slot(u64::from(code) ^ ((key.0 as u64) << 16)))
 }

@@ -1,21 +1,7 @@
-//! The `emcy-decode` binary: parse arguments, run, map errors to exit codes.
-//! Everything else lives in the library.
+//! The `emcy-decode` binary. The application lives in the library's `app`
+//! module (command line, commands, exit codes); this only starts it.
 #![forbid(unsafe_code)]
 
-use std::process::ExitCode;
-
-use clap::Parser;
-use emcy_decode::cli::Cli;
-use emcy_decode::run::{EXIT_ERROR, run};
-
-fn main() -> ExitCode {
-    // clap exits 2 on usage errors and 0 for --help/--version.
-    let cli = Cli::parse();
-    match run(cli) {
-        Ok(code) => code,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::from(EXIT_ERROR)
-        }
-    }
+fn main() -> std::process::ExitCode {
+    emcy_decode::cli_main()
 }

@@ -25,8 +25,8 @@ mod common;
 use std::io::{self, Read, Write};
 
 use common::frames::*;
+use emcy_decode::analyze::Sink as Renderer;
 use emcy_decode::analyze::{DiagnosticLog, Options, analyze};
-use emcy_decode::report::Renderer;
 use emcy_decode::report::ndjson::Ndjson;
 use emcy_decode::trace::input::sniff_gzip;
 use emcy_decode::trace::{Format, FrameKind, HexBytes, Interest, LineParser, Parsed};

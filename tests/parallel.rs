@@ -2,8 +2,8 @@
 //! it: every trace below is decoded with one thread and with several, with
 //! blocks from 1 byte to 1 MiB, and stdout and stderr must be identical.
 
+use emcy_decode::analyze::Sink as Renderer;
 use emcy_decode::analyze::{DiagnosticLog, Options, analyze};
-use emcy_decode::report::Renderer;
 use emcy_decode::report::ndjson::Ndjson;
 
 fn run(trace: &[u8], threads: usize, block_size: usize) -> (String, String) {

@@ -24,7 +24,7 @@ use std::collections::BTreeMap;
 use std::fmt::{self, Write as _};
 use std::io;
 
-use super::{BootEvent, EmcyEvent, InputReport, NodeReport};
+use crate::analyze::{BootEvent, EmcyEvent, InputReport, NodeReport};
 use crate::canopen::codes::{self, Class};
 use crate::timeline::{At, ClearedBy, Interval};
 use crate::trace::{Format, Timestamp};

@@ -13,7 +13,7 @@ use std::io::{self, Write};
 
 use super::chart::{self, Clock, Collector, Panel, esc};
 use super::svg::{doc_title, document};
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
 use crate::trace::Timestamp;
 
 /// Events listed per input.
@@ -178,7 +178,7 @@ fn write_row(s: &mut String, clock: &Clock, r: &Row) -> std::fmt::Result {
     )
 }
 
-impl<W: Write> Renderer for HtmlReport<W> {
+impl<W: Write> Sink for HtmlReport<W> {
     fn begin_input(&mut self, _file: &str) -> io::Result<()> {
         self.collector.begin_input();
         self.rows.clear();

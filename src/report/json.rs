@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 
 use super::jsonw::{JsonWriter, Pretty, pretty};
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
 
 /// `{"events":[...],"nodes":[...],"inputs":[...],"diagnostics":[...]}`,
 /// pretty-printed, events streamed as they come.
@@ -52,7 +52,7 @@ impl<W: Write> JsonDocument<W> {
     }
 }
 
-impl<W: Write> Renderer for JsonDocument<W> {
+impl<W: Write> Sink for JsonDocument<W> {
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
         // Written indented as it goes, not re-indented (the hot path).
         if self.events == 0 {

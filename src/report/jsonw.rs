@@ -9,7 +9,7 @@
 use std::collections::HashMap;
 use std::io;
 
-use super::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
+use crate::analyze::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
 use crate::cache::{Cache, profile_code_key, profile_key, slot};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue, Profile};

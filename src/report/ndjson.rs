@@ -5,7 +5,7 @@ use std::io::{self, Write};
 
 use super::jsonw::{JsonWriter, NODE_END};
 use super::ordered::Ordered;
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
 use crate::canopen::profile::Profile;
 use crate::timeline::Interval;
 
@@ -152,7 +152,7 @@ const CHUNK: usize = 64 * 1024;
 /// Errors per batch: ~200 KiB of text.
 const ERROR_BATCH: usize = 1024;
 
-impl<W: Write> Renderer for Ndjson<W> {
+impl<W: Write> Sink for Ndjson<W> {
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
         self.json.emcy(&mut self.buf, event);
         self.line()

@@ -7,7 +7,7 @@
 use std::io::{self, Write};
 
 use super::chart::{self, Collector, N, Panel};
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
 
 /// Space between the panels of several inputs.
 pub(crate) const PANEL_GAP: f64 = 24.0;
@@ -82,7 +82,7 @@ pub(crate) fn doc_title(inputs: &[InputReport]) -> String {
     format!("EMCY timeline: {}", files.join(", "))
 }
 
-impl<W: Write> Renderer for SvgReport<W> {
+impl<W: Write> Sink for SvgReport<W> {
     fn begin_input(&mut self, _file: &str) -> io::Result<()> {
         self.collector.begin_input();
         Ok(())

@@ -8,8 +8,9 @@ use std::io::{self, Write};
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
+use super::text::printable;
 use super::timefmt::{TimeFormat, TimeStyle};
-use super::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
 use crate::cache::{Cache, profile_code_key};
 use crate::canopen::profile::{Decoded, FieldValue, Profile};
 use crate::timeline::Interval;
@@ -260,24 +261,6 @@ impl<W: Write> TableReport<W> {
     }
 }
 
-/// A channel name as the trace wrote it, with control characters escaped: a
-/// hostile trace must not put terminal control sequences on the screen
-/// (`(1.0) \x1b]0;title\x07 081#...` is a valid candump log line).
-pub(crate) fn printable(s: &str) -> Cow<'_, str> {
-    if !s.chars().any(char::is_control) {
-        return Cow::Borrowed(s);
-    }
-    let mut out = String::with_capacity(s.len() + 8);
-    for c in s.chars() {
-        if c.is_control() {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
-    Cow::Owned(out)
-}
-
 /// The manufacturer bytes as the profile reads them: `key: value; ...`.
 fn decoded_text(d: &Decoded) -> String {
     let fields: Vec<String> = d
@@ -353,7 +336,7 @@ pub(crate) fn codes_list(codes: &[u16]) -> String {
         .join(", ")
 }
 
-impl<W: Write> Renderer for TableReport<W> {
+impl<W: Write> Sink for TableReport<W> {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
         self.layout = None;
         self.times.origin = None;
@@ -704,42 +687,5 @@ fn right_align(t: &mut Table, columns: &[usize]) {
         if let Some(c) = t.column_mut(i) {
             c.set_cell_alignment(CellAlignment::Right);
         }
-    }
-}
-
-/// Whether to colour: `--color always|never`, or auto = a terminal and no
-/// (non-empty) `NO_COLOR`, per no-color.org.
-pub fn use_color(
-    choice: ColorChoice,
-    is_terminal: bool,
-    no_color: Option<&std::ffi::OsStr>,
-) -> bool {
-    match choice {
-        ColorChoice::Always => true,
-        ColorChoice::Never => false,
-        ColorChoice::Auto => is_terminal && no_color.is_none_or(|v| v.is_empty()),
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ColorChoice {
-    Auto,
-    Always,
-    Never,
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::ffi::OsStr;
-
-    #[test]
-    fn colour_only_on_a_terminal_without_no_color() {
-        assert!(use_color(ColorChoice::Auto, true, None));
-        assert!(!use_color(ColorChoice::Auto, false, None));
-        assert!(!use_color(ColorChoice::Auto, true, Some(OsStr::new("1"))));
-        assert!(use_color(ColorChoice::Auto, true, Some(OsStr::new(""))));
-        assert!(use_color(ColorChoice::Always, false, Some(OsStr::new("1"))));
-        assert!(!use_color(ColorChoice::Never, true, None));
     }
 }

@@ -8,7 +8,7 @@ use time::OffsetDateTime;
 use crate::trace::Timestamp;
 
 /// `--time`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TimeStyle {
     /// ISO-8601 UTC for Unix times (after 2001-09-09), else seconds as written
     #[default]

@@ -5,7 +5,8 @@ use std::fs::File;
 use std::io::{self, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use crate::interrupt::{Follow, Interruptible, StopOnInterrupt};
+use super::cancel::{Cancel, Interruptible, StopOnCancel};
+use super::follow::Follow;
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
@@ -55,16 +56,21 @@ pub enum ReadMode {
     Follow,
 }
 
-/// Opens a source. Errors carry a message fit for `error: NAME: message`.
-pub fn open(source: &Source) -> io::Result<Opened> {
-    open_as(source, ReadMode::Finite)
-}
-
-/// Opens a source to be read the given way.
-pub fn open_as(source: &Source, mode: ReadMode) -> io::Result<Opened> {
+/// Opens a source to be read the given way; a cancel of `cancel` ends it.
+/// Errors carry a message fit for `error: NAME: message`.
+pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Opened> {
+    let stop = |inner: Box<dyn Read + Send>| -> Box<dyn Read + Send> {
+        Box::new(StopOnCancel {
+            inner,
+            cancel: cancel.clone(),
+        })
+    };
     let (raw, size): (Box<dyn Read + Send>, Option<u64>) = match source {
-        Source::Stdin if mode == ReadMode::Finite => (Box::new(StopOnInterrupt(io::stdin())), None),
-        Source::Stdin => (Box::new(Interruptible::new(Box::new(io::stdin()))), None),
+        Source::Stdin if mode == ReadMode::Finite => (stop(Box::new(io::stdin())), None),
+        Source::Stdin => (
+            Box::new(Interruptible::new(Box::new(io::stdin()), cancel.clone())),
+            None,
+        ),
         Source::Path(path) => {
             let file = File::open(path)?;
             let meta = file.metadata()?;
@@ -75,11 +81,14 @@ pub fn open_as(source: &Source, mode: ReadMode) -> io::Result<Opened> {
                 ));
             }
             match mode {
-                ReadMode::Follow => (Box::new(Follow::new(file)), None),
-                ReadMode::Live => (Box::new(Interruptible::new(Box::new(file))), None),
+                ReadMode::Follow => (Box::new(Follow::new(file, cancel.clone())), None),
+                ReadMode::Live => (
+                    Box::new(Interruptible::new(Box::new(file), cancel.clone())),
+                    None,
+                ),
                 ReadMode::Finite => {
                     let size = meta.is_file().then_some(meta.len());
-                    (Box::new(StopOnInterrupt(file)), size)
+                    (stop(Box::new(file)), size)
                 }
             }
         }
@@ -180,7 +189,11 @@ mod tests {
 
     #[test]
     fn directories_are_refused() {
-        let err = match open(&Source::Path(PathBuf::from("."))) {
+        let err = match open(
+            &Source::Path(PathBuf::from(".")),
+            ReadMode::Finite,
+            &Cancel::new(),
+        ) {
             Err(e) => e,
             Ok(_) => panic!("opened a directory"),
         };

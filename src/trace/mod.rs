@@ -6,9 +6,11 @@
 
 pub mod asc;
 pub mod blf;
+pub mod cancel;
 pub mod candump_log;
 pub mod candump_screen;
 pub mod detect;
+pub mod follow;
 pub mod hex;
 pub mod input;
 pub mod lines;

@@ -12,6 +12,10 @@
 //! - code == 0x0000, register == 0: transition 4 if error-occurred (else none
 //!   and a warning); every active error closes (reset); error-free.
 //! - NMT boot-up closes every active error (boot) and returns to error-free.
+//!
+//! [`history`] keeps the closed intervals of every node of an input.
+
+pub mod history;
 
 use crate::canopen::codes;
 use crate::canopen::emcy::{Emcy, Warning};

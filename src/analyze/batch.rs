@@ -1,6 +1,6 @@
 //! Many small files (`emcy-decode logs/*.log`): each is analysed on its own
 //! thread into a recording, and the recordings are replayed into the one
-//! renderer in argument order, so the output is byte for byte what reading
+//! sink in argument order, so the output is byte for byte what reading
 //! them one after another gives. Only small files go this way (a recording
 //! holds a file's events); big ones are read in order with block
 //! parallelism instead.
@@ -10,12 +10,13 @@ use std::io;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
 
-use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
+use super::event::{BootEvent, Diagnostic, EmcyEvent, InputReport};
+use super::sink::Sink;
+use super::{Analysis, DiagnosticLog, Options, OutputError};
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::profile::Decoded;
-use crate::profile_choice::Chosen;
-use crate::report::{BootEvent, Diagnostic, EmcyEvent, InputReport, Renderer};
+use crate::canopen::profile_choice::Chosen;
 use crate::timeline::State;
 use crate::trace::Timestamp;
 use crate::trace::input::{ReadMode, Source};
@@ -54,13 +55,13 @@ struct OwnedEmcy {
     decoded: Option<Decoded>,
 }
 
-/// A renderer that keeps everything for a later replay.
+/// A sink that keeps everything for a later replay.
 #[derive(Default)]
 struct Recorder {
     events: Vec<Recorded>,
 }
 
-impl Renderer for Recorder {
+impl Sink for Recorder {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
         self.events.push(Recorded::Begin(file.to_string()));
         Ok(())
@@ -121,17 +122,17 @@ pub struct FileResult {
 }
 
 impl FileResult {
-    /// Replays the file into the real renderer and stderr.
+    /// Replays the file into the real sink and stderr.
     pub fn replay<E: io::Write>(
         self,
-        renderer: &mut dyn Renderer,
+        sink: &mut dyn Sink,
         log: &mut DiagnosticLog<E>,
     ) -> Result<Option<Analysis>, OutputError> {
         log.replay(&self.stderr, self.diagnostics);
         for ev in self.events {
             match ev {
-                Recorded::Begin(file) => renderer.begin_input(&file),
-                Recorded::Emcy(e) => renderer.emcy(&EmcyEvent {
+                Recorded::Begin(file) => sink.begin_input(&file),
+                Recorded::Emcy(e) => sink.emcy(&EmcyEvent {
                     file: &e.file,
                     line: e.line,
                     time: e.time,
@@ -156,7 +157,7 @@ impl FileResult {
                     channel,
                     node,
                     cleared,
-                } => renderer.boot(&BootEvent {
+                } => sink.boot(&BootEvent {
                     file: &file,
                     line,
                     time,
@@ -165,7 +166,7 @@ impl FileResult {
                     cleared: &cleared,
                 }),
                 Recorded::End => match &self.analysis {
-                    Some(a) => renderer.end_input(&a.report),
+                    Some(a) => sink.end_input(&a.report),
                     None => Ok(()),
                 },
             }
@@ -180,7 +181,7 @@ fn record(source: &Source, opts: &Options) -> FileResult {
     let mut log = DiagnosticLog::new(Vec::new());
     let mut recorder = Recorder::default();
     // A Recorder never fails to write.
-    let analysis = analyze::analyze_source(
+    let analysis = super::analyze_source(
         source,
         ReadMode::Finite,
         opts,
@@ -225,7 +226,7 @@ pub fn run_parallel(
             scope.spawn(move || {
                 loop {
                     let got_ticket = ticket_rx.lock().map(|r| r.recv().is_ok()).unwrap_or(false);
-                    if !got_ticket || crate::interrupt::interrupted() {
+                    if !got_ticket || opts.cancel.is_cancelled() {
                         return;
                     }
                     let i = next.fetch_add(1, Ordering::SeqCst);

@@ -15,8 +15,8 @@ use std::fs::File;
 use std::io::{self, Write};
 use std::sync::Arc;
 
+use super::{At, ClearedBy, Interval};
 use crate::canopen::register::Register;
-use crate::timeline::{At, ClearedBy, Interval};
 use crate::trace::Timestamp;
 
 /// Closed intervals kept in memory before they go to disk (~100 bytes each).

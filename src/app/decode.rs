@@ -1,136 +1,36 @@
-//! Runs a parsed command line and decides the exit code.
+//! `emcy-decode [FILE]...`: decode traces into the chosen report. Here is
+//! the policy the library leaves to the application: which renderer, live
+//! or finite reading, how many threads, small files side by side, progress
+//! bars, and the exit code from the inputs and `--fail-on`.
 
 use std::io::{self, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use clap::CommandFactory;
 
-use crate::analyze::{self, Analysis, DiagnosticLog, Options, OutputError};
-use crate::baseline;
-use crate::batch;
-use crate::canopen::profile::{self, Profile};
-use crate::cli::{
-    Cli, Command, DecodeArgs, ExplainArgs, ExplainFormat, FailOn, OutputFormat, View,
+use super::cli::{ColorChoice, DecodeArgs, OutputFormat, View};
+use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
+use crate::analyze::fail_on::{self, FailOn};
+use crate::analyze::{
+    self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Sink, WithoutEvents, batch,
 };
-use crate::explain;
-use crate::interrupt;
-use crate::profile_choice;
 use crate::report::html::HtmlReport;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::svg::SvgReport;
-use crate::report::table::{TableReport, use_color};
-use crate::report::{InputReport, Renderer, WithoutEvents};
+use crate::report::table::TableReport;
 use crate::trace::input::{self, ReadMode, Source};
 
-/// The exit codes of the contract in `--help`.
-pub const EXIT_OK: u8 = 0;
-pub const EXIT_FAIL_ON: u8 = 1;
-pub const EXIT_ERROR: u8 = 2;
-
-pub fn run(cli: Cli) -> Result<ExitCode> {
-    match cli.command {
-        Some(Command::Explain(args)) => explain_command(&args),
-        Some(Command::Completions { shell }) => {
-            let mut out = Vec::new();
-            clap_complete::generate(shell, &mut Cli::command(), "emcy-decode", &mut out);
-            write_stdout(&String::from_utf8_lossy(&out))
-        }
-        Some(Command::Man) => {
-            let mut out = Vec::new();
-            clap_mangen::Man::new(Cli::command()).render(&mut out)?;
-            write_stdout(&String::from_utf8_lossy(&out))
-        }
-        Some(Command::Profiles) => profiles_command(),
-        Some(Command::Baseline(args)) => baseline::baseline_command(&args),
-        Some(Command::Check(args)) => baseline::check_command(&args),
-        None => decode_command(&cli.decode),
-    }
-}
-
-fn profiles_command() -> Result<ExitCode> {
-    let mut text = String::new();
-    let width = profile::builtins()
-        .iter()
-        .map(|p| p.name().len())
-        .max()
-        .unwrap_or(0);
-    for p in profile::builtins() {
-        let default = if p.name() == profile::DEFAULT_PROFILE {
-            " (default)"
-        } else {
-            ""
-        };
-        text.push_str(&format!("{:<width$}  {}{default}\n", p.name(), p.summary()));
-    }
-    write_stdout(&text)
-}
-
-fn explain_command(args: &ExplainArgs) -> Result<ExitCode> {
-    let user = args
-        .profile_file
-        .as_deref()
-        .map(profile::load_file)
-        .transpose()?;
-    let profile: &Profile = match (&args.profile, &user) {
-        (Some(name), Some(u)) if u.name() == name => u,
-        (Some(name), _) => profile::builtin(name).ok_or_else(|| {
-            anyhow::anyhow!("unknown profile '{name}' (`emcy-decode profiles` lists them)")
-        })?,
-        (None, Some(u)) => u,
-        (None, None) => profile_choice::default_profile(),
-    };
-    let text = match (&args.data, &args.code, args.format) {
-        (Some(data), _, ExplainFormat::Text) => {
-            explain::payload_text(profile, &explain::parse_payload(data)?)?
-        }
-        (Some(data), _, ExplainFormat::Json) => {
-            format!(
-                "{:#}\n",
-                explain::payload_json(profile, &explain::parse_payload(data)?)?
-            )
-        }
-        (None, Some(code), ExplainFormat::Text) => {
-            explain::code_text(profile, explain::parse_code(code)?)
-        }
-        (None, Some(code), ExplainFormat::Json) => {
-            format!(
-                "{:#}\n",
-                explain::code_json(profile, explain::parse_code(code)?)
-            )
-        }
-        (None, None, _) => anyhow::bail!("give a CODE or --data"),
-    };
-    write_stdout(&text)
-}
-
-/// Writes a whole short output; a reader that went away is not an error.
-pub(crate) fn write_stdout(text: &str) -> Result<ExitCode> {
-    let mut out = io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
-        Err(e) if e.kind() != io::ErrorKind::BrokenPipe => return Err(e.into()),
-        _ => {}
-    }
-    Ok(ExitCode::from(EXIT_OK))
-}
-
-fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
-    let opts = Options {
-        input_format: args.input_format.map(Into::into),
-        nodes: args.node.clone(),
-        channels: args.channel.clone(),
-        max_diagnostics: args.max_diagnostics,
-        emcy_ids: args.emcy_id.clone(),
-        profiles: profile_choice::resolve(&args.profile, &args.profile_file)?,
-        ..Options::default()
-    };
+/// Reads every input into the chosen renderer; the exit code is the worst
+/// of all inputs.
+pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
+    let opts = args.options()?;
     let sources = expand_sources(&args.files, args.recursive)?;
     if args.follow && !matches!(sources.as_slice(), [Source::Path(_)]) {
         anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
     }
-    interrupt::catch();
+    signals::catch(&opts.cancel);
     // Reading a live stream (`candump -L can0 | emcy-decode -`, a followed
     // file): each event must show up when its line arrives, not when a
     // buffer fills.
@@ -150,11 +50,11 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
     } else {
         cores()
     };
-    let mut renderer: Box<dyn Renderer> = match args.format {
+    let mut renderer: Box<dyn Sink> = match args.format {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
             let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
-            let table = TableReport::new(out, color, live).time_style(args.time);
+            let table = TableReport::new(out, color, live).time_style(args.time.into());
             Box::new(if summary { table.summary_only() } else { table })
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
@@ -189,9 +89,9 @@ fn decode_command(args: &DecodeArgs) -> Result<ExitCode> {
             EXIT_ERROR
         }
     };
-    if interrupt::interrupted() {
+    if opts.cancel.is_cancelled() {
         log.note("interrupted: the report covers what was read before Ctrl-C");
-        return Ok(ExitCode::from(interrupt::EXIT_INTERRUPTED));
+        return Ok(ExitCode::from(signals::EXIT_INTERRUPTED));
     }
     Ok(ExitCode::from(code))
 }
@@ -235,10 +135,10 @@ fn expand_sources(files: &[PathBuf], recursive: bool) -> Result<Vec<Source>> {
 }
 
 /// What all inputs amounted to.
-pub struct Outcome {
-    pub analyses: Vec<Analysis>,
+struct Outcome {
+    analyses: Vec<Analysis>,
     /// Inputs that could not be opened.
-    pub open_failures: usize,
+    open_failures: usize,
 }
 
 /// How inputs are read.
@@ -263,7 +163,7 @@ const PROGRESS_MIN_BYTES: u64 = 50 * 1024 * 1024;
 
 /// Threads for one input by its size: all cores for big files and gzip (its
 /// decompression runs beside the parsing), one for small ones.
-pub(crate) fn auto_threads(opened: &input::Opened) -> usize {
+pub(super) fn auto_threads(opened: &input::Opened) -> usize {
     let big = opened.gzip || opened.size.is_some_and(|s| s >= PARALLEL_MIN_BYTES);
     if big { cores() } else { 1 }
 }
@@ -300,7 +200,7 @@ fn decode_all(
     sources: &[Source],
     opts: &Options,
     how: HowToRead,
-    renderer: &mut dyn Renderer,
+    renderer: &mut dyn Sink,
     log: &mut DiagnosticLog<io::Stderr>,
 ) -> Result<Outcome, OutputError> {
     let mut analyses = Vec::new();
@@ -311,7 +211,7 @@ fn decode_all(
         cores()
     };
     let mut i = 0;
-    while i < sources.len() && !interrupt::interrupted() {
+    while i < sources.len() && !opts.cancel.is_cancelled() {
         // A run of small files: side by side, replayed in order.
         let run = sources[i..]
             .iter()
@@ -396,7 +296,7 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
     if input_failed || strict_failed {
         return EXIT_ERROR;
     }
-    let met = fail_on_met(&FailOn::combine(&args.fail_on), &outcome.analyses);
+    let met = fail_on::met(&FailOn::combine(&args.fail_on), &outcome.analyses);
     for reason in &met {
         log.note(&format!("fail-on: {reason}"));
     }
@@ -407,52 +307,14 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
     }
 }
 
-/// The `--fail-on` conditions the inputs met, each with what met it.
-pub fn fail_on_met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
-    let mut met = Vec::new();
-    let nodes = || analyses.iter().flat_map(|a| &a.report.nodes);
-    if fail_on.any {
-        let n: u64 = analyses.iter().map(|a| a.errors_raised).sum();
-        if n > 0 {
-            met.push(format!("any: {n} error EMCY frame{}", plural(n)));
-        }
+/// Whether to colour: `--color always|never`, or auto = a terminal and no
+/// (non-empty) `NO_COLOR`, per no-color.org.
+fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi::OsStr>) -> bool {
+    match choice {
+        ColorChoice::Always => true,
+        ColorChoice::Never => false,
+        ColorChoice::Auto => is_terminal && no_color.is_none_or(|v| v.is_empty()),
     }
-    if fail_on.active {
-        let n = nodes().filter(|n| !n.active.is_empty()).count() as u64;
-        if n > 0 {
-            met.push(format!(
-                "active: {n} node{} end{} with an active error",
-                plural(n),
-                if n == 1 { "s" } else { "" }
-            ));
-        }
-    }
-    if fail_on.warning {
-        let n: u64 = analyses.iter().map(|a| a.frames_with_warnings).sum();
-        if n > 0 {
-            met.push(format!(
-                "warning: {n} EMCY frame{} with warnings",
-                plural(n)
-            ));
-        }
-    }
-    for &code in &fail_on.codes {
-        let n: u64 = nodes().filter_map(|n| n.stats.raised.get(&code)).sum();
-        if n > 0 {
-            met.push(format!("code=0x{code:04X}: raised {n} time{}", plural(n)));
-        }
-    }
-    if let Some(bound) = fail_on.category_at_most {
-        let worst = analyses.iter().filter_map(|a| a.worst_category).min();
-        if let Some(worst) = worst.filter(|&w| w <= bound) {
-            met.push(format!("category<={bound}: an error of category {worst}"));
-        }
-    }
-    met
-}
-
-fn plural(n: u64) -> &'static str {
-    if n == 1 { "" } else { "s" }
 }
 
 #[cfg(test)]
@@ -473,5 +335,15 @@ mod tests {
         assert!(wants_progress(true, PROGRESS_MIN_BYTES));
         assert!(!wants_progress(true, PROGRESS_MIN_BYTES - 1));
         assert!(!wants_progress(false, u64::MAX));
+    }
+
+    #[test]
+    fn colour_only_on_a_terminal_without_no_color() {
+        assert!(use_color(ColorChoice::Auto, true, None));
+        assert!(!use_color(ColorChoice::Auto, false, None));
+        assert!(!use_color(ColorChoice::Auto, true, Some(OsStr::new("1"))));
+        assert!(use_color(ColorChoice::Auto, true, Some(OsStr::new(""))));
+        assert!(use_color(ColorChoice::Always, false, Some(OsStr::new("1"))));
+        assert!(!use_color(ColorChoice::Never, true, None));
     }
 }

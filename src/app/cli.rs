@@ -3,12 +3,14 @@
 
 use std::path::PathBuf;
 
+use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::analyze::EmcyId;
-use crate::report::table::ColorChoice;
+use crate::analyze::fail_on::FailOn;
+use crate::analyze::{EmcyId, Options};
+use crate::canopen::profile_choice::{self, ProfileRequest};
 use crate::report::timefmt::TimeStyle;
-use crate::trace::Format;
+use crate::trace::{Format, hex};
 
 const EXAMPLES_AND_EXIT_CODES: &str = "\
 Examples:
@@ -61,9 +63,9 @@ pub enum Command {
     /// List the built-in vendor profiles, one line each
     Profiles,
     /// Record what traces contain (errors per node, line counts) for `check`
-    Baseline(crate::baseline::BaselineArgs),
+    Baseline(BaselineArgs),
     /// Compare traces with a baseline: exit 1 on a regression
-    Check(crate::baseline::CheckArgs),
+    Check(CheckArgs),
 }
 
 #[derive(Args, Debug)]
@@ -97,7 +99,7 @@ pub struct DecodeArgs {
     /// own wins. Without one, the trace's SDO identity answers choose, else cia402.
     /// `emcy-decode profiles` lists them
     #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME")]
-    pub profile: Vec<ProfileArg>,
+    pub profile: Vec<ProfileRequest>,
 
     /// A user profile (TOML, see README): used for every node not chosen by --profile,
     /// or only where --profile names it (repeatable)
@@ -135,8 +137,8 @@ pub struct DecodeArgs {
     pub color: ColorChoice,
 
     /// How the table shows times
-    #[arg(long, value_enum, default_value_t = TimeStyle::Auto, value_name = "STYLE")]
-    pub time: TimeStyle,
+    #[arg(long, value_enum, default_value_t = TimeArg::Auto, value_name = "STYLE")]
+    pub time: TimeArg,
 
     /// Keep reading FILE as it grows (like tail -f); Ctrl-C prints the summary
     #[arg(long, requires = "files")]
@@ -229,42 +231,161 @@ pub enum View {
     Summary,
 }
 
-/// The `--fail-on` conditions of one or more flags, combined: any met fails.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct FailOn {
-    /// Any EMCY with an error code (not a reset).
-    pub any: bool,
-    /// A node ends the trace with an active error.
-    pub active: bool,
-    /// Any protocol warning on a reported EMCY.
-    pub warning: bool,
-    /// Any of these codes raised.
-    pub codes: Vec<u16>,
-    /// An error whose profile category is at most this (1 = most severe).
-    pub category_at_most: Option<u8>,
+/// `--color`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ColorChoice {
+    Auto,
+    Always,
+    Never,
 }
 
-impl FailOn {
-    /// All flags given, merged.
-    pub fn combine(flags: &[FailOn]) -> FailOn {
-        let mut all = FailOn::default();
-        for f in flags {
-            all.any |= f.any;
-            all.active |= f.active;
-            all.warning |= f.warning;
-            all.codes.extend(&f.codes);
-            all.category_at_most = match (all.category_at_most, f.category_at_most) {
-                (Some(a), Some(b)) => Some(a.max(b)),
-                (a, b) => a.or(b),
-            };
-        }
-        all.codes.sort_unstable();
-        all.codes.dedup();
-        all
-    }
+/// `--time`: how the table shows times.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum TimeArg {
+    /// ISO-8601 UTC for Unix times (after 2001-09-09), else seconds as written
+    #[default]
+    Auto,
+    /// Seconds exactly as the trace wrote them
+    Absolute,
+    /// Seconds since the input's first reported event
+    Relative,
+    /// ISO-8601 UTC, every time taken as Unix time
+    Iso,
+}
 
-    pub fn is_never(&self) -> bool {
-        *self == FailOn::default()
+impl From<TimeArg> for TimeStyle {
+    fn from(t: TimeArg) -> TimeStyle {
+        match t {
+            TimeArg::Auto => TimeStyle::Auto,
+            TimeArg::Absolute => TimeStyle::Absolute,
+            TimeArg::Relative => TimeStyle::Relative,
+            TimeArg::Iso => TimeStyle::Iso,
+        }
+    }
+}
+
+/// Traces and how to read them; the same for `baseline` and `check`, so a
+/// check reads its traces exactly as the baseline did.
+#[derive(Args, Debug)]
+pub struct TraceArgs {
+    /// Trace files (`-` reads stdin); each is recorded under the path as given,
+    /// normalized and relative
+    #[arg(value_name = "TRACE", required = true)]
+    pub traces: Vec<PathBuf>,
+
+    /// Read traces as this format instead of detecting it
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub input_format: Option<InputFormat>,
+
+    /// A node's EMCY id moved by object 0x1014: COBID=NODE, e.g. 0x1A5=5 (repeatable)
+    #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
+    pub emcy_id: Vec<EmcyId>,
+
+    /// Print at most N diagnostics (malformed lines...) per trace on stderr
+    #[arg(long, default_value_t = 20, value_name = "N")]
+    pub max_diagnostics: usize,
+
+    /// Vendor profile for every node (NAME) or one node (NODE=NAME), as for decoding
+    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME")]
+    pub profile: Vec<ProfileRequest>,
+
+    /// A user profile (TOML), as for decoding
+    #[arg(long, value_name = "FILE.toml")]
+    pub profile_file: Vec<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct BaselineArgs {
+    #[command(flatten)]
+    pub read: TraceArgs,
+
+    /// Write the baseline to FILE (replaced atomically) instead of stdout
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+const CHECK_HELP: &str = "\
+Output: one line per difference, `SEVERITY: FILE[ CHANNEL node N]: MESSAGE`,
+sorted by file, channel, node and code, then a `check:` summary line.
+
+Regressions (exit 1 unless --allow/--allow-node accepts them): a new error
+code, an error still active at the end that the baseline had cleared, a new
+node with errors, more malformed lines or undecodable EMCYs, a trace not in
+the baseline, a baseline trace not given.
+Improvements (exit 0): an error no longer raised, an error no longer active
+at the end, fewer malformed lines. Changes (exit 0): a known error raised a
+different number of times, a node gone, a new node without errors, another
+format.
+
+Exit status:
+  0  no regression (or --update)
+  1  at least one regression
+  2  usage error, unreadable trace or baseline, baseline of another version";
+
+#[derive(Args, Debug)]
+#[command(after_help = CHECK_HELP)]
+pub struct CheckArgs {
+    /// The baseline to compare with (written by `emcy-decode baseline`)
+    #[arg(long, short = 'b', value_name = "FILE")]
+    pub baseline: PathBuf,
+
+    #[command(flatten)]
+    pub read: TraceArgs,
+
+    /// Output format of the differences
+    #[arg(long, short = 'f', value_enum, default_value_t = CheckFormat::Text)]
+    pub format: CheckFormat,
+
+    /// Accept new or newly active errors with this code (repeatable or comma list, hex)
+    #[arg(long, value_delimiter = ',', value_parser = parse_code_arg, value_name = "CODE")]
+    pub allow: Vec<u16>,
+
+    /// Accept every difference of this node, on any channel (repeatable or comma list)
+    #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
+    pub allow_node: Vec<u8>,
+
+    /// Rewrite the baseline from these traces after printing the differences; exit 0
+    #[arg(long)]
+    pub update: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CheckFormat {
+    /// One finding per line, then a summary line
+    Text,
+    /// One JSON document: findings and summary
+    Json,
+}
+
+fn parse_code_arg(s: &str) -> Result<u16, String> {
+    parse_code(s).map_err(|e| e.to_string())
+}
+
+impl DecodeArgs {
+    /// The library's options for these flags (user profiles are loaded here).
+    pub(super) fn options(&self) -> Result<Options> {
+        Ok(Options {
+            input_format: self.input_format.map(Into::into),
+            nodes: self.node.clone(),
+            channels: self.channel.clone(),
+            max_diagnostics: self.max_diagnostics,
+            emcy_ids: self.emcy_id.clone(),
+            profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
+            ..Options::default()
+        })
+    }
+}
+
+impl TraceArgs {
+    /// The library's options for these flags, as `decode` would make them.
+    pub(super) fn options(&self) -> Result<Options> {
+        Ok(Options {
+            input_format: self.input_format.map(Into::into),
+            max_diagnostics: self.max_diagnostics,
+            emcy_ids: self.emcy_id.clone(),
+            profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
+            ..Options::default()
+        })
     }
 }
 
@@ -276,7 +397,7 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
     for item in s.split(',').map(str::trim) {
         let lower = item.to_ascii_lowercase();
         if let Some(code) = lower.strip_prefix("code=") {
-            f.codes.push(parse_code(code)?);
+            f.codes.push(fail_on_code(code)?);
             in_codes = true;
             continue;
         }
@@ -296,7 +417,7 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             "active" => f.active = true,
             "warning" | "warnings" => f.warning = true,
             _ if in_codes => {
-                f.codes.push(parse_code(item)?);
+                f.codes.push(fail_on_code(item)?);
                 continue;
             }
             _ => {
@@ -312,19 +433,13 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
 }
 
 /// An error code in hex, with or without 0x.
-fn parse_code(s: &str) -> Result<u16, String> {
+fn fail_on_code(s: &str) -> Result<u16, String> {
     crate::trace::hex::parse_code(s)
         .ok_or_else(|| format!("'{s}' is not an error code (1-4 hex digits)"))
 }
 
 /// `--profile NAME` or `--profile NODE=NAME`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ProfileArg {
-    pub node: Option<u8>,
-    pub name: String,
-}
-
-pub(crate) fn parse_profile_arg(s: &str) -> Result<ProfileArg, String> {
+fn parse_profile_arg(s: &str) -> Result<ProfileRequest, String> {
     let (node, name) = match s.split_once('=') {
         Some((node, name)) => (Some(parse_node(node)?), name.trim()),
         None => (None, s.trim()),
@@ -332,14 +447,14 @@ pub(crate) fn parse_profile_arg(s: &str) -> Result<ProfileArg, String> {
     if name.is_empty() {
         return Err(format!("'{s}' names no profile"));
     }
-    Ok(ProfileArg {
+    Ok(ProfileRequest {
         node,
         name: name.to_string(),
     })
 }
 
 /// `0x1A5=5`, `000001A5=5` (29-bit by digit count), `1A5x=5` (29-bit).
-pub(crate) fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
+fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
     let err = || format!("'{s}' is not COBID=NODE (e.g. 0x1A5=5 or 18FF0105x=5)");
     let (cob, node) = s.split_once('=').ok_or_else(err)?;
     let node = parse_node(node)?;
@@ -361,7 +476,7 @@ pub(crate) fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
 }
 
 /// A CANopen node id, 1..=127, decimal or 0x hex.
-pub(crate) fn parse_node(s: &str) -> Result<u8, String> {
+fn parse_node(s: &str) -> Result<u8, String> {
     let t = s.trim();
     let value = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(hex) => u8::from_str_radix(hex, 16),
@@ -370,6 +485,49 @@ pub(crate) fn parse_node(s: &str) -> Result<u8, String> {
     match value {
         Ok(n @ 1..=127) => Ok(n),
         _ => Err(format!("'{s}' is not a node id (1-127, decimal or 0x hex)")),
+    }
+}
+
+/// Parses `10 43 09 01`, `1043090100000000`, `10:43:09`, `0x10,0x43` into bytes.
+pub(super) fn parse_payload(text: &str) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    for token in text
+        .split(|c: char| c.is_whitespace() || matches!(c, ':' | ',' | '-' | '.'))
+        .filter(|t| !t.is_empty())
+    {
+        let digits = token
+            .strip_prefix("0x")
+            .or_else(|| token.strip_prefix("0X"))
+            .unwrap_or(token);
+        let digits = digits.as_bytes();
+        if digits.len() == 1 {
+            match hex::nibble(digits[0]) {
+                Some(v) => bytes.push(v),
+                None => bail!("'{token}' is not a hex byte"),
+            }
+            continue;
+        }
+        if digits.is_empty() || digits.len() % 2 != 0 {
+            bail!("'{token}' is not a whole number of hex bytes");
+        }
+        for pair in digits.chunks_exact(2) {
+            match hex::parse_byte(pair[0], pair[1]) {
+                Some(b) => bytes.push(b),
+                None => bail!("'{token}' is not hexadecimal"),
+            }
+        }
+    }
+    if bytes.len() > 8 {
+        bail!("an EMCY payload has at most 8 bytes; got {}", bytes.len());
+    }
+    Ok(bytes)
+}
+
+/// An error code in hex, with or without 0x (`explain`, `--allow`).
+pub(super) fn parse_code(text: &str) -> Result<u16> {
+    match hex::parse_code(text) {
+        Some(c) => Ok(c),
+        None => bail!("'{text}' is not an error code (1-4 hex digits, optional 0x)"),
     }
 }
 
@@ -464,6 +622,30 @@ mod tests {
         assert!(p("0=cia402").is_err());
         assert!(p("5=").is_err());
         assert!(p("").is_err());
+    }
+
+    #[test]
+    fn payload_spellings() {
+        let want = vec![0x10, 0x43, 0x09, 0x01, 0, 0, 0, 0];
+        for text in [
+            "10 43 09 01 00 00 00 00",
+            "1043090100000000",
+            "10:43:09:01:00:00:00:00",
+            "0x10,0x43,0x09,0x01,0x00,0x00,0x00,0x00",
+            "10-43-09-01 00000000",
+        ] {
+            assert_eq!(parse_payload(text).unwrap(), want, "{text}");
+        }
+        assert_eq!(parse_payload("0 0 0").unwrap(), [0, 0, 0]);
+        assert!(parse_payload("104").is_err());
+        assert!(parse_payload("zz").is_err());
+        assert!(parse_payload("00 00 00 00 00 00 00 00 00").is_err());
+    }
+
+    #[test]
+    fn explain_codes() {
+        assert_eq!(parse_code("4310").unwrap(), 0x4310);
+        assert!(parse_code("43100").is_err());
     }
 
     #[test]

@@ -1,57 +1,15 @@
-//! `emcy-decode explain`: what a code means, or what one raw payload says
-//! (what users read off an EtherCAT master or a drive's display).
+//! `emcy-decode explain` rendered: what a code means, or what one raw
+//! payload says (what users read off an EtherCAT master or a drive's
+//! display), as text or JSON.
 
 use std::fmt::Write as _;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use serde_json::json;
 
 use crate::canopen::emcy::Emcy;
 use crate::canopen::profile::{FieldValue, Profile};
 use crate::canopen::register::{self, Register};
-use crate::trace::hex;
-
-/// Parses `10 43 09 01`, `1043090100000000`, `10:43:09`, `0x10,0x43` into bytes.
-pub fn parse_payload(text: &str) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    for token in text
-        .split(|c: char| c.is_whitespace() || matches!(c, ':' | ',' | '-' | '.'))
-        .filter(|t| !t.is_empty())
-    {
-        let digits = token
-            .strip_prefix("0x")
-            .or_else(|| token.strip_prefix("0X"))
-            .unwrap_or(token);
-        let digits = digits.as_bytes();
-        if digits.len() == 1 {
-            match hex::nibble(digits[0]) {
-                Some(v) => bytes.push(v),
-                None => bail!("'{token}' is not a hex byte"),
-            }
-            continue;
-        }
-        if digits.is_empty() || digits.len() % 2 != 0 {
-            bail!("'{token}' is not a whole number of hex bytes");
-        }
-        for pair in digits.chunks_exact(2) {
-            match hex::parse_byte(pair[0], pair[1]) {
-                Some(b) => bytes.push(b),
-                None => bail!("'{token}' is not hexadecimal"),
-            }
-        }
-    }
-    if bytes.len() > 8 {
-        bail!("an EMCY payload has at most 8 bytes; got {}", bytes.len());
-    }
-    Ok(bytes)
-}
-
-pub fn parse_code(text: &str) -> Result<u16> {
-    match hex::parse_code(text) {
-        Some(c) => Ok(c),
-        None => bail!("'{text}' is not an error code (1-4 hex digits, optional 0x)"),
-    }
-}
 
 fn register_bit_text(bit: Option<u8>) -> String {
     match bit {
@@ -197,26 +155,8 @@ fn decode(data: &[u8]) -> Result<Emcy> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn payload_spellings() {
-        let want = vec![0x10, 0x43, 0x09, 0x01, 0, 0, 0, 0];
-        for text in [
-            "10 43 09 01 00 00 00 00",
-            "1043090100000000",
-            "10:43:09:01:00:00:00:00",
-            "0x10,0x43,0x09,0x01,0x00,0x00,0x00,0x00",
-            "10-43-09-01 00000000",
-        ] {
-            assert_eq!(parse_payload(text).unwrap(), want, "{text}");
-        }
-        assert_eq!(parse_payload("0 0 0").unwrap(), [0, 0, 0]);
-        assert!(parse_payload("104").is_err());
-        assert!(parse_payload("zz").is_err());
-        assert!(parse_payload("00 00 00 00 00 00 00 00 00").is_err());
-    }
-
     fn cia402() -> &'static Profile {
-        crate::profile_choice::default_profile()
+        crate::canopen::profile_choice::default_profile()
     }
 
     #[test]
@@ -229,8 +169,6 @@ mod tests {
 
     #[test]
     fn codes() {
-        assert_eq!(parse_code("4310").unwrap(), 0x4310);
-        assert!(parse_code("43100").is_err());
         assert!(code_text(cia402(), 0x4310).contains("bit 3 (temperature)"));
         assert_eq!(code_json(cia402(), 0x4310)["register_bit"], 3);
     }

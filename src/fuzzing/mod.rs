@@ -7,19 +7,19 @@
 //! public API.
 
 use crate::canopen::profile::{self, Profile};
-use crate::profile_choice::{Chosen, ProfileSource};
+use crate::canopen::profile_choice::{Chosen, ProfileSource};
 use std::io::{self, Read};
 
 use serde_json::Value;
 
 use crate::analyze::{self, DiagnosticLog, Options};
+use crate::analyze::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
 use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::canopen::sdo;
-use crate::history::History;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::table::TableReport;
-use crate::report::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Renderer};
+use crate::timeline::history::History;
 use crate::timeline::{At, ClearedBy, Interval, NodeTimeline, State, Step};
 use crate::trace::input::sniff_gzip;
 use crate::trace::lines::Block;
@@ -195,7 +195,7 @@ fn run(data: &[u8], gzip: bool, opts: &Options, output: Output) -> Run {
     };
     let mut out = Vec::new();
     let mut err = Vec::new();
-    let mut renderer: Box<dyn Renderer + '_> = match output {
+    let mut renderer: Box<dyn Sink + '_> = match output {
         // The node objects' errors on as many helpers as the read has
         // threads: the parallel run's ndjson must equal the sequential one.
         Output::Ndjson => Box::new(Ndjson::new(&mut out, false).threads(opts.threads)),
@@ -448,7 +448,7 @@ fn no_control_characters(what: &str, bytes: &[u8]) {
 /// shortcut only skips valid frames that are not wanted and returns wanted
 /// ones exactly as `parse` does.
 fn lines_agree(format: Format, data: &[u8]) {
-    let wanted = analyze::interest(&Options::default());
+    let wanted = analyze::interest::interest(&Options::default());
     let all = Interest::all();
     let mut p_all = format.parser();
     let mut p_wanted = format.parser();
@@ -766,11 +766,16 @@ pub fn decode_timeline(data: &[u8]) {
             m.timeline.active().len() as u64,
             "opened = closed + active"
         );
-        open.extend(m.timeline.active().iter().map(|iv| crate::history::Record {
-            channel: m.channel,
-            node: m.node,
-            interval: iv.clone(),
-        }));
+        open.extend(
+            m.timeline
+                .active()
+                .iter()
+                .map(|iv| crate::timeline::history::Record {
+                    channel: m.channel,
+                    node: m.node,
+                    interval: iv.clone(),
+                }),
+        );
     }
     let finished = history.finish(open);
     let mut merge = finished.merge();

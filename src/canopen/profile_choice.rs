@@ -5,9 +5,18 @@
 
 use std::path::PathBuf;
 
-use crate::canopen::profile::{self, Profile};
-use crate::canopen::sdo::{self, Object};
-use crate::cli::ProfileArg;
+use super::profile::{self, Profile};
+use super::sdo::{self, Object};
+
+/// A profile asked for by name: for every node (`--profile NAME`) or for
+/// one (`--profile NODE=NAME`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProfileRequest {
+    /// The node it is for; `None` for every node.
+    pub node: Option<u8>,
+    /// A built-in profile's name or a user profile's.
+    pub name: String,
+}
 
 /// Why a node got its profile (the `profile_source` key).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,7 +146,7 @@ impl<'c> NodeProfiles<'c> {
 /// Turns `--profile` and `--profile-file` into a choice. User profiles are
 /// loaded once for the whole run (they live as long as the process). A name
 /// is looked up among the user profiles first, then the built-ins.
-pub fn resolve(args: &[ProfileArg], files: &[PathBuf]) -> anyhow::Result<ProfileChoice> {
+pub fn resolve(args: &[ProfileRequest], files: &[PathBuf]) -> anyhow::Result<ProfileChoice> {
     let mut user: Vec<&'static Profile> = Vec::new();
     for f in files {
         let p = profile::load_file(f)?;
@@ -239,8 +248,8 @@ mod tests {
         );
     }
 
-    fn arg(node: Option<u8>, name: &str) -> ProfileArg {
-        ProfileArg {
+    fn arg(node: Option<u8>, name: &str) -> ProfileRequest {
+        ProfileRequest {
             node,
             name: name.to_string(),
         }

@@ -1,0 +1,119 @@
+//! The one loop that classifies a block's lines into a [`LineSink`]: the
+//! consumer itself when reading sequentially, a worker's recorder in
+//! parallel.
+
+use super::OutputError;
+use crate::trace::detect::Detector;
+use crate::trace::lines::{self, Block, RawLine};
+use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp};
+
+/// A frame read in another format than the file's: (its format, the file's).
+pub(super) type Foreign = Option<(Format, Format)>;
+
+/// Receives classified lines; `idx` is the line's 0-based index in its block.
+pub(super) trait LineSink {
+    /// The ids to decode now (the consumer's can change mid-input).
+    fn interest(&self) -> &Interest;
+    /// Valid frames the consumer has no use for: counted only.
+    fn plain_frames(&mut self, n: u64);
+    /// `n` wanted frames that only move the input's first/last time (see
+    /// [`content_matters`](super::interest::content_matters)), the first and last of their times.
+    fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
+    fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
+    fn skipped(&mut self);
+    fn malformed(&mut self, idx: u64, reason: Reason);
+    fn lines(&mut self, n: u64);
+}
+
+pub(super) fn too_long(n: u64, max_line: usize) -> Reason {
+    format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
+}
+
+/// The one loop that classifies lines, sequentially or on a worker: runs
+/// of common lines through the parser's hot loop, anything else a line at
+/// a time.
+pub(super) fn classify_block(
+    block: &Block,
+    max_line: usize,
+    detector: &mut Detector,
+    sink: &mut impl LineSink,
+) -> Result<(), OutputError> {
+    let bytes = block.text();
+    let mut idx = 0u64;
+    let mut pos = 0usize;
+    if let Some(n) = block.too_long_before {
+        sink.malformed(idx, too_long(n, max_line));
+        idx += 1;
+    }
+    loop {
+        let run = detector.run(
+            bytes.get(pos..).unwrap_or_default(),
+            max_line,
+            sink.interest(),
+        );
+        pos += run.bytes;
+        if run.plain > 0 {
+            sink.plain_frames(run.plain);
+            idx += run.plain;
+        }
+        if let (Some(first), Some(last)) = (run.first_time, run.last_time) {
+            sink.timed_frames(run.timed, first, last);
+            idx += run.timed;
+        }
+        if let Some(frame) = run.frame {
+            deliver(sink, idx, &frame, None)?;
+            idx += 1;
+            continue;
+        }
+        let Some((raw, next)) = lines::line_at(bytes, pos, max_line) else {
+            break;
+        };
+        pos = next;
+        match raw {
+            RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
+            RawLine::Text(text) => match detector.scan(text, sink.interest()) {
+                Scan::Plain => sink.plain_frames(1),
+                Scan::Timed(t) => sink.timed_frames(1, t, t),
+                Scan::Frame(frame) => deliver(sink, idx, &frame, None)?,
+                Scan::Parse => match detector.parse(text, sink.interest()) {
+                    Parsed::Frame(frame) => {
+                        let foreign = detector.take_foreign().zip(detector.format());
+                        deliver(sink, idx, &frame, foreign)?;
+                    }
+                    Parsed::Skipped => sink.skipped(),
+                    Parsed::Malformed(reason) => sink.malformed(idx, reason),
+                },
+            },
+        }
+        idx += 1;
+    }
+    sink.lines(idx);
+    Ok(())
+}
+
+/// Hands a frame on as the consumer treats it: one it has no use for is
+/// only counted, one that only moves the input's first/last time only timed
+/// (so workers record neither); the rest, and every frame in another format
+/// than the file's (its line gets a diagnostic), go to `frame`, which
+/// applies the same rules in full.
+pub(super) fn deliver(
+    sink: &mut impl LineSink,
+    idx: u64,
+    frame: &Frame<'_>,
+    foreign: Foreign,
+) -> Result<(), OutputError> {
+    if foreign.is_none() {
+        let interest = sink.interest();
+        if frame.kind != FrameKind::Data || !interest.wants(frame.id, frame.extended) {
+            sink.plain_frames(1);
+            return Ok(());
+        }
+        if let Some(t) = frame.time
+            && interest.timed_only(frame.id, frame.extended, frame.data.as_slice())
+        {
+            sink.timed_frames(1, t, t);
+            return Ok(());
+        }
+    }
+    sink.frame(idx, frame, foreign)
+}

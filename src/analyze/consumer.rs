@@ -1,0 +1,549 @@
+//! The consumer: turns classified lines into timelines, events and counts,
+//! in line order, and hands events to the sink.
+
+use std::collections::HashMap;
+use std::io::Write;
+
+use super::classify::{Foreign, LineSink};
+use super::diagnostics::{DiagnosticLog, InputDiagnostics};
+use super::event::{BootEvent, Counts, EmcyEvent, InputReport, NodeReport};
+use super::interest::{add_emcy_id, interest};
+use super::parallel::SharedInterest;
+use super::sink::Sink;
+use super::{Analysis, Options, OutputError};
+use crate::cache::{Cache, profile_code_key};
+use crate::canopen::codes::CodeInfo;
+use crate::canopen::emcy::{self, Emcy, Warning};
+use crate::canopen::profile_choice::{NodeProfiles, ProfileSource, default_profile};
+use crate::canopen::sdo;
+use crate::timeline::history::{ErrorHistory, History, Record};
+use crate::timeline::{At, NodeTimeline, Step};
+use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
+
+/// Per-channel node timelines. Channels are usually few, but every distinct
+/// interface name in the trace is one, so a hostile trace can name a million:
+/// lookup is hashed and a channel holds only the nodes it has seen, keeping
+/// time and memory linear in the input.
+struct Nodes {
+    channels: Vec<ChannelNodes>,
+    index: HashMap<Vec<u8>, usize>,
+    /// Channels by name. Different bytes can read as one name (invalid
+    /// UTF-8 becomes U+FFFD); reports and the history know a channel by its
+    /// name, so those bytes are one channel.
+    by_name: HashMap<String, usize>,
+    /// The channel of the previous lookup: nearly every trace has one or two.
+    last: Option<usize>,
+    /// Closed intervals of every node (timelines keep only active ones).
+    history: History,
+}
+
+struct ChannelNodes {
+    raw: Vec<u8>,
+    name: String,
+    /// The channel's index in the history.
+    id: u32,
+    /// Sorted by node id (1..=127).
+    nodes: Vec<(u8, NodeTimeline)>,
+}
+
+/// A node's timeline, borrowed with what an event needs around it.
+struct NodeSlot<'n> {
+    channel: &'n str,
+    channel_id: u32,
+    timeline: &'n mut NodeTimeline,
+    history: &'n mut History,
+}
+
+impl Nodes {
+    fn new(spill_at: usize) -> Self {
+        Nodes {
+            channels: Vec::new(),
+            index: HashMap::new(),
+            by_name: HashMap::new(),
+            last: None,
+            history: History::new(spill_at),
+        }
+    }
+
+    fn get(&mut self, raw: &[u8], node: u8) -> NodeSlot<'_> {
+        let cached = self.last.filter(|&i| {
+            self.channels
+                .get(i)
+                .is_some_and(|c| c.raw.as_slice() == raw)
+        });
+        let idx = match cached.or_else(|| self.index.get(raw).copied()) {
+            Some(i) => i,
+            None => {
+                let name = String::from_utf8_lossy(raw).into_owned();
+                let i = match self.by_name.get(&name) {
+                    Some(&i) => i,
+                    None => {
+                        let id = self.history.add_channel(&name);
+                        self.by_name.insert(name.clone(), self.channels.len());
+                        self.channels.push(ChannelNodes {
+                            raw: raw.to_vec(),
+                            name,
+                            id,
+                            nodes: Vec::new(),
+                        });
+                        self.channels.len() - 1
+                    }
+                };
+                self.index.insert(raw.to_vec(), i);
+                i
+            }
+        };
+        self.last = Some(idx);
+        let Nodes {
+            channels, history, ..
+        } = self;
+        let ch = &mut channels[idx];
+        let slot = match ch.nodes.binary_search_by_key(&node, |(n, _)| *n) {
+            Ok(i) => i,
+            Err(i) => {
+                ch.nodes.insert(i, (node, NodeTimeline::new()));
+                i
+            }
+        };
+        NodeSlot {
+            channel: &ch.name,
+            channel_id: ch.id,
+            timeline: &mut ch.nodes[slot].1,
+            history,
+        }
+    }
+
+    /// Node reports sorted by channel name, then node, and the history with
+    /// the still-active intervals added.
+    fn into_reports(self, opts: &Options) -> (Vec<NodeReport>, ErrorHistory) {
+        let mut out = Vec::new();
+        let mut open = Vec::new();
+        let mut channels = self.channels;
+        channels.sort_by(|a, b| a.name.cmp(&b.name));
+        for ch in channels {
+            for (node, tl) in ch.nodes {
+                open.extend(tl.active().iter().map(|iv| Record {
+                    channel: ch.id,
+                    node,
+                    interval: iv.clone(),
+                }));
+                if !opts.selects(&ch.name, node) {
+                    continue;
+                }
+                out.push(NodeReport {
+                    channel: ch.name.clone(),
+                    node,
+                    state: tl.state(),
+                    active: tl.active_codes().collect(),
+                    emcy_count: tl.emcy_count(),
+                    stats: tl.stats().clone(),
+                    profile: default_profile(),
+                    profile_source: ProfileSource::Default,
+                    profile_reason: None,
+                });
+            }
+        }
+        (out, self.history.finish(open))
+    }
+}
+
+/// Turns classified lines into timelines, events and counts, in line order.
+pub(super) struct Consumer<'r, 'l, E: Write> {
+    pub(super) file: &'r str,
+    pub(super) opts: &'r Options,
+    pub(super) sink: &'r mut dyn Sink,
+    pub(super) log: &'l mut DiagnosticLog<E>,
+    pub(super) counts: Counts,
+    pub(super) nodes: Nodes,
+    pub(super) diags: InputDiagnostics,
+    pub(super) errors_raised: u64,
+    pub(super) frames_with_warnings: u64,
+    pub(super) worst_category: Option<u8>,
+    pub(super) decided: bool,
+    /// Lines before the current block.
+    pub(super) line_base: u64,
+    /// Time and line of the last EMCY or boot-up: the trace's clock as far
+    /// as the timelines see it.
+    pub(super) clock: Option<(Timestamp, u64)>,
+    /// EMCY ids other than 0x80 + node, to their node.
+    pub(super) emcy_ids: HashMap<(u32, bool), u8>,
+    /// First and last time of a decoded frame.
+    pub(super) first_time: Option<Timestamp>,
+    pub(super) last_time: Option<Timestamp>,
+    pub(super) interest: Interest,
+    pub(super) interest_gen: u64,
+    /// Set while workers run: where they read the interest from.
+    pub(super) shared_interest: Option<SharedInterest>,
+    pub(super) warnings: Vec<Warning>,
+    pub(super) active: Vec<u16>,
+    pub(super) sdo: sdo::Tracker,
+    pub(super) profiles: NodeProfiles<'r>,
+    /// The last timeline step, handed back for its vectors.
+    pub(super) step_buffers: Step,
+    /// Code table entries by (profile, code): the profile's lookup goes
+    /// through a thread-local cache whose access and by-value copy showed
+    /// as stalls on this thread.
+    pub(super) infos: Cache<(usize, u16), CodeInfo, 64>,
+}
+
+impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
+    pub(super) fn new(
+        file: &'r str,
+        opts: &'r Options,
+        sink: &'r mut dyn Sink,
+        log: &'l mut DiagnosticLog<E>,
+        decided: bool,
+    ) -> Self {
+        Consumer {
+            file,
+            opts,
+            sink,
+            decided,
+            log,
+            counts: Counts::default(),
+            nodes: Nodes::new(opts.spill_at),
+            diags: InputDiagnostics {
+                file: file.to_string(),
+                limit: opts.max_diagnostics,
+                shown: 0,
+                suppressed: 0,
+                pending: Vec::new(),
+            },
+            errors_raised: 0,
+            frames_with_warnings: 0,
+            worst_category: None,
+            line_base: 0,
+            clock: None,
+            first_time: None,
+            last_time: None,
+            emcy_ids: opts
+                .emcy_ids
+                .iter()
+                .map(|e| ((e.id, e.extended), e.node))
+                .collect(),
+            interest: interest(opts),
+            interest_gen: 0,
+            shared_interest: None,
+            warnings: Vec::new(),
+            active: Vec::new(),
+            sdo: sdo::Tracker::default(),
+            profiles: NodeProfiles::new(&opts.profiles),
+            step_buffers: Step::default(),
+            infos: Cache::default(),
+        }
+    }
+
+    /// The end of the input: held diagnostics, node reports, the history;
+    /// the sink gets the input's report.
+    pub(super) fn finish(
+        mut self,
+        format: Option<Format>,
+        gzip: bool,
+        mut error: Option<String>,
+    ) -> Result<Analysis, OutputError> {
+        let file = self.file;
+        if format.is_none() && self.counts.malformed > 0 && error.is_none() {
+            error = Some(
+                "cannot detect the trace format: no line is a candump log, candump screen, \
+             Vector ASC or PEAK TRC frame and the input is not BLF (force one with \
+             --input-format candump|candump-screen|asc|trc|blf)"
+                    .to_string(),
+            );
+        } else {
+            self.diags.release(self.log);
+            if self.diags.suppressed > 0 {
+                self.log.note(&format!(
+                    "{file}: {} more diagnostics not shown (--max-diagnostics {})",
+                    self.diags.suppressed, self.opts.max_diagnostics
+                ));
+            }
+        }
+        let nodes_taken = std::mem::replace(&mut self.nodes, Nodes::new(1));
+        let (mut nodes, history) = nodes_taken.into_reports(self.opts);
+        for n in &mut nodes {
+            let chosen = self.profiles.get(n.node);
+            n.profile = chosen.profile;
+            n.profile_source = chosen.source;
+            n.profile_reason = self.profiles.reason(n.node).map(str::to_string);
+        }
+        if let Some(e) = history.spill_error() {
+            self.log.note(&format!(
+                "{file}: could not move the error history to a temporary file ({e}); kept in memory"
+            ));
+        }
+        let report = InputReport {
+            first_time: self.first_time,
+            last_time: self.last_time,
+            file: file.to_string(),
+            format,
+            gzip,
+            counts: self.counts,
+            nodes,
+            history,
+            error,
+        };
+        self.sink.end_input(&report).map_err(OutputError)?;
+        Ok(Analysis {
+            report,
+            errors_raised: self.errors_raised,
+            frames_with_warnings: self.frames_with_warnings,
+            worst_category: self.worst_category,
+        })
+    }
+
+    pub(super) fn line_no(&self, idx: u64) -> u64 {
+        self.line_base + idx + 1
+    }
+
+    /// The node a data frame's EMCY id belongs to: a moved id first, then
+    /// the pre-defined set (standard ids 0x081-0x0FF).
+    pub(super) fn emcy_node(&self, id: u32, extended: bool) -> Option<u8> {
+        self.emcy_ids
+            .get(&(id, extended))
+            .copied()
+            .or_else(|| if extended { None } else { emcy::emcy_node(id) })
+    }
+
+    /// A node holds `value` in `object` (SDO upload or confirmed download).
+    fn object_value(&mut self, node: u8, object: sdo::Object, value: u32) {
+        self.profiles.object_value(node, object, value);
+        if object.index == sdo::COB_ID_EMCY
+            && object.sub == 0
+            && let Some((id, extended)) = sdo::cob_id_emcy(value)
+        {
+            self.map_emcy_id(id, extended, node);
+        }
+    }
+
+    /// A node's EMCY id moved (object 0x1014 seen in the trace): decode
+    /// frames on it from here on.
+    fn map_emcy_id(&mut self, id: u32, extended: bool, node: u8) {
+        if self.emcy_ids.insert((id, extended), node) == Some(node) {
+            return;
+        }
+        add_emcy_id(&mut self.interest, id, extended);
+        self.interest_gen += 1;
+        if let Some(shared) = &self.shared_interest
+            && let Ok(mut w) = shared.write()
+        {
+            *w = (self.interest_gen, self.interest.clone());
+        }
+    }
+
+    /// A frame was read: the format is known, held diagnostics go out.
+    pub(super) fn decide(&mut self) {
+        if !self.decided {
+            self.decided = true;
+            self.diags.release(self.log);
+        }
+    }
+
+    /// A wanted frame's time: the input's first and last time.
+    pub(super) fn time(&mut self, t: Timestamp) {
+        self.first_time.get_or_insert(t);
+        self.last_time = Some(t);
+    }
+
+    /// A time earlier than the previous EMCY's or boot-up's (two logs
+    /// concatenated, a clock reset) gets a diagnostic: durations across this
+    /// line come out negative, and the user should know why.
+    fn check_clock(&mut self, at: At) {
+        let Some(time) = at.time else { return };
+        if let Some((previous, line)) = self.clock
+            && time.since(previous).is_negative()
+        {
+            self.diags.report(
+                self.log,
+                self.decided,
+                at.line,
+                format!(
+                    "time {time} is earlier than {previous} at line {line}: the trace's clock \
+                     went backwards (durations across this line are negative)"
+                ),
+            );
+        }
+        self.clock = Some((time, at.line));
+    }
+}
+
+impl<E: Write> LineSink for Consumer<'_, '_, E> {
+    fn interest(&self) -> &Interest {
+        &self.interest
+    }
+
+    fn plain_frames(&mut self, n: u64) {
+        self.counts.frames += n;
+        self.decide();
+    }
+
+    fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
+        self.counts.frames += n;
+        self.decide();
+        self.time(first);
+        self.time(last);
+    }
+
+    fn lines(&mut self, n: u64) {
+        self.counts.lines += n;
+        self.line_base += n;
+    }
+
+    fn skipped(&mut self) {
+        self.counts.skipped += 1;
+    }
+
+    fn malformed(&mut self, idx: u64, reason: Reason) {
+        self.counts.malformed += 1;
+        let line = self.line_no(idx);
+        self.diags
+            .report(self.log, self.decided, line, reason.into_owned());
+    }
+
+    fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
+        self.counts.frames += 1;
+        let line_no = self.line_no(idx);
+        self.decide();
+        if let Some((other, primary)) = foreign {
+            self.counts.other_format += 1;
+            let msg = format!(
+                "line is in {} format, not {} like the rest; read anyway",
+                other.name(),
+                primary.name()
+            );
+            self.diags.report(self.log, true, line_no, msg);
+        }
+        if frame.kind != FrameKind::Data {
+            return Ok(());
+        }
+        // Only wanted ids count: workers may hand over frames the sequential
+        // reader only counts, and the result must not depend on the path.
+        if !self.interest.wants(frame.id, frame.extended) {
+            return Ok(());
+        }
+        if let Some(t) = frame.time {
+            self.time(t);
+        }
+        if self
+            .interest
+            .timed_only(frame.id, frame.extended, frame.data.as_slice())
+        {
+            return Ok(());
+        }
+        let at = At {
+            time: frame.time,
+            line: line_no,
+        };
+        let data = frame.data.as_slice();
+        if let Some(node) = self.emcy_node(frame.id, frame.extended) {
+            let emcy = match Emcy::decode(data) {
+                Ok(e) => e,
+                Err(short) => {
+                    self.counts.emcy_invalid += 1;
+                    self.diags
+                        .report(self.log, true, line_no, format!("node {node}: {short}"));
+                    return Ok(());
+                }
+            };
+            self.counts.emcy += 1;
+            self.check_clock(at);
+            let chosen = self.profiles.get(node);
+            let profile = chosen.profile;
+            let (key, slot) = profile_code_key(profile, emcy.code);
+            let looked_up;
+            let info = match self.infos.get(key, slot, || profile.info(emcy.code)) {
+                Some(info) => info,
+                None => {
+                    looked_up = profile.info(emcy.code);
+                    &looked_up
+                }
+            };
+            self.warnings.clear();
+            emcy.frame_warnings(info, &mut self.warnings);
+            profile.frame_warnings(&emcy, &mut self.warnings);
+            let NodeSlot {
+                channel,
+                channel_id,
+                timeline,
+                history,
+            } = self.nodes.get(frame.channel, node);
+            let step = timeline.apply(
+                &emcy,
+                at,
+                profile.status_bit(&emcy),
+                &mut self.warnings,
+                std::mem::take(&mut self.step_buffers),
+            );
+            for iv in &step.closed {
+                history.push(channel_id, node, iv.clone());
+            }
+            if !self.opts.selects(channel, node) {
+                self.step_buffers = step;
+                return Ok(());
+            }
+            if !emcy.is_reset() {
+                self.errors_raised += 1;
+                if let Some(c) = profile.category(&emcy) {
+                    self.worst_category = Some(self.worst_category.map_or(c, |w| w.min(c)));
+                }
+            }
+            if !self.warnings.is_empty() {
+                self.frames_with_warnings += 1;
+            }
+            self.active.clear();
+            self.active.extend(timeline.active_codes());
+            let decoded = profile.decode_manufacturer(&emcy);
+            let event = EmcyEvent {
+                file: self.file,
+                line: line_no,
+                time: frame.time,
+                channel,
+                node,
+                cob_id: frame.id,
+                data,
+                emcy: &emcy,
+                info,
+                transition: step.transition,
+                state: step.state,
+                active: &self.active,
+                cleared: &step.cleared,
+                warnings: &self.warnings,
+                profile: chosen,
+                decoded: decoded.as_ref(),
+            };
+            self.sink.emcy(&event).map_err(OutputError)?;
+            self.step_buffers = step;
+        } else if frame.extended {
+            return Ok(());
+        } else if let Some(access) = sdo::parse(frame.id, data) {
+            if let Some((node, object, value)) = self.sdo.feed(access) {
+                self.object_value(node, object, value);
+            }
+        } else if let Some(node) = emcy::boot_node(frame.id, data) {
+            self.counts.boot += 1;
+            self.check_clock(at);
+            let NodeSlot {
+                channel,
+                channel_id,
+                timeline,
+                history,
+            } = self.nodes.get(frame.channel, node);
+            let closed = timeline.boot(at);
+            let cleared: Vec<u16> = closed.iter().map(|iv| iv.code).collect();
+            for iv in closed {
+                history.push(channel_id, node, iv);
+            }
+            if self.opts.selects(channel, node) {
+                let event = BootEvent {
+                    file: self.file,
+                    line: line_no,
+                    time: frame.time,
+                    channel,
+                    node,
+                    cleared: &cleared,
+                };
+                self.sink.boot(&event).map_err(OutputError)?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,143 @@
+//! What the analysis reports: one event per decoded EMCY or boot-up, and
+//! per input its counts, node states and error history. Renderers receive
+//! these through [`Sink`](super::Sink); the JSON key names derived from
+//! them are a public contract (README).
+
+use crate::canopen::codes::CodeInfo;
+use crate::canopen::emcy::{Emcy, Warning};
+use crate::canopen::profile::{Decoded, Profile};
+use crate::canopen::profile_choice::{Chosen, ProfileSource};
+use crate::timeline::history::ErrorHistory;
+use crate::timeline::{NodeStats, State};
+use crate::trace::{Format, Span, Timestamp};
+
+/// One decoded EMCY frame, borrowed from the pipeline (no allocation per event).
+pub struct EmcyEvent<'a> {
+    pub file: &'a str,
+    pub line: u64,
+    pub time: Option<Timestamp>,
+    pub channel: &'a str,
+    pub node: u8,
+    pub cob_id: u32,
+    pub data: &'a [u8],
+    pub emcy: &'a Emcy,
+    pub info: &'a CodeInfo,
+    pub transition: Option<u8>,
+    pub state: State,
+    pub active: &'a [u16],
+    pub cleared: &'a [u16],
+    pub warnings: &'a [Warning],
+    /// The node's profile (it gave `info`) and why.
+    pub profile: Chosen,
+    /// The manufacturer bytes as the profile reads them.
+    pub decoded: Option<&'a Decoded>,
+}
+
+/// An NMT boot-up: the node restarted, its errors are gone.
+pub struct BootEvent<'a> {
+    pub file: &'a str,
+    pub line: u64,
+    pub time: Option<Timestamp>,
+    pub channel: &'a str,
+    pub node: u8,
+    pub cleared: &'a [u16],
+}
+
+/// A node's state at the end of an input; its errors are in the input's
+/// [`ErrorHistory`] (read with `history.merge().node_errors(..)`).
+#[derive(Clone, Debug)]
+pub struct NodeReport {
+    pub channel: String,
+    pub node: u8,
+    pub state: State,
+    pub active: Vec<u16>,
+    pub emcy_count: u64,
+    pub stats: NodeStats,
+    pub profile: &'static Profile,
+    pub profile_source: ProfileSource,
+    /// Why the trace chose the profile (vendor id, device type).
+    pub profile_reason: Option<String>,
+}
+
+impl NodeReport {
+    /// Time spent in error: periods that ended, plus the current one up to
+    /// `trace_end` when the node is still in error. `None` without times.
+    pub fn time_in_error(&self, trace_end: Option<Timestamp>) -> Option<Span> {
+        let first = self.stats.first_emcy?.time?;
+        // Zero at the trace's precision: "0.000000", not "0".
+        let zero = first.since(first);
+        let open = match (self.stats.in_error_since, trace_end) {
+            (Some(since), Some(end)) => end.since(since),
+            _ => zero,
+        };
+        zero.checked_add(self.stats.time_in_error)?
+            .checked_add(open)
+    }
+
+    /// Whether the node raised any error (a reset alone does not count).
+    pub fn had_errors(&self) -> bool {
+        !self.stats.raised.is_empty()
+    }
+}
+
+/// Line counts of one input. Every line is exactly one of frame, skipped, malformed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    pub lines: u64,
+    pub frames: u64,
+    pub emcy: u64,
+    pub skipped: u64,
+    pub malformed: u64,
+    /// NMT boot-up frames.
+    pub boot: u64,
+    /// Frames on an EMCY id too short to decode (fewer than 3 bytes).
+    pub emcy_invalid: u64,
+    /// Frames read in another format than the one detected (mixed files).
+    pub other_format: u64,
+}
+
+/// Everything known about one input after reading it.
+#[derive(Clone, Debug)]
+pub struct InputReport {
+    pub file: String,
+    pub format: Option<Format>,
+    pub gzip: bool,
+    pub counts: Counts,
+    pub nodes: Vec<NodeReport>,
+    /// Every error interval of every node, in report order.
+    pub history: ErrorHistory,
+    /// Times of the first and last decoded frame (EMCY, NMT, SDO): the span
+    /// the summary measures rates and open errors against.
+    pub first_time: Option<Timestamp>,
+    pub last_time: Option<Timestamp>,
+    /// Why reading stopped early (I/O error, corrupt gzip, unknown format).
+    pub error: Option<String>,
+}
+
+impl InputReport {
+    /// EMCY frames per second between the first and last decoded frame;
+    /// `None` without times or over an empty span.
+    pub fn emcy_rate(&self) -> Option<f64> {
+        let span = self.last_time?.since(self.first_time?).as_f64();
+        (span > 0.0).then(|| self.counts.emcy as f64 / span)
+    }
+
+    /// How many reported nodes raised an error.
+    pub fn nodes_with_errors(&self) -> usize {
+        self.nodes.iter().filter(|n| n.had_errors()).count()
+    }
+}
+
+/// A line that could not be read, or an EMCY that could not be decoded.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Diagnostic {
+    pub file: String,
+    pub line: u64,
+    pub message: String,
+}
+
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}: {}", self.file, self.line, self.message)
+    }
+}

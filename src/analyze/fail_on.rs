@@ -1,0 +1,91 @@
+//! `--fail-on`: conditions over what the inputs contained that fail a run
+//! (exit 1 in the application), each met one named with what met it.
+
+use super::Analysis;
+
+/// The `--fail-on` conditions of one or more flags, combined: any met fails.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FailOn {
+    /// Any EMCY with an error code (not a reset).
+    pub any: bool,
+    /// A node ends the trace with an active error.
+    pub active: bool,
+    /// Any protocol warning on a reported EMCY.
+    pub warning: bool,
+    /// Any of these codes raised.
+    pub codes: Vec<u16>,
+    /// An error whose profile category is at most this (1 = most severe).
+    pub category_at_most: Option<u8>,
+}
+
+impl FailOn {
+    /// All flags given, merged.
+    pub fn combine(flags: &[FailOn]) -> FailOn {
+        let mut all = FailOn::default();
+        for f in flags {
+            all.any |= f.any;
+            all.active |= f.active;
+            all.warning |= f.warning;
+            all.codes.extend(&f.codes);
+            all.category_at_most = match (all.category_at_most, f.category_at_most) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            };
+        }
+        all.codes.sort_unstable();
+        all.codes.dedup();
+        all
+    }
+
+    pub fn is_never(&self) -> bool {
+        *self == FailOn::default()
+    }
+}
+
+/// The `--fail-on` conditions the inputs met, each with what met it.
+pub fn met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
+    let mut met = Vec::new();
+    let nodes = || analyses.iter().flat_map(|a| &a.report.nodes);
+    if fail_on.any {
+        let n: u64 = analyses.iter().map(|a| a.errors_raised).sum();
+        if n > 0 {
+            met.push(format!("any: {n} error EMCY frame{}", plural(n)));
+        }
+    }
+    if fail_on.active {
+        let n = nodes().filter(|n| !n.active.is_empty()).count() as u64;
+        if n > 0 {
+            met.push(format!(
+                "active: {n} node{} end{} with an active error",
+                plural(n),
+                if n == 1 { "s" } else { "" }
+            ));
+        }
+    }
+    if fail_on.warning {
+        let n: u64 = analyses.iter().map(|a| a.frames_with_warnings).sum();
+        if n > 0 {
+            met.push(format!(
+                "warning: {n} EMCY frame{} with warnings",
+                plural(n)
+            ));
+        }
+    }
+    for &code in &fail_on.codes {
+        let n: u64 = nodes().filter_map(|n| n.stats.raised.get(&code)).sum();
+        if n > 0 {
+            met.push(format!("code=0x{code:04X}: raised {n} time{}", plural(n)));
+        }
+    }
+    if let Some(bound) = fail_on.category_at_most {
+        let worst = analyses.iter().filter_map(|a| a.worst_category).min();
+        if let Some(worst) = worst.filter(|&w| w <= bound) {
+            met.push(format!("category<={bound}: an error of category {worst}"));
+        }
+    }
+    met
+}
+
+fn plural(n: u64) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}

@@ -1,0 +1,243 @@
+//! The analysis pipeline, one input start to finish: lines -> frames ->
+//! EMCY/boot -> timelines -> events for a [`Sink`]. Reading never stops for
+//! a bad line; it stops only at end of input, on an input I/O error
+//! (recorded in the report), on a cancel, or when the output is gone
+//! (returned as [`OutputError`]).
+//!
+//! Lines are classified block by block by one loop
+//! ([`classify::classify_block`]) into a line sink. Sequentially that sink is
+//! the [`consumer`] itself. On large inputs worker threads classify blocks
+//! into compact records (only the lines that matter: EMCY/boot candidates
+//! and diagnostics) and the consumer replays them in order ([`parallel`]),
+//! so output is identical whatever the thread count. This layer owns the
+//! event and report types ([`event`]) and the output trait ([`Sink`]); it
+//! never knows which sink it feeds.
+
+pub(crate) mod batch;
+mod classify;
+mod consumer;
+mod diagnostics;
+pub(crate) mod event;
+pub(crate) mod fail_on;
+pub(crate) mod interest;
+mod parallel;
+pub(crate) mod sink;
+
+use std::io::{self, Read, Write};
+
+use crate::canopen::profile_choice::ProfileChoice;
+use crate::timeline::history::DEFAULT_SPILL_AT;
+use crate::trace::Format;
+use crate::trace::Parsed;
+use crate::trace::blf;
+use crate::trace::cancel::Cancel;
+use crate::trace::detect::Detector;
+use crate::trace::input::{self, Opened, ReadMode, Source};
+use crate::trace::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE};
+
+use classify::{LineSink, classify_block, deliver};
+use consumer::Consumer;
+pub use diagnostics::DiagnosticLog;
+pub(crate) use event::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
+pub use sink::{Discard, Sink, WithoutEvents};
+
+/// What the user asked for that shapes reading and selection.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// `--input-format`: skip detection.
+    pub input_format: Option<Format>,
+    /// `--node`: report only these nodes (empty = all).
+    pub nodes: Vec<u8>,
+    /// `--channel`: report only these channels (empty = all).
+    pub channels: Vec<String>,
+    /// Diagnostics printed per input; the counts stay exact beyond it.
+    pub max_diagnostics: usize,
+    /// Lines longer than this are reported and skipped.
+    pub max_line: usize,
+    /// Threads classifying lines; 1 = all on the calling thread.
+    pub threads: usize,
+    /// Bytes per read / per block handed to a thread.
+    pub block_size: usize,
+    /// Closed error intervals kept in memory before they go to a temporary file.
+    pub spill_at: usize,
+    /// `--emcy-id`: EMCY COB-IDs moved by object 0x1014, to the node they belong to.
+    pub emcy_ids: Vec<EmcyId>,
+    /// `--profile`, `--profile-file`: which profile decodes which node.
+    pub profiles: ProfileChoice,
+    /// Ends reading when cancelled (Ctrl-C): what was read is reported.
+    pub cancel: Cancel,
+}
+
+/// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct EmcyId {
+    pub id: u32,
+    pub extended: bool,
+    pub node: u8,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            input_format: None,
+            nodes: Vec::new(),
+            channels: Vec::new(),
+            max_diagnostics: 20,
+            max_line: DEFAULT_MAX_LINE,
+            threads: 1,
+            block_size: DEFAULT_BLOCK,
+            spill_at: DEFAULT_SPILL_AT,
+            emcy_ids: Vec::new(),
+            profiles: ProfileChoice::default(),
+            cancel: Cancel::new(),
+        }
+    }
+}
+
+impl Options {
+    pub(crate) fn selects(&self, channel: &str, node: u8) -> bool {
+        (self.nodes.is_empty() || self.nodes.contains(&node))
+            && (self.channels.is_empty() || self.channels.iter().any(|c| c == channel))
+    }
+}
+
+/// Writing the report failed (typically a closed pipe): stop everything.
+#[derive(Debug)]
+pub struct OutputError(pub io::Error);
+
+/// The result of one input: its report plus what `--fail-on` needs.
+#[derive(Debug)]
+pub struct Analysis {
+    pub report: InputReport,
+    /// Selected EMCY frames with an error code (not a reset).
+    pub errors_raised: u64,
+    /// Selected EMCY frames that carried a protocol warning.
+    pub frames_with_warnings: u64,
+    /// The lowest (most severe) profile category of a selected error EMCY.
+    pub worst_category: Option<u8>,
+}
+
+/// Opens one source and reads it to the end ([`analyze`]); what stops it
+/// (it cannot be opened, or reading failed part way) goes to the log as
+/// `error: NAME: reason`. `None` when the source could not be opened.
+/// `threads` picks the thread count from what was opened; `wrap` may wrap
+/// the (decompressed) reader, e.g. to count progress.
+pub fn analyze_source<E: Write>(
+    source: &Source,
+    mode: ReadMode,
+    opts: &Options,
+    threads: impl FnOnce(&Opened) -> usize,
+    wrap: impl FnOnce(&Opened, Box<dyn Read + Send>) -> Box<dyn Read + Send>,
+    sink: &mut dyn Sink,
+    log: &mut DiagnosticLog<E>,
+) -> Result<Option<Analysis>, OutputError> {
+    let name = source.display_name();
+    let mut opened = match input::open(source, mode, &opts.cancel) {
+        Ok(o) => o,
+        Err(e) => {
+            log.error(&format!("{name}: {}", describe_io(&e)));
+            return Ok(None);
+        }
+    };
+    let input_opts = Options {
+        threads: threads(&opened),
+        ..opts.clone()
+    };
+    let reader = std::mem::replace(&mut opened.reader, Box::new(io::empty()));
+    let reader = wrap(&opened, reader);
+    let analysis = analyze(&name, reader, opened.gzip, &input_opts, sink, log)?;
+    if let Some(err) = &analysis.report.error {
+        log.error(&format!("{name}: {err}"));
+    }
+    Ok(Some(analysis))
+}
+
+/// `No such file or directory` without Rust's `(os error 2)` suffix.
+pub fn describe_io(e: &io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text.get(..i).unwrap_or(&text).to_string(),
+        None => text,
+    }
+}
+
+/// Reads one input to the end and reports it.
+pub fn analyze<R: Read + Send, E: Write>(
+    file: &str,
+    reader: R,
+    gzip: bool,
+    opts: &Options,
+    sink: &mut dyn Sink,
+    log: &mut DiagnosticLog<E>,
+) -> Result<Analysis, OutputError> {
+    sink.begin_input(file).map_err(OutputError)?;
+    let mut detector = match opts.input_format {
+        Some(f) => Detector::forced(f),
+        None => Detector::auto(),
+    };
+    let mut consumer = Consumer::new(file, opts, sink, log, detector.format().is_some());
+
+    // BLF is binary: known by its magic (or forced), read object by object.
+    let (reader, magic) = blf::sniff(reader);
+    match magic {
+        Err(e) => return consumer.finish(None, gzip, Some(e.to_string())),
+        Ok(magic) if opts.input_format.map_or(magic, |f| f == Format::Blf) => {
+            consumer.decided = true;
+            let error = read_blf(reader, &mut consumer)?;
+            return consumer.finish(Some(Format::Blf), gzip, error);
+        }
+        Ok(_) => {}
+    }
+    let mut blocks = BlockReader::new(reader, opts.block_size, opts.max_line);
+
+    // Sequential until the format is known (and for inputs whose lines chain,
+    // or when one thread was asked for); then, if allowed, in parallel.
+    let mut error = None;
+    let mut buf = Vec::new();
+    let format = loop {
+        if opts.threads > 1 && detector.format().is_some() && detector.context().is_some() {
+            let (read_error, detector) = parallel::run(blocks, detector, &mut consumer)?;
+            error = read_error;
+            break detector.format();
+        }
+        match blocks.next_block(buf) {
+            Ok(Some(block)) => {
+                classify_block(&block, opts.max_line, &mut detector, &mut consumer)?;
+                buf = block.bytes;
+            }
+            Ok(None) => break detector.format(),
+            Err(e) => {
+                error = Some(e.to_string());
+                break detector.format();
+            }
+        }
+    };
+    consumer.finish(format, gzip, error)
+}
+
+/// Vector BLF into the same consumer: each object counts as a line, its
+/// index in reading order is its line number.
+fn read_blf<R: Read, E: Write>(
+    reader: R,
+    consumer: &mut Consumer<'_, '_, E>,
+) -> Result<Option<String>, OutputError> {
+    let mut reader = match blf::BlfReader::new(reader) {
+        Ok(r) => r,
+        Err(e) => return Ok(Some(e.to_string())),
+    };
+    if let Some(note) = reader.take_note() {
+        consumer.log.note(&format!("{}: {note}", consumer.file));
+    }
+    loop {
+        match reader.next_object() {
+            Ok(Some(Parsed::Frame(f))) => {
+                deliver(consumer, 0, &f, None)?;
+            }
+            Ok(Some(Parsed::Skipped)) => consumer.skipped(),
+            Ok(Some(Parsed::Malformed(reason))) => consumer.malformed(0, reason),
+            Ok(None) => return Ok(None),
+            Err(e) => return Ok(Some(e.to_string())),
+        }
+        consumer.lines(1);
+    }
+}

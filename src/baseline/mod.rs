@@ -1,0 +1,226 @@
+//! The CI baseline: what a set of traces contained, per trace and per
+//! (channel, node): which error codes were raised, how often, and which
+//! were still active at the end, plus the trace's line counts. `check`
+//! compares a new record with a recorded one ([`compare`]) and prints one
+//! finding per line ([`text`]). The file format and the rules for what is a
+//! regression are in the README ("Use in CI"); this module is their single
+//! implementation. No command line and no process I/O here: the
+//! application reads the traces and writes the files.
+
+pub(crate) mod compare;
+pub(crate) mod key;
+pub(crate) mod text;
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::fmt;
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::analyze::InputReport;
+
+/// The `baseline_version` this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// A baseline file. Serialized with sorted keys (struct fields are declared
+/// in alphabetical order, maps are `BTreeMap`s) so the same traces always
+/// give the same bytes.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Baseline {
+    pub baseline_version: u32,
+    /// By trace key (see [`trace_key`]).
+    pub traces: BTreeMap<String, TraceEntry>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TraceEntry {
+    pub counts: CountsEntry,
+    /// `candump`, `candump-screen`, `asc`, or null when no frame was found.
+    pub format: Option<String>,
+    /// Channel -> node -> what the node did.
+    pub nodes: BTreeMap<String, BTreeMap<u8, NodeEntry>>,
+}
+
+/// The input counts of the JSON contract, in alphabetical order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CountsEntry {
+    pub boot: u64,
+    pub emcy: u64,
+    pub emcy_invalid: u64,
+    pub frames: u64,
+    pub lines: u64,
+    pub malformed: u64,
+    pub other_format: u64,
+    pub skipped: u64,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NodeEntry {
+    /// EMCY frames of this node, resets included.
+    pub emcy: u64,
+    /// Every error code raised, by code.
+    pub errors: BTreeMap<Code, ErrorEntry>,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ErrorEntry {
+    /// Still active when the trace ended.
+    pub active_at_end: bool,
+    /// Times it was raised (a repeat while active is not a raise).
+    pub raised: u64,
+}
+
+/// An error code, written `0x4310` (always `0x` and four upper-case digits,
+/// so string order is numeric order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Code(pub u16);
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "0x{:04X}", self.0)
+    }
+}
+
+impl Serialize for Code {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for Code {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Code, D::Error> {
+        let text: Cow<'de, str> = Deserialize::deserialize(d)?;
+        let code = text
+            .strip_prefix("0x")
+            .filter(|h| h.len() == 4)
+            .and_then(|h| u16::from_str_radix(h, 16).ok())
+            .map(Code)
+            .filter(|c| c.to_string() == text);
+        code.ok_or_else(|| {
+            serde::de::Error::custom(format!("'{text}' is not an error code like 0x4310"))
+        })
+    }
+}
+
+impl Baseline {
+    /// The exact bytes of the file: pretty JSON, two-space indent, one
+    /// trailing newline.
+    pub fn to_json(&self) -> Result<String> {
+        let mut text = serde_json::to_string_pretty(self)?;
+        text.push('\n');
+        Ok(text)
+    }
+
+    /// Reads a baseline file's text; the version is checked before the rest,
+    /// so a newer format is named as such, not as a syntax error.
+    pub fn from_json(text: &str) -> Result<Baseline> {
+        let value: serde_json::Value =
+            serde_json::from_str(text).context("not a baseline (invalid JSON)")?;
+        match value.get("baseline_version").map(serde_json::Value::as_u64) {
+            Some(Some(v)) if v == u64::from(VERSION) => {}
+            Some(Some(v)) => bail!(
+                "baseline version {v} is not supported (this emcy-decode reads version \
+                 {VERSION}); write it again with `emcy-decode baseline`"
+            ),
+            _ => bail!("not a baseline (no baseline_version number)"),
+        }
+        serde_json::from_value(value).context("not a baseline")
+    }
+
+    /// The record of the given traces, by key.
+    pub fn from_reports(traces: &[(String, InputReport)]) -> Baseline {
+        let traces = traces
+            .iter()
+            .map(|(key, report)| (key.clone(), TraceEntry::from_report(report)))
+            .collect();
+        Baseline {
+            baseline_version: VERSION,
+            traces,
+        }
+    }
+}
+
+impl TraceEntry {
+    fn from_report(report: &InputReport) -> TraceEntry {
+        let c = report.counts;
+        let mut nodes: BTreeMap<String, BTreeMap<u8, NodeEntry>> = BTreeMap::new();
+        for n in &report.nodes {
+            let mut errors: BTreeMap<Code, ErrorEntry> = n
+                .stats
+                .raised
+                .iter()
+                .map(|(&code, &raised)| {
+                    let entry = ErrorEntry {
+                        active_at_end: false,
+                        raised,
+                    };
+                    (Code(code), entry)
+                })
+                .collect();
+            for &code in &n.active {
+                errors.entry(Code(code)).or_default().active_at_end = true;
+            }
+            let entry = NodeEntry {
+                emcy: n.emcy_count,
+                errors,
+            };
+            nodes
+                .entry(n.channel.clone())
+                .or_default()
+                .insert(n.node, entry);
+        }
+        TraceEntry {
+            counts: CountsEntry {
+                boot: c.boot,
+                emcy: c.emcy,
+                emcy_invalid: c.emcy_invalid,
+                frames: c.frames,
+                lines: c.lines,
+                malformed: c.malformed,
+                other_format: c.other_format,
+                skipped: c.skipped,
+            },
+            format: report.format.map(|f| f.name().to_string()),
+            nodes,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_read_back_only_in_their_one_spelling() {
+        let code = |s: &str| serde_json::from_str::<Code>(s).ok();
+        assert_eq!(code("\"0x4310\""), Some(Code(0x4310)));
+        assert_eq!(code("\"0xFF01\""), Some(Code(0xFF01)));
+        assert_eq!(code("\"0xff01\""), None);
+        assert_eq!(code("\"4310\""), None);
+        assert_eq!(code("\"0x431\""), None);
+        assert_eq!(code("17168"), None);
+        assert_eq!(
+            serde_json::to_string(&Code(0x00A1)).ok().as_deref(),
+            Some("\"0x00A1\"")
+        );
+    }
+
+    #[test]
+    fn version_is_checked_before_the_shape() {
+        let err = |s: &str| Baseline::from_json(s).err().map(|e| format!("{e:#}"));
+        assert!(
+            err(r#"{"baseline_version": 2, "x": []}"#).is_some_and(|e| e.contains("version 2"))
+        );
+        assert!(err(r#"{"traces": {}}"#).is_some_and(|e| e.contains("no baseline_version")));
+        assert!(err("[1,").is_some_and(|e| e.contains("invalid JSON")));
+        assert!(err(r#"{"baseline_version": 1}"#).is_some_and(|e| e.contains("not a baseline")));
+        assert_eq!(
+            Baseline::from_json(r#"{"baseline_version": 1, "traces": {}}"#).ok(),
+            Some(Baseline {
+                baseline_version: 1,
+                traces: BTreeMap::new()
+            })
+        );
+    }
+}
