@@ -2,7 +2,6 @@
 //! its invariants are `emcy_decode::fuzzing::reader`.
 #![no_main]
 
-use emcy_decode::trace::Format;
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| emcy_decode::fuzzing::reader(Some(Format::CandumpScreen), data));
+fuzz_target!(|data: &[u8]| emcy_decode::fuzzing::candump_screen(data));

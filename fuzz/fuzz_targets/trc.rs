@@ -3,10 +3,6 @@
 //! invariants of `emcy_decode::fuzzing::reader`.
 #![no_main]
 
-use emcy_decode::trace::Format;
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| {
-    emcy_decode::trace::trc::fuzz_trc(data);
-    emcy_decode::fuzzing::reader(Some(Format::Trc), data);
-});
+fuzz_target!(|data: &[u8]| emcy_decode::fuzzing::trc(data));

@@ -6,7 +6,7 @@ use std::io::Write;
 
 use super::classify::{Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
-use super::event::{BootEvent, Counts, EmcyEvent, InputReport, NodeReport};
+use super::event::{BootEvent, CodeTexts, Counts, EmcyEvent, InputReport, NodeReport};
 use super::interest::{add_emcy_id, interest};
 use super::parallel::SharedInterest;
 use super::sink::Sink;
@@ -14,6 +14,7 @@ use super::{Analysis, Options, OutputError};
 use crate::cache::{Cache, profile_code_key};
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{self, Emcy, Warning};
+use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{NodeProfiles, ProfileSource, default_profile};
 use crate::canopen::sdo;
 use crate::timeline::history::{ErrorHistory, History, Record};
@@ -24,7 +25,7 @@ use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
 /// interface name in the trace is one, so a hostile trace can name a million:
 /// lookup is hashed and a channel holds only the nodes it has seen, keeping
 /// time and memory linear in the input.
-struct Nodes {
+pub(super) struct Nodes {
     channels: Vec<ChannelNodes>,
     index: HashMap<Vec<u8>, usize>,
     /// Channels by name. Different bytes can read as one name (invalid
@@ -140,6 +141,7 @@ impl Nodes {
                     profile: default_profile(),
                     profile_source: ProfileSource::Default,
                     profile_reason: None,
+                    descriptions: CodeTexts::default(),
                 });
             }
         }
@@ -180,10 +182,27 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     pub(super) profiles: NodeProfiles<'r>,
     /// The last timeline step, handed back for its vectors.
     pub(super) step_buffers: Step,
-    /// Code table entries by (profile, code): the profile's lookup goes
-    /// through a thread-local cache whose access and by-value copy showed
-    /// as stalls on this thread.
-    pub(super) infos: Cache<(usize, u16), CodeInfo, 64>,
+    /// What each (profile, code) means: the one code lookup of the run. A
+    /// lookup is a few binary searches and a profile's description
+    /// allocates, and an EMCY-heavy trace repeats a few codes millions of
+    /// times on this thread, so the event carries both from here and no
+    /// renderer looks a code up again.
+    pub(super) codes: Cache<(usize, u16), CodeEntry, 64>,
+}
+
+/// A code as a profile reads it.
+pub(super) struct CodeEntry {
+    info: CodeInfo,
+    description: String,
+}
+
+impl CodeEntry {
+    fn of(profile: &Profile, code: u16) -> CodeEntry {
+        CodeEntry {
+            info: profile.info(code),
+            description: profile.describe(code),
+        }
+    }
 }
 
 impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
@@ -229,7 +248,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             sdo: sdo::Tracker::default(),
             profiles: NodeProfiles::new(&opts.profiles),
             step_buffers: Step::default(),
-            infos: Cache::default(),
+            codes: Cache::default(),
         }
     }
 
@@ -265,6 +284,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.profiles.reason(n.node).map(str::to_string);
+            n.descriptions = CodeTexts::new(n.profile, n.stats.raised.keys().copied());
         }
         if let Some(e) = history.spill_error() {
             self.log.note(&format!(
@@ -450,13 +470,17 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             let profile = chosen.profile;
             let (key, slot) = profile_code_key(profile, emcy.code);
             let looked_up;
-            let info = match self.infos.get(key, slot, || profile.info(emcy.code)) {
-                Some(info) => info,
+            let entry = match self
+                .codes
+                .get(key, slot, || CodeEntry::of(profile, emcy.code))
+            {
+                Some(entry) => entry,
                 None => {
-                    looked_up = profile.info(emcy.code);
+                    looked_up = CodeEntry::of(profile, emcy.code);
                     &looked_up
                 }
             };
+            let info = &entry.info;
             self.warnings.clear();
             emcy.frame_warnings(info, &mut self.warnings);
             profile.frame_warnings(&emcy, &mut self.warnings);
@@ -502,6 +526,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 data,
                 emcy: &emcy,
                 info,
+                description: &entry.description,
                 transition: step.transition,
                 state: step.state,
                 active: &self.active,

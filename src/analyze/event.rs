@@ -3,6 +3,9 @@
 //! these through [`Sink`](super::Sink); the JSON key names derived from
 //! them are a public contract (README).
 
+use std::borrow::Cow;
+use std::sync::Arc;
+
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::profile::{Decoded, Profile};
@@ -22,6 +25,9 @@ pub struct EmcyEvent<'a> {
     pub data: &'a [u8],
     pub emcy: &'a Emcy,
     pub info: &'a CodeInfo,
+    /// The code's description by the node's profile (its vendor row, else
+    /// the CiA tables).
+    pub description: &'a str,
     pub transition: Option<u8>,
     pub state: State,
     pub active: &'a [u16],
@@ -57,9 +63,48 @@ pub struct NodeReport {
     pub profile_source: ProfileSource,
     /// Why the trace chose the profile (vendor id, device type).
     pub profile_reason: Option<String>,
+    /// The profile's description of every code the node raised.
+    pub descriptions: CodeTexts,
+}
+
+/// Descriptions of a node's codes, made once per input: its error list
+/// (millions of errors in a long trace) needs one per error, and the node
+/// raised only a few codes. Shared, so renderer threads can hold them.
+#[derive(Clone, Debug, Default)]
+pub struct CodeTexts(Arc<[(u16, Box<str>)]>);
+
+impl CodeTexts {
+    /// `profile`'s descriptions of `codes` (ascending).
+    pub fn new(profile: &Profile, codes: impl Iterator<Item = u16>) -> Self {
+        CodeTexts(
+            codes
+                .map(|code| (code, profile.describe(code).into_boxed_str()))
+                .collect(),
+        )
+    }
+
+    /// The description of `code`, if the node raised it.
+    pub fn get(&self, code: u16) -> Option<&str> {
+        let i = self.0.binary_search_by_key(&code, |(c, _)| *c).ok()?;
+        self.0.get(i).map(|(_, text)| &**text)
+    }
+
+    /// Every code with its description, ascending.
+    pub fn iter(&self) -> impl Iterator<Item = (u16, &str)> {
+        self.0.iter().map(|(code, text)| (*code, &**text))
+    }
 }
 
 impl NodeReport {
+    /// The description of a code the node raised, by its profile.
+    pub fn describe(&self, code: u16) -> Cow<'_, str> {
+        match self.descriptions.get(code) {
+            Some(text) => Cow::Borrowed(text),
+            // Every error of the node was raised by it; kept for safety.
+            None => Cow::Owned(self.profile.describe(code)),
+        }
+    }
+
     /// Time spent in error: periods that ended, plus the current one up to
     /// `trace_end` when the node is still in error. `None` without times.
     pub fn time_in_error(&self, trace_end: Option<Timestamp>) -> Option<Span> {

@@ -36,10 +36,6 @@ impl FailOn {
         all.codes.dedup();
         all
     }
-
-    pub fn is_never(&self) -> bool {
-        *self == FailOn::default()
-    }
 }
 
 /// The `--fail-on` conditions the inputs met, each with what met it.

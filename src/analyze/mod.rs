@@ -37,9 +37,9 @@ use crate::trace::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE};
 
 use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
-pub use diagnostics::DiagnosticLog;
+pub(crate) use diagnostics::DiagnosticLog;
 pub(crate) use event::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
-pub use sink::{Discard, Sink, WithoutEvents};
+pub(crate) use sink::{Discard, Sink, WithoutEvents};
 
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]

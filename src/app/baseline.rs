@@ -3,7 +3,7 @@
 //! differences. The model and the comparison are library code
 //! ([`crate::baseline`]); this file is their process side.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::io::{self, Write};
 use std::path::Path;
 use std::process::ExitCode;

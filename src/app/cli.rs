@@ -610,7 +610,7 @@ mod tests {
         assert!(!all.active);
         assert_eq!(all.codes, [0x2310, 0x4310]);
         assert_eq!(all.category_at_most, Some(3), "the widest bound wins");
-        assert!(FailOn::combine(&[]).is_never());
+        assert_eq!(FailOn::combine(&[]), FailOn::default());
     }
 
     #[test]

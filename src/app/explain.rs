@@ -6,7 +6,7 @@ use anyhow::Result;
 
 use super::cli::{ExplainArgs, ExplainFormat, parse_code, parse_payload};
 use super::write_stdout;
-use crate::canopen::profile::{self, Profile};
+use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice;
 use crate::report::explain;
 
@@ -15,11 +15,11 @@ pub(super) fn run(args: &ExplainArgs) -> Result<ExitCode> {
     let user = args
         .profile_file
         .as_deref()
-        .map(profile::load_file)
+        .map(Profile::load)
         .transpose()?;
     let profile: &Profile = match (&args.profile, &user) {
         (Some(name), Some(u)) if u.name() == name => u,
-        (Some(name), _) => profile::builtin(name).ok_or_else(|| {
+        (Some(name), _) => Profile::builtin(name).ok_or_else(|| {
             anyhow::anyhow!("unknown profile '{name}' (`emcy-decode profiles` lists them)")
         })?,
         (None, Some(u)) => u,

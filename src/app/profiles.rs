@@ -5,17 +5,17 @@ use std::process::ExitCode;
 use anyhow::Result;
 
 use super::write_stdout;
-use crate::canopen::profile;
+use crate::canopen::profile::{self, Profile};
 
 /// Lists the built-ins, the default marked.
 pub(super) fn run() -> Result<ExitCode> {
     let mut text = String::new();
-    let width = profile::builtins()
+    let width = Profile::builtins()
         .iter()
         .map(|p| p.name().len())
         .max()
         .unwrap_or(0);
-    for p in profile::builtins() {
+    for p in Profile::builtins() {
         let default = if p.name() == profile::DEFAULT_PROFILE {
             " (default)"
         } else {

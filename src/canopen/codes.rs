@@ -48,6 +48,7 @@ pub enum Class {
 }
 
 impl Class {
+    /// The stable name in JSON (`temperature`).
     pub fn slug(self) -> &'static str {
         match self {
             Class::Reset => "reset",
@@ -113,6 +114,7 @@ pub enum Tables {
 }
 
 impl Tables {
+    /// The name a profile file uses (`cia301`, `cia402`).
     pub fn slug(self) -> &'static str {
         match self {
             Tables::Cia301 => "cia301",
@@ -120,7 +122,7 @@ impl Tables {
         }
     }
 
-    pub fn from_slug(slug: &str) -> Option<Tables> {
+    pub(crate) fn from_slug(slug: &str) -> Option<Tables> {
         match slug {
             "cia301" => Some(Tables::Cia301),
             "cia402" => Some(Tables::Cia402),
@@ -132,9 +134,11 @@ impl Tables {
 /// What the tables say about one code.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CodeInfo {
+    /// The code looked up.
     pub code: u16,
     /// The tables the lookup used.
     pub tables: Tables,
+    /// Its class (a range of codes).
     pub class: Class,
     /// The code itself has a table entry (not only its class or group).
     pub listed: bool,
@@ -163,6 +167,8 @@ impl CodeInfo {
     }
 }
 
+/// A code's description, written when displayed (no allocation):
+/// `Temperature · drive · excess temperature drive`.
 pub struct Description(CodeInfo);
 
 impl fmt::Display for Description {
@@ -566,32 +572,6 @@ fn find(entries: &'static [Entry], value: u16) -> Option<&'static Entry> {
     entries.get(i)
 }
 
-/// [`lookup`] through a small per-thread direct-mapped cache: an EMCY-heavy
-/// trace looks up the same few codes millions of times.
-pub fn lookup_cached(code: u16) -> CodeInfo {
-    lookup_in_cached(code, Tables::Cia402)
-}
-
-/// [`lookup_in`] through the per-thread cache.
-pub fn lookup_in_cached(code: u16, tables: Tables) -> CodeInfo {
-    use std::cell::RefCell;
-    const SLOTS: usize = 64;
-    thread_local! {
-        static CACHE: RefCell<[Option<CodeInfo>; SLOTS]> = const { RefCell::new([None; SLOTS]) };
-    }
-    CACHE.with(|cache| {
-        let Ok(mut cache) = cache.try_borrow_mut() else {
-            return lookup_in(code, tables);
-        };
-        // Not `code % SLOTS`: 0x2310, 0x3210 and 0x4310 would share a slot.
-        let slot = &mut cache[crate::cache::slot(u64::from(code)) % SLOTS];
-        match *slot {
-            Some(info) if info.code == code && info.tables == tables => info,
-            _ => *slot.insert(lookup_in(code, tables)),
-        }
-    })
-}
-
 /// Looks `code` up in the full (CiA 301 + CiA 402) tables.
 pub fn lookup(code: u16) -> CodeInfo {
     lookup_in(code, Tables::Cia402)
@@ -638,6 +618,7 @@ pub fn lookup_in(code: u16, tables: Tables) -> CodeInfo {
 }
 
 /// Whether `code` has a row of its own (class, group, subgroup or code).
+#[cfg(test)]
 fn has_row(code: u16) -> bool {
     CLASSES.iter().any(|row| row.first == code)
         || LEVELS
@@ -647,7 +628,8 @@ fn has_row(code: u16) -> bool {
 
 /// Every code with a row of its own, ascending, for listing the tables. A
 /// whole-range class (FFxx) shows once, as its first code.
-pub fn all_entries() -> impl Iterator<Item = CodeInfo> {
+#[cfg(test)]
+fn all_entries() -> impl Iterator<Item = CodeInfo> {
     (0..=u16::MAX).filter(|&code| has_row(code)).map(lookup)
 }
 
@@ -950,20 +932,10 @@ mod tests {
     }
 
     #[test]
-    fn the_cache_keeps_the_tables_apart() {
-        assert_eq!(
-            lookup_in_cached(0x5100, Tables::Cia402).class,
-            Class::Hardware
-        );
-        assert_eq!(
-            lookup_in_cached(0x5100, Tables::Cia301).class,
-            Class::Undefined
-        );
-        assert_eq!(
-            lookup_in_cached(0x5100, Tables::Cia402).class,
-            Class::Hardware
-        );
-        assert_eq!(lookup_cached(0x5100), lookup(0x5100));
+    fn the_tables_differ_and_their_slugs_read_back() {
+        assert_eq!(lookup_in(0x5100, Tables::Cia402).class, Class::Hardware);
+        assert_eq!(lookup_in(0x5100, Tables::Cia301).class, Class::Undefined);
+        assert_eq!(lookup_in(0x5100, Tables::Cia402), lookup(0x5100));
         assert_eq!(Tables::from_slug("cia301"), Some(Tables::Cia301));
         assert_eq!(
             Tables::from_slug(Tables::Cia402.slug()),

@@ -36,7 +36,9 @@ pub fn boot_node(id: u32, data: &[u8]) -> Option<u8> {
 /// A decoded EMCY payload.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Emcy {
+    /// The emergency error code (bytes 0-1, little-endian); 0x0000 is a reset.
     pub code: u16,
+    /// The error register (object 0x1001) sent with it (byte 2).
     pub register: Register,
     /// Bytes 3-7 as received (fewer on short frames).
     manufacturer: [u8; 5],
@@ -45,9 +47,11 @@ pub struct Emcy {
     pub len: u8,
 }
 
-/// An EMCY frame too short to carry code and register.
+/// An EMCY frame too short to carry code and register: its data bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TooShort(pub usize);
+
+impl std::error::Error for TooShort {}
 
 impl fmt::Display for TooShort {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -79,16 +83,21 @@ impl Emcy {
         })
     }
 
+    /// Code 0x0000: error reset or no error.
     pub fn is_reset(&self) -> bool {
         self.code == 0
     }
 
+    /// The manufacturer-specific bytes 3-7 as received (fewer on short
+    /// frames); a [`Profile`](crate::Profile) says what they mean.
     pub fn manufacturer(&self) -> &[u8] {
         &self.manufacturer[..usize::from(self.manufacturer_len)]
     }
 
+    /// What the CiA 301 and CiA 402 tables say about the code (a vendor's
+    /// own rows: [`Profile::info`](crate::Profile::info)).
     pub fn info(&self) -> CodeInfo {
-        codes::lookup_cached(self.code)
+        codes::lookup(self.code)
     }
 
     /// The checks of emcy.md §7 that the frame alone decides, in a fixed order.
@@ -129,37 +138,59 @@ impl Emcy {
 /// these). Printed as `tag: explanation`, the tag being stable for scripts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Warning {
+    /// `short_frame`: fewer than 8 data bytes (CiA 301 says 8).
     ShortFrame {
+        /// The data bytes the frame had.
         len: u8,
     },
+    /// `no_generic_bit`: error bits set in the register, but not bit 0.
     NoGenericBit {
+        /// The error register.
         register: u8,
     },
+    /// `reserved_bit`: register bit 6, reserved by CiA 301, is set.
     ReservedBit,
+    /// `odd_reset_code`: a code in 0x0001-0x00FF (the reset class has only 0x0000).
     OddResetCode {
+        /// The code.
         code: u16,
     },
+    /// `undefined_code`: the code is in no class of the tables.
     UndefinedCode {
+        /// The code.
         code: u16,
     },
+    /// `empty_register`: an error code with register 0.
     EmptyRegister,
+    /// `class_register_mismatch`: the code's class has a register bit that is clear.
     ClassRegisterMismatch {
+        /// The code's class.
         class: Class,
+        /// The register bit of that class.
         bit: u8,
     },
+    /// `reset_while_error_free`: a reset of a node with no active error.
     ResetWhileErrorFree,
+    /// `partial_reset_while_error_free`: a partial reset of a node with no active error.
     PartialResetWhileErrorFree,
-    /// A partial reset whose register change names no active error.
+    /// `partial_reset_unattributed`: a partial reset whose register change
+    /// names no active error.
     PartialResetUnattributed {
+        /// The error register.
         register: u8,
     },
-    /// Bytes the node's profile says are zero are not (first..=last, 3-7).
+    /// `manufacturer_bytes_nonzero`: bytes the node's profile says are zero
+    /// are not.
     ManufacturerBytesNonZero {
+        /// The first such byte (3-7).
         first: u8,
+        /// The last such byte (3-7).
         last: u8,
     },
-    /// A register bit the node's profile reserves (must be 0) is set.
+    /// `profile_reserved_bit`: a register bit the node's profile reserves
+    /// (must be 0) is set.
     ProfileReservedBit {
+        /// The bit (0-7).
         bit: u8,
     },
 }

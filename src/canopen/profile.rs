@@ -75,6 +75,7 @@ const DRIVE_PROFILE_NUMBER: u32 = 402;
 /// A vendor's own row for an error code.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct VendorCode {
+    /// The vendor's text for the code.
     pub text: String,
     /// The error category the vendor gives the code (Kollmorgen 1-5).
     pub category: Option<u8>,
@@ -86,18 +87,23 @@ pub struct VendorCode {
 /// the JSON keys (`category`, `category_text`, ...).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Decoded {
+    /// (JSON key, value), in the profile's layout order.
     pub fields: Vec<(String, FieldValue)>,
 }
 
 impl Decoded {
+    /// The value of one key (`category`).
     pub fn get(&self, key: &str) -> Option<&FieldValue> {
         self.fields.iter().find(|(k, _)| k == key).map(|(_, v)| v)
     }
 }
 
+/// One decoded value: the number in the bytes, or its name.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FieldValue {
+    /// The field's bytes as a little-endian number.
     Int(u64),
+    /// The name the profile gives that number (the `_text` keys).
     Text(String),
 }
 
@@ -149,8 +155,9 @@ impl Field {
     }
 }
 
-/// A vendor profile. Built-ins come from [`builtins`], user profiles from
-/// [`load_file`] or [`parse`].
+/// A vendor profile: how a vendor describes its codes and what its EMCY
+/// manufacturer bytes mean. Built-ins come from [`Profile::builtin`], user
+/// profiles from [`Profile::load`] or [`Profile::parse`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Profile {
     name: String,
@@ -184,8 +191,37 @@ impl Profile {
         }
     }
 
+    /// The built-in's name (`kollmorgen`), or the user profile's `name`.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The built-in profiles, in listing order.
+    pub fn builtins() -> &'static [Profile] {
+        builtins()
+    }
+
+    /// The built-in profile of this name.
+    pub fn builtin(name: &str) -> Option<&'static Profile> {
+        builtins().iter().find(|p| p.name == name)
+    }
+
+    /// Reads and parses a user profile file (TOML, see the README); errors
+    /// name the path and line.
+    pub fn load(path: &Path) -> Result<Profile, ProfileError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
+            origin: origin.clone(),
+            line: None,
+            message: e.to_string(),
+        })?;
+        Profile::parse(&origin, &text)
+    }
+
+    /// Parses a user profile's text; `origin` names it in errors (usually
+    /// the path). Its `base` may be any built-in.
+    pub fn parse(origin: &str, text: &str) -> Result<Profile, ProfileError> {
+        parse_with(origin, text, builtins())
     }
 
     /// One line for `emcy-decode profiles`.
@@ -230,9 +266,10 @@ impl Profile {
 
     /// What the profile's CiA tables say about `code`.
     pub fn info(&self, code: u16) -> CodeInfo {
-        codes::lookup_in_cached(code, self.tables)
+        codes::lookup_in(code, self.tables)
     }
 
+    /// The vendor's own row for `code`, if the profile has one.
     pub fn vendor_code(&self, code: u16) -> Option<&VendorCode> {
         self.codes.get(&code)
     }
@@ -318,7 +355,7 @@ impl Profile {
 }
 
 /// The built-in profiles, in listing order.
-pub fn builtins() -> &'static [Profile] {
+fn builtins() -> &'static [Profile] {
     static BUILTINS: OnceLock<Vec<Profile>> = OnceLock::new();
     BUILTINS.get_or_init(|| {
         let mut loaded: Vec<Profile> = Vec::with_capacity(BUILTIN_FILES.len());
@@ -333,10 +370,6 @@ pub fn builtins() -> &'static [Profile] {
         }
         loaded
     })
-}
-
-pub fn builtin(name: &str) -> Option<&'static Profile> {
-    builtins().iter().find(|p| p.name == name)
 }
 
 /// Which built-in profile the trace's identity objects select, and why.
@@ -356,16 +389,16 @@ pub fn for_identity(
     if let Some(id) = vendor_id
         && is_drive
         && let Some((_, name, vendor)) = VENDORS.iter().find(|(v, _, _)| *v == id)
-        && let Some(profile) = builtin(name)
+        && let Some(profile) = Profile::builtin(name)
     {
         return Some((profile, format!("vendor id 0x{id:08X} ({vendor})")));
     }
     let number = profile_number?;
     if number == DRIVE_PROFILE_NUMBER {
-        let profile = builtin("cia402")?;
+        let profile = Profile::builtin("cia402")?;
         return Some((profile, format!("device type {number} (drive)")));
     }
-    let profile = builtin("cia301")?;
+    let profile = Profile::builtin("cia301")?;
     Some((profile, format!("device type {number} (not a drive)")))
 }
 
@@ -379,10 +412,12 @@ pub struct ProfileError {
 }
 
 impl ProfileError {
+    /// The line of the file, when the error is at one.
     pub fn line(&self) -> Option<usize> {
         self.line
     }
 
+    /// What is wrong, without the file and line.
     pub fn message(&self) -> &str {
         &self.message
     }
@@ -398,23 +433,6 @@ impl fmt::Display for ProfileError {
 }
 
 impl std::error::Error for ProfileError {}
-
-/// Reads and parses a user profile; errors name the path.
-pub fn load_file(path: &Path) -> Result<Profile, ProfileError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
-        origin: origin.clone(),
-        line: None,
-        message: e.to_string(),
-    })?;
-    parse(&origin, &text)
-}
-
-/// Parses a user profile; `origin` names it in errors (usually the path).
-/// Its `base` may be any built-in.
-pub fn parse(origin: &str, text: &str) -> Result<Profile, ProfileError> {
-    parse_with(origin, text, builtins())
-}
 
 // ---- The file format ----------------------------------------------------
 

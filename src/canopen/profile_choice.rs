@@ -149,19 +149,19 @@ impl<'c> NodeProfiles<'c> {
 pub fn resolve(args: &[ProfileRequest], files: &[PathBuf]) -> anyhow::Result<ProfileChoice> {
     let mut user: Vec<&'static Profile> = Vec::new();
     for f in files {
-        let p = profile::load_file(f)?;
+        let p = Profile::load(f)?;
         user.push(Box::leak(Box::new(p)));
     }
     let find = |name: &str| -> anyhow::Result<&'static Profile> {
         user.iter()
             .copied()
             .find(|p| p.name() == name)
-            .or_else(|| profile::builtin(name))
+            .or_else(|| Profile::builtin(name))
             .ok_or_else(|| {
                 let known: Vec<&str> = user
                     .iter()
                     .map(|p| p.name())
-                    .chain(profile::builtins().iter().map(Profile::name))
+                    .chain(Profile::builtins().iter().map(Profile::name))
                     .collect();
                 anyhow::anyhow!("unknown profile '{name}' (known: {})", known.join(", "))
             })
@@ -197,10 +197,10 @@ pub fn resolve(args: &[ProfileRequest], files: &[PathBuf]) -> anyhow::Result<Pro
 
 /// The profile nodes get when nothing chooses one.
 pub fn default_profile() -> &'static Profile {
-    match profile::builtin(profile::DEFAULT_PROFILE) {
+    match Profile::builtin(profile::DEFAULT_PROFILE) {
         Some(p) => p,
         // The built-in set always holds the default; a test pins it.
-        None => &profile::builtins()[0],
+        None => &Profile::builtins()[0],
     }
 }
 
@@ -209,7 +209,7 @@ mod tests {
     use super::*;
 
     fn named(name: &str) -> &'static Profile {
-        profile::builtin(name).unwrap()
+        Profile::builtin(name).unwrap()
     }
 
     const DEVICE_TYPE: Object = Object {

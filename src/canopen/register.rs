@@ -25,6 +25,7 @@ pub const RESERVED: u8 = 6;
 pub struct Register(pub u8);
 
 impl Register {
+    /// Whether bit `bit` (0-7) is set.
     pub fn has(self, bit: u8) -> bool {
         bit < 8 && self.0 & (1 << bit) != 0
     }
@@ -37,7 +38,7 @@ impl Register {
     }
 
     /// `gen+temp`, for the table.
-    pub fn short(self) -> ShortNames {
+    pub(crate) fn short(self) -> ShortNames {
         ShortNames(self)
     }
 }
@@ -58,11 +59,6 @@ impl fmt::Display for ShortNames {
     }
 }
 
-/// The bit a name refers to (`temperature` -> 3), for `explain` and filters.
-pub fn bit_by_name(name: &str) -> Option<u8> {
-    BIT_NAMES.iter().position(|n| *n == name).map(|i| i as u8)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,9 +68,7 @@ mod tests {
         for (bit, name) in BIT_NAMES.iter().enumerate() {
             let r = Register(1 << bit);
             assert_eq!(r.names().collect::<Vec<_>>(), [*name]);
-            assert_eq!(bit_by_name(name), Some(bit as u8));
         }
-        assert_eq!(bit_by_name("nonsense"), None);
     }
 
     #[test]

@@ -6,12 +6,13 @@
 //! test panics: a panic is what libFuzzer reports as a crash. Not part of the
 //! public API.
 
-use crate::canopen::profile::{self, Profile};
+use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
 use std::io::{self, Read};
 
 use serde_json::Value;
 
+use crate::analyze::event::CodeTexts;
 use crate::analyze::{self, DiagnosticLog, Options};
 use crate::analyze::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
 use crate::canopen::emcy::{self, Emcy, Warning};
@@ -26,6 +27,35 @@ use crate::trace::lines::Block;
 use crate::trace::{Format, FrameKind, Interest, LineParser, Parsed, Scan, Timestamp};
 
 // ---- readers: one trace through analyze ------------------------------------------
+
+/// The `candump_log` target: [`reader`] with the format forced.
+pub fn candump_log(data: &[u8]) {
+    reader(Some(Format::CandumpLog), data);
+}
+
+/// The `candump_screen` target: [`reader`] with the format forced.
+pub fn candump_screen(data: &[u8]) {
+    reader(Some(Format::CandumpScreen), data);
+}
+
+/// The `asc` target: [`reader`] with the format forced.
+pub fn asc(data: &[u8]) {
+    reader(Some(Format::Asc), data);
+}
+
+/// The `trc` target: the reader's own checks (well-formed frames, no endless
+/// loop), then [`reader`] with the format forced.
+pub fn trc(data: &[u8]) {
+    crate::trace::trc::fuzz_trc(data);
+    reader(Some(Format::Trc), data);
+}
+
+/// The `blf` target: the reader's own checks (well-formed frames, no endless
+/// loop, bounded buffers), then [`reader`] with the format forced.
+pub fn blf(data: &[u8]) {
+    crate::trace::blf::fuzz_blf(data);
+    reader(Some(Format::Blf), data);
+}
 
 /// The `candump_log`, `candump_screen` and `asc` targets (`Some(format)`,
 /// forced as with `--input-format`), and the plain-bytes half of `detect`.
@@ -453,7 +483,7 @@ fn lines_agree(format: Format, data: &[u8]) {
     let mut p_all = format.parser();
     let mut p_wanted = format.parser();
     let mut p_scan = format.parser();
-    let block = Block::of(data, true);
+    let block = Block::of(data);
     for raw in block.lines(512) {
         let crate::trace::lines::RawLine::Text(line) = raw else {
             continue;
@@ -602,8 +632,8 @@ pub fn decode_timeline(data: &[u8]) {
             NODES.iter().enumerate().map(move |(i, &node)| ModelNode {
                 channel,
                 node,
-                profile: &profile::builtins()
-                    [(i + 4 * channel as usize) % profile::builtins().len()],
+                profile: &Profile::builtins()
+                    [(i + 4 * channel as usize) % Profile::builtins().len()],
                 timeline: NodeTimeline::new(),
                 emcy: 0,
                 opened: 0,
@@ -677,6 +707,7 @@ pub fn decode_timeline(data: &[u8]) {
                     let _ = (w.tag(), w.to_string());
                 }
                 let active: Vec<u16> = m.timeline.active_codes().collect();
+                let description = m.profile.describe(e.code);
                 let event = EmcyEvent {
                     file: "fuzz",
                     line,
@@ -687,6 +718,7 @@ pub fn decode_timeline(data: &[u8]) {
                     data: &payload,
                     emcy: &e,
                     info: &info,
+                    description: &description,
                     transition: step.transition,
                     state: step.state,
                     active: &active,
@@ -808,6 +840,7 @@ pub fn decode_timeline(data: &[u8]) {
             profile: m.profile,
             profile_source: ProfileSource::Flag,
             profile_reason: None,
+            descriptions: CodeTexts::new(m.profile, m.timeline.stats().raised.keys().copied()),
         })
         .collect();
     let report = InputReport {

@@ -1182,7 +1182,7 @@ fn bar_title(clock: &Clock, scale: Scale, node: &NodeReport, bar: &Bar) -> Strin
         return format!(
             "0x{:04X} {}\n{label}\nstart: {}\nend: {end}\nduration: {duration}\ncleared by: {cleared}\n{lines}",
             iv.code,
-            node.profile.describe(iv.code),
+            node.describe(iv.code),
             clock.at(&iv.start),
         );
     }
@@ -1199,7 +1199,7 @@ fn bar_title(clock: &Clock, scale: Scale, node: &NodeReport, bar: &Bar) -> Strin
     let mut codes_sorted = bar.codes.clone();
     codes_sorted.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     for (code, n) in codes_sorted {
-        let _ = writeln!(s, "0x{code:04X} ×{n} {}", node.profile.describe(code));
+        let _ = writeln!(s, "0x{code:04X} ×{n} {}", node.describe(code));
     }
     if bar.other_codes > 0 {
         let _ = writeln!(s, "{} more of other codes", bar.other_codes);

@@ -196,7 +196,7 @@ impl<W: Write> Sink for HtmlReport<W> {
             code: Some(ev.emcy.code),
             register: ev.emcy.register.0,
             transition: ev.transition,
-            description: ev.profile.profile.describe(ev.emcy.code),
+            description: ev.description.to_string(),
             cleared: ev.cleared.to_vec(),
             state: ev.state.slug(),
         });

@@ -8,11 +8,12 @@
 
 use std::collections::HashMap;
 use std::io;
+use std::sync::Arc;
 
 use crate::analyze::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
-use crate::cache::{Cache, profile_code_key, profile_key, slot};
+use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::emcy::Warning;
-use crate::canopen::profile::{Decoded, FieldValue, Profile};
+use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
 use crate::trace::time::SecondsText;
@@ -171,20 +172,34 @@ impl<'a> Obj<'a> {
     }
 }
 
-/// A code's description as a JSON string, from the cache.
-fn describe<'c>(
-    cache: &'c mut Cache<(usize, u16), Vec<u8>, 256>,
-    profile: &Profile,
-    code: u16,
-) -> &'c [u8] {
-    let (key, slot) = profile_code_key(profile, code);
-    cache
-        .get(key, slot, || {
-            let mut v = Vec::new();
-            push_str(&mut v, &profile.describe(code));
-            v
-        })
-        .map_or(&[], Vec::as_slice)
+/// A node's code descriptions as JSON strings, escaped once per node (its
+/// error list can run to millions); shared with the helper threads that
+/// render the errors.
+#[derive(Clone, Default)]
+pub struct JsonTexts(Arc<[(u16, Vec<u8>)]>);
+
+impl JsonTexts {
+    pub fn of(node: &NodeReport) -> JsonTexts {
+        JsonTexts(
+            node.descriptions
+                .iter()
+                .map(|(code, text)| {
+                    let mut v = Vec::with_capacity(text.len() + 2);
+                    push_str(&mut v, text);
+                    (code, v)
+                })
+                .collect(),
+        )
+    }
+
+    /// `code`'s description, quoted; `""` for a code the node never raised
+    /// (its errors are all raised by it, so never).
+    fn get(&self, code: u16) -> &[u8] {
+        match self.0.binary_search_by_key(&code, |(c, _)| *c) {
+            Ok(i) => self.0.get(i).map_or(b"\"\"", |(_, v)| v.as_slice()),
+            Err(_) => b"\"\"",
+        }
+    }
 }
 
 /// The part of an EMCY event that depends only on its payload: `"code"` to
@@ -205,8 +220,6 @@ pub struct JsonWriter {
     /// document), written directly: re-indenting compact text cost more than
     /// writing it. `None`: compact (ndjson).
     level: Option<usize>,
-    /// Per (profile address, code).
-    descriptions: Cache<(usize, u16), Vec<u8>, 256>,
     warnings: HashMap<Warning, Vec<u8>>,
     payloads: Cache<PayloadKey, Vec<u8>, 256>,
     /// `{"type":"emcy","file":"…","line":` for the last file seen.
@@ -298,10 +311,6 @@ impl JsonWriter {
         }
     }
 
-    fn description(&mut self, out: &mut Vec<u8>, profile: &Profile, code: u16) {
-        out.extend_from_slice(describe(&mut self.descriptions, profile, code));
-    }
-
     fn warning(&mut self, out: &mut Vec<u8>, w: Warning) {
         let text = self.warnings.entry(w).or_insert_with(|| {
             let mut v = Vec::new();
@@ -323,7 +332,6 @@ impl JsonWriter {
         let slot =
             slot(u64::from_le_bytes(key.bytes) ^ u64::from(key.len) ^ ((key.profile as u64) << 8));
         let fragment = {
-            let descriptions = &mut self.descriptions;
             let level = self.level;
             self.payloads.get(key, slot, || {
                 let mut v = Vec::with_capacity(256);
@@ -332,7 +340,7 @@ impl JsonWriter {
                 v.extend_from_slice(b",\"class\":\"");
                 v.extend_from_slice(ev.info.class.slug().as_bytes());
                 v.extend_from_slice(b"\",\"description\":");
-                v.extend_from_slice(describe(descriptions, profile, ev.emcy.code));
+                push_str(&mut v, ev.description);
                 v.extend_from_slice(b",\"register\":");
                 push_u64(&mut v, u64::from(ev.emcy.register.0));
                 v.extend_from_slice(b",\"register_bits\":[");
@@ -439,11 +447,12 @@ impl JsonWriter {
         flush: &mut dyn FnMut(&mut Vec<u8>) -> io::Result<()>,
     ) -> io::Result<()> {
         self.node_head(out, input, node);
+        let texts = JsonTexts::of(node);
         for (i, iv) in errors.into_iter().enumerate() {
             if i > 0 {
                 out.push(b',');
             }
-            self.interval(out, node.profile, &iv);
+            self.interval(out, &texts, &iv);
             if out.len() >= FLUSH_AT {
                 flush(out)?;
             }
@@ -507,7 +516,7 @@ impl JsonWriter {
     pub fn errors(
         &mut self,
         out: &mut Vec<u8>,
-        profile: &Profile,
+        texts: &JsonTexts,
         errors: &[Interval],
         first: bool,
     ) {
@@ -515,18 +524,18 @@ impl JsonWriter {
             if i > 0 || !first {
                 out.push(b',');
             }
-            self.interval(out, profile, iv);
+            self.interval(out, texts, iv);
         }
     }
 
     /// One error of a node object (a trace can have millions): fixed
     /// fragments between the values, like [`JsonWriter::emcy`].
-    fn interval(&mut self, out: &mut Vec<u8>, profile: &Profile, iv: &Interval) {
+    fn interval(&mut self, out: &mut Vec<u8>, texts: &JsonTexts, iv: &Interval) {
         let end_time = iv.end.and_then(|e| e.time);
         out.extend_from_slice(b"{\"code\":");
         push_code(out, iv.code);
         out.extend_from_slice(b",\"description\":");
-        self.description(out, profile, iv.code);
+        out.extend_from_slice(texts.get(iv.code));
         out.extend_from_slice(b",\"start\":");
         self.time(out, iv.start.time);
         out.extend_from_slice(b",\"end\":");

@@ -7,11 +7,11 @@
 pub(crate) mod chart;
 pub(crate) mod explain;
 pub(crate) mod html;
-pub mod json;
+pub(crate) mod json;
 pub(crate) mod jsonw;
-pub mod ndjson;
+pub(crate) mod ndjson;
 pub(crate) mod ordered;
 pub(crate) mod svg;
-pub mod table;
+pub(crate) mod table;
 pub(crate) mod text;
 pub(crate) mod timefmt;

@@ -3,10 +3,9 @@
 
 use std::io::{self, Write};
 
-use super::jsonw::{JsonWriter, NODE_END};
+use super::jsonw::{JsonTexts, JsonWriter, NODE_END};
 use super::ordered::Ordered;
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
-use crate::canopen::profile::Profile;
 use crate::timeline::Interval;
 
 pub struct Ndjson<W: Write> {
@@ -48,9 +47,9 @@ impl<W: Write> Ndjson<W> {
                     self.threads,
                     JsonWriter::new,
                     |json: &mut JsonWriter,
-                     (profile, errors, first): ErrorBatch,
+                     (texts, errors, first): ErrorBatch,
                      out: &mut Vec<u8>| {
-                        json.errors(out, profile, &errors, first);
+                        json.errors(out, &texts, &errors, first);
                     },
                 )
             });
@@ -58,6 +57,7 @@ impl<W: Write> Ndjson<W> {
                 let mut merge = input.history.merge();
                 for node in &input.nodes {
                     json.node_head(buf, input, node);
+                    let texts = JsonTexts::of(node);
                     put(&mut helpers, buf, out)?;
                     let mut first = true;
                     let mut batch = Vec::with_capacity(ERROR_BATCH);
@@ -68,10 +68,10 @@ impl<W: Write> Ndjson<W> {
                             Some(h) => {
                                 let full =
                                     std::mem::replace(&mut batch, Vec::with_capacity(ERROR_BATCH));
-                                h.job((node.profile, full, first), out)?;
+                                h.job((texts.clone(), full, first), out)?;
                             }
                             None => {
-                                json.errors(buf, node.profile, &batch, first);
+                                json.errors(buf, &texts, &batch, first);
                                 batch.clear();
                                 put(&mut helpers, buf, out)?;
                             }
@@ -141,9 +141,9 @@ fn put(
     done
 }
 
-/// Errors of one node for a helper: its profile (descriptions), the
-/// errors, and whether they open the node's list.
-type ErrorBatch = (&'static Profile, Vec<Interval>, bool);
+/// Errors of one node for a helper: its descriptions, the errors, and
+/// whether they open the node's list.
+type ErrorBatch = (JsonTexts, Vec<Interval>, bool);
 
 /// Events are written in chunks of about this many bytes (the size of the
 /// output's buffer, so a chunk bypasses it).

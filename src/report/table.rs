@@ -2,7 +2,6 @@
 //! with fixed columns, so a trace with a million events prints without holding
 //! them), then the node states and error timeline; at the end the input counts.
 
-use std::borrow::Cow;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
@@ -11,8 +10,7 @@ use comfy_table::{CellAlignment, Table, presets};
 use super::text::printable;
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
-use crate::cache::{Cache, profile_code_key};
-use crate::canopen::profile::{Decoded, FieldValue, Profile};
+use crate::canopen::profile::{Decoded, FieldValue};
 use crate::timeline::Interval;
 use crate::trace::Timestamp;
 use unicode_width::UnicodeWidthStr;
@@ -35,7 +33,6 @@ pub struct TableReport<W: Write> {
     line: String,
     /// Register column texts, padded, by register value.
     registers: Vec<Option<String>>,
-    descriptions: Descriptions,
 }
 
 #[derive(Clone, Copy)]
@@ -58,7 +55,6 @@ impl<W: Write> TableReport<W> {
             times: TimeFormat::default(),
             line: String::new(),
             registers: vec![None; 256],
-            descriptions: Descriptions::default(),
         }
     }
 
@@ -227,8 +223,7 @@ impl<W: Write> TableReport<W> {
         let mut widths = TIMELINE_HEADER.map(str::len);
         let mut rows = 0u64;
         let times = self.times.clone();
-        let mut descriptions = std::mem::take(&mut self.descriptions);
-        for_each_timeline_row(input, &times, &mut descriptions, |_, cell_widths| {
+        for_each_timeline_row(input, &times, |_, cell_widths| {
             rows += 1;
             for (w, c) in widths.iter_mut().zip(cell_widths) {
                 *w = (*w).max(*c);
@@ -236,7 +231,6 @@ impl<W: Write> TableReport<W> {
             Ok(())
         })?;
         if rows == 0 {
-            self.descriptions = descriptions;
             return Ok(());
         }
         writeln!(self.out)?;
@@ -244,13 +238,10 @@ impl<W: Write> TableReport<W> {
         write_row(&mut self.out, &TIMELINE_HEADER, &widths, &TIMELINE_RIGHT)?;
         let out = &mut self.out;
         let mut line = String::new();
-        let written =
-            for_each_timeline_row(input, &times, &mut descriptions, |cells, cell_widths| {
-                push_row(&mut line, cells, cell_widths, &widths, &TIMELINE_RIGHT);
-                out.write_all(line.as_bytes())
-            });
-        self.descriptions = descriptions;
-        written
+        for_each_timeline_row(input, &times, |cells, cell_widths| {
+            push_row(&mut line, cells, cell_widths, &widths, &TIMELINE_RIGHT);
+            out.write_all(line.as_bytes())
+        })
     }
 
     fn end_event(&mut self) -> io::Result<()> {
@@ -274,18 +265,29 @@ fn decoded_text(d: &Decoded) -> String {
     format!("manufacturer: {}", fields.join("; "))
 }
 
-/// Descriptions and their display widths by (profile, code).
-type Descriptions = Cache<(usize, u16), (String, usize), 256>;
+/// A node's code descriptions with their display widths, measured once per
+/// node (its timeline can have millions of rows; descriptions are rarely
+/// ASCII, so measuring is not free).
+struct NodeTexts<'n>(Vec<(u16, &'n str, usize)>);
 
-fn describe<'d>(cache: &'d mut Descriptions, profile: &Profile, code: u16) -> (&'d str, usize) {
-    let (key, slot) = profile_code_key(profile, code);
-    cache
-        .get(key, slot, || {
-            let text = profile.describe(code);
-            let width = display_width(&text);
-            (text, width)
-        })
-        .map_or(("", 0), |(t, w)| (t.as_str(), *w))
+impl<'n> NodeTexts<'n> {
+    fn of(node: &'n NodeReport) -> Self {
+        NodeTexts(
+            node.descriptions
+                .iter()
+                .map(|(code, text)| (code, text, display_width(text)))
+                .collect(),
+        )
+    }
+
+    /// `code`'s description and width; empty for a code the node never
+    /// raised (its errors are all raised by it, so never).
+    fn get(&self, code: u16) -> (&'n str, usize) {
+        match self.0.binary_search_by_key(&code, |(c, _, _)| *c) {
+            Ok(i) => self.0.get(i).map_or(("", 0), |(_, t, w)| (*t, *w)),
+            Err(_) => ("", 0),
+        }
+    }
 }
 
 /// Columns a text takes on a terminal; ASCII (nearly every cell) needs no
@@ -393,7 +395,7 @@ impl<W: Write> Sink for TableReport<W> {
         }
         pad_to(&mut line, start + MANUFACTURER_WIDTH);
         line.push_str("  ");
-        line.push_str(describe(&mut self.descriptions, ev.profile.profile, ev.emcy.code).0);
+        line.push_str(ev.description);
         if !ev.cleared.is_empty() {
             line.push_str(" (cleared ");
             for (i, &c) in ev.cleared.iter().enumerate() {
@@ -519,7 +521,7 @@ const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true
 fn timeline_cells(
     cells: &mut [String; 8],
     times: &TimeFormat,
-    descriptions: &mut Descriptions,
+    texts: &NodeTexts<'_>,
     n: &NodeReport,
     iv: &Interval,
 ) -> [usize; 8] {
@@ -541,7 +543,7 @@ fn timeline_cells(
     channel_cell.push_str(&printable(channel));
     node_cell.push_str(itoa::Buffer::new().format(node));
     push_code(code, iv.code);
-    let (text, description_width) = describe(descriptions, n.profile, iv.code);
+    let (text, description_width) = texts.get(iv.code);
     description.push_str(text);
     match iv.start.time {
         Some(t) => times.push(start, t),
@@ -585,14 +587,14 @@ fn timeline_cells(
 fn for_each_timeline_row(
     input: &InputReport,
     times: &TimeFormat,
-    descriptions: &mut Descriptions,
     mut row: impl FnMut(&[String; 8], &[usize; 8]) -> io::Result<()>,
 ) -> io::Result<()> {
     let mut cells: [String; 8] = Default::default();
     let mut merge = input.history.merge();
     for n in &input.nodes {
+        let texts = NodeTexts::of(n);
         for iv in merge.node_errors(&n.channel, n.node) {
-            let widths = timeline_cells(&mut cells, times, descriptions, n, &iv);
+            let widths = timeline_cells(&mut cells, times, &texts, n, &iv);
             row(&cells, &widths)?;
         }
     }

@@ -42,7 +42,6 @@ pub struct History {
     spill_at: usize,
     file: Option<File>,
     runs: Vec<Run>,
-    len: u64,
     /// Why spilling failed, if it did (the history then stays in memory).
     spill_error: Option<String>,
 }
@@ -61,7 +60,6 @@ impl History {
             spill_at: spill_at.max(1),
             file: None,
             runs: Vec::new(),
-            len: 0,
             spill_error: None,
         }
     }
@@ -78,21 +76,12 @@ impl History {
             node,
             interval,
         });
-        self.len += 1;
         if self.buffer.len() >= self.spill_at
             && self.spill_error.is_none()
             && let Err(e) = self.spill()
         {
             self.spill_error = Some(e.to_string());
         }
-    }
-
-    pub fn len(&self) -> u64 {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
     }
 
     /// The records' indices in report order. Records are large and names
@@ -352,6 +341,7 @@ impl ErrorHistory {
         self.spill_error.as_deref()
     }
 
+    #[cfg(test)]
     pub fn channel_name(&self, channel: u32) -> &str {
         self.names.get(channel as usize).map_or("", String::as_str)
     }

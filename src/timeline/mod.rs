@@ -22,14 +22,18 @@ use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::register::Register;
 use crate::trace::{Span, Timestamp};
 
+/// A node's error state (CiA 301).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum State {
+    /// No error active.
     #[default]
     ErrorFree,
+    /// At least one error raised and not cleared.
     ErrorOccurred,
 }
 
 impl State {
+    /// The stable name in JSON (`error_free`).
     pub fn slug(self) -> &'static str {
         match self {
             State::ErrorFree => "error_free",
@@ -53,6 +57,7 @@ pub enum ClearedBy {
 }
 
 impl ClearedBy {
+    /// The stable name in JSON (`partial_reset`).
     pub fn slug(self) -> &'static str {
         match self {
             ClearedBy::Reset => "reset",
@@ -66,7 +71,9 @@ impl ClearedBy {
 /// Where in the trace something happened.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct At {
+    /// The frame's time, as the trace wrote it.
     pub time: Option<Timestamp>,
+    /// Its 1-based line.
     pub line: u64,
 }
 
@@ -75,9 +82,13 @@ pub struct At {
 pub struct Interval {
     /// Raise order within the node (0, 1, 2, ...): the order reports list errors in.
     pub seq: u64,
+    /// The error code.
     pub code: u16,
+    /// The EMCY that raised it.
     pub start: At,
+    /// The frame that cleared it; `None` while active.
     pub end: Option<At>,
+    /// What cleared it; `None` while active.
     pub cleared_by: Option<ClearedBy>,
     /// The error register sent with the raising EMCY: the class bit that must
     /// later drop for a partial reset to be attributed to this error.
@@ -86,11 +97,21 @@ pub struct Interval {
     pub status_bit: Option<u8>,
 }
 
+impl Interval {
+    /// How long the error lasted: from the raising EMCY to the frame that
+    /// cleared it, at the finer precision of the two; negative when the
+    /// trace's clock went backwards. `None` while active or without times.
+    pub fn duration(&self) -> Option<Span> {
+        Some(self.end?.time?.since(self.start.time?))
+    }
+}
+
 /// What one EMCY did to its node.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Step {
     /// 1-4, or `None` for a reset that changed nothing.
     pub transition: Option<u8>,
+    /// The node's state after it.
     pub state: State,
     /// Codes closed by this frame.
     pub cleared: Vec<u16>,
@@ -127,19 +148,23 @@ pub struct NodeStats {
 }
 
 impl NodeTimeline {
+    /// A node that has sent nothing yet: error-free.
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// The state now.
     pub fn state(&self) -> State {
         self.state
     }
 
+    /// EMCY frames applied, resets included.
     pub fn emcy_count(&self) -> u64 {
         self.emcy_count
     }
 
-    pub fn stats(&self) -> &NodeStats {
+    /// Running totals for the summary view.
+    pub(crate) fn stats(&self) -> &NodeStats {
         &self.stats
     }
 
@@ -194,7 +219,7 @@ impl NodeTimeline {
     /// (emptied first) instead of new ones: a caller that hands each step
     /// back allocates nothing per clearing frame. (The buffers stay with the
     /// caller, not in every timeline: a trace can have thousands of nodes.)
-    pub fn apply(
+    pub(crate) fn apply(
         &mut self,
         emcy: &Emcy,
         at: At,
@@ -239,7 +264,7 @@ impl NodeTimeline {
         } else if emcy.register.0 != 0 {
             let now = emcy.register;
             self.close_where(at, ClearedBy::PartialReset, &mut closed, |iv| {
-                codes::lookup_cached(iv.code)
+                codes::lookup(iv.code)
                     .class
                     .register_bit()
                     .is_some_and(|bit| iv.raised_register.has(bit) && !now.has(bit))

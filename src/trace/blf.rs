@@ -733,8 +733,8 @@ impl LineParser for BinaryParser {
 
 /// Fuzz target body: any bytes must read to the end without a panic or an
 /// endless loop, and every frame must be well-formed.
-#[doc(hidden)]
-pub fn fuzz_blf(data: &[u8]) {
+#[cfg(feature = "fuzzing")]
+pub(crate) fn fuzz_blf(data: &[u8]) {
     let Ok(mut r) = BlfReader::new(data) else {
         return;
     };

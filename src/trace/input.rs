@@ -126,7 +126,38 @@ pub fn stdin_is_stream() -> bool {
 
 /// Reads up to two bytes to look for the gzip magic, then puts them back in
 /// front of the stream. Works on pipes that deliver one byte at a time.
-pub fn sniff_gzip(mut raw: Box<dyn Read + Send>) -> io::Result<Opened> {
+pub fn sniff_gzip(raw: Box<dyn Read + Send>) -> io::Result<Opened> {
+    let (reader, gzip) = sniff_gzip_generic(raw)?;
+    Ok(Opened {
+        reader: match reader {
+            Sniffed::Plain(r) => Box::new(r),
+            Sniffed::Gzip(r) => Box::new(r),
+        },
+        gzip,
+        size: None,
+    })
+}
+
+/// A stream with its first bytes put back: plain, or decompressed.
+pub(crate) enum Sniffed<R> {
+    Plain(Peeked<R>),
+    /// MultiGzDecoder: `cat a.gz b.gz` is a valid gzip stream of two members.
+    Gzip(Box<flate2::read::MultiGzDecoder<BufReader<Peeked<R>>>>),
+}
+
+type Peeked<R> = io::Chain<io::Take<io::Cursor<[u8; 2]>>, R>;
+
+impl<R: Read> Read for Sniffed<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        match self {
+            Sniffed::Plain(r) => r.read(buf),
+            Sniffed::Gzip(r) => r.read(buf),
+        }
+    }
+}
+
+/// [`sniff_gzip`] for any reader: the stream and whether it was gzip.
+pub(crate) fn sniff_gzip_generic<R: Read>(mut raw: R) -> io::Result<(Sniffed<R>, bool)> {
     let mut head = [0u8; 2];
     let mut got = 0;
     while got < head.len() {
@@ -137,23 +168,13 @@ pub fn sniff_gzip(mut raw: Box<dyn Read + Send>) -> io::Result<Opened> {
             Err(e) => return Err(e),
         }
     }
-    let prefix = io::Cursor::new(head).take(got as u64);
-    let stream = prefix.chain(raw);
+    let stream = io::Cursor::new(head).take(got as u64).chain(raw);
     if got == 2 && head == GZIP_MAGIC {
-        // MultiGzDecoder: `cat a.gz b.gz` is a valid gzip stream of two members.
         let decoder =
             flate2::read::MultiGzDecoder::new(BufReader::with_capacity(256 * 1024, stream));
-        Ok(Opened {
-            reader: Box::new(decoder),
-            gzip: true,
-            size: None,
-        })
+        Ok((Sniffed::Gzip(Box::new(decoder)), true))
     } else {
-        Ok(Opened {
-            reader: Box::new(stream),
-            gzip: false,
-            size: None,
-        })
+        Ok((Sniffed::Plain(stream), false))
     }
 }
 

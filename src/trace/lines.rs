@@ -34,18 +34,16 @@ pub struct Block {
     pub start: usize,
     /// A too-long line that came right before the text (its length).
     pub too_long_before: Option<u64>,
-    /// The input's last block: its last line may lack a newline.
-    pub last: bool,
 }
 
 impl Block {
     /// A block of exactly these lines.
-    pub fn of(text: &[u8], last: bool) -> Block {
+    #[cfg(any(test, feature = "fuzzing"))]
+    pub fn of(text: &[u8]) -> Block {
         Block {
             bytes: text.to_vec(),
             start: 0,
             too_long_before: None,
-            last,
         }
     }
 
@@ -82,6 +80,7 @@ impl<'a> BlockLines<'a> {
     }
 
     /// Bytes of the block not yet returned as lines.
+    #[cfg(test)]
     fn consumed(&self) -> usize {
         self.start
     }
@@ -193,12 +192,14 @@ impl<R: Read> BlockReader<R> {
         }
     }
 
-    pub fn max_line(&self) -> usize {
+    #[cfg(test)]
+    fn max_line(&self) -> usize {
         self.max_line
     }
 
     /// Bytes consumed from the underlying reader so far.
-    pub fn bytes_read(&self) -> u64 {
+    #[cfg(test)]
+    fn bytes_read(&self) -> u64 {
         self.bytes_read
     }
 
@@ -235,7 +236,6 @@ impl<R: Read> BlockReader<R> {
                     bytes: buf,
                     start,
                     too_long_before: self.too_long.take(),
-                    last: false,
                 }));
             }
             if self.eof {
@@ -250,7 +250,6 @@ impl<R: Read> BlockReader<R> {
                     bytes: buf,
                     start,
                     too_long_before: self.too_long.take(),
-                    last: true,
                 }));
             }
             if self.filled - self.begin > self.max_line {
@@ -262,7 +261,6 @@ impl<R: Read> BlockReader<R> {
                         bytes: buf,
                         start: 0,
                         too_long_before: Some(n),
-                        last: false,
                     }));
                 }
                 // No newline within the cap: measure and skip the rest of the line.
@@ -286,7 +284,6 @@ impl<R: Read> BlockReader<R> {
                     bytes: buf,
                     start: 0,
                     too_long_before: Some(n),
-                    last: false,
                 }));
             }
         }
@@ -378,20 +375,22 @@ impl<R: Read> BlockReader<R> {
     }
 }
 
-/// Line by line over a [`BlockReader`], for callers that want one line at a time.
-pub struct LineReader<R> {
+/// Line by line over a [`BlockReader`], for the tests below.
+#[cfg(test)]
+struct LineReader<R> {
     blocks: BlockReader<R>,
     block: Block,
     pos: usize,
     line_no: u64,
 }
 
+#[cfg(test)]
 impl<R: Read> LineReader<R> {
-    pub fn new(inner: R) -> Self {
+    fn new(inner: R) -> Self {
         Self::with_max_line(inner, DEFAULT_MAX_LINE)
     }
 
-    pub fn with_max_line(inner: R, max_line: usize) -> Self {
+    fn with_max_line(inner: R, max_line: usize) -> Self {
         LineReader {
             blocks: BlockReader::new(inner, DEFAULT_BLOCK, max_line),
             block: Block::default(),
@@ -401,17 +400,17 @@ impl<R: Read> LineReader<R> {
     }
 
     /// 1-based number of the line last returned.
-    pub fn line_no(&self) -> u64 {
+    fn line_no(&self) -> u64 {
         self.line_no
     }
 
     /// Bytes consumed from the underlying reader so far.
-    pub fn bytes_read(&self) -> u64 {
+    fn bytes_read(&self) -> u64 {
         self.blocks.bytes_read()
     }
 
     /// The next line, `Ok(None)` at end of input.
-    pub fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
+    fn next_line(&mut self) -> io::Result<Option<RawLine<'_>>> {
         loop {
             if let Some(n) = self.block.too_long_before.take() {
                 self.line_no += 1;

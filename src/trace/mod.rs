@@ -14,6 +14,7 @@ pub mod follow;
 pub mod hex;
 pub mod input;
 pub mod lines;
+pub mod reader;
 pub mod scan;
 pub mod time;
 pub mod trc;
@@ -34,7 +35,7 @@ pub enum Format {
     Asc,
     /// PEAK TRC (PCAN-View, PCAN-Explorer), versions 1.0 to 2.1.
     Trc,
-    /// Vector BLF, binary: read by [`blf::BlfReader`], not line by line, and
+    /// Vector BLF, binary: read object by object, not line by line, and
     /// detected by its `LOGG` magic, so it is not in [`Format::ALL`].
     Blf,
 }
@@ -59,7 +60,7 @@ impl Format {
         }
     }
 
-    pub fn parser(self) -> AnyParser {
+    pub(crate) fn parser(self) -> AnyParser {
         match self {
             Format::CandumpLog => AnyParser::CandumpLog(candump_log::CandumpLogParser::new()),
             Format::CandumpScreen => {
@@ -161,10 +162,12 @@ impl Payload {
         }
     }
 
+    #[cfg(any(test, feature = "fuzzing"))]
     pub fn len(&self) -> usize {
         usize::from(self.len)
     }
 
+    #[cfg(any(test, feature = "fuzzing"))]
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }

@@ -48,6 +48,7 @@ fn pow10(n: usize) -> u64 {
 }
 
 impl Timestamp {
+    /// Second zero with no fraction digits.
     pub const ZERO: Timestamp = Timestamp {
         secs: 0,
         atto: 0,
@@ -70,7 +71,7 @@ impl Timestamp {
     /// Parses `int` `.` `frac` where both are ASCII digit strings (the caller
     /// has split at the dot). `frac` may be empty (no dot). Leading zeros of the
     /// integer part are accepted (`-tz` writes `000.123456`).
-    pub fn from_decimal(int: &[u8], frac: &[u8]) -> Result<Timestamp, &'static str> {
+    pub(crate) fn from_decimal(int: &[u8], frac: &[u8]) -> Result<Timestamp, &'static str> {
         if int.is_empty() {
             return Err("timestamp has no integer part");
         }
@@ -124,7 +125,7 @@ impl Timestamp {
 
     /// Adds a delta (ASC `timestamps relative`, candump `-td`); the result
     /// keeps the finer of the two precisions. `None` on overflow.
-    pub fn checked_add(self, delta: Timestamp) -> Option<Timestamp> {
+    pub(crate) fn checked_add(self, delta: Timestamp) -> Option<Timestamp> {
         let total = self.total().checked_add(delta.total())?;
         Timestamp::from_total(total, self.digits.max(delta.digits))
     }
@@ -137,17 +138,18 @@ impl Timestamp {
         }
     }
 
+    /// Whole seconds.
     pub fn secs(self) -> u64 {
         self.secs
     }
 
     /// The parts as stored: (seconds, attoseconds within the second, digits).
-    pub fn to_raw(self) -> (u64, u64, u8) {
+    pub(crate) fn to_raw(self) -> (u64, u64, u8) {
         (self.secs, self.atto, self.digits)
     }
 
     /// Inverse of [`Timestamp::to_raw`]; `None` if the parts are out of range.
-    pub fn from_raw(secs: u64, atto: u64, digits: u8) -> Option<Timestamp> {
+    pub(crate) fn from_raw(secs: u64, atto: u64, digits: u8) -> Option<Timestamp> {
         (u128::from(atto) < ATTO_PER_SEC && usize::from(digits) <= MAX_FRACTION_DIGITS)
             .then_some(Timestamp { secs, atto, digits })
     }
@@ -176,19 +178,23 @@ impl Ord for Timestamp {
 }
 
 impl Span {
+    /// No time at all.
     pub const ZERO: Span = Span { atto: 0, digits: 0 };
 
     /// The sum, with the finer precision; `None` on overflow.
-    pub fn checked_add(self, other: Span) -> Option<Span> {
+    pub(crate) fn checked_add(self, other: Span) -> Option<Span> {
         Some(Span {
             atto: self.atto.checked_add(other.atto)?,
             digits: self.digits.max(other.digits),
         })
     }
 
+    /// The later time came first: the trace's clock went backwards.
     pub fn is_negative(self) -> bool {
         self.atto < 0
     }
+
+    /// Seconds as `f64`, for layout only (printing uses the exact digits).
     pub fn as_f64(self) -> f64 {
         self.atto as f64 / ATTO_PER_SEC as f64
     }
@@ -288,19 +294,19 @@ impl SecondsText {
 
 impl Timestamp {
     /// Appends the text `Display` writes (the JSON and table hot paths).
-    pub fn push_decimal(self, out: &mut Vec<u8>) {
+    pub(crate) fn push_decimal(self, out: &mut Vec<u8>) {
         push_parts(out, self.secs, self.atto, self.digits);
     }
 
     /// [`Timestamp::push_decimal`], the seconds' text kept in `seconds`.
-    pub fn push_decimal_with(self, out: &mut Vec<u8>, seconds: &mut SecondsText) {
+    pub(crate) fn push_decimal_with(self, out: &mut Vec<u8>, seconds: &mut SecondsText) {
         seconds.push(out, self.secs);
         push_fraction(out, self.atto, self.digits);
     }
 
     /// Appends `self.since(earlier)` as text, without the 128-bit division
     /// of [`Span::push_decimal`] (a duration per error in every report).
-    pub fn push_since(self, earlier: Timestamp, out: &mut Vec<u8>) {
+    pub(crate) fn push_since(self, earlier: Timestamp, out: &mut Vec<u8>) {
         let per_sec = pow10(MAX_FRACTION_DIGITS);
         let (later, sooner, negative) = if (self.secs, self.atto) >= (earlier.secs, earlier.atto) {
             (self, earlier, false)
@@ -324,7 +330,7 @@ impl Timestamp {
 
 impl Span {
     /// Appends the text `Display` writes.
-    pub fn push_decimal(self, out: &mut Vec<u8>) {
+    pub(crate) fn push_decimal(self, out: &mut Vec<u8>) {
         if self.atto < 0 {
             out.push(b'-');
         }

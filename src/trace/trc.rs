@@ -179,7 +179,8 @@ impl TrcParser {
         }
     }
 
-    pub fn version(&self) -> Version {
+    #[cfg(test)]
+    fn version(&self) -> Version {
         self.version
     }
 }
@@ -596,8 +597,8 @@ fn show(token: &[u8]) -> String {
 
 /// Fuzz target body: any bytes, line by line, must classify without a
 /// panic, and frames must be well-formed.
-#[doc(hidden)]
-pub fn fuzz_trc(data: &[u8]) {
+#[cfg(feature = "fuzzing")]
+pub(crate) fn fuzz_trc(data: &[u8]) {
     let mut p = TrcParser::new();
     let all = Interest::all();
     let none = Interest::none();

@@ -1,0 +1,329 @@
+//! A whole trace read into frames, one record per line: the library's way
+//! in for a Rust program that wants the frames themselves. The analysis
+//! does not use it (it decodes only the ids that matter, on several
+//! threads); this reads every id of every line, in order, and owns what it
+//! returns.
+
+use std::collections::VecDeque;
+use std::io::{self, Read};
+
+use super::blf::{self, BlfReader};
+use super::detect::Detector;
+use super::input::sniff_gzip_generic;
+use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
+use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
+use crate::canopen::emcy;
+
+/// One CAN frame of a trace, owned.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CanFrame {
+    /// 1-based line of the trace (for BLF: the object's number).
+    pub line: u64,
+    /// Seconds as the trace wrote them; `None` when the trace has no times.
+    pub time: Option<Timestamp>,
+    /// Interface (candump), channel number (ASC, TRC, BLF) as written;
+    /// bytes that are not UTF-8 become U+FFFD.
+    pub channel: String,
+    /// 11- or 29-bit identifier (for error frames, the error class bits).
+    pub id: u32,
+    /// A 29-bit identifier.
+    pub extended: bool,
+    /// Data, remote, error or CAN FD.
+    pub kind: FrameKind,
+    /// The data bytes (none for remote and error frames).
+    pub data: Vec<u8>,
+}
+
+impl CanFrame {
+    /// The node whose EMCY this frame is, by the pre-defined connection
+    /// set: a classic 11-bit data frame on 0x081-0x0FF (node = id - 0x80).
+    pub fn emcy_node(&self) -> Option<u8> {
+        if self.kind != FrameKind::Data || self.extended {
+            return None;
+        }
+        emcy::emcy_node(self.id)
+    }
+
+    /// The node an NMT boot-up frame (0x700 + node, one byte 0x00) announces.
+    pub fn boot_node(&self) -> Option<u8> {
+        if self.kind != FrameKind::Data || self.extended {
+            return None;
+        }
+        emcy::boot_node(self.id, &self.data)
+    }
+
+    fn of(line: u64, f: &Frame<'_>) -> CanFrame {
+        CanFrame {
+            line,
+            time: f.time,
+            channel: String::from_utf8_lossy(f.channel).into_owned(),
+            id: f.id,
+            extended: f.extended,
+            kind: f.kind,
+            data: f.data.as_slice().to_vec(),
+        }
+    }
+}
+
+/// What one line of a trace is. Every line is exactly one of these.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Record {
+    /// A CAN frame.
+    Frame(CanFrame),
+    /// A known line that is not a frame: a header, comment, status line.
+    Skipped {
+        /// 1-based line.
+        line: u64,
+    },
+    /// A line that is not what the format allows, with the reason.
+    Malformed {
+        /// 1-based line.
+        line: u64,
+        /// Why, e.g. `odd number of data digits`.
+        reason: String,
+    },
+    /// Something about the trace as a whole worth telling, e.g. a BLF
+    /// header whose start time is not a date.
+    Note(String),
+}
+
+/// Reads a trace into [`Record`]s, one per line, in order. The format is
+/// detected from the content (candump log or screen output, Vector ASC,
+/// PEAK TRC, Vector BLF), or forced; gzip is decompressed, known by its
+/// magic bytes. Lines longer than 64 KiB are malformed, never buffered.
+///
+/// An I/O error ends the iteration after it is returned.
+pub struct TraceReader<'a> {
+    source: Source<'a>,
+    /// Records of the current block not yet returned.
+    queue: VecDeque<Record>,
+    /// Lines before the next block.
+    lines: u64,
+    /// The buffer of the last block, reused.
+    buf: Vec<u8>,
+}
+
+enum Source<'a> {
+    Text {
+        blocks: BlockReader<Box<dyn Read + 'a>>,
+        detector: Detector,
+    },
+    Blf(BlfReader<Box<dyn Read + 'a>>),
+    Failed(io::Error),
+    Done,
+}
+
+impl<'a> TraceReader<'a> {
+    /// A reader that detects the format.
+    pub fn new(input: impl Read + 'a) -> Self {
+        Self::open(input, None)
+    }
+
+    /// A reader that reads every line as `format` (lines of other formats
+    /// are malformed).
+    pub fn with_format(input: impl Read + 'a, format: Format) -> Self {
+        Self::open(input, Some(format))
+    }
+
+    fn open(input: impl Read + 'a, format: Option<Format>) -> Self {
+        let source = match Self::sniff(input, format) {
+            Ok(source) => source,
+            Err(e) => Source::Failed(e),
+        };
+        TraceReader {
+            source,
+            queue: VecDeque::new(),
+            lines: 0,
+            buf: Vec::new(),
+        }
+    }
+
+    fn sniff(input: impl Read + 'a, format: Option<Format>) -> io::Result<Source<'a>> {
+        let (input, _) = sniff_gzip_generic(input)?;
+        let (input, magic) = blf::sniff(input);
+        let input: Box<dyn Read + 'a> = Box::new(input);
+        if format.map_or(magic?, |f| f == Format::Blf) {
+            return Ok(Source::Blf(BlfReader::new(input)?));
+        }
+        let detector = match format {
+            Some(f) => Detector::forced(f),
+            None => Detector::auto(),
+        };
+        Ok(Source::Text {
+            blocks: BlockReader::new(input, DEFAULT_BLOCK, DEFAULT_MAX_LINE),
+            detector,
+        })
+    }
+
+    /// The format: forced, or detected from the lines read so far.
+    pub fn format(&self) -> Option<Format> {
+        match &self.source {
+            Source::Text { detector, .. } => detector.format(),
+            Source::Blf(_) => Some(Format::Blf),
+            Source::Failed(_) | Source::Done => None,
+        }
+    }
+
+    /// Fills the queue from the next block or BLF object; `Err` ends the
+    /// input, `Ok(false)` at its end.
+    fn refill(&mut self) -> io::Result<bool> {
+        match &mut self.source {
+            Source::Text { blocks, detector } => {
+                let Some(block) = blocks.next_block(std::mem::take(&mut self.buf))? else {
+                    return Ok(false);
+                };
+                let all = Interest::all();
+                for raw in block.lines(DEFAULT_MAX_LINE) {
+                    self.lines += 1;
+                    let line = self.lines;
+                    self.queue.push_back(match raw {
+                        RawLine::TooLong(n) => Record::Malformed {
+                            line,
+                            reason: format!(
+                                "line of {n} bytes is longer than the {DEFAULT_MAX_LINE} \
+                                 byte limit; skipped"
+                            ),
+                        },
+                        RawLine::Text(text) => match detector.parse(text, &all) {
+                            Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+                            Parsed::Skipped => Record::Skipped { line },
+                            Parsed::Malformed(reason) => Record::Malformed {
+                                line,
+                                reason: reason.into_owned(),
+                            },
+                        },
+                    });
+                }
+                self.buf = block.bytes;
+                Ok(true)
+            }
+            Source::Blf(reader) => {
+                if let Some(note) = reader.take_note() {
+                    self.queue.push_back(Record::Note(note));
+                }
+                let Some(parsed) = reader.next_object()? else {
+                    return Ok(false);
+                };
+                self.lines += 1;
+                let line = self.lines;
+                self.queue.push_back(match parsed {
+                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+                    Parsed::Skipped => Record::Skipped { line },
+                    Parsed::Malformed(reason) => Record::Malformed {
+                        line,
+                        reason: reason.into_owned(),
+                    },
+                });
+                Ok(true)
+            }
+            Source::Failed(_) | Source::Done => Ok(false),
+        }
+    }
+}
+
+impl Iterator for TraceReader<'_> {
+    type Item = io::Result<Record>;
+
+    fn next(&mut self) -> Option<io::Result<Record>> {
+        loop {
+            if let Some(record) = self.queue.pop_front() {
+                return Some(Ok(record));
+            }
+            if let Source::Failed(_) = self.source {
+                let Source::Failed(e) = std::mem::replace(&mut self.source, Source::Done) else {
+                    return None;
+                };
+                return Some(Err(e));
+            }
+            match self.refill() {
+                Ok(true) => {}
+                Ok(false) => {
+                    self.source = Source::Done;
+                    return None;
+                }
+                Err(e) => {
+                    self.source = Source::Done;
+                    return Some(Err(e));
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn records(text: &[u8]) -> Vec<Record> {
+        TraceReader::new(text).map(|r| r.unwrap()).collect()
+    }
+
+    #[test]
+    fn every_line_is_one_record_in_order() {
+        let got = records(
+            b"(1.000000) can0 081#1043080100000000\n\
+              # a comment\n\
+              (2.000000) can0 081#10zz\n\
+              (3.000000) can0 701#00\n",
+        );
+        assert_eq!(got.len(), 4);
+        let Record::Frame(f) = &got[0] else {
+            panic!("{got:?}")
+        };
+        assert_eq!((f.line, f.id, f.emcy_node()), (1, 0x81, Some(1)));
+        assert_eq!(f.data, [0x10, 0x43, 0x08, 0x01, 0, 0, 0, 0]);
+        assert_eq!(f.time.map(|t| t.to_string()), Some("1.000000".into()));
+        assert_eq!(got[1], Record::Skipped { line: 2 });
+        assert!(matches!(&got[2], Record::Malformed { line: 3, .. }));
+        let Record::Frame(boot) = &got[3] else {
+            panic!("{got:?}")
+        };
+        assert_eq!((boot.boot_node(), boot.emcy_node()), (Some(1), None));
+    }
+
+    #[test]
+    fn gzip_is_read_and_the_format_known() {
+        use std::io::Write;
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        enc.write_all(b"date Mon Jan 1 00:00:00 2024\nbase hex  timestamps absolute\n   1.000000 1  81  Rx   d 8 10 43 08 01 00 00 00 00\n")
+            .unwrap();
+        let gz = enc.finish().unwrap();
+        let mut r = TraceReader::new(&gz[..]);
+        let frames: Vec<CanFrame> = r
+            .by_ref()
+            .filter_map(|x| match x.unwrap() {
+                Record::Frame(f) => Some(f),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(r.format(), Some(Format::Asc));
+        assert_eq!(frames.len(), 1);
+        assert_eq!((frames[0].line, frames[0].channel.as_str()), (3, "1"));
+    }
+
+    #[test]
+    fn a_forced_format_makes_other_formats_malformed() {
+        let line = b"(1.000000) can0 081#1043080100000000\n";
+        let got: Vec<Record> = TraceReader::with_format(&line[..], Format::Asc)
+            .map(|r| r.unwrap())
+            .collect();
+        assert!(
+            matches!(&got[..], [Record::Malformed { line: 1, .. }]),
+            "{got:?}"
+        );
+    }
+
+    #[test]
+    fn a_read_error_is_returned_once_then_the_end() {
+        struct Failing;
+        impl Read for Failing {
+            fn read(&mut self, _: &mut [u8]) -> io::Result<usize> {
+                Err(io::Error::other("device gone"))
+            }
+        }
+        let mut r = TraceReader::new(Failing);
+        assert_eq!(r.next().unwrap().unwrap_err().to_string(), "device gone");
+        assert!(r.next().is_none());
+    }
+}
