@@ -901,7 +901,7 @@ mod tests {
     }
 
     fn profile(name: &str) -> &'static Profile {
-        builtin(name).unwrap_or_else(|| panic!("no built-in {name}"))
+        Profile::builtin(name).unwrap_or_else(|| panic!("no built-in {name}"))
     }
 
     fn warnings(p: &Profile, data: &[u8]) -> Vec<Warning> {
@@ -911,7 +911,7 @@ mod tests {
     }
 
     fn parse_err(text: &str) -> ProfileError {
-        match parse("bad.toml", text) {
+        match Profile::parse("bad.toml", text) {
             Ok(p) => panic!("parsed: {p:?}"),
             Err(e) => e,
         }
@@ -919,7 +919,7 @@ mod tests {
 
     #[test]
     fn every_builtin_parses_in_listing_order() {
-        let names: Vec<&str> = builtins().iter().map(Profile::name).collect();
+        let names: Vec<&str> = Profile::builtins().iter().map(Profile::name).collect();
         assert_eq!(
             names,
             [
@@ -933,18 +933,18 @@ mod tests {
             ]
         );
         for (file, text) in BUILTIN_FILES {
-            let p = parse(file, text).unwrap_or_else(|e| panic!("{e}"));
+            let p = Profile::parse(file, text).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(format!("{}.toml", p.name()), file);
             // The same profile whichever way it was loaded.
-            assert_eq!(builtin(p.name()), Some(&p));
+            assert_eq!(Profile::builtin(p.name()), Some(&p));
             assert!(!p.summary().is_empty() && !p.summary().contains('\n'));
         }
         assert_eq!(
-            builtin(DEFAULT_PROFILE).map(Profile::tables),
+            Profile::builtin(DEFAULT_PROFILE).map(Profile::tables),
             Some(Tables::Cia402)
         );
-        assert!(builtin("nonsense").is_none());
-        assert!(builtin("").is_none());
+        assert!(Profile::builtin("nonsense").is_none());
+        assert!(Profile::builtin("").is_none());
     }
 
     #[test]
@@ -1171,7 +1171,10 @@ mod tests {
         assert_eq!(p.status_bit(&frame(&[0, 0, 0])), None);
         assert_eq!(p.tables(), Tables::Cia301);
         assert!(warnings(p, &[0, 0, 0, 1, 1, 2, 3, 4]).is_empty());
-        for other in builtins().iter().filter(|p| p.name() != "canopennode") {
+        for other in Profile::builtins()
+            .iter()
+            .filter(|p| p.name() != "canopennode")
+        {
             assert_eq!(other.status_bit(&warning), None, "{}", other.name());
         }
     }
@@ -1213,7 +1216,7 @@ mod tests {
 
     #[test]
     fn the_example_user_profile_extends_kollmorgen() {
-        let p = parse("acme-servo.toml", ACME).unwrap_or_else(|e| panic!("{e}"));
+        let p = Profile::parse("acme-servo.toml", ACME).unwrap_or_else(|e| panic!("{e}"));
         let base = profile("kollmorgen");
         assert_eq!(p.name(), "acme-servo");
         assert_eq!(p.base(), Some("kollmorgen"));
@@ -1269,13 +1272,13 @@ mod tests {
         let good = dir.path().join("acme.toml");
         std::fs::write(&good, ACME).expect("write");
         assert_eq!(
-            load_file(&good).map(|p| p.name().to_owned()),
+            Profile::load(&good).map(|p| p.name().to_owned()),
             Ok("acme-servo".to_owned())
         );
 
         let bad = dir.path().join("bad.toml");
         std::fs::write(&bad, "name = \"x\"\nbase = \"cia402\"\nsize = 3\n").expect("write");
-        let e = load_file(&bad).expect_err("unknown key");
+        let e = Profile::load(&bad).expect_err("unknown key");
         assert_eq!(e.line(), Some(3));
         assert!(
             e.to_string().starts_with(&format!("{}:3: ", bad.display())),
@@ -1283,7 +1286,7 @@ mod tests {
         );
 
         let missing = dir.path().join("missing.toml");
-        let e = load_file(&missing).expect_err("no file");
+        let e = Profile::load(&missing).expect_err("no file");
         assert_eq!(e.line(), None);
         assert!(
             e.to_string()
@@ -1406,7 +1409,7 @@ mod tests {
 
     #[test]
     fn user_profiles_without_base_start_from_cia402() {
-        let p = parse(
+        let p = Profile::parse(
             "plain.toml",
             "name = \"plain\"\n[[field]]\nname = \"code\"\nbyte = 3\nsize = 2\n",
         )
@@ -1425,7 +1428,7 @@ mod tests {
             None
         );
         // A category field without value names: any non-zero value counts.
-        let p = parse(
+        let p = Profile::parse(
             "cat.toml",
             "name = \"cat\"\nbase = \"cia301\"\n[[field]]\nname = \"severity\"\nbyte = 7\nrole = \"category\"\n",
         )
@@ -1441,8 +1444,8 @@ mod tests {
 
     #[test]
     fn arbitrary_frames_never_panic() {
-        let user = parse("acme.toml", ACME).unwrap_or_else(|e| panic!("{e}"));
-        let all: Vec<&Profile> = builtins().iter().chain([&user]).collect();
+        let user = Profile::parse("acme.toml", ACME).unwrap_or_else(|e| panic!("{e}"));
+        let all: Vec<&Profile> = Profile::builtins().iter().chain([&user]).collect();
         for len in 3..=8usize {
             for fill in [0x00u8, 0x01, 0x7F, 0x80, 0xFF] {
                 let data: Vec<u8> = (0..len).map(|i| fill.wrapping_add(i as u8)).collect();

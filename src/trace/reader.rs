@@ -111,7 +111,8 @@ enum Source<'a> {
     },
     Blf(BlfReader<Box<dyn Read + 'a>>),
     Failed(io::Error),
-    Done,
+    /// The end, with the format the input had.
+    Done(Option<Format>),
 }
 
 impl<'a> TraceReader<'a> {
@@ -161,7 +162,8 @@ impl<'a> TraceReader<'a> {
         match &self.source {
             Source::Text { detector, .. } => detector.format(),
             Source::Blf(_) => Some(Format::Blf),
-            Source::Failed(_) | Source::Done => None,
+            Source::Failed(_) => None,
+            Source::Done(format) => *format,
         }
     }
 
@@ -217,7 +219,7 @@ impl<'a> TraceReader<'a> {
                 });
                 Ok(true)
             }
-            Source::Failed(_) | Source::Done => Ok(false),
+            Source::Failed(_) | Source::Done(_) => Ok(false),
         }
     }
 }
@@ -230,20 +232,21 @@ impl Iterator for TraceReader<'_> {
             if let Some(record) = self.queue.pop_front() {
                 return Some(Ok(record));
             }
-            if let Source::Failed(_) = self.source {
-                let Source::Failed(e) = std::mem::replace(&mut self.source, Source::Done) else {
-                    return None;
-                };
-                return Some(Err(e));
-            }
-            match self.refill() {
+            let result = match &self.source {
+                Source::Failed(_) => Ok(false),
+                _ => self.refill(),
+            };
+            match result {
                 Ok(true) => {}
                 Ok(false) => {
-                    self.source = Source::Done;
-                    return None;
+                    let end = Source::Done(self.format());
+                    return match std::mem::replace(&mut self.source, end) {
+                        Source::Failed(e) => Some(Err(e)),
+                        _ => None,
+                    };
                 }
                 Err(e) => {
-                    self.source = Source::Done;
+                    self.source = Source::Done(self.format());
                     return Some(Err(e));
                 }
             }
