@@ -26,6 +26,8 @@
 
 use std::io::{self, Read};
 
+use time::{Date, Month, PrimitiveDateTime, Time};
+
 use super::{Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp};
 
 /// The file's magic bytes.
@@ -678,33 +680,33 @@ fn build(
 /// to attoseconds since the Unix epoch; `Ok(None)` when all zero, `Err`
 /// with the date as written when it is not one.
 fn system_time(b: &[u8]) -> Result<Option<(u128, u8)>, String> {
+    /// Seconds in 400 Gregorian years (146 097 days), after which the
+    /// calendar repeats itself exactly.
+    const CYCLE_SECS: i64 = 146_097 * 86_400;
     let f = |i: usize| u16_at(b, i * 2).unwrap_or(0);
     let (y, mo, d, h, mi, s, ms) = (f(0), f(1), f(3), f(4), f(5), f(6), f(7));
     if (y, mo, d, h, mi, s, ms) == (0, 0, 0, 0, 0, 0, 0) {
         return Ok(None);
     }
     let text = format!("{y:04}-{mo:02}-{d:02} {h:02}:{mi:02}:{s:02}.{ms:03}");
-    let days_in_month = match mo {
-        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
-        4 | 6 | 9 | 11 => 30,
-        2 if (y % 4 == 0 && y % 100 != 0) || y % 400 == 0 => 29,
-        2 => 28,
-        _ => 0,
-    };
-    if y < 1970 || d == 0 || d > days_in_month || h > 23 || mi > 59 || s > 59 || ms > 999 {
+    if y < 1970 {
         return Err(text);
     }
-    // Days from the civil date (proleptic Gregorian), 1970-01-01 = 0.
-    let (y, m) = (i64::from(y), i64::from(mo));
-    let y = if m <= 2 { y - 1 } else { y };
-    let era = y.div_euclid(400);
-    let yoe = y - era * 400;
-    let mp = (m + 9) % 12;
-    let doy = (153 * mp + 2) / 5 + i64::from(d) - 1;
-    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    let days = era * 146_097 + doe - 719_468;
-    let secs = days * 86_400 + i64::from(h) * 3600 + i64::from(mi) * 60 + i64::from(s);
-    let secs = u128::try_from(secs).map_err(|_| text.clone())?;
+    // `time`'s calendar ends with 9999 and a SYSTEMTIME's with 65535: whole
+    // 400-year cycles come off the year here and go back on as seconds.
+    let cycles = y.saturating_sub(9999).div_ceil(400);
+    let byte = |v: u16| u8::try_from(v).ok();
+    let date_time = || {
+        let month = Month::try_from(byte(mo)?).ok()?;
+        let date = Date::from_calendar_date(i32::from(y - 400 * cycles), month, byte(d)?).ok()?;
+        let clock = Time::from_hms_milli(byte(h)?, byte(mi)?, byte(s)?, ms).ok()?;
+        Some(PrimitiveDateTime::new(date, clock))
+    };
+    let Some(date_time) = date_time() else {
+        return Err(text);
+    };
+    let secs = date_time.assume_utc().unix_timestamp() + i64::from(cycles) * CYCLE_SECS;
+    let secs = u128::try_from(secs).map_err(|_| text)?;
     let digits = if ms == 0 { 0 } else { 3 };
     Ok(Some((
         secs * ATTO + u128::from(ms) * 1_000_000_000_000_000,
@@ -768,4 +770,103 @@ pub fn sniff<R: Read>(mut input: R) -> (io::Chain<io::Cursor<Vec<u8>>, R>, io::R
     let prefix = head.get(..n).unwrap_or_default().to_vec();
     let magic = got.map(|n| n == 4 && &head == MAGIC);
     (io::Cursor::new(prefix).chain(input), magic)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`system_time`] of a SYSTEMTIME's eight fields: year, month, day of
+    /// week, day, hour, minute, second, millisecond.
+    fn systemtime(fields: [u16; 8]) -> Result<Option<(u128, u8)>, String> {
+        let bytes: Vec<u8> = fields.iter().flat_map(|f| f.to_le_bytes()).collect();
+        system_time(&bytes)
+    }
+
+    /// `secs` and `ms` as [`system_time`] returns them.
+    fn at(secs: u128, ms: u128) -> Result<Option<(u128, u8)>, String> {
+        Ok(Some((
+            secs * ATTO + ms * (ATTO / 1000),
+            if ms == 0 { 0 } else { 3 },
+        )))
+    }
+
+    #[test]
+    fn start_times_at_calendar_edges_are_exact() {
+        // All zero: no start time.
+        assert_eq!(systemtime([0; 8]), Ok(None));
+        assert_eq!(systemtime([1970, 1, 4, 1, 0, 0, 0, 0]), at(0, 0));
+        assert_eq!(systemtime([1970, 1, 4, 1, 0, 0, 0, 1]), at(0, 1));
+        assert_eq!(
+            systemtime([1999, 12, 5, 31, 23, 59, 59, 999]),
+            at(946_684_799, 999)
+        );
+        // 2000 is a leap year (divisible by 400).
+        assert_eq!(systemtime([2000, 2, 2, 29, 0, 0, 0, 0]), at(951_782_400, 0));
+        assert_eq!(
+            systemtime([2024, 2, 4, 29, 23, 59, 59, 500]),
+            at(1_709_251_199, 500)
+        );
+        assert_eq!(
+            systemtime([2023, 4, 0, 30, 23, 59, 59, 0]),
+            at(1_682_899_199, 0)
+        );
+        assert_eq!(
+            systemtime([9999, 12, 5, 31, 23, 59, 59, 999]),
+            at(253_402_300_799, 999)
+        );
+        // Past 9999 (a SYSTEMTIME's year goes to 65535).
+        assert_eq!(
+            systemtime([10000, 1, 6, 1, 0, 0, 0, 0]),
+            at(253_402_300_800, 0)
+        );
+        assert_eq!(
+            systemtime([10400, 2, 0, 29, 0, 0, 0, 0]),
+            at(266_030_179_200, 0)
+        );
+        assert_eq!(
+            systemtime([65535, 12, 0, 31, 23, 59, 59, 999]),
+            at(2_005_949_145_599, 999)
+        );
+        // The day of the week is not checked.
+        assert_eq!(systemtime([1970, 1, 6, 1, 0, 0, 0, 0]), at(0, 0));
+    }
+
+    #[test]
+    fn impossible_start_times_are_errors_as_written() {
+        for (fields, written) in [
+            // 2100 and 10100 are divisible by 100, not by 400: common years.
+            ([2100, 2, 1, 29, 0, 0, 0, 0], "2100-02-29 00:00:00.000"),
+            ([10100, 2, 0, 29, 0, 0, 0, 0], "10100-02-29 00:00:00.000"),
+            ([2023, 2, 3, 29, 0, 0, 0, 0], "2023-02-29 00:00:00.000"),
+            // The 31st of the 30-day months.
+            ([2023, 4, 0, 31, 0, 0, 0, 0], "2023-04-31 00:00:00.000"),
+            ([2023, 6, 0, 31, 0, 0, 0, 0], "2023-06-31 00:00:00.000"),
+            ([2023, 9, 0, 31, 0, 0, 0, 0], "2023-09-31 00:00:00.000"),
+            ([2023, 11, 0, 31, 0, 0, 0, 0], "2023-11-31 00:00:00.000"),
+            // Month 0 and 13, day 0, days past any month.
+            ([2023, 0, 0, 10, 0, 0, 0, 0], "2023-00-10 00:00:00.000"),
+            ([2023, 13, 0, 10, 0, 0, 0, 0], "2023-13-10 00:00:00.000"),
+            ([2023, 1, 0, 0, 0, 0, 0, 0], "2023-01-00 00:00:00.000"),
+            ([2023, 1, 0, 32, 0, 0, 0, 0], "2023-01-32 00:00:00.000"),
+            ([2023, 1, 0, 300, 0, 0, 0, 0], "2023-01-300 00:00:00.000"),
+            // Before 1970.
+            (
+                [1969, 12, 3, 31, 23, 59, 59, 999],
+                "1969-12-31 23:59:59.999",
+            ),
+            ([0, 0, 0, 0, 0, 0, 0, 1], "0000-00-00 00:00:00.001"),
+            // One past the last hour, minute, second, millisecond.
+            ([2023, 1, 0, 1, 24, 0, 0, 0], "2023-01-01 24:00:00.000"),
+            ([2023, 1, 0, 1, 23, 60, 0, 0], "2023-01-01 23:60:00.000"),
+            ([2023, 1, 0, 1, 23, 59, 60, 0], "2023-01-01 23:59:60.000"),
+            (
+                [2023, 1, 0, 1, 23, 59, 59, 1000],
+                "2023-01-01 23:59:59.1000",
+            ),
+            ([2023, 1, 0, 1, 256, 0, 0, 0], "2023-01-01 256:00:00.000"),
+        ] {
+            assert_eq!(systemtime(fields), Err(written.to_string()), "{fields:?}");
+        }
+    }
 }

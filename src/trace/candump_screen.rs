@@ -32,6 +32,8 @@
 //! CAN XL frames (`[nnnn]` lengths) are reported as malformed: a [`Frame`]
 //! cannot hold them and dropping them silently would hide data.
 
+use time::{Date, Month, PrimitiveDateTime, Time};
+
 use super::candump_log::{ERROR_FLAG, is_candump_non_frame};
 use super::hex;
 use super::time::MAX_FRACTION_DIGITS;
@@ -541,12 +543,17 @@ fn parse_date(text: &[u8]) -> Result<Timestamp, Reason> {
     if d.next().is_some() || t.next().is_some() {
         return Err(SHAPE.into());
     }
-    let days = days_since_epoch(year, month, day)
+    let date = calendar_date(year, month, day)
         .ok_or_else(|| format!("invalid date {year:04}-{month:02}-{day:02} (or before 1970)"))?;
-    if hour > 23 || minute > 59 || second > 59 {
-        return Err(format!("invalid time of day {hour:02}:{minute:02}:{second:02}").into());
-    }
-    let secs = days * 86_400 + hour * 3_600 + minute * 60 + second;
+    let time_of_day = clock_time(hour, minute, second)
+        .ok_or_else(|| format!("invalid time of day {hour:02}:{minute:02}:{second:02}"))?;
+    // From 1970 on, so never negative.
+    let secs = u64::try_from(
+        PrimitiveDateTime::new(date, time_of_day)
+            .assume_utc()
+            .unix_timestamp(),
+    )
+    .unwrap_or_default();
     let (frac_value, digits) = match frac {
         None => (0, 0),
         Some([]) => return Err("timestamp ends with a dot".into()),
@@ -561,41 +568,27 @@ fn parse_date(text: &[u8]) -> Result<Timestamp, Reason> {
     Ok(Timestamp::from_parts(secs, frac_value, digits))
 }
 
-fn is_leap(year: u64) -> bool {
-    year.is_multiple_of(4) && (!year.is_multiple_of(100) || year.is_multiple_of(400))
-}
-
-/// Days from 1970-01-01 to the given civil (proleptic Gregorian) date;
-/// `None` for impossible dates and dates before 1970.
-fn days_since_epoch(year: u64, month: u64, day: u64) -> Option<u64> {
-    const DAYS_BEFORE_MONTH: [u64; 12] = [0, 31, 59, 90, 120, 151, 181, 212, 243, 273, 304, 334];
-    const MONTH_DAYS: [u64; 12] = [31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
-    // Days from 0001-01-01 to January 1st of `y`.
-    let days_before_year = |y: u64| {
-        let p = y - 1;
-        p * 365 + p / 4 - p / 100 + p / 400
-    };
+/// A civil (proleptic Gregorian) date from 1970 on; `None` for impossible
+/// dates (month 0 or 13, February 29th of a common year, ...) and dates
+/// before 1970.
+fn calendar_date(year: u64, month: u64, day: u64) -> Option<Date> {
     if year < 1970 {
         return None;
     }
-    let m = usize::try_from(month.checked_sub(1)?).ok()?;
-    let leap_day = u64::from(month == 2 && is_leap(year));
-    let max_day = MONTH_DAYS.get(m)? + leap_day;
-    if day == 0 || day > max_day {
-        return None;
-    }
-    let leap_before = u64::from(month > 2 && is_leap(year));
-    Some(
-        days_before_year(year) - days_before_year(1970)
-            + DAYS_BEFORE_MONTH.get(m)?
-            + leap_before
-            + (day - 1),
-    )
+    let month = Month::try_from(u8::try_from(month).ok()?).ok()?;
+    Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?).ok()
+}
+
+/// A time of day; `None` for an hour past 23 or a minute or second past 59.
+fn clock_time(hour: u64, minute: u64, second: u64) -> Option<Time> {
+    let field = |v: u64| u8::try_from(v).ok();
+    Time::from_hms(field(hour)?, field(minute)?, field(second)?).ok()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::borrow::Cow;
 
     fn parse(line: &str) -> Parsed<'_> {
         CandumpScreenParser::new().parse(line.as_bytes(), &Interest::all())
@@ -753,6 +746,62 @@ mod tests {
         assert!(bad("2018-12-06 09:31:30.").contains("dot"));
         assert!(bad("2018-12-06 09:31:30.5x").contains("decimal"));
         assert!(bad("2018-12-06").contains("YYYY-MM-DD"));
+    }
+
+    /// `parse_date` at the calendar's edges: exact seconds and fractions,
+    /// exact messages.
+    #[test]
+    fn date_edges_are_exact() {
+        let date = |text: &str| {
+            parse_date(text.as_bytes())
+                .map(|t| t.to_string())
+                .map_err(Cow::into_owned)
+        };
+        let ok = |s: &str| Ok(s.to_string());
+        let invalid_date = |d: &str| Err(format!("invalid date {d} (or before 1970)"));
+        let invalid_time = |t: &str| Err(format!("invalid time of day {t}"));
+        // The epoch and the last second before it.
+        assert_eq!(date("1970-01-01 00:00:00"), ok("0"));
+        assert_eq!(date("1970-01-01 00:00:00.000000"), ok("0.000000"));
+        assert_eq!(date("1969-12-31 23:59:59"), invalid_date("1969-12-31"));
+        assert_eq!(date("0000-01-01 00:00:00"), invalid_date("0000-01-01"));
+        // The millennium, and 2000-02-29 (divisible by 400: a leap year).
+        assert_eq!(date("1999-12-31 23:59:59.999999"), ok("946684799.999999"));
+        assert_eq!(date("2000-01-01 00:00:00"), ok("946684800"));
+        assert_eq!(date("2000-02-29 00:00:00"), ok("951782400"));
+        assert_eq!(date("2000-02-29 23:59:59.5"), ok("951868799.5"));
+        // 2100 is divisible by 100, not by 400: a common year.
+        assert_eq!(date("2100-02-28 23:59:59"), ok("4107542399"));
+        assert_eq!(date("2100-02-29 00:00:00"), invalid_date("2100-02-29"));
+        assert_eq!(date("2024-02-29 23:59:59.123456"), ok("1709251199.123456"));
+        assert_eq!(date("2023-02-29 00:00:00"), invalid_date("2023-02-29"));
+        assert_eq!(date("2024-02-30 00:00:00"), invalid_date("2024-02-30"));
+        // The 31st of the 30-day months; the 30th is fine.
+        for month in ["04", "06", "09", "11"] {
+            let d = format!("2023-{month}-31");
+            assert_eq!(date(&format!("{d} 00:00:00")), invalid_date(&d));
+        }
+        assert_eq!(date("2023-04-30 23:59:59"), ok("1682899199"));
+        assert_eq!(date("2023-01-31 00:00:00"), ok("1675123200"));
+        assert_eq!(date("2023-01-32 00:00:00"), invalid_date("2023-01-32"));
+        // Month 0 and 13, day 0.
+        assert_eq!(date("2023-00-10 00:00:00"), invalid_date("2023-00-10"));
+        assert_eq!(date("2023-13-10 00:00:00"), invalid_date("2023-13-10"));
+        assert_eq!(date("2023-12-00 00:00:00"), invalid_date("2023-12-00"));
+        assert_eq!(date("2023-99-99 00:00:00"), invalid_date("2023-99-99"));
+        // The last date of four-digit years, with all 18 fraction digits.
+        assert_eq!(
+            date("9999-12-31 23:59:59.999999999999999999"),
+            ok("253402300799.999999999999999999")
+        );
+        // The last second of a day; one past it in each field.
+        assert_eq!(date("2018-12-06 23:59:59"), ok("1544140799"));
+        assert_eq!(date("2018-12-06 24:00:00"), invalid_time("24:00:00"));
+        assert_eq!(date("2018-12-06 23:60:00"), invalid_time("23:60:00"));
+        assert_eq!(date("2018-12-06 23:59:60"), invalid_time("23:59:60"));
+        assert_eq!(date("2018-12-06 99:99:99"), invalid_time("99:99:99"));
+        // The date is checked first.
+        assert_eq!(date("2100-02-29 24:00:00"), invalid_date("2100-02-29"));
     }
 
     #[test]

@@ -1,0 +1,388 @@
+//! The time axis: what it measures ([`Axis`]), how positions become axis
+//! values and readable times ([`Clock`]), the calendar of wall-clock times,
+//! tick spacing and labels, and drawing the axis line, grid and ticks. Kept
+//! together because tick labels and tooltip times must agree on the clock.
+
+use std::fmt::{self, Write as _};
+
+use time::OffsetDateTime;
+
+use super::Scale;
+use super::style::{LANES_TOP, PLOT_W, X0, X1};
+use super::text::N;
+use crate::timeline::At;
+use crate::trace::Timestamp;
+
+/// What the horizontal axis measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Axis {
+    /// candump times: Unix seconds, shown as UTC clock times.
+    Wall,
+    /// ASC times and relative candump times: seconds.
+    Seconds,
+    /// No timestamps at all (candump screen output without -t): trace lines.
+    Lines,
+}
+
+/// Converts trace positions to axis values and formats them.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::report) struct Clock {
+    pub(super) axis: Axis,
+    /// Time of axis value 0 (timed axes).
+    pub(super) origin: Option<Timestamp>,
+    /// All times of the input fall on one UTC day (wall clock only).
+    pub(super) one_day: bool,
+}
+
+impl Clock {
+    /// Axis value of a position: seconds after the origin, or the line.
+    pub(super) fn value(&self, at: &At) -> Option<f64> {
+        match self.axis {
+            Axis::Lines => Some(at.line as f64),
+            Axis::Wall | Axis::Seconds => Some(at.time?.since(self.origin?).as_f64()),
+        }
+    }
+
+    /// A time as a reader wants it: `22:13:21.250000 UTC` (the date too when
+    /// the trace spans days), `1.250000 s`, or `line 12` without times.
+    pub(super) fn at(&self, at: &At) -> String {
+        match (self.axis, at.time) {
+            (Axis::Lines, _) | (_, None) => format!("line {}", at.line),
+            (Axis::Wall, Some(t)) => format!("{} UTC", self.wall(t)),
+            (Axis::Seconds, Some(t)) => format!("{t} s"),
+        }
+    }
+
+    /// The heading of a time column.
+    pub(in crate::report) fn heading(&self) -> &'static str {
+        match self.axis {
+            Axis::Wall => "time (UTC)",
+            Axis::Seconds => "time (s)",
+            Axis::Lines => "time",
+        }
+    }
+
+    /// An event's time for the HTML table.
+    pub(in crate::report) fn cell(&self, time: Option<Timestamp>) -> String {
+        match (self.axis, time) {
+            (_, None) => "-".to_string(),
+            (Axis::Wall, Some(t)) => self.wall(t),
+            (_, Some(t)) => t.to_string(),
+        }
+    }
+
+    fn wall(&self, t: Timestamp) -> String {
+        let (date, clock) = wall_clock(t);
+        if self.one_day {
+            clock
+        } else {
+            format!("{date} {clock}")
+        }
+    }
+}
+
+/// `("2023-11-14", "22:13:21.250000")`, exact to the trace's digits.
+pub(super) fn wall_clock(t: Timestamp) -> (String, String) {
+    let (secs, atto, digits) = t.to_raw();
+    let c = Utc::of(secs);
+    let mut clock = format!("{:02}:{:02}:{:02}", c.hour, c.minute, c.second);
+    if digits > 0 {
+        let digits = u32::from(digits.min(18));
+        let frac = atto / 10u64.pow(18 - digits);
+        let _ = write!(clock, ".{frac:0w$}", w = digits as usize);
+    }
+    (format!("{:04}-{:02}-{:02}", c.year, c.month, c.day), clock)
+}
+
+/// Seconds in 400 Gregorian years (146 097 days), after which the calendar
+/// repeats itself exactly.
+const CYCLE_SECS: u64 = 146_097 * 86_400;
+
+/// A Unix second as a UTC calendar date and clock time.
+#[derive(Clone, Copy, Debug)]
+struct Utc {
+    year: u64,
+    month: u8,
+    day: u8,
+    hour: u8,
+    minute: u8,
+    second: u8,
+}
+
+impl Utc {
+    /// The calendar is `time`'s, which counts years up to 9999; a trace's
+    /// times can be any `u64` (nothing stops a candump log from saying
+    /// `(99999999999999.5)`), so whole 400-year cycles come off before and
+    /// go back onto the year after.
+    fn of(secs: u64) -> Utc {
+        let cycles = secs / CYCLE_SECS;
+        // Below 400 years after 1970: always in `time`'s range.
+        let t = i64::try_from(secs % CYCLE_SECS)
+            .ok()
+            .and_then(|s| OffsetDateTime::from_unix_timestamp(s).ok())
+            .unwrap_or(OffsetDateTime::UNIX_EPOCH);
+        Utc {
+            year: u64::from(t.year().unsigned_abs()) + 400 * cycles,
+            month: t.month().into(),
+            day: t.day(),
+            hour: t.hour(),
+            minute: t.minute(),
+            second: t.second(),
+        }
+    }
+}
+
+/// Tick spacing of a wall-clock axis, in seconds.
+const WALL_STEPS: [f64; 28] = [
+    1e-6, 2e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 0.01, 0.02, 0.05, 0.1,
+    0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 30.0, 60.0, 120.0, 300.0, 600.0,
+];
+const WALL_STEPS_LONG: [f64; 8] = [
+    900.0, 1800.0, 3600.0, 7200.0, 10_800.0, 21_600.0, 43_200.0, 86_400.0,
+];
+
+/// The smallest 1-2-5 step of at least `raw`.
+fn nice_step(raw: f64) -> f64 {
+    if !(raw.is_finite() && raw > 0.0) {
+        return 1.0;
+    }
+    let mag = 10f64.powf(raw.log10().floor());
+    for m in [1.0, 2.0, 5.0, 10.0] {
+        if m * mag >= raw * (1.0 - 1e-9) {
+            return m * mag;
+        }
+    }
+    10.0 * mag
+}
+
+fn tick_step(axis: Axis, span: f64) -> f64 {
+    // A tick every 90 px or more: room for a label like 22:13:21.25.
+    let raw = span / (PLOT_W / 90.0);
+    match axis {
+        Axis::Lines => nice_step(raw).max(1.0),
+        Axis::Seconds => nice_step(raw),
+        Axis::Wall => WALL_STEPS
+            .iter()
+            .chain(&WALL_STEPS_LONG)
+            .copied()
+            .find(|&s| s >= raw)
+            .unwrap_or_else(|| 86_400.0 * nice_step(raw / 86_400.0)),
+    }
+}
+
+/// Decimals a label needs at this step.
+fn decimals(step: f64) -> usize {
+    let mut d = 0;
+    while d < 9 && (step * 10f64.powi(d as i32)).fract().abs() > 1e-6 {
+        d += 1;
+    }
+    d
+}
+
+fn tick_label(axis: Axis, value: f64, step: f64, one_day: bool) -> String {
+    let d = decimals(step);
+    match axis {
+        Axis::Lines => format!("{value:.0}"),
+        Axis::Seconds => format!("{value:.d$}"),
+        Axis::Wall => {
+            let scale = 10f64.powi(d as i32);
+            let units = (value * scale).round();
+            if !(units.is_finite() && units >= 0.0) {
+                return String::new();
+            }
+            let units = units as u64;
+            let per = 10u64.pow(d as u32);
+            let secs = units / per;
+            let frac = units % per;
+            let Utc {
+                month: m,
+                day,
+                hour: h,
+                minute: min,
+                second: s,
+                ..
+            } = Utc::of(secs);
+            if step >= 86_400.0 {
+                format!("{m:02}-{day:02}")
+            } else if !one_day {
+                format!("{m:02}-{day:02} {h:02}:{min:02}")
+            } else if step >= 60.0 {
+                format!("{h:02}:{min:02}")
+            } else if d == 0 {
+                format!("{h:02}:{min:02}:{s:02}")
+            } else {
+                format!("{h:02}:{min:02}:{s:02}.{frac:0d$}")
+            }
+        }
+    }
+}
+
+pub(super) fn write_axis(
+    out: &mut String,
+    clock: &Clock,
+    scale: Scale,
+    axis_y: f64,
+) -> fmt::Result {
+    let span = scale.hi - scale.lo;
+    let step = tick_step(clock.axis, span);
+    // Ticks fall on round absolute values (whole seconds of the clock).
+    let base = match clock.axis {
+        Axis::Lines => 0.0,
+        _ => clock.origin.map_or(0.0, Timestamp::as_f64),
+    };
+    let first = ((base + scale.lo) / step).ceil() * step;
+    out.push_str("<g>\n");
+    writeln!(
+        out,
+        "<line class=\"axis\" x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/>",
+        N(X0),
+        N(axis_y),
+        N(X1),
+        N(axis_y)
+    )?;
+    for i in 0..200 {
+        let abs = first + f64::from(i) * step;
+        let v = abs - base;
+        if v > scale.hi + step * 1e-6 {
+            break;
+        }
+        let x = scale.x(v);
+        writeln!(
+            out,
+            "<line class=\"grid\" x1=\"{x}\" y1=\"{}\" x2=\"{x}\" y2=\"{}\"/>\
+             <text class=\"tick\" x=\"{x}\" y=\"{}\">{}</text>",
+            N(LANES_TOP),
+            N(axis_y + 4.0),
+            N(axis_y + 16.0),
+            tick_label(clock.axis, abs, step, clock.one_day),
+            x = N(x),
+        )?;
+    }
+    let x = N(scale.x(scale.end));
+    writeln!(
+        out,
+        "<line class=\"end\" x1=\"{x}\" y1=\"{}\" x2=\"{x}\" y2=\"{}\"><title>last frame of the trace</title></line>",
+        N(LANES_TOP),
+        N(axis_y)
+    )?;
+    let caption = match clock.axis {
+        Axis::Wall => "time (UTC)",
+        Axis::Seconds => "time (s)",
+        Axis::Lines => "trace line",
+    };
+    writeln!(
+        out,
+        "<text class=\"cap\" x=\"{}\" y=\"{}\">{caption}</text>",
+        N(X1),
+        N(axis_y + 30.0)
+    )?;
+    out.push_str("</g>\n");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ts(s: &str) -> Timestamp {
+        Timestamp::parse(s.as_bytes()).expect("timestamp")
+    }
+
+    #[test]
+    fn wall_clock_is_utc_and_exact() {
+        assert_eq!(
+            wall_clock(ts("1700000001.250000")),
+            ("2023-11-14".to_string(), "22:13:21.250000".to_string())
+        );
+        assert_eq!(
+            wall_clock(ts("0")),
+            ("1970-01-01".to_string(), "00:00:00".to_string())
+        );
+        // A leap day, and nanosecond digits kept.
+        assert_eq!(
+            wall_clock(ts("951782400.000000001")),
+            ("2000-02-29".to_string(), "00:00:00.000000001".to_string())
+        );
+    }
+
+    /// Dates and clock times at the calendar's edges, each second before
+    /// and after where it matters.
+    #[test]
+    fn wall_clock_at_calendar_edges() {
+        let wall = |t: &str| {
+            let (date, clock) = wall_clock(ts(t));
+            format!("{date} {clock}")
+        };
+        assert_eq!(wall("0"), "1970-01-01 00:00:00");
+        assert_eq!(wall("0.000000"), "1970-01-01 00:00:00.000000");
+        assert_eq!(wall("86399.999999"), "1970-01-01 23:59:59.999999");
+        assert_eq!(wall("946684799.999999"), "1999-12-31 23:59:59.999999");
+        assert_eq!(wall("946684800"), "2000-01-01 00:00:00");
+        // 2000 is a leap year (divisible by 400), 2100 is not (by 100).
+        assert_eq!(wall("951782399"), "2000-02-28 23:59:59");
+        assert_eq!(wall("951782400"), "2000-02-29 00:00:00");
+        assert_eq!(wall("951868799"), "2000-02-29 23:59:59");
+        assert_eq!(wall("1709251199.5"), "2024-02-29 23:59:59.5");
+        assert_eq!(wall("1709251200"), "2024-03-01 00:00:00");
+        assert_eq!(wall("4107542399"), "2100-02-28 23:59:59");
+        assert_eq!(wall("4107542400"), "2100-03-01 00:00:00");
+        // A 30-day month has no 31st.
+        assert_eq!(wall("1682899199"), "2023-04-30 23:59:59");
+        assert_eq!(wall("1682899200"), "2023-05-01 00:00:00");
+        // All 18 fraction digits kept.
+        assert_eq!(
+            wall("253402300799.999999999999999999"),
+            "9999-12-31 23:59:59.999999999999999999"
+        );
+        // Past `time`'s calendar: whole 400-year cycles.
+        assert_eq!(wall("253402300800"), "10000-01-01 00:00:00");
+        assert_eq!(wall("12622780799"), "2369-12-31 23:59:59");
+        assert_eq!(wall("12622780800"), "2370-01-01 00:00:00");
+        assert_eq!(
+            wall("18446744073709551615.5"),
+            "584554051223-11-09 07:00:15.5"
+        );
+    }
+
+    #[test]
+    fn tick_labels_at_calendar_edges() {
+        let day = 86_400.0;
+        assert_eq!(tick_label(Axis::Wall, 0.0, day, false), "01-01");
+        assert_eq!(tick_label(Axis::Wall, 951_782_400.0, day, false), "02-29");
+        assert_eq!(tick_label(Axis::Wall, 4_107_542_400.0, day, false), "03-01");
+        assert_eq!(tick_label(Axis::Wall, 946_684_799.0, 1.0, true), "23:59:59");
+        assert_eq!(
+            tick_label(Axis::Wall, 1_682_899_140.0, 600.0, false),
+            "04-30 23:59"
+        );
+        assert_eq!(
+            tick_label(Axis::Wall, 253_402_300_799.5, 0.5, true),
+            "23:59:59.5"
+        );
+        assert_eq!(
+            tick_label(Axis::Wall, 253_402_300_800.0, 3600.0, false),
+            "01-01 00:00"
+        );
+    }
+
+    #[test]
+    fn ticks_are_round() {
+        assert_eq!(nice_step(0.26), 0.5);
+        assert_eq!(nice_step(3.0), 5.0);
+        assert_eq!(nice_step(0.0), 1.0);
+        assert_eq!(tick_step(Axis::Wall, 7.0), 1.0);
+        assert_eq!(tick_step(Axis::Wall, 3000.0), 600.0);
+        assert_eq!(tick_step(Axis::Lines, 3.0), 1.0);
+        assert_eq!(
+            tick_label(Axis::Wall, 1_700_000_001.5, 0.5, true),
+            "22:13:21.5"
+        );
+        assert_eq!(tick_label(Axis::Wall, 1_700_000_040.0, 60.0, true), "22:14");
+        assert_eq!(
+            tick_label(Axis::Wall, 1_700_000_040.0, 600.0, false),
+            "11-14 22:14"
+        );
+        assert_eq!(tick_label(Axis::Seconds, 2.0, 0.5, true), "2.0");
+        assert_eq!(tick_label(Axis::Seconds, 12.0, 2.0, true), "12");
+    }
+}

@@ -1,0 +1,446 @@
+//! Drawing: one input's panel as SVG elements (title, lane backgrounds,
+//! lanes with their labels, bars with tooltips, markers, the legend). Only
+//! writes what layout ([`super::Panel`]), binning ([`super::bars`]) and the
+//! markers ([`super::marks`]) decided; the axis draws itself ([`super::axis`]).
+
+use std::fmt::{self, Write as _};
+
+use super::axis::{Axis, Clock, wall_clock, write_axis};
+use super::bars::{Bar, CLEARED_SLUGS, SMALL_PX};
+use super::marks::{Clusters, MARKS, Mark, Streamed};
+use super::style::{BAR_H, LANES_TOP, LEGEND_ORDER, ROW_H, WIDTH, X0, class_index};
+use super::text::{N, clip, esc, plural, short_number};
+use super::{Lane, Scale, lane_key, lane_label};
+use crate::analyze::{InputReport, NodeReport};
+use crate::canopen::codes::Class;
+use crate::timeline::ClearedBy;
+
+/// Markers of one kind closer than this are drawn as one.
+const MARKER_GAP_PX: f64 = 3.0;
+
+/// Title line two: the time span, what the chart shows.
+fn subtitle(input: &InputReport, clock: &Clock, lanes: &[Lane<'_>], streamed: &Streamed) -> String {
+    let mut s = match (clock.axis, input.first_time, input.last_time) {
+        (Axis::Wall, Some(a), Some(b)) => {
+            let (da, ca) = wall_clock(a);
+            let (db, cb) = wall_clock(b);
+            let to = if da == db { cb } else { format!("{db} {cb}") };
+            format!("{da} {ca} – {to} UTC ({} s)", b.since(a))
+        }
+        (Axis::Seconds, Some(a), Some(b)) => format!("{a} s – {b} s ({} s)", b.since(a)),
+        _ => format!(
+            "lines 1–{} (the trace has no timestamps)",
+            input.counts.lines
+        ),
+    };
+    let errors: u64 = lanes
+        .iter()
+        .flat_map(|l| &l.bars.bars)
+        .map(|b| b.count)
+        .sum();
+    let open: u64 = lanes
+        .iter()
+        .flat_map(|l| &l.bars.bars)
+        .map(|b| b.open)
+        .sum();
+    let _ = write!(
+        s,
+        " · {} node{} · {errors} error{}",
+        lanes.len(),
+        plural(lanes.len() as u64),
+        plural(errors)
+    );
+    if open > 0 {
+        let _ = write!(s, " ({open} still active)");
+    }
+    for (mark, n) in MARKS.iter().zip(streamed.counts) {
+        if n > 0 {
+            let _ = write!(
+                s,
+                " · {n} {}",
+                match mark {
+                    Mark::Reset => "reset",
+                    Mark::Partial => "partial reset",
+                    Mark::Boot => "boot-up",
+                }
+            );
+            s.push_str(plural(n));
+        }
+    }
+    let unplaced = streamed.unplaced + lanes.iter().map(|l| l.bars.unplaced).sum::<u64>();
+    if unplaced > 0 {
+        let _ = write!(s, " · {unplaced} without a time not drawn");
+    }
+    s
+}
+
+/// Writes one input's chart; returns its height.
+pub(super) fn write_panel(
+    out: &mut String,
+    input: &InputReport,
+    clock: &Clock,
+    scale: Scale,
+    lanes: &[Lane<'_>],
+    streamed: &Streamed,
+) -> Result<f64, fmt::Error> {
+    writeln!(
+        out,
+        "<text class=\"t1\" x=\"10\" y=\"20\">{}</text>",
+        esc(&input.file)
+    )?;
+    writeln!(
+        out,
+        "<text class=\"t2\" x=\"10\" y=\"38\">{}</text>",
+        esc(&subtitle(input, clock, lanes, streamed))
+    )?;
+    if lanes.is_empty() {
+        let why = match &input.error {
+            Some(e) => format!("nothing to draw: {e}"),
+            None => "no EMCY or boot-up frames".to_string(),
+        };
+        writeln!(
+            out,
+            "<text class=\"none\" x=\"{}\" y=\"{}\">{}</text>",
+            N(X0),
+            N(LANES_TOP + 16.0),
+            esc(&why)
+        )?;
+        return Ok(LANES_TOP + 32.0);
+    }
+    let lanes_h: f64 = lanes.iter().map(|l| l.height).sum();
+    let axis_y = LANES_TOP + lanes_h;
+
+    // Alternate lane backgrounds, then the grid over them, then the lanes.
+    let mut y = LANES_TOP;
+    for (i, lane) in lanes.iter().enumerate() {
+        if i % 2 == 0 {
+            writeln!(
+                out,
+                "<rect class=\"bg\" x=\"0\" y=\"{}\" width=\"{}\" height=\"{}\"/>",
+                N(y),
+                N(WIDTH),
+                N(lane.height)
+            )?;
+        }
+        y += lane.height;
+    }
+    write_axis(out, clock, scale, axis_y)?;
+    let mut y = LANES_TOP;
+    for lane in lanes {
+        write_lane(out, clock, scale, lane, y)?;
+        y += lane.height;
+    }
+    let legend_h = write_legend(out, lanes, axis_y + 44.0)?;
+    Ok(axis_y + 44.0 + legend_h)
+}
+
+fn write_lane(
+    out: &mut String,
+    clock: &Clock,
+    scale: Scale,
+    lane: &Lane<'_>,
+    y: f64,
+) -> fmt::Result {
+    let node = lane.node;
+    let label = lane_label(node);
+    writeln!(
+        out,
+        "<g class=\"lane\" data-lane=\"{}\" transform=\"translate(0,{})\">",
+        esc(&lane_key(&node.channel, node.node)),
+        N(y)
+    )?;
+    let mid = lane.height / 2.0;
+    match &label.detail {
+        None => writeln!(
+            out,
+            "<text class=\"lbl\" x=\"10\" y=\"{}\">{}</text>",
+            N(mid + 4.0),
+            esc(&clip(&label.main, 24))
+        )?,
+        Some(detail) => writeln!(
+            out,
+            "<text class=\"lbl\" x=\"10\" y=\"{}\">{}</text>\
+             <text class=\"lbl2\" x=\"10\" y=\"{}\">{}</text>",
+            N(mid - 1.0),
+            esc(&clip(&label.main, 24)),
+            N(mid + 10.0),
+            esc(&clip(detail, 28))
+        )?,
+    }
+    let rows = lane.bars.rows.len().max(1) as f64;
+    let top = (lane.height - rows * ROW_H) / 2.0 + (ROW_H - BAR_H) / 2.0;
+    for bar in &lane.bars.bars {
+        write_bar(out, clock, scale, lane, bar, top)?;
+    }
+    if let Some(marks) = &lane.marks {
+        for (mark, clusters) in MARKS.iter().zip(&marks.marks) {
+            write_marks(out, clock, scale, *mark, clusters, lane.height)?;
+        }
+    }
+    out.push_str("</g>\n");
+    Ok(())
+}
+
+fn write_bar(
+    out: &mut String,
+    clock: &Clock,
+    scale: Scale,
+    lane: &Lane<'_>,
+    bar: &Bar,
+    top: f64,
+) -> fmt::Result {
+    let y = top + bar.row as f64 * ROW_H;
+    let w = (bar.x1 - bar.x0).max(1.0);
+    let mut class = format!("b c-{}", bar.class().slug());
+    if bar.count > 1 {
+        class.push_str(" m");
+    } else if bar.open > 0 {
+        class.push_str(" o");
+    }
+    writeln!(
+        out,
+        "<rect class=\"{class}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"><title>{}</title></rect>",
+        N(bar.x0),
+        N(y),
+        N(w),
+        N(BAR_H),
+        esc(&bar_title(clock, scale, lane.node, bar))
+    )?;
+    if bar.open > 0 {
+        // The open end: a triangle past the end of the plot area.
+        let x = N(bar.x1 + 1.0);
+        writeln!(
+            out,
+            "<path class=\"oe\" d=\"M{x} {}l7 {}l-7 {}z\"><title>still active at the end of the trace</title></path>",
+            N(y - 1.0),
+            N(BAR_H / 2.0 + 1.0),
+            N(BAR_H / 2.0 + 1.0),
+        )?;
+    }
+    Ok(())
+}
+
+fn bar_title(clock: &Clock, scale: Scale, node: &NodeReport, bar: &Bar) -> String {
+    let label = lane_label(node).main;
+    let iv = &bar.first;
+    if bar.count == 1 {
+        let (end, duration, cleared) = match iv.end {
+            Some(e) => (
+                clock.at(&e),
+                match (e.time, iv.start.time) {
+                    (Some(b), Some(a)) if clock.axis != Axis::Lines => format!("{} s", b.since(a)),
+                    _ => "-".to_string(),
+                },
+                iv.cleared_by.map_or("-", ClearedBy::slug),
+            ),
+            None => (
+                "still active at the end of the trace".to_string(),
+                "open".to_string(),
+                "-",
+            ),
+        };
+        let lines = match iv.end {
+            Some(e) => format!("lines {}–{}", iv.start.line, e.line),
+            None => format!("line {}", iv.start.line),
+        };
+        return format!(
+            "0x{:04X} {}\n{label}\nstart: {}\nend: {end}\nduration: {duration}\ncleared by: {cleared}\n{lines}",
+            iv.code,
+            node.describe(iv.code),
+            clock.at(&iv.start),
+        );
+    }
+    let mut s = format!(
+        "{} errors merged into one bar (each shorter than {} px, about {} {} at this scale)\n{label}\n",
+        bar.count,
+        N(SMALL_PX),
+        short_number(scale.per_px() * SMALL_PX),
+        match clock.axis {
+            Axis::Lines => "lines",
+            _ => "s",
+        }
+    );
+    let mut codes_sorted = bar.codes.clone();
+    codes_sorted.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    for (code, n) in codes_sorted {
+        let _ = writeln!(s, "0x{code:04X} ×{n} {}", node.describe(code));
+    }
+    if bar.other_codes > 0 {
+        let _ = writeln!(s, "{} more of other codes", bar.other_codes);
+    }
+    let _ = write!(s, "from: {}\nto: ", clock.at(&iv.start));
+    match (bar.open, bar.last_end) {
+        (0, Some(e)) => s.push_str(&clock.at(&e)),
+        _ => s.push_str("still active at the end of the trace"),
+    }
+    let cleared: Vec<String> = CLEARED_SLUGS
+        .iter()
+        .zip(bar.cleared)
+        .filter(|(_, n)| *n > 0)
+        .map(|(slug, n)| format!("{slug} ×{n}"))
+        .collect();
+    if !cleared.is_empty() {
+        let _ = write!(s, "\ncleared by: {}", cleared.join(", "));
+    }
+    if bar.open > 0 {
+        let _ = write!(s, "\n{} still active", bar.open);
+    }
+    s
+}
+
+fn write_marks(
+    out: &mut String,
+    clock: &Clock,
+    scale: Scale,
+    mark: Mark,
+    clusters: &Clusters,
+    height: f64,
+) -> fmt::Result {
+    // Markers closer than a few pixels are one marker at this scale.
+    let mut merged = clusters.clone();
+    merged.coarsen(scale.per_px() * MARKER_GAP_PX);
+    for c in &merged.items {
+        let (x_lo, x_hi) = (scale.x(c.lo), scale.x(c.hi));
+        let title = if c.count == 1 {
+            format!("{} at {}", mark.noun(1), clock.at(&c.first))
+        } else {
+            format!(
+                "{} {} from {} to {} (merged: closer than {} px)",
+                c.count,
+                mark.noun(c.count),
+                clock.at(&c.first),
+                clock.at(&c.last),
+                N(MARKER_GAP_PX)
+            )
+        };
+        write!(
+            out,
+            "<g class=\"mk {}\"><title>{}</title>",
+            mark.css(),
+            esc(&title)
+        )?;
+        let bottom = N(height - 2.0);
+        if x_hi - x_lo < MARKER_GAP_PX {
+            let x = N((x_lo + x_hi) / 2.0);
+            write!(
+                out,
+                "<line x1=\"{x}\" y1=\"2\" x2=\"{x}\" y2=\"{bottom}\"/>"
+            )?;
+            match mark {
+                Mark::Reset | Mark::Partial => {
+                    write!(out, "<circle cx=\"{x}\" cy=\"4\" r=\"3\"/>")?
+                }
+                Mark::Boot => write!(out, "<path d=\"M{x} 0l4 4l-4 4l-4-4z\"/>")?,
+            }
+        } else {
+            // Many markers over a stretch: a band from the first to the last.
+            let (a, b) = (N(x_lo), N(x_hi));
+            write!(
+                out,
+                "<line x1=\"{a}\" y1=\"2\" x2=\"{a}\" y2=\"{bottom}\"/>\
+                 <line x1=\"{b}\" y1=\"2\" x2=\"{b}\" y2=\"{bottom}\"/>\
+                 <rect x=\"{a}\" y=\"1\" width=\"{}\" height=\"4\"/>",
+                N(x_hi - x_lo)
+            )?;
+        }
+        out.push_str("</g>\n");
+    }
+    Ok(())
+}
+
+/// The legend: classes drawn in this panel, then the marker kinds.
+fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt::Error> {
+    let mut classes = [false; LEGEND_ORDER.len()];
+    let (mut merged, mut open) = (false, false);
+    let mut marks = [false; 3];
+    for lane in lanes {
+        for bar in &lane.bars.bars {
+            if let Some(c) = classes.get_mut(class_index(bar.class())) {
+                *c = true;
+            }
+            merged |= bar.count > 1;
+            open |= bar.open > 0;
+        }
+        if let Some(m) = &lane.marks {
+            for (seen, c) in marks.iter_mut().zip(&m.marks) {
+                *seen |= !c.items.is_empty();
+            }
+        }
+    }
+    let y0 = y;
+    let mut x = 10.0;
+    let mut y = y;
+    let mut item = |out: &mut String, glyph: String, text: &str| -> fmt::Result {
+        let w = 16.0 + text.chars().count() as f64 * 5.8 + 14.0;
+        if x + w > WIDTH - 10.0 {
+            x = 10.0;
+            y += 18.0;
+        }
+        writeln!(
+            out,
+            "<g transform=\"translate({},{})\">{glyph}<text x=\"16\" y=\"9\">{text}</text></g>",
+            N(x),
+            N(y)
+        )?;
+        x += w;
+        Ok(())
+    };
+    out.push_str("<g class=\"legend\">\n");
+    for (class, _) in LEGEND_ORDER.iter().zip(classes).filter(|(_, seen)| *seen) {
+        item(
+            out,
+            format!(
+                "<rect class=\"b c-{}\" width=\"11\" height=\"{}\"/>",
+                class.slug(),
+                N(BAR_H)
+            ),
+            &match class {
+                // 0x00xx other than 0x0000: an error, not a reset marker.
+                Class::Reset => "00xx (not a reset)".to_string(),
+                c => c.slug().replace('_', " "),
+            },
+        )?;
+    }
+    if open {
+        item(
+            out,
+            format!(
+                "<rect class=\"b o c-generic\" width=\"5\" height=\"{}\"/><path class=\"oe\" d=\"M6 -1l6 5.5l-6 5.5z\"/>",
+                N(BAR_H)
+            ),
+            "still active at end",
+        )?;
+    }
+    if merged {
+        item(
+            out,
+            format!(
+                "<rect class=\"b m c-generic\" width=\"11\" height=\"{}\"/>",
+                N(BAR_H)
+            ),
+            "merged short errors",
+        )?;
+    }
+    for (mark, _) in MARKS.iter().zip(marks).filter(|(_, seen)| *seen) {
+        let glyph = match mark {
+            Mark::Reset | Mark::Partial => {
+                "<line x1=\"5\" y1=\"-1\" x2=\"5\" y2=\"11\"/><circle cx=\"5\" cy=\"1\" r=\"3\"/>"
+            }
+            Mark::Boot => {
+                "<line x1=\"5\" y1=\"-1\" x2=\"5\" y2=\"11\"/><path d=\"M5 -3l4 4l-4 4l-4-4z\"/>"
+            }
+        };
+        let text = match mark {
+            Mark::Reset => "reset",
+            Mark::Partial => "partial reset",
+            Mark::Boot => "boot-up",
+        };
+        item(
+            out,
+            format!("<g class=\"mk {}\">{glyph}</g>", mark.css()),
+            text,
+        )?;
+    }
+    out.push_str("</g>\n");
+    Ok(y - y0 + 18.0)
+}

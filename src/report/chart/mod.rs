@@ -1,0 +1,273 @@
+//! The timeline chart shared by `--format svg` and `--format html`: one lane
+//! per (channel, node), error intervals as bars coloured by class, resets and
+//! boot-ups as markers, a time axis, a legend.
+//!
+//! Plain SVG text, not a plotting crate. What the chart needs is a `<title>`
+//! tooltip on every bar, CSS classes instead of repeated style attributes
+//! (that is what keeps a file with thousands of bars small), exact control of
+//! number formatting (golden tests compare bytes) and escaping of
+//! trace-controlled text. plotters' SVG backend gives none of the first three
+//! (every element carries inline styles, no child elements for tooltips) and
+//! brings a font stack for text measurement we do not need; the chart is a
+//! few rectangles and lines, so writing them directly is less code than
+//! adapting a backend.
+//!
+//! Memory stays bounded by pixels, not by the trace: markers (resets, partial
+//! resets, boot-ups) are coalesced while they stream in
+//! ([`marks::Clusters`]), and the error intervals are read once from the
+//! input's history at the end and folded into at most a few thousand bars
+//! per lane ([`bars::Bars`]); intervals narrower than [`bars::SMALL_PX`]
+//! that follow each other within a pixel become one bar whose tooltip says
+//! how many errors it merges.
+//!
+//! The parts, one concern each: [`style`] (geometry and CSS), [`text`]
+//! (escaping and number formatting), [`axis`] (the time axis and its
+//! calendar), [`marks`] (markers as they stream in), [`bars`] (intervals
+//! binned into bars), [`draw`] (the SVG elements). This file is the surface
+//! `svg.rs` and `html.rs` use: the [`Collector`] and the [`Panel`] it lays
+//! out, and the lanes and scale the parts share.
+
+mod axis;
+mod bars;
+mod draw;
+mod marks;
+mod style;
+mod text;
+
+use std::io;
+
+use crate::analyze::{BootEvent, EmcyEvent, InputReport, NodeReport};
+use crate::trace::Format;
+
+use axis::Axis;
+use bars::Bars;
+use draw::write_panel;
+use marks::{LaneMarks, Mark, Streamed};
+use style::{LANE_MIN_H, PLOT_W, ROW_H, X0};
+
+pub(super) use axis::Clock;
+pub(super) use style::{STYLE, WIDTH};
+pub(super) use text::{N, esc};
+
+/// Room right of the last frame, as a fraction of the span.
+const END_ROOM: f64 = 0.03;
+/// Times from this Unix second on (1973) are wall-clock times.
+const UNIX_FROM: u64 = 100_000_000;
+
+/// Collects one input at a time and lays it out as a [`Panel`].
+#[derive(Debug, Default)]
+pub(super) struct Collector {
+    current: Streamed,
+}
+
+impl Collector {
+    pub(super) fn begin_input(&mut self) {
+        self.current = Streamed::default();
+    }
+
+    pub(super) fn emcy(&mut self, ev: &EmcyEvent<'_>) {
+        if !ev.emcy.is_reset() {
+            // Errors are drawn from the history, which has their ends; the
+            // event only fixes whether the trace is timed.
+            self.current.timed.get_or_insert(ev.time.is_some());
+            if let (Some(t), None) = (ev.time, self.current.origin) {
+                self.current.origin = Some(t);
+            }
+            return;
+        }
+        let mark = if ev.emcy.register.0 == 0 {
+            Mark::Reset
+        } else {
+            Mark::Partial
+        };
+        self.current
+            .mark(ev.channel, ev.node, ev.time, ev.line, mark);
+    }
+
+    pub(super) fn boot(&mut self, ev: &BootEvent<'_>) {
+        self.current
+            .mark(ev.channel, ev.node, ev.time, ev.line, Mark::Boot);
+    }
+
+    /// Lays out the input that just ended.
+    pub(super) fn end_input(&mut self, input: &InputReport) -> io::Result<Panel> {
+        let streamed = std::mem::take(&mut self.current);
+        Panel::build(input, streamed)
+    }
+}
+
+/// The label of a lane: `can0 · node 5`, and a second line.
+struct LaneLabel {
+    main: String,
+    detail: Option<String>,
+}
+
+/// The one place a lane's label is made: channel and node, then the node's
+/// profile and why it has it.
+fn lane_label(node: &NodeReport) -> LaneLabel {
+    LaneLabel {
+        main: format!("{} · node {}", node.channel, node.node),
+        detail: Some(format!(
+            "{} ({})",
+            node.profile.name(),
+            node.profile_source.slug()
+        )),
+    }
+}
+
+/// Key of a lane in the HTML filter: `channel/node`.
+pub(super) fn lane_key(channel: &str, node: u8) -> String {
+    format!("{channel}/{node}")
+}
+
+/// One input laid out: the SVG fragment (without `<svg>` and style), its
+/// height, and the clock its times are shown with. `pub(crate)` only because
+/// `svg::document`, which takes panels, is.
+pub(crate) struct Panel {
+    pub(super) svg: String,
+    pub(super) height: f64,
+    pub(super) clock: Clock,
+    /// `(key, label)` per lane, for the HTML filter.
+    pub(super) lanes: Vec<(String, String)>,
+}
+
+struct Lane<'a> {
+    node: &'a NodeReport,
+    bars: Bars,
+    marks: Option<LaneMarks>,
+    height: f64,
+}
+
+/// Maps axis values to x pixels.
+#[derive(Clone, Copy)]
+struct Scale {
+    lo: f64,
+    hi: f64,
+    /// The last frame of the input.
+    end: f64,
+}
+
+impl Scale {
+    fn x(&self, v: f64) -> f64 {
+        let v = v.clamp(self.lo, self.hi);
+        X0 + (v - self.lo) / (self.hi - self.lo) * PLOT_W
+    }
+    fn per_px(&self) -> f64 {
+        (self.hi - self.lo) / PLOT_W
+    }
+}
+
+impl Panel {
+    fn build(input: &InputReport, mut streamed: Streamed) -> io::Result<Panel> {
+        let timed = streamed.timed.unwrap_or(input.first_time.is_some());
+        let origin = input.first_time.or(streamed.origin);
+        let wall = matches!(
+            input.format,
+            Some(Format::CandumpLog | Format::CandumpScreen)
+        ) && origin.is_some_and(|t| t.secs() >= UNIX_FROM);
+        let axis = match (timed, wall) {
+            (false, _) => Axis::Lines,
+            (true, true) => Axis::Wall,
+            (true, false) => Axis::Seconds,
+        };
+        let one_day = match (input.first_time, input.last_time) {
+            (Some(a), Some(b)) => a.secs() / 86_400 == b.secs() / 86_400,
+            _ => true,
+        };
+        let clock = Clock {
+            axis,
+            origin,
+            one_day,
+        };
+        // Streamed marker values are relative to the first event's time;
+        // the axis is relative to the input's first frame.
+        let shift = match (streamed.origin, origin) {
+            (Some(s), Some(o)) if timed => s.since(o).as_f64(),
+            _ => 0.0,
+        };
+        for nodes in streamed.lanes.values_mut() {
+            for lane in nodes.values_mut() {
+                for c in lane.marks.iter_mut().flat_map(|m| m.items.iter_mut()) {
+                    c.lo += shift;
+                    c.hi += shift;
+                }
+            }
+        }
+        let (mut lo, mut hi): (f64, f64) = match axis {
+            Axis::Lines => (1.0, input.counts.lines.max(1) as f64),
+            _ => (
+                0.0,
+                match (input.last_time, origin) {
+                    (Some(l), Some(o)) => l.since(o).as_f64(),
+                    _ => 0.0,
+                },
+            ),
+        };
+        if let (Some(a), Some(b)) = (streamed.lo, streamed.hi) {
+            lo = lo.min(a + shift);
+            hi = hi.max(b + shift);
+        }
+        // An empty span (one frame, or no times): one unit wide.
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+            hi = lo + 1.0;
+        }
+        // Room right of the last frame, so an error still active there
+        // visibly runs on to the edge.
+        let scale = Scale {
+            lo,
+            hi: hi + (hi - lo) * END_ROOM,
+            end: hi,
+        };
+
+        let mut lanes = Vec::with_capacity(input.nodes.len());
+        let mut merge = input.history.merge();
+        for node in &input.nodes {
+            let mut bars = Bars::default();
+            for iv in merge.node_errors(&node.channel, node.node) {
+                let start = clock.value(&iv.start);
+                let end = match iv.end {
+                    Some(e) => clock.value(&e),
+                    None => Some(scale.hi),
+                };
+                let (Some(s), Some(e)) = (start, end) else {
+                    bars.unplaced += 1;
+                    continue;
+                };
+                let (x0, x1) = (scale.x(s), scale.x(e.max(s)));
+                bars.push(iv, x0, x1);
+            }
+            let marks = streamed
+                .lanes
+                .get_mut(node.channel.as_str())
+                .and_then(|n| n.remove(&node.node));
+            let rows = bars.rows.len().max(1) as f64;
+            lanes.push(Lane {
+                node,
+                bars,
+                marks,
+                height: (rows * ROW_H + 10.0).max(LANE_MIN_H),
+            });
+        }
+        if let Some(e) = merge.take_error() {
+            return Err(e);
+        }
+        let mut svg = String::new();
+        let height = write_panel(&mut svg, input, &clock, scale, &lanes, &streamed)
+            .map_err(|_| io::Error::other("formatting the chart failed"))?;
+        let lanes = lanes
+            .iter()
+            .map(|l| {
+                (
+                    lane_key(&l.node.channel, l.node.node),
+                    lane_label(l.node).main,
+                )
+            })
+            .collect();
+        Ok(Panel {
+            svg,
+            height,
+            clock,
+            lanes,
+        })
+    }
+}
