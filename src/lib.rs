@@ -55,6 +55,8 @@ pub(crate) mod canopen;
 #[cfg(feature = "fuzzing")]
 #[doc(hidden)]
 pub mod fuzzing;
+#[cfg(test)]
+mod layers;
 pub(crate) mod report;
 pub(crate) mod timeline;
 pub(crate) mod trace;

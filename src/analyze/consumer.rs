@@ -25,7 +25,7 @@ use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
 /// interface name in the trace is one, so a hostile trace can name a million:
 /// lookup is hashed and a channel holds only the nodes it has seen, keeping
 /// time and memory linear in the input.
-pub(super) struct Nodes {
+struct Nodes {
     channels: Vec<ChannelNodes>,
     index: HashMap<Vec<u8>, usize>,
     /// Channels by name. Different bytes can read as one name (invalid
@@ -153,41 +153,41 @@ impl Nodes {
 pub(super) struct Consumer<'r, 'l, E: Write> {
     pub(super) file: &'r str,
     pub(super) opts: &'r Options,
-    pub(super) sink: &'r mut dyn Sink,
+    sink: &'r mut dyn Sink,
     pub(super) log: &'l mut DiagnosticLog<E>,
     pub(super) counts: Counts,
-    pub(super) nodes: Nodes,
+    nodes: Nodes,
     pub(super) diags: InputDiagnostics,
-    pub(super) errors_raised: u64,
-    pub(super) frames_with_warnings: u64,
-    pub(super) worst_category: Option<u8>,
+    errors_raised: u64,
+    frames_with_warnings: u64,
+    worst_category: Option<u8>,
     pub(super) decided: bool,
     /// Lines before the current block.
-    pub(super) line_base: u64,
+    line_base: u64,
     /// Time and line of the last EMCY or boot-up: the trace's clock as far
     /// as the timelines see it.
-    pub(super) clock: Option<(Timestamp, u64)>,
+    clock: Option<(Timestamp, u64)>,
     /// EMCY ids other than 0x80 + node, to their node.
-    pub(super) emcy_ids: HashMap<(u32, bool), u8>,
+    emcy_ids: HashMap<(u32, bool), u8>,
     /// First and last time of a decoded frame.
-    pub(super) first_time: Option<Timestamp>,
-    pub(super) last_time: Option<Timestamp>,
+    first_time: Option<Timestamp>,
+    last_time: Option<Timestamp>,
     pub(super) interest: Interest,
     pub(super) interest_gen: u64,
     /// Set while workers run: where they read the interest from.
     pub(super) shared_interest: Option<SharedInterest>,
-    pub(super) warnings: Vec<Warning>,
-    pub(super) active: Vec<u16>,
-    pub(super) sdo: sdo::Tracker,
-    pub(super) profiles: NodeProfiles<'r>,
+    warnings: Vec<Warning>,
+    active: Vec<u16>,
+    sdo: sdo::Tracker,
+    profiles: NodeProfiles<'r>,
     /// The last timeline step, handed back for its vectors.
-    pub(super) step_buffers: Step,
+    step_buffers: Step,
     /// What each (profile, code) means: the one code lookup of the run. A
     /// lookup is a few binary searches and a profile's description
     /// allocates, and an EMCY-heavy trace repeats a few codes millions of
     /// times on this thread, so the event carries both from here and no
     /// renderer looks a code up again.
-    pub(super) codes: Cache<(usize, u16), CodeEntry, 64>,
+    codes: Cache<(usize, u16), CodeEntry, 64>,
 }
 
 /// A code as a profile reads it.

@@ -6,6 +6,8 @@ use std::fmt;
 
 use super::codes::{self, Class, CodeInfo};
 use super::register::{self, Register};
+use crate::trace::FrameKind;
+use crate::trace::reader::CanFrame;
 
 /// The lowest and highest standard ids of the pre-defined EMCY connection set.
 pub const EMCY_BASE: u32 = 0x080;
@@ -31,6 +33,26 @@ pub fn is_nmt_error_control(id: u32) -> bool {
 pub fn boot_node(id: u32, data: &[u8]) -> Option<u8> {
     let node = id.checked_sub(NMT_ERROR_CONTROL_BASE)?;
     ((1..=127).contains(&node) && data == [0x00]).then_some(node as u8)
+}
+
+/// What a frame read by [`crate::TraceReader`] is to CANopen.
+impl CanFrame {
+    /// The node whose EMCY this frame is, by the pre-defined connection
+    /// set: a classic 11-bit data frame on 0x081-0x0FF (node = id - 0x80).
+    pub fn emcy_node(&self) -> Option<u8> {
+        if self.kind != FrameKind::Data || self.extended {
+            return None;
+        }
+        emcy_node(self.id)
+    }
+
+    /// The node an NMT boot-up frame (0x700 + node, one byte 0x00) announces.
+    pub fn boot_node(&self) -> Option<u8> {
+        if self.kind != FrameKind::Data || self.extended {
+            return None;
+        }
+        boot_node(self.id, &self.data)
+    }
 }
 
 /// A decoded EMCY payload.

@@ -2,7 +2,8 @@
 //! in for a Rust program that wants the frames themselves. The analysis
 //! does not use it (it decodes only the ids that matter, on several
 //! threads); this reads every id of every line, in order, and owns what it
-//! returns.
+//! returns. (What a frame is to CANopen, e.g. [`CanFrame::emcy_node`], is
+//! in `canopen`: this layer knows nothing above the frame.)
 
 use std::collections::VecDeque;
 use std::io::{self, Read};
@@ -12,7 +13,6 @@ use super::detect::Detector;
 use super::input::sniff_gzip_generic;
 use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
 use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
-use crate::canopen::emcy;
 
 /// One CAN frame of a trace, owned.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -35,23 +35,6 @@ pub struct CanFrame {
 }
 
 impl CanFrame {
-    /// The node whose EMCY this frame is, by the pre-defined connection
-    /// set: a classic 11-bit data frame on 0x081-0x0FF (node = id - 0x80).
-    pub fn emcy_node(&self) -> Option<u8> {
-        if self.kind != FrameKind::Data || self.extended {
-            return None;
-        }
-        emcy::emcy_node(self.id)
-    }
-
-    /// The node an NMT boot-up frame (0x700 + node, one byte 0x00) announces.
-    pub fn boot_node(&self) -> Option<u8> {
-        if self.kind != FrameKind::Data || self.extended {
-            return None;
-        }
-        emcy::boot_node(self.id, &self.data)
-    }
-
     fn of(line: u64, f: &Frame<'_>) -> CanFrame {
         CanFrame {
             line,
