@@ -1,21 +1,20 @@
 //! Micro-benchmarks of the per-line hot paths: `cargo bench --bench parse`.
 //! Lines per second for each format's common line, wanted and unwanted ids,
-//! and for the fallback (full) parsers.
+//! and for the fallback (full) parsers. The parsers are the library's
+//! internals, reached through the `fuzzing` feature's hook.
+
+use std::ops::RangeInclusive;
 
 use divan::{Bencher, black_box};
-use emcy_decode::trace::detect::Detector;
-use emcy_decode::trace::{Format, Interest, LineParser};
+use emcy_decode::Format;
+use emcy_decode::fuzzing::{Detector, Ids, Parser};
 
 fn main() {
     divan::main();
 }
 
-fn decoder_interest() -> Interest {
-    let mut i = Interest::none();
-    i.add_standard_range(0x81..=0xFF);
-    i.add_standard_range(0x701..=0x77F);
-    i
-}
+/// The ids the decoder wants: EMCY and NMT error control (boot-ups).
+const DECODER_IDS: [RangeInclusive<u32>; 2] = [0x81..=0xFF, 0x701..=0x77F];
 
 const LINES: &[(&str, Format, &str)] = &[
     (
@@ -58,22 +57,20 @@ const LINES: &[(&str, Format, &str)] = &[
 #[divan::bench(args = LINES.iter().map(|l| l.0))]
 fn parse_line(bencher: Bencher, name: &str) {
     let (_, format, line) = LINES.iter().find(|l| l.0 == name).copied().unwrap();
-    let mut parser = format.parser();
-    let interest = decoder_interest();
+    let mut parser = Parser::new(format, Ids::Standard(&DECODER_IDS));
     bencher
         .counter(divan::counter::BytesCount::new(line.len()))
         .bench_local(|| {
-            black_box(parser.parse(black_box(line.as_bytes()), &interest));
+            black_box(parser.parse(black_box(line.as_bytes())));
         });
 }
 
 #[divan::bench]
 fn detector_locked_candump(bencher: Bencher) {
-    let mut d = Detector::auto();
-    let interest = decoder_interest();
+    let mut d = Detector::auto(Ids::Standard(&DECODER_IDS));
     let line = b"(1700000000.123456) can0 181#1122334455667788";
-    d.parse(line, &interest);
+    d.parse(line);
     bencher.bench_local(|| {
-        black_box(d.parse(black_box(line), &interest));
+        black_box(d.parse(black_box(line)));
     });
 }

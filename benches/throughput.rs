@@ -6,7 +6,7 @@
 //! peak resident memory. Sizes: `BENCH_MB` (default 1024), `BENCH_GZ_MB`
 //! (default 256); best of `BENCH_RUNS` (default 3).
 
-#[path = "../tests/common/tracegen.rs"]
+#[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
 
 use std::fs::File;

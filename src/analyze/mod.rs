@@ -22,6 +22,8 @@ pub(crate) mod fail_on;
 pub(crate) mod interest;
 mod parallel;
 pub(crate) mod sink;
+#[cfg(test)]
+mod tests;
 
 use std::io::{self, Read, Write};
 

@@ -1,10 +1,16 @@
 //! The bodies of the cargo-fuzz targets in `fuzz/`, kept in the library so
 //! that `cargo test` on stable replays the committed corpus and regressions
-//! (`tests/fuzz_regressions.rs`) through exactly the code the fuzzer ran.
+//! (`tests/integration/fuzz_corpus.rs`) through exactly the code the fuzzer
+//! ran; and the per-line parsers for the `parse` benchmark ([`Parser`],
+//! [`Detector`]).
 //!
 //! Each body panics when an invariant breaks, not only when the code under
 //! test panics: a panic is what libFuzzer reports as a crash. Not part of the
 //! public API.
+
+mod lines;
+
+pub use lines::{Detector, Ids, Parser, Scanned};
 
 use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{Chosen, ProfileSource};

@@ -1,15 +1,13 @@
 //! At the machine and in the shell: live streams, Ctrl-C, --follow, several
 //! files side by side, directories, completions and the man page.
 
-mod common;
-
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 use std::process::{Child, ChildStdout, Command, Stdio};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Duration;
 
-use common::emcy_decode;
+use crate::support::{binary, emcy_decode};
 use serde_json::Value;
 
 /// Patience for one event to come through: generous for a loaded CI
@@ -17,11 +15,8 @@ use serde_json::Value;
 const WAIT: Duration = Duration::from_secs(20);
 
 fn spawn(args: &[&str]) -> Child {
-    Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
+    binary()
         .args(args)
-        .env_remove("NO_COLOR")
-        .env_remove("COLUMNS")
-        .env_remove("CI")
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

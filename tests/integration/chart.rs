@@ -4,38 +4,16 @@
 //! network references, trace text escaped.
 //!
 //! Refresh the golden files after an intended change with
-//! `UPDATE_GOLDEN=1 cargo test --test chart` and look at the diff (and at
-//! the picture: `scripts/screenshot.sh fixtures/s300.log`).
-
-mod common;
+//! `UPDATE_GOLDEN=1 cargo test --test integration -- chart::` and look at
+//! the diff (and at the picture: `scripts/screenshot.sh fixtures/s300.log`).
 
 use std::fmt::Write as _;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use common::emcy_decode;
+use crate::support::emcy_decode;
+use crate::support::golden::{self, check, fixtures};
 use serde_json::Value;
-
-/// The fixtures golden.rs renders: files directly in fixtures/.
-fn fixtures() -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = fs::read_dir("fixtures")
-        .expect("fixtures/ exists")
-        .map(|e| e.expect("readable entry").path())
-        .filter(|p| {
-            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-            !name.ends_with(".py")
-                && !name.ends_with(".md")
-                && !name.ends_with(".toml")
-                && p.is_file()
-        })
-        .collect();
-    files.sort();
-    assert!(
-        files.len() >= 15,
-        "expected the fixture set, found {files:?}"
-    );
-    files
-}
 
 fn render(format: &str, args: &[&Path]) -> String {
     let out = emcy_decode()
@@ -51,34 +29,13 @@ fn render(format: &str, args: &[&Path]) -> String {
     String::from_utf8(out.stdout).expect("utf-8 output")
 }
 
-fn check(path: &Path, actual: &str, failures: &mut Vec<String>) {
-    if std::env::var_os("UPDATE_GOLDEN").is_some() {
-        fs::write(path, actual).expect("write golden");
-        return;
-    }
-    match fs::read_to_string(path) {
-        Ok(expected) if expected == actual => {}
-        Ok(expected) => failures.push(format!(
-            "{} differs:\n{}",
-            path.display(),
-            common::first_difference(&expected, actual)
-        )),
-        Err(_) => failures.push(format!(
-            "{} is missing (run UPDATE_GOLDEN=1 cargo test --test chart)",
-            path.display()
-        )),
-    }
-}
-
 #[test]
 fn every_fixture_as_svg_and_html_matches_its_golden_file() {
     let mut failures = Vec::new();
     for fixture in fixtures() {
-        let name = fixture.file_name().and_then(|n| n.to_str()).expect("name");
         for format in ["svg", "html"] {
             let out = render(format, &[&fixture]);
-            let golden = Path::new("tests/golden").join(format!("{name}.{format}"));
-            check(&golden, &out, &mut failures);
+            check(&golden::path(&fixture, format), &out, &mut failures);
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));

@@ -1,14 +1,27 @@
 //! Differential test against the `candump-parse` crate: on every well-formed
 //! candump log line that crate accepts, we read the same frame. (Where it is
 //! wrong — `(1.5)` as 5 us, odd nibbles, `081#` vs `00000081#` — the unit tests
-//! in src/trace/candump_log.rs pin our behaviour instead.)
+//! in src/trace/candump_log.rs pin our behaviour instead.) Our side is the
+//! library's reader with the format forced to the candump log.
 
 use std::panic;
 
 use chumsky::Parser as _;
-use emcy_decode::trace::candump_log::CandumpLogParser;
-use emcy_decode::trace::{Interest, LineParser, Parsed};
+use emcy_decode::{CanFrame, Format, Record, TraceReader};
 use proptest::prelude::*;
+
+/// One line read as a candump log line: the frame, or `None` when the line
+/// is not one.
+fn parse(line: &str) -> Option<CanFrame> {
+    let records: Vec<Record> = TraceReader::with_format(line.as_bytes(), Format::CandumpLog)
+        .collect::<Result<_, _>>()
+        .expect("reading a string cannot fail");
+    assert_eq!(records.len(), 1, "one line, one record: {records:?}");
+    match records.into_iter().next() {
+        Some(Record::Frame(f)) => Some(f),
+        _ => None,
+    }
+}
 
 /// The subset of the log grammar candump-parse was written for: 6 fraction
 /// digits, an identifier-like interface, 3 or 8 hex id digits, 0-8 data bytes.
@@ -40,13 +53,12 @@ proptest! {
             // It panicked or refused: nothing to compare on this line.
             return Ok(());
         };
-        let mut ours = CandumpLogParser::new();
-        let Parsed::Frame(frame) = ours.parse(line.as_bytes(), &Interest::all()) else {
+        let Some(frame) = parse(&line) else {
             panic!("we rejected a well-formed line candump-parse accepts: {line}");
         };
         prop_assert_eq!(frame.id, theirs.id);
         prop_assert_eq!(frame.data.as_slice(), theirs.data.as_slice());
-        prop_assert_eq!(frame.channel, theirs.interface.as_bytes());
+        prop_assert_eq!(frame.channel.as_bytes(), theirs.interface.as_bytes());
         let time = frame.time.expect("time decoded");
         prop_assert_eq!(time.secs(), theirs.timestamp.as_secs());
         let text = time.to_string();
@@ -61,8 +73,7 @@ fn the_comparison_is_not_vacuous() {
     let line = "(1469439874.299654) can0 081#1043080100000000";
     let theirs = candump_parse::parser().parse(line).expect("accepted");
     assert_eq!(theirs.id, 0x81);
-    let Parsed::Frame(ours) = CandumpLogParser::new().parse(line.as_bytes(), &Interest::all())
-    else {
+    let Some(ours) = parse(line) else {
         panic!("rejected");
     };
     assert_eq!(ours.data.as_slice(), theirs.data.as_slice());
@@ -70,12 +81,6 @@ fn the_comparison_is_not_vacuous() {
 
 #[test]
 fn where_candump_parse_is_wrong_we_are_right() {
-    fn parse(l: &str) -> Option<emcy_decode::trace::Frame<'_>> {
-        match CandumpLogParser::new().parse(l.as_bytes(), &Interest::all()) {
-            Parsed::Frame(f) => Some(f),
-            _ => None,
-        }
-    }
     // (1.5) is one and a half seconds, not 1 s + 5 us.
     let theirs = candump_parse::parser()
         .parse("(1.5) can0 081#00")
@@ -100,7 +105,7 @@ fn where_candump_parse_is_wrong_we_are_right() {
     assert!(!parse("(1.000000) can0 081#00").unwrap().extended);
     assert!(parse("(1.000000) can0 00000081#00").unwrap().extended);
     // Dotted data is read whole, not cut after the first byte.
-    assert_eq!(parse("(1.000000) can0 123#11.22.33").unwrap().len, 3);
+    assert_eq!(parse("(1.000000) can0 123#11.22.33").unwrap().data.len(), 3);
     // An over-long id is a malformed line, not a panic.
     assert!(parse("(1.000000) can0 123456789ABCDEF#00").is_none());
 }

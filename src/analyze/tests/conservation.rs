@@ -20,23 +20,22 @@
 //! bases) to be malformed, so the oracle never counts a line as garbage that
 //! a reader could take for a frame.
 
-mod common;
-
 use std::io::{self, Read, Write};
 
-use common::frames::*;
-use emcy_decode::analyze::Sink as Renderer;
-use emcy_decode::analyze::{DiagnosticLog, Options, analyze};
-use emcy_decode::report::ndjson::Ndjson;
-use emcy_decode::trace::input::sniff_gzip;
-use emcy_decode::trace::{Format, FrameKind, HexBytes, Interest, LineParser, Parsed};
+use super::frames::*;
+use crate::analyze::Sink as Renderer;
+use crate::analyze::{DiagnosticLog, Options, analyze};
+use crate::report::ndjson::Ndjson;
+use crate::trace::input::sniff_gzip;
+use crate::trace::{Format, FrameKind, HexBytes, Interest, LineParser, Parsed};
 use proptest::prelude::*;
 use serde::Deserialize;
 use serde_json::Value;
 use serde_json::value::RawValue;
 
 /// A small cap keeps over-long lines cheap; the mechanism is the same as at
-/// the default 64 KiB (which tests/hostile.rs covers through the binary).
+/// the default 64 KiB (which the integration tests' `hostile` covers through
+/// the binary).
 const MAX_LINE: usize = 1024;
 const FILE: &str = "trace";
 
@@ -188,7 +187,8 @@ fn style(format: Format) -> BoxedStrategy<Style> {
         Format::CandumpLog => log_style().prop_map(Style::Log).boxed(),
         Format::CandumpScreen => screen_style().prop_map(Style::Screen).boxed(),
         Format::Asc => asc_style().prop_map(Style::Asc).boxed(),
-        // TRC and BLF have their own property tests (tests/trc.rs, tests/blf.rs).
+        // TRC and BLF have their own property tests (the integration tests'
+        // `trc` and `blf`).
         other => unreachable!("{other:?} is not generated here"),
     }
 }
@@ -505,7 +505,7 @@ fn check(case: &Case) -> Result<(), TestCaseError> {
     .map_err(|e| TestCaseError::fail(format!("output error {:?}", e.0)))?;
     let collected = std::mem::take(&mut log.collected);
     drop(log);
-    // Node and input objects come at the end of the run, as in run.rs.
+    // Node and input objects come at the end of the run, as in src/app/decode.rs.
     renderer
         .finish(std::slice::from_ref(&analysis.report), &collected)
         .unwrap();
@@ -516,7 +516,7 @@ fn check(case: &Case) -> Result<(), TestCaseError> {
     let (mut emcy, mut emcy_invalid, mut boot) = (0u64, 0u64, 0u64);
     let mut events = Vec::new();
     let mut diagnostic_lines = Vec::new();
-    let mut clock: Option<emcy_decode::trace::Timestamp> = None;
+    let mut clock: Option<crate::trace::Timestamp> = None;
     for (i, expect) in built.expect.iter().enumerate() {
         let line = i as u64 + 1;
         match expect {

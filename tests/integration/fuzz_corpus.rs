@@ -9,28 +9,17 @@ use std::panic;
 use std::path::{Path, PathBuf};
 
 use emcy_decode::fuzzing;
-use emcy_decode::trace::Format;
 
 /// A fuzz target's body.
 type Body = fn(&[u8]);
 
-/// The fuzz targets and the bodies they run.
+/// The fuzz targets (`fuzz/fuzz_targets/`) and the bodies they run.
 const TARGETS: [(&str, Body); 7] = [
-    ("candump_log", |d| {
-        fuzzing::reader(Some(Format::CandumpLog), d)
-    }),
-    ("candump_screen", |d| {
-        fuzzing::reader(Some(Format::CandumpScreen), d)
-    }),
-    ("asc", |d| fuzzing::reader(Some(Format::Asc), d)),
-    ("trc", |d| {
-        emcy_decode::trace::trc::fuzz_trc(d);
-        fuzzing::reader(Some(Format::Trc), d)
-    }),
-    ("blf", |d| {
-        emcy_decode::trace::blf::fuzz_blf(d);
-        fuzzing::reader(Some(Format::Blf), d)
-    }),
+    ("candump_log", fuzzing::candump_log),
+    ("candump_screen", fuzzing::candump_screen),
+    ("asc", fuzzing::asc),
+    ("trc", fuzzing::trc),
+    ("blf", fuzzing::blf),
     ("detect", fuzzing::detect),
     ("decode_timeline", fuzzing::decode_timeline),
 ];

@@ -1,13 +1,11 @@
 //! The command-line contract: exit codes, flags, stdin, errors. Hostile
 //! input (directories, empty files, corrupt gzip, closed pipes, mixed
-//! formats, bounded diagnostics) is tests/hostile.rs.
-
-mod common;
+//! formats, bounded diagnostics) is `hostile`.
 
 use std::io::Write;
 use std::process::Stdio;
 
-use common::emcy_decode;
+use crate::support::{binary, emcy_decode};
 use predicates::prelude::*;
 use serde_json::Value;
 
@@ -535,7 +533,7 @@ fn events_from_a_pipe_arrive_before_the_writer_finishes() {
     // `candump -L can0 | emcy-decode --format ndjson -`: the event must be
     // printed while stdin is still open.
     use std::io::BufRead;
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
+    let mut child = binary()
         .args(["--format", "ndjson", "-"])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())

@@ -2,9 +2,9 @@
 //! it: every trace below is decoded with one thread and with several, with
 //! blocks from 1 byte to 1 MiB, and stdout and stderr must be identical.
 
-use emcy_decode::analyze::Sink as Renderer;
-use emcy_decode::analyze::{DiagnosticLog, Options, analyze};
-use emcy_decode::report::ndjson::Ndjson;
+use crate::analyze::Sink as Renderer;
+use crate::analyze::{DiagnosticLog, Options, analyze};
+use crate::report::ndjson::Ndjson;
 
 fn run(trace: &[u8], threads: usize, block_size: usize) -> (String, String) {
     run_with(
@@ -243,9 +243,7 @@ fn error_history_on_disk_reads_back_identically() {
     let table = |spill_at| {
         let mut out = Vec::new();
         report_with(&trace, &spilling_every(spill_at), &mut out, |o| {
-            Box::new(emcy_decode::report::table::TableReport::new(
-                o, false, false,
-            ))
+            Box::new(crate::report::table::TableReport::new(o, false, false))
         });
         String::from_utf8(out).unwrap()
     };

@@ -1,14 +1,13 @@
 //! Property tests for the readers: random frames, rendered in each format with
 //! random valid variations (padding, case, separators, fraction digits, -x
-//! columns, ASC base dec...), read back through format detection, must come
-//! back as the same frames.
+//! columns, ASC base dec...), read back through format detection
+//! (`emcy_decode::TraceReader`), must come back as the same frames.
 
-mod common;
-
-use common::frames::*;
-use emcy_decode::trace::detect::Detector;
-use emcy_decode::trace::{FrameKind, Interest, Parsed};
+use emcy_decode::FrameKind;
 use proptest::prelude::*;
+
+use crate::support::frames::*;
+use crate::support::read_last;
 
 fn check(line: &str, f: &TestFrame, with_time: bool) -> Result<(), TestCaseError> {
     check_lines(&[line.to_string()], f, with_time, false)
@@ -20,19 +19,8 @@ fn check_lines(
     with_time: bool,
     asc: bool,
 ) -> Result<(), TestCaseError> {
-    let mut detector = Detector::auto();
-    let (last, header) = lines.split_last().expect("at least one line");
-    for h in header {
-        prop_assert_eq!(
-            detector.parse(h.as_bytes(), &Interest::all()),
-            Parsed::Skipped
-        );
-    }
-    let line = last.as_str();
-    let parsed = detector.parse(line.as_bytes(), &Interest::all());
-    let Parsed::Frame(got) = parsed else {
-        return Err(TestCaseError::fail(format!("{line:?} -> {parsed:?}")));
-    };
+    let (got, _) = read_last(lines)?;
+    let line = lines.last().expect("at least one line").as_str();
     prop_assert_eq!(got.kind, f.kind, "{}", line);
     if asc && f.kind == FrameKind::Error {
         // ASC error frames carry no id.
@@ -41,22 +29,22 @@ fn check_lines(
     prop_assert_eq!(got.id, f.id, "{}", line);
     prop_assert_eq!(got.extended, f.extended, "{}", line);
     if !asc {
-        prop_assert_eq!(got.channel, f.channel.as_bytes(), "{}", line);
+        prop_assert_eq!(&got.channel, &f.channel, "{}", line);
     }
     if f.kind != FrameKind::Remote {
         // An FD frame is padded up to the next valid FD length.
         let n = if f.kind == FrameKind::Fd && asc {
-            usize::from(got.len)
+            got.data.len()
         } else {
             f.data.len()
         };
         prop_assert_eq!(
-            &got.data.as_slice()[..f.data.len().min(n)],
+            &got.data[..f.data.len().min(n)],
             f.data.as_slice(),
             "{}",
             line
         );
-        prop_assert_eq!(usize::from(got.len), n, "{}", line);
+        prop_assert_eq!(got.data.len(), n, "{}", line);
     }
     if with_time {
         prop_assert_eq!(got.time, Some(f.time()), "{}", line);

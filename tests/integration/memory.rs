@@ -2,12 +2,11 @@
 //! streamed through the binary and its peak resident size is checked. Not a
 //! timing test: it passes on a slow machine too.
 
-mod common;
-
 use std::io::{BufWriter, Write};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 
-use common::tracegen::{TraceFormat, write_trace};
+use crate::support::binary;
+use crate::support::tracegen::{TraceFormat, write_trace};
 
 const TRACE_BYTES: u64 = 200 * 1024 * 1024;
 const LIMIT_KIB: u64 = 32 * 1024;
@@ -29,7 +28,7 @@ fn peak_with_emcy(
     bytes: u64,
     emcy_per_mille: u64,
 ) -> Option<u64> {
-    let mut child = Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"))
+    let mut child = binary()
         .args(args)
         .arg("-")
         .stdin(Stdio::piped())

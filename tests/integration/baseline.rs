@@ -3,13 +3,12 @@
 //! the reference run (`fixtures/baseline/rig.log`), then the trace is replaced
 //! by a variant from `fixtures/baseline/` and checked.
 
-mod common;
-
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use crate::support::golden::first_difference;
+use crate::support::{emcy_decode, readme_block};
 use assert_cmd::Command;
-use common::emcy_decode;
 use predicates::prelude::*;
 use serde_json::Value;
 use tempfile::TempDir;
@@ -478,22 +477,6 @@ fn the_json_diff_parses_and_every_finding_has_the_same_keys() {
 
 // ---- the README's CI example --------------------------------------------------------------
 
-/// The lines of the README's code block between `<!-- NAME:start -->` and
-/// `<!-- NAME:end -->`, without the fences.
-fn readme_block(name: &str) -> Vec<String> {
-    let readme = fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
-        .expect("README.md");
-    let start = format!("<!-- {name}:start -->");
-    let end = format!("<!-- {name}:end -->");
-    let from = readme.find(&start).expect("start marker") + start.len();
-    let to = readme[from..].find(&end).expect("end marker") + from;
-    readme[from..to]
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !l.starts_with("```"))
-        .map(str::to_string)
-        .collect()
-}
-
 /// Runs a README command line with `sh` in `dir`, the built binary first on
 /// PATH (so `emcy-decode` and shell globs work as in CI).
 #[cfg(unix)]
@@ -558,7 +541,7 @@ fn the_readme_baseline_example_is_what_baseline_writes() {
     assert!(
         actual == expected,
         "README baseline example is stale:\n{}",
-        common::first_difference(&expected, &actual)
+        first_difference(&expected, &actual)
     );
 }
 

@@ -23,9 +23,7 @@
 //! | regressions found here | `many_distinct_channels_stay_linear_in_time_and_memory`, `channel_names_cannot_put_control_sequences_on_the_terminal`, `channel_names_that_read_the_same_are_one_channel` (fuzzing) |
 //!
 //! That no EMCY is lost or invented among garbage is a property test:
-//! tests/conservation.rs.
-
-mod common;
+//! the library's `analyze::tests::conservation` (src/analyze/tests/).
 
 use std::ffi::OsString;
 use std::fs;
@@ -35,7 +33,8 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use common::emcy_decode;
+use crate::support::tracegen::Rng;
+use crate::support::{binary, emcy_decode};
 use serde_json::Value;
 
 /// Peak resident memory the binary may reach on any streaming case. Its
@@ -135,36 +134,6 @@ impl Drop for TempDir {
     fn drop(&mut self) {
         let _ = fs::remove_dir_all(&self.0);
     }
-}
-
-/// A small deterministic generator (xorshift64*): the same bytes every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-
-    fn bytes(&mut self, n: usize) -> Vec<u8> {
-        (0..n).map(|_| self.next() as u8).collect()
-    }
-}
-
-/// The binary as a plain process (for cases that need the pid or a stream).
-fn binary() -> Command {
-    let mut cmd = Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"));
-    cmd.env_remove("COLUMNS")
-        .env_remove("NO_COLOR")
-        .env_remove("CLICOLOR_FORCE")
-        .env_remove("CI");
-    cmd
 }
 
 struct Measured {
@@ -332,14 +301,15 @@ fn gzip_bomb(prefix: &[u8], unit: &[u8], times: usize, suffix: &[u8]) -> Vec<u8>
 
 #[test]
 fn random_bytes_never_panic_and_every_line_is_counted() {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    // The same bytes every run.
+    let mut rng = Rng::new(0x9E37_79B9_7F4A_7C15);
     for case in 0..45 {
-        let len = rng.below(1 << (case % 15));
+        let len = rng.below(1 << (case % 15)) as usize;
         let mut input = rng.bytes(len);
         if case % 3 == 0 {
             // Valid lines among the noise are still read.
             for _ in 0..3 {
-                let at = rng.below(input.len() + 1);
+                let at = rng.below(input.len() as u64 + 1) as usize;
                 let line = format!("\n{ERROR_LINE}\n");
                 input.splice(at..at, line.bytes());
             }

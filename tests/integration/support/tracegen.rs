@@ -1,6 +1,8 @@
 //! Deterministic generator of large, realistic CAN traces (a CANopen machine:
 //! SYNC, PDOs, heartbeats, SDO traffic, and EMCY raise/reset cycles at a
-//! chosen rate), shared by the throughput benchmark and the memory test.
+//! chosen rate), shared by the throughput benchmark (`benches/throughput.rs`
+//! includes this file) and the memory test; and the random numbers of the
+//! tests that need the same bytes every run (hostile input).
 #![allow(dead_code)]
 
 use std::io::{self, Write};
@@ -28,6 +30,9 @@ impl Rng {
     }
     pub fn below(&mut self, n: u64) -> u64 {
         self.next() % n.max(1)
+    }
+    pub fn bytes(&mut self, n: usize) -> Vec<u8> {
+        (0..n).map(|_| self.next() as u8).collect()
     }
 }
 

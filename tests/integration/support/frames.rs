@@ -1,9 +1,12 @@
 //! Random CAN frames and their renderings in the three trace formats, with
 //! random valid variations (padding, case, separators, fraction digits, -x
-//! columns, ASC base dec...). Shared by the property tests (roundtrip,
-//! conservation).
+//! columns, ASC base dec...). Shared by the property tests: roundtrip, trc
+//! and blf here, and the library's conservation test
+//! (`src/analyze/tests/`), which includes this file with `#[path]`. So it
+//! names the library's types as `crate::...`: the library root, or the
+//! test binary's root, which imports them from `emcy_decode`.
 
-use emcy_decode::trace::{FrameKind, Timestamp};
+use crate::{FrameKind, Timestamp};
 use proptest::prelude::*;
 
 #[derive(Clone, Debug)]

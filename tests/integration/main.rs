@@ -1,0 +1,28 @@
+//! The integration tests, one binary (one link, one run): the program
+//! through its command line, and the library through its public API and
+//! its fuzz target bodies (`emcy_decode::fuzzing`). One module per area;
+//! what they share is in `support`.
+//!
+//! `cargo test --test integration` runs them all; a module or a test by
+//! name filter, e.g. `cargo test --test integration -- trc::` or
+//! `cargo test --test integration -- golden:: chart::`.
+
+// `support/frames.rs` is also compiled inside the library (its unit tests)
+// and names these as `crate::FrameKind`, `crate::Timestamp`.
+use emcy_decode::{FrameKind, Timestamp};
+
+mod support;
+
+mod api;
+mod baseline;
+mod blf;
+mod chart;
+mod cli;
+mod differential;
+mod fuzz_corpus;
+mod golden;
+mod hostile;
+mod live;
+mod memory;
+mod roundtrip;
+mod trc;

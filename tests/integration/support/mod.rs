@@ -1,0 +1,132 @@
+//! What the integration tests share: the binary with a neutral
+//! environment, golden files, the trace generator and its random numbers,
+//! and the proptest strategies for frames in every text format.
+
+pub mod frames;
+pub mod golden;
+pub mod tracegen;
+
+use emcy_decode::{CanFrame, Format, Record, TraceReader};
+use proptest::prelude::*;
+use serde_json::Value;
+
+/// The binary as a plain process (for a pid, a stream, a child to signal)
+/// with a neutral terminal environment, so output never depends on who
+/// runs the tests.
+pub fn binary() -> std::process::Command {
+    let mut cmd = std::process::Command::new(assert_cmd::cargo::cargo_bin("emcy-decode"));
+    cmd.env_remove("COLUMNS")
+        .env_remove("NO_COLOR")
+        .env_remove("CLICOLOR_FORCE")
+        .env_remove("CI");
+    cmd
+}
+
+/// [`binary`] as an `assert_cmd` command (`.assert()`, `.write_stdin()`,
+/// `.timeout()`).
+pub fn emcy_decode() -> assert_cmd::Command {
+    assert_cmd::Command::from_std(binary())
+}
+
+/// The objects the binary prints with `--format ndjson` and `args` (flags,
+/// then the trace).
+pub fn ndjson<I, S>(args: I) -> Vec<Value>
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let out = emcy_decode()
+        .args(["--format", "ndjson"])
+        .args(args)
+        .output()
+        .expect("runs");
+    String::from_utf8(out.stdout)
+        .expect("utf-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("valid JSON line"))
+        .collect()
+}
+
+/// `object` without the `keys` that depend on the trace format (file, line,
+/// channel, times...), also in the errors of a node object: what must be the
+/// same whichever format a scenario was recorded in.
+pub fn without(object: &Value, keys: &[&str]) -> Value {
+    let mut v = object.clone();
+    if let Some(o) = v.as_object_mut() {
+        for k in keys {
+            o.remove(*k);
+        }
+        if let Some(Value::Array(errors)) = o.get_mut("errors") {
+            for e in errors.iter_mut() {
+                *e = without(e, keys);
+            }
+        }
+    }
+    v
+}
+
+/// The event and node objects of a run (not the input object), each
+/// [`without`] `keys`.
+pub fn semantic(objects: &[Value], keys: &[&str]) -> Vec<Value> {
+    objects
+        .iter()
+        .filter(|o| o["type"] != "input")
+        .map(|o| without(o, keys))
+        .collect()
+}
+
+/// What depends on where a trace is and how its lines are laid out.
+pub const PLACE: [&str; 5] = ["file", "line", "channel", "start_line", "end_line"];
+
+/// What depends on how a format writes times.
+pub const TIMES: [&str; 8] = [
+    "time",
+    "start",
+    "end",
+    "duration",
+    "time_in_error",
+    "longest_error",
+    "first_emcy",
+    "last_emcy",
+];
+
+/// Reads `lines` as one trace, the format detected ([`TraceReader::new`]):
+/// every line but the last must be skipped (headers), the last a frame.
+/// Returns that frame and the format the reader detected.
+pub fn read_last(lines: &[String]) -> Result<(CanFrame, Option<Format>), TestCaseError> {
+    let text = lines.join("\n");
+    let mut reader = TraceReader::new(text.as_bytes());
+    let records: Vec<Record> = reader
+        .by_ref()
+        .collect::<Result<_, _>>()
+        .map_err(|e| TestCaseError::fail(format!("{text:?}: {e}")))?;
+    prop_assert_eq!(records.len(), lines.len(), "{:?}: {:?}", text, records);
+    let (last, header) = records.split_last().expect("at least one line");
+    for (i, h) in header.iter().enumerate() {
+        prop_assert_eq!(h, &Record::Skipped { line: i as u64 + 1 }, "{}", lines[i]);
+    }
+    match last {
+        Record::Frame(got) => Ok((got.clone(), reader.format())),
+        other => Err(TestCaseError::fail(format!(
+            "{:?} -> {other:?}",
+            lines.last()
+        ))),
+    }
+}
+
+/// The lines of the README's code block between `<!-- NAME:start -->` and
+/// `<!-- NAME:end -->`, without the fences.
+pub fn readme_block(name: &str) -> Vec<String> {
+    let readme =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+            .expect("README.md");
+    let start = format!("<!-- {name}:start -->");
+    let end = format!("<!-- {name}:end -->");
+    let from = readme.find(&start).expect("start marker") + start.len();
+    let to = readme[from..].find(&end).expect("end marker") + from;
+    readme[from..to]
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with("```"))
+        .map(str::to_string)
+        .collect()
+}
