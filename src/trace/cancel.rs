@@ -133,7 +133,7 @@ impl Read for Interruptible {
 
 #[cfg(test)]
 mod tests {
-    // Ctrl-C itself is tested through the binary (tests/live.rs).
+    // Ctrl-C itself is tested through the binary (tests/integration/live.rs).
     use super::*;
 
     #[test]
