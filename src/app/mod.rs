@@ -3,7 +3,7 @@
 //! knows about the process; the library below never imports it.
 
 mod baseline;
-pub(crate) mod cli;
+mod cli;
 mod decode;
 mod explain;
 mod man;

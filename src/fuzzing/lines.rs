@@ -7,7 +7,7 @@ use std::ops::RangeInclusive;
 
 use crate::trace::detect;
 use crate::trace::reader::CanFrame;
-use crate::trace::{AnyParser, Format, Frame, Interest, LineParser, Parsed, Scan, Timestamp};
+use crate::trace::{AnyParser, Format, Interest, LineParser, Parsed, Scan, Timestamp};
 
 /// Which identifiers a parser decodes in full (time and data); for the
 /// others it only checks the line.
@@ -120,21 +120,8 @@ impl Detector {
         match self.detector.scan(line, &self.interest) {
             Scan::Plain => Scanned::Plain,
             Scan::Timed(t) => Scanned::Timed(t),
-            Scan::Frame(f) => Scanned::Frame(owned(&f)),
+            Scan::Frame(f) => Scanned::Frame(CanFrame::of(0, &f)),
             Scan::Parse => Scanned::Parse,
         }
-    }
-}
-
-/// A frame as [`crate::TraceReader`] returns it, at line 0.
-fn owned(f: &Frame<'_>) -> CanFrame {
-    CanFrame {
-        line: 0,
-        time: f.time,
-        channel: String::from_utf8_lossy(f.channel).into_owned(),
-        id: f.id,
-        extended: f.extended,
-        kind: f.kind,
-        data: f.data.as_slice().to_vec(),
     }
 }

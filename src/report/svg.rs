@@ -30,7 +30,7 @@ impl<W: Write> SvgReport<W> {
 
 /// The `<svg>` element of one or more panels, stacked; `standalone` adds
 /// the XML declaration and the style sheet (HTML has its style in the head).
-pub(crate) fn document(panels: &[&Panel], title: &str, standalone: bool) -> String {
+pub(super) fn document(panels: &[&Panel], title: &str, standalone: bool) -> String {
     let mut height: f64 = panels.iter().map(|p| p.height).sum::<f64>()
         + PANEL_GAP * panels.len().saturating_sub(1) as f64;
     if panels.is_empty() {

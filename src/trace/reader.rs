@@ -35,7 +35,8 @@ pub struct CanFrame {
 }
 
 impl CanFrame {
-    fn of(line: u64, f: &Frame<'_>) -> CanFrame {
+    /// The owned copy of a parsed frame at `line`.
+    pub(crate) fn of(line: u64, f: &Frame<'_>) -> CanFrame {
         CanFrame {
             line,
             time: f.time,

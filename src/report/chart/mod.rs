@@ -123,7 +123,7 @@ pub(super) fn lane_key(channel: &str, node: u8) -> String {
 /// One input laid out: the SVG fragment (without `<svg>` and style), its
 /// height, and the clock its times are shown with. `pub(crate)` only because
 /// `svg::document`, which takes panels, is.
-pub(crate) struct Panel {
+pub(in crate::report) struct Panel {
     pub(super) svg: String,
     pub(super) height: f64,
     pub(super) clock: Clock,
