@@ -141,8 +141,8 @@ pub fn sniff_gzip(raw: Box<dyn Read + Send>) -> io::Result<Opened> {
 /// A stream with its first bytes put back: plain, or decompressed.
 pub(crate) enum Sniffed<R> {
     Plain(Peeked<R>),
-    /// MultiGzDecoder: `cat a.gz b.gz` is a valid gzip stream of two members.
-    Gzip(Box<flate2::read::MultiGzDecoder<BufReader<Peeked<R>>>>),
+    /// Every member of the stream (`cat a.gz b.gz` is valid gzip).
+    Gzip(Box<Members<BufReader<Peeked<R>>>>),
 }
 
 type Peeked<R> = io::Chain<io::Take<io::Cursor<[u8; 2]>>, R>;
@@ -170,11 +170,69 @@ pub(crate) fn sniff_gzip_generic<R: Read>(mut raw: R) -> io::Result<(Sniffed<R>,
     }
     let stream = io::Cursor::new(head).take(got as u64).chain(raw);
     if got == 2 && head == GZIP_MAGIC {
-        let decoder =
-            flate2::read::MultiGzDecoder::new(BufReader::with_capacity(256 * 1024, stream));
-        Ok((Sniffed::Gzip(Box::new(decoder)), true))
+        let members = Members::new(BufReader::with_capacity(256 * 1024, stream));
+        Ok((Sniffed::Gzip(Box::new(members)), true))
     } else {
         Ok((Sniffed::Plain(stream), false))
+    }
+}
+
+/// The members of a gzip stream, one after another, and what GNU gzip
+/// accepts after the last: nothing, or zero bytes (tape and block devices
+/// pad with them). Anything else after a member is an error, as it is for
+/// gzip. flate2's MultiGzDecoder takes the zeros for a broken header; its
+/// single-member bufread decoder reads exactly one member, so the bytes
+/// after it can be looked at here.
+pub(crate) struct Members<R> {
+    decoder: Option<flate2::bufread::GzDecoder<R>>,
+}
+
+impl<R: io::BufRead> Members<R> {
+    fn new(inner: R) -> Self {
+        Members {
+            decoder: Some(flate2::bufread::GzDecoder::new(inner)),
+        }
+    }
+}
+
+impl<R: io::BufRead> Read for Members<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        loop {
+            let Some(decoder) = &mut self.decoder else {
+                return Ok(0);
+            };
+            let n = decoder.read(buf)?;
+            if n > 0 || buf.is_empty() {
+                return Ok(n);
+            }
+            // A member ended: another, zero padding, the end, or garbage.
+            let Some(mut inner) = self.decoder.take().map(|d| d.into_inner()) else {
+                return Ok(0);
+            };
+            loop {
+                let head = match inner.fill_buf() {
+                    Ok(head) => head,
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                    Err(e) => return Err(e),
+                };
+                if head.is_empty() {
+                    return Ok(0);
+                }
+                if head.first() == Some(&0) {
+                    let zeros = head.iter().take_while(|b| **b == 0).count();
+                    inner.consume(zeros);
+                    continue;
+                }
+                if head.first() == Some(&GZIP_MAGIC[0]) {
+                    self.decoder = Some(flate2::bufread::GzDecoder::new(inner));
+                    break;
+                }
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    "trailing garbage after gzip data",
+                ));
+            }
+        }
     }
 }
 
@@ -206,6 +264,44 @@ mod tests {
             gz.extend(enc.finish().unwrap());
         }
         assert_eq!(read_all(gz), (b"hello world".to_vec(), true));
+    }
+
+    fn gz(part: &[u8]) -> Vec<u8> {
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        enc.write_all(part).unwrap();
+        enc.finish().unwrap()
+    }
+
+    fn read_result(data: Vec<u8>) -> io::Result<Vec<u8>> {
+        let mut opened = sniff_gzip(Box::new(io::Cursor::new(data)))?;
+        let mut out = Vec::new();
+        opened.reader.read_to_end(&mut out).map(|_| out)
+    }
+
+    #[test]
+    fn zero_padding_after_gzip_is_accepted_as_gnu_gzip_does() {
+        let mut padded = gz(b"hello ");
+        padded.extend([0u8; 512]);
+        assert_eq!(read_result(padded.clone()).unwrap(), b"hello ");
+        // Between members too (concatenated padded files).
+        padded.extend(gz(b"world"));
+        padded.extend([0u8; 3]);
+        assert_eq!(read_result(padded).unwrap(), b"hello world");
+    }
+
+    #[test]
+    fn anything_else_after_gzip_is_an_error_after_the_data() {
+        for junk in [&b"garbage\n"[..], &[0, 0, 7][..], &[0x1f, 0x00][..]] {
+            let mut data = gz(b"hello");
+            data.extend_from_slice(junk);
+            let mut opened = sniff_gzip(Box::new(io::Cursor::new(data))).unwrap();
+            let mut out = Vec::new();
+            let err = opened.reader.read_to_end(&mut out).unwrap_err();
+            assert_eq!(
+                out, b"hello",
+                "{junk:?}: the data before it is read ({err})"
+            );
+        }
     }
 
     #[test]

@@ -11,7 +11,7 @@
 //! | 10^6 hex digits after `#` | `a_million_hex_digits_after_the_hash_is_one_malformed_line`, `huge_frames_under_the_line_cap_are_malformed` |
 //! | numbers overflowing u64 | `numbers_that_overflow_u64_are_malformed_never_wrapped`, `the_largest_timestamp_is_read_exactly`, `relative_asc_times_that_overflow_are_malformed` |
 //! | timestamps going backwards | `timestamps_going_backwards_get_a_diagnostic_and_a_negative_duration` |
-//! | truncated or corrupt gzip | `truncated_gzip_reports_what_was_read_then_exit_2`, `corrupt_gzip_reports_what_was_read_then_exit_2`, `gzip_with_a_bad_checksum_is_read_then_exit_2`, `gzip_with_trailing_garbage_is_read_then_exit_2`, `gzip_magic_alone_is_an_error_with_a_named_file` |
+//! | truncated or corrupt gzip | `truncated_gzip_reports_what_was_read_then_exit_2`, `corrupt_gzip_reports_what_was_read_then_exit_2`, `gzip_with_a_bad_checksum_is_read_then_exit_2`, `gzip_with_trailing_garbage_is_read_then_exit_2`, `gzip_with_trailing_zero_padding_is_read_as_gzip_reads_it`, `gzip_magic_alone_is_an_error_with_a_named_file` |
 //! | gzip bomb | `gzip_bomb_of_a_gib_of_zeros_streams_in_flat_memory`, `gzip_bomb_of_newlines_streams_in_flat_memory` |
 //! | empty file | `empty_inputs_are_fine` |
 //! | directory as FILE | `a_directory_is_an_error_and_other_files_are_still_read`, `a_directory_on_stdin_is_an_error` |
@@ -822,11 +822,25 @@ fn gzip_with_a_bad_checksum_is_read_then_exit_2() {
 
 #[test]
 fn gzip_with_trailing_garbage_is_read_then_exit_2() {
-    for junk in [&b"garbage\n"[..], &[0u8; 16][..]] {
+    for junk in [&b"garbage\n"[..], &[0, 0, 0, 9][..]] {
         let mut gz = gzip(gzip_trace().as_bytes());
         gz.extend_from_slice(junk);
         assert_eq!(check_corrupt_gzip(gz), 200);
     }
+}
+
+/// Tape and block devices pad a gzip file with zeros; GNU gzip reads it
+/// without a word, and so do we (exit 0, every line read).
+#[test]
+fn gzip_with_trailing_zero_padding_is_read_as_gzip_reads_it() {
+    let mut gz = gzip(gzip_trace().as_bytes());
+    gz.extend_from_slice(&[0u8; 4096]);
+    let (code, objects, stderr) = ndjson_run(&["-"], gz);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+    let (_, reference, _) = ndjson_run(&["-"], gzip(gzip_trace().as_bytes()));
+    assert_eq!(objects, reference);
+    assert_eq!(input_of(&objects)["lines"], 200);
 }
 
 #[test]
