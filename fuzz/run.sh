@@ -3,16 +3,37 @@
 # fuzz/README.md were taken this way):
 #   fuzz/run.sh SECONDS [TARGET...]     (default: every target, 600 s each)
 # New inputs go to fuzz/corpus-full/<target> (not committed), seeded from the
-# committed fuzz/corpus/<target> and fuzz/regressions/<target>; the libFuzzer
-# log of each run is fuzz/<target>.log. Needs nightly and cargo-fuzz.
+# fixtures of the target's format, the committed fuzz/corpus/<target> and
+# fuzz/regressions/<target>; the libFuzzer log of each run is
+# fuzz/<target>.log. Needs nightly and cargo-fuzz.
 # -O -a: optimised, with debug assertions and overflow checks (an integer
 # overflow is a crash, not a silent wrap).
+#
+# Exits non-zero when any target fails to build, crashes, or does not run
+# to its time: a fuzz run that did not run is a failure, never a success.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(candump_log candump_screen asc trc blf detect decode_timeline)
+all=(candump_log candump_screen asc trc blf detect decode_timeline)
+[ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
+
+# The fixtures each target starts from (by the format it forces).
+fixtures_of() {
+    case "$1" in
+        candump_log) ls fixtures/*.log fixtures/baseline/*.log ;;
+        candump_screen) ls fixtures/*.txt ;;
+        asc) ls fixtures/*.asc ;;
+        trc) ls fixtures/*.trc ;;
+        blf) ls fixtures/*.blf ;;
+        detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.gz ;;
+        decode_timeline) ;;
+        *) echo "unknown target $1 (known: ${all[*]})" >&2; return 1 ;;
+    esac
+}
+
+failed=()
 for t in "${targets[@]}"; do
     max_len=4096
     [ "$t" = decode_timeline ] && max_len=1024
@@ -20,9 +41,29 @@ for t in "${targets[@]}"; do
     # channel context of a worker still exiting (a race, not a leak).
     leaks=1
     [ "$t" = detect ] && leaks=0
+    seeds=$(fixtures_of "$t") || { failed+=("$t (unknown)"); continue; }
     mkdir -p "fuzz/corpus-full/$t"
-    cargo +nightly fuzz run -O -a "$t" "fuzz/corpus-full/$t" "fuzz/corpus/$t" "fuzz/regressions/$t" -- \
+    for f in $seeds; do cp -n "$f" "fuzz/corpus-full/$t/" 2>/dev/null || true; done
+    # Only directories that exist: libFuzzer stops on a missing one.
+    dirs=("fuzz/corpus-full/$t")
+    for d in "fuzz/corpus/$t" "fuzz/regressions/$t"; do
+        [ -d "$d" ] && dirs+=("$d")
+    done
+    status=0
+    cargo +nightly fuzz run -O -a "$t" "${dirs[@]}" -- \
         -max_total_time="$secs" -rss_limit_mb=2048 -max_len="$max_len" -timeout=10 \
-        -detect_leaks="$leaks" \
-        -print_final_stats=1 2>&1 | tee "fuzz/$t.log" | grep -E "^(#[0-9]+ +(INITED|DONE|pulse)|==|SUMMARY|stat::|Done)" || true
+        -detect_leaks="$leaks" -print_final_stats=1 >"fuzz/$t.log" 2>&1 || status=$?
+    grep -E "^(#[0-9]+ +(INITED|DONE)|==|SUMMARY|stat::number_of_executed_units|Done)" "fuzz/$t.log" || true
+    # A run that ended by its time says "Done N runs in S second(s)".
+    ran=$(sed -n 's/^Done \([0-9]*\) runs in \([0-9]*\) second.*/\1 \2/p' "fuzz/$t.log" | tail -1)
+    if [ "$status" -ne 0 ] || [ -z "$ran" ] || [ "${ran#* }" -lt $((secs - 1)) ]; then
+        echo "FAILED: $t (exit $status; ${ran:-no run}; see fuzz/$t.log)" >&2
+        failed+=("$t")
+    else
+        echo "ok: $t: ${ran% *} runs in ${ran#* } s"
+    fi
 done
+if [ ${#failed[@]} -gt 0 ]; then
+    echo "fuzz/run.sh: failed: ${failed[*]}" >&2
+    exit 1
+fi
