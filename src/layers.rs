@@ -10,7 +10,8 @@
 //! trace      bytes -> frames (imports nothing of ours)
 //! ```
 //!
-//! `cache` is a utility below everything (it imports nothing of ours);
+//! `cache` and `text` are utilities below everything (they import nothing
+//! of ours);
 //! `fuzzing` is the fuzz harness, which may use anything and which nothing
 //! uses. A module may use its own layer and the layers below it. Tests are
 //! not part of the house: a `tests` module (inline at the end of a file,
@@ -38,8 +39,8 @@ fn violation(from: &str, to: &str) -> Option<String> {
     match (from, to) {
         (_, "fuzzing") => Some("nothing may use the fuzz harness".into()),
         ("fuzzing", _) => None,
-        ("cache", _) => Some("cache is below everything and imports nothing".into()),
-        (_, "cache") => None,
+        ("cache" | "text", _) => Some(format!("{from} is below everything and imports nothing")),
+        (_, "cache" | "text") => None,
         _ => match (rank(from), rank(to)) {
             (Some(f), Some(t)) if t > f => Some(format!("{from} is below {to}")),
             (Some(_), Some(_)) => None,

@@ -58,6 +58,7 @@ pub mod fuzzing;
 #[cfg(test)]
 mod layers;
 pub(crate) mod report;
+pub(crate) mod text;
 pub(crate) mod timeline;
 pub(crate) mod trace;
 

@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 use std::io;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
+use std::thread::Scope;
 
 use super::event::{BootEvent, Diagnostic, EmcyEvent, InputReport};
 use super::sink::Sink;
@@ -50,6 +51,7 @@ struct OwnedEmcy {
     transition: Option<u8>,
     state: State,
     active: Vec<u16>,
+    active_total: usize,
     cleared: Vec<u16>,
     warnings: Vec<Warning>,
     profile: Chosen,
@@ -83,6 +85,7 @@ impl Sink for Recorder {
             transition: ev.transition,
             state: ev.state,
             active: ev.active.to_vec(),
+            active_total: ev.active_total,
             cleared: ev.cleared.to_vec(),
             warnings: ev.warnings.to_vec(),
             profile: ev.profile,
@@ -148,6 +151,7 @@ impl FileResult {
                     transition: e.transition,
                     state: e.state,
                     active: &e.active,
+                    active_total: e.active_total,
                     cleared: &e.cleared,
                     warnings: &e.warnings,
                     profile: e.profile,
@@ -179,9 +183,11 @@ impl FileResult {
     }
 }
 
-/// Analyses one file completely, recording its output.
-fn record(source: &Source, opts: &Options) -> FileResult {
+/// Analyses one file completely, recording its output (`quiet`: as the
+/// run's log would print it, so stderr does not depend on the threads).
+fn record(source: &Source, opts: &Options, quiet: bool) -> FileResult {
     let mut log = DiagnosticLog::new(Vec::new());
+    log.quiet = quiet;
     let mut recorder = Recorder::default();
     // A Recorder never fails to write.
     let analysis = super::analyze_source(
@@ -193,8 +199,7 @@ fn record(source: &Source, opts: &Options) -> FileResult {
         &mut recorder,
         &mut log,
     )
-    .ok()
-    .flatten();
+    .ok();
     let diagnostics = std::mem::take(&mut log.collected);
     FileResult {
         events: recorder.events,
@@ -207,10 +212,13 @@ fn record(source: &Source, opts: &Options) -> FileResult {
 /// Analyses `sources` on up to `threads` threads and hands each result to
 /// `emit` in order, as soon as it and all before it are done. At most
 /// `2 * threads` results wait for their turn, so memory stays bounded.
+/// `quiet` is the run's `--quiet`. Threads the system will not start are
+/// done without; with none, this thread reads the files one by one.
 pub fn run_parallel(
     sources: &[Source],
     opts: &Options,
     threads: usize,
+    quiet: bool,
     mut emit: impl FnMut(FileResult) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
     let next = AtomicUsize::new(0);
@@ -223,10 +231,12 @@ pub fn run_parallel(
     let ticket_rx = std::sync::Mutex::new(ticket_rx);
     let (tx, rx) = mpsc::channel::<(usize, FileResult)>();
     std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
+        let mut started = 0;
+        // No more threads than files: each would only wait.
+        for _ in 0..threads.clamp(1, sources.len().max(1)) {
             let tx = tx.clone();
             let (next, ticket_rx) = (&next, &ticket_rx);
-            scope.spawn(move || {
+            let spawned = spawn_scoped(scope, move || {
                 loop {
                     let got_ticket = ticket_rx.lock().map(|r| r.recv().is_ok()).unwrap_or(false);
                     if !got_ticket || opts.cancel.is_cancelled() {
@@ -236,13 +246,23 @@ pub fn run_parallel(
                     let Some(source) = sources.get(i) else {
                         return;
                     };
-                    if tx.send((i, record(source, opts))).is_err() {
+                    if tx.send((i, record(source, opts, quiet))).is_err() {
                         return;
                     }
                 }
             });
+            if !spawned {
+                break;
+            }
+            started += 1;
         }
         drop(tx);
+        if started == 0 {
+            return sources
+                .iter()
+                .take_while(|_| !opts.cancel.is_cancelled())
+                .try_for_each(|source| emit(record(source, opts, quiet)));
+        }
         let mut waiting = BTreeMap::new();
         let mut turn = 0;
         let result = (|| {
@@ -260,4 +280,53 @@ pub fn run_parallel(
         drop(ticket_tx);
         result
     })
+}
+
+/// Starts `f` on a new thread of `scope`; `false` when the system will not
+/// start one (out of threads or memory). Every thread of the pipeline and
+/// its renderers starts here, and a caller told `false` goes on with the
+/// threads it has, at least its own: a run never fails for want of a thread.
+pub(crate) fn spawn_scoped<'scope, 'env, F>(scope: &'scope Scope<'scope, 'env>, f: F) -> bool
+where
+    F: FnOnce() + Send + 'scope,
+{
+    if spawn_limit::refused() {
+        return false;
+    }
+    std::thread::Builder::new().spawn_scoped(scope, f).is_ok()
+}
+
+/// Tests make spawning fail: after `allow(n)`, the next `n` spawns from
+/// this thread start, the ones after fail, as when the system is out of
+/// threads.
+#[cfg(test)]
+pub(crate) mod spawn_limit {
+    use std::cell::Cell;
+
+    thread_local! {
+        static LEFT: Cell<Option<usize>> = const { Cell::new(None) };
+    }
+
+    /// Lets `n` more spawns from this thread start (`None`: no limit).
+    pub(crate) fn allow(n: Option<usize>) {
+        LEFT.with(|left| left.set(n));
+    }
+
+    pub(super) fn refused() -> bool {
+        LEFT.with(|left| match left.get() {
+            None => false,
+            Some(0) => true,
+            Some(n) => {
+                left.set(Some(n - 1));
+                false
+            }
+        })
+    }
+}
+
+#[cfg(not(test))]
+mod spawn_limit {
+    pub(super) fn refused() -> bool {
+        false
+    }
 }

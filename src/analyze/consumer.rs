@@ -1,12 +1,17 @@
 //! The consumer: turns classified lines into timelines, events and counts,
 //! in line order, and hands events to the sink.
 
+use std::borrow::Borrow;
 use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 use std::io::Write;
+use std::sync::Arc;
 
 use super::classify::{Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
-use super::event::{BootEvent, CodeTexts, Counts, EmcyEvent, InputReport, NodeReport};
+use super::event::{
+    BootEvent, CodeTexts, Counts, EVENT_ACTIVE_MAX, EmcyEvent, InputReport, NodeReport,
+};
 use super::interest::{add_emcy_id, interest};
 use super::parallel::SharedInterest;
 use super::sink::Sink;
@@ -17,21 +22,22 @@ use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{NodeProfiles, ProfileSource, default_profile};
 use crate::canopen::sdo;
-use crate::timeline::history::{ErrorHistory, History, Record};
+use crate::timeline::history::{ErrorHistory, History};
 use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
 /// interface name in the trace is one, so a hostile trace can name a million:
 /// lookup is hashed and a channel holds only the nodes it has seen, keeping
-/// time and memory linear in the input.
+/// time and memory linear in the input. A channel's name is allocated once
+/// and shared by the channel, its key and the history.
 struct Nodes {
     channels: Vec<ChannelNodes>,
-    index: HashMap<Vec<u8>, usize>,
-    /// Channels by name. Different bytes can read as one name (invalid
-    /// UTF-8 becomes U+FFFD); reports and the history know a channel by its
-    /// name, so those bytes are one channel.
-    by_name: HashMap<String, usize>,
+    /// Channels by the bytes the trace names them with. Different bytes can
+    /// read as one name (invalid UTF-8 becomes U+FFFD); reports and the
+    /// history know a channel by its name, so those bytes are one channel:
+    /// every channel is also found under its name's bytes.
+    index: HashMap<ChannelKey, usize>,
     /// The channel of the previous lookup: nearly every trace has one or two.
     last: Option<usize>,
     /// Closed intervals of every node (timelines keep only active ones).
@@ -39,12 +45,49 @@ struct Nodes {
 }
 
 struct ChannelNodes {
-    raw: Vec<u8>,
-    name: String,
+    /// The one copy of the name (the history holds it too).
+    name: Arc<str>,
     /// The channel's index in the history.
     id: u32,
     /// Sorted by node id (1..=127).
     nodes: Vec<(u8, NodeTimeline)>,
+}
+
+/// How [`Nodes::index`] knows a channel: its name, shared, or for bytes
+/// that are not UTF-8, those bytes. Hashed and compared as bytes, so a
+/// lookup takes the trace's bytes as they are.
+enum ChannelKey {
+    Name(Arc<str>),
+    Bytes(Box<[u8]>),
+}
+
+impl ChannelKey {
+    fn bytes(&self) -> &[u8] {
+        match self {
+            ChannelKey::Name(name) => name.as_bytes(),
+            ChannelKey::Bytes(bytes) => bytes,
+        }
+    }
+}
+
+impl PartialEq for ChannelKey {
+    fn eq(&self, other: &Self) -> bool {
+        self.bytes() == other.bytes()
+    }
+}
+
+impl Eq for ChannelKey {}
+
+impl Hash for ChannelKey {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.bytes().hash(state);
+    }
+}
+
+impl Borrow<[u8]> for ChannelKey {
+    fn borrow(&self) -> &[u8] {
+        self.bytes()
+    }
 }
 
 /// A node's timeline, borrowed with what an event needs around it.
@@ -60,7 +103,6 @@ impl Nodes {
         Nodes {
             channels: Vec::new(),
             index: HashMap::new(),
-            by_name: HashMap::new(),
             last: None,
             history: History::new(spill_at),
         }
@@ -70,29 +112,11 @@ impl Nodes {
         let cached = self.last.filter(|&i| {
             self.channels
                 .get(i)
-                .is_some_and(|c| c.raw.as_slice() == raw)
+                .is_some_and(|c| c.name.as_bytes() == raw)
         });
         let idx = match cached.or_else(|| self.index.get(raw).copied()) {
             Some(i) => i,
-            None => {
-                let name = String::from_utf8_lossy(raw).into_owned();
-                let i = match self.by_name.get(&name) {
-                    Some(&i) => i,
-                    None => {
-                        let id = self.history.add_channel(&name);
-                        self.by_name.insert(name.clone(), self.channels.len());
-                        self.channels.push(ChannelNodes {
-                            raw: raw.to_vec(),
-                            name,
-                            id,
-                            nodes: Vec::new(),
-                        });
-                        self.channels.len() - 1
-                    }
-                };
-                self.index.insert(raw.to_vec(), i);
-                i
-            }
+            None => self.add_channel(raw),
         };
         self.last = Some(idx);
         let Nodes {
@@ -102,6 +126,11 @@ impl Nodes {
         let slot = match ch.nodes.binary_search_by_key(&node, |(n, _)| *n) {
             Ok(i) => i,
             Err(i) => {
+                if ch.nodes.capacity() == 0 {
+                    // Most channels have one node or a few: not the four
+                    // slots (over a KiB) a first insert reserves.
+                    ch.nodes.reserve_exact(1);
+                }
                 ch.nodes.insert(i, (node, NodeTimeline::new()));
                 i
             }
@@ -114,30 +143,72 @@ impl Nodes {
         }
     }
 
+    /// The channel of bytes the index does not know: the channel of their
+    /// name, new if no bytes read as that name before.
+    fn add_channel(&mut self, raw: &[u8]) -> usize {
+        let name = String::from_utf8_lossy(raw);
+        let i = match self.index.get(name.as_bytes()) {
+            Some(&i) => i,
+            None => {
+                let name: Arc<str> = Arc::from(&*name);
+                let id = self.history.add_channel(Arc::clone(&name));
+                self.channels.push(ChannelNodes {
+                    name: Arc::clone(&name),
+                    id,
+                    nodes: Vec::new(),
+                });
+                let i = self.channels.len() - 1;
+                self.index.insert(ChannelKey::Name(name), i);
+                i
+            }
+        };
+        if name.as_bytes() != raw {
+            self.index.insert(ChannelKey::Bytes(raw.into()), i);
+        }
+        i
+    }
+
     /// Node reports sorted by channel name, then node, and the history with
     /// the still-active intervals added.
     fn into_reports(self, opts: &Options) -> (Vec<NodeReport>, ErrorHistory) {
-        let mut out = Vec::new();
-        let mut open = Vec::new();
-        let mut channels = self.channels;
+        let Nodes {
+            mut channels,
+            index,
+            mut history,
+            ..
+        } = self;
+        // Lookups are over: the keys' memory is free for the reports.
+        drop(index);
         channels.sort_by(|a, b| a.name.cmp(&b.name));
+        let selected = channels
+            .iter()
+            .flat_map(|ch| ch.nodes.iter().map(|(node, _)| (&ch.name, *node)))
+            .filter(|(name, node)| opts.selects(name, *node))
+            .count();
+        let mut out = Vec::with_capacity(selected);
         for ch in channels {
             for (node, tl) in ch.nodes {
-                open.extend(tl.active().iter().map(|iv| Record {
-                    channel: ch.id,
-                    node,
-                    interval: iv.clone(),
-                }));
-                if !opts.selects(&ch.name, node) {
+                let end = tl.into_end();
+                let reported = opts.selects(&ch.name, node);
+                let active = match reported {
+                    true => end.active.iter().map(|iv| iv.code).collect(),
+                    false => Vec::new(),
+                };
+                // Still-active intervals join the closed ones, spilling to
+                // disk like them when there are many.
+                for iv in end.active {
+                    history.push(ch.id, node, iv);
+                }
+                if !reported {
                     continue;
                 }
                 out.push(NodeReport {
-                    channel: ch.name.clone(),
+                    channel: ch.name.to_string(),
                     node,
-                    state: tl.state(),
-                    active: tl.active_codes().collect(),
-                    emcy_count: tl.emcy_count(),
-                    stats: tl.stats().clone(),
+                    state: end.state,
+                    active,
+                    emcy_count: end.emcy_count,
+                    stats: end.stats,
                     profile: default_profile(),
                     profile_source: ProfileSource::Default,
                     profile_reason: None,
@@ -145,7 +216,7 @@ impl Nodes {
                 });
             }
         }
-        (out, self.history.finish(open))
+        (out, history.finish([]))
     }
 }
 
@@ -279,13 +350,29 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         }
         let nodes_taken = std::mem::replace(&mut self.nodes, Nodes::new(1));
         let (mut nodes, history) = nodes_taken.into_reports(self.opts);
+        // Nodes that raised the same codes under the same profile share
+        // one set of descriptions (a trace with a million channels has a
+        // million nodes, nearly all alike).
+        let mut shared: HashMap<*const Profile, HashMap<Box<[u16]>, CodeTexts>> = HashMap::new();
+        let mut codes = Vec::new();
         for n in &mut nodes {
             let chosen = self.profiles.get(n.node);
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.profiles.reason(n.node).map(str::to_string);
-            n.descriptions = CodeTexts::new(n.profile, n.stats.raised.keys().copied());
+            codes.clear();
+            codes.extend(n.stats.raised.keys().copied());
+            let same = shared.entry(std::ptr::from_ref(n.profile)).or_default();
+            n.descriptions = match same.get(codes.as_slice()) {
+                Some(texts) => texts.clone(),
+                None => {
+                    let texts = CodeTexts::new(n.profile, codes.iter().copied());
+                    same.insert(codes.as_slice().into(), texts.clone());
+                    texts
+                }
+            };
         }
+        drop(shared);
         if let Some(e) = history.spill_error() {
             self.log.note(&format!(
                 "{file}: could not move the error history to a temporary file ({e}); kept in memory"
@@ -513,8 +600,11 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             if !self.warnings.is_empty() {
                 self.frames_with_warnings += 1;
             }
+            // The first few: an event's size must not grow with the node's
+            // active errors (a trace can leave thousands active).
             self.active.clear();
-            self.active.extend(timeline.active_codes());
+            self.active
+                .extend(timeline.active_codes().take(EVENT_ACTIVE_MAX));
             let decoded = profile.decode_manufacturer(&emcy);
             let event = EmcyEvent {
                 file: self.file,
@@ -530,6 +620,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 transition: step.transition,
                 state: step.state,
                 active: &self.active,
+                active_total: timeline.active().len(),
                 cleared: &step.cleared,
                 warnings: &self.warnings,
                 profile: chosen,

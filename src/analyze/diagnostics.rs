@@ -1,9 +1,11 @@
 //! Where diagnostics go: stderr as they happen, bounded per input, and a
-//! copy for the JSON document.
+//! copy for the JSON document. What goes to stderr is escaped: file names
+//! and trace text must not put control sequences on a terminal.
 
 use std::io::Write;
 
 use super::event::Diagnostic;
+use crate::text::printable;
 
 /// Where diagnostics go: stderr as they happen (bounded per input) and a
 /// copy for the JSON document.
@@ -26,7 +28,7 @@ impl<E: Write> DiagnosticLog<E> {
     pub(super) fn emit(&mut self, d: Diagnostic) {
         // A failing stderr must not stop decoding; the counts still record it.
         if !self.quiet {
-            let _ = writeln!(self.stderr, "{d}");
+            let _ = writeln!(self.stderr, "{}", printable(&d.to_string()));
         }
         self.collected.push(d);
     }
@@ -45,12 +47,12 @@ impl<E: Write> DiagnosticLog<E> {
 
     /// A one-line `error:` message (not kept in the JSON diagnostics).
     pub fn error(&mut self, message: &str) {
-        let _ = writeln!(self.stderr, "error: {message}");
+        let _ = writeln!(self.stderr, "error: {}", printable(message));
     }
 
     pub fn note(&mut self, message: &str) {
         if !self.quiet {
-            let _ = writeln!(self.stderr, "{message}");
+            let _ = writeln!(self.stderr, "{}", printable(message));
         }
     }
 }

@@ -14,6 +14,11 @@ use crate::timeline::history::ErrorHistory;
 use crate::timeline::{NodeStats, State};
 use crate::trace::{Format, Span, Timestamp};
 
+/// Active codes an event lists at most: a node can have thousands active,
+/// and listing them all in every event made output and work quadratic in
+/// them. The node object at the end lists them all.
+pub const EVENT_ACTIVE_MAX: usize = 64;
+
 /// One decoded EMCY frame, borrowed from the pipeline (no allocation per event).
 pub struct EmcyEvent<'a> {
     pub file: &'a str,
@@ -30,7 +35,12 @@ pub struct EmcyEvent<'a> {
     pub description: &'a str,
     pub transition: Option<u8>,
     pub state: State,
+    /// The first [`EVENT_ACTIVE_MAX`] codes active after it, in the order
+    /// they were raised.
     pub active: &'a [u16],
+    /// How many codes are active after it (more than `active` holds when
+    /// the list was cut).
+    pub active_total: usize,
     pub cleared: &'a [u16],
     pub warnings: &'a [Warning],
     /// The node's profile (it gave `info`) and why.
@@ -58,7 +68,9 @@ pub struct NodeReport {
     pub state: State,
     pub active: Vec<u16>,
     pub emcy_count: u64,
-    pub stats: NodeStats,
+    /// Boxed: taken from the timeline as it is (a trace can end with a
+    /// million nodes, and a report is several times the size without it).
+    pub stats: Box<NodeStats>,
     pub profile: &'static Profile,
     pub profile_source: ProfileSource,
     /// Why the trace chose the profile (vendor id, device type).

@@ -1,7 +1,7 @@
 //! `--fail-on`: conditions over what the inputs contained that fail a run
 //! (exit 1 in the application), each met one named with what met it.
 
-use super::Analysis;
+use super::{Analysis, InputReport};
 
 /// The `--fail-on` conditions of one or more flags, combined: any met fails.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -38,12 +38,33 @@ impl FailOn {
     }
 }
 
+/// What `--fail-on` needs of the inputs beside their reports, summed over
+/// them (so the reports can go to the renderer without a copy).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Tally {
+    errors_raised: u64,
+    frames_with_warnings: u64,
+    worst_category: Option<u8>,
+}
+
+impl Tally {
+    /// Adds one input's analysis.
+    pub fn add(&mut self, a: &Analysis) {
+        self.errors_raised += a.errors_raised;
+        self.frames_with_warnings += a.frames_with_warnings;
+        self.worst_category = match (self.worst_category, a.worst_category) {
+            (Some(w), Some(c)) => Some(w.min(c)),
+            (w, c) => w.or(c),
+        };
+    }
+}
+
 /// The `--fail-on` conditions the inputs met, each with what met it.
-pub fn met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
+pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<String> {
     let mut met = Vec::new();
-    let nodes = || analyses.iter().flat_map(|a| &a.report.nodes);
+    let nodes = || reports.iter().flat_map(|r| &r.nodes);
     if fail_on.any {
-        let n: u64 = analyses.iter().map(|a| a.errors_raised).sum();
+        let n = tally.errors_raised;
         if n > 0 {
             met.push(format!("any: {n} error EMCY frame{}", plural(n)));
         }
@@ -59,7 +80,7 @@ pub fn met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
         }
     }
     if fail_on.warning {
-        let n: u64 = analyses.iter().map(|a| a.frames_with_warnings).sum();
+        let n = tally.frames_with_warnings;
         if n > 0 {
             met.push(format!(
                 "warning: {n} EMCY frame{} with warnings",
@@ -73,11 +94,10 @@ pub fn met(fail_on: &FailOn, analyses: &[Analysis]) -> Vec<String> {
             met.push(format!("code=0x{code:04X}: raised {n} time{}", plural(n)));
         }
     }
-    if let Some(bound) = fail_on.category_at_most {
-        let worst = analyses.iter().filter_map(|a| a.worst_category).min();
-        if let Some(worst) = worst.filter(|&w| w <= bound) {
-            met.push(format!("category<={bound}: an error of category {worst}"));
-        }
+    if let (Some(bound), Some(worst)) = (fail_on.category_at_most, tally.worst_category)
+        && worst <= bound
+    {
+        met.push(format!("category<={bound}: an error of category {worst}"));
     }
     met
 }

@@ -28,7 +28,7 @@ mod tests;
 use std::io::{self, Read, Write};
 
 use crate::canopen::profile_choice::ProfileChoice;
-use crate::timeline::history::DEFAULT_SPILL_AT;
+use crate::timeline::history::{DEFAULT_SPILL_AT, ErrorHistory};
 use crate::trace::Format;
 use crate::trace::Parsed;
 use crate::trace::blf;
@@ -103,6 +103,28 @@ impl Options {
     }
 }
 
+impl Analysis {
+    /// An input that could not be opened: nothing read, the reason.
+    pub(crate) fn unopened(file: String, error: String) -> Analysis {
+        Analysis {
+            report: InputReport {
+                file,
+                format: None,
+                gzip: false,
+                counts: Counts::default(),
+                nodes: Vec::new(),
+                history: ErrorHistory::default(),
+                first_time: None,
+                last_time: None,
+                error: Some(error),
+            },
+            errors_raised: 0,
+            frames_with_warnings: 0,
+            worst_category: None,
+        }
+    }
+}
+
 /// Writing the report failed (typically a closed pipe): stop everything.
 #[derive(Debug)]
 pub struct OutputError(pub io::Error);
@@ -121,7 +143,9 @@ pub struct Analysis {
 
 /// Opens one source and reads it to the end ([`analyze`]); what stops it
 /// (it cannot be opened, or reading failed part way) goes to the log as
-/// `error: NAME: reason`. `None` when the source could not be opened.
+/// `error: NAME: reason` and into the report's `error`. A source that could
+/// not be opened still has a report (nothing read, its error), so every
+/// input given is in the output; the sink sees no events for it.
 /// `threads` picks the thread count from what was opened; `wrap` may wrap
 /// the (decompressed) reader, e.g. to count progress.
 pub fn analyze_source<E: Write>(
@@ -132,13 +156,14 @@ pub fn analyze_source<E: Write>(
     wrap: impl FnOnce(&Opened, Box<dyn Read + Send>) -> Box<dyn Read + Send>,
     sink: &mut dyn Sink,
     log: &mut DiagnosticLog<E>,
-) -> Result<Option<Analysis>, OutputError> {
+) -> Result<Analysis, OutputError> {
     let name = source.display_name();
     let mut opened = match input::open(source, mode, &opts.cancel) {
         Ok(o) => o,
         Err(e) => {
-            log.error(&format!("{name}: {}", describe_io(&e)));
-            return Ok(None);
+            let error = describe_io(&e);
+            log.error(&format!("{name}: {error}"));
+            return Ok(Analysis::unopened(name, error));
         }
     };
     let input_opts = Options {
@@ -151,7 +176,7 @@ pub fn analyze_source<E: Write>(
     if let Some(err) = &analysis.report.error {
         log.error(&format!("{name}: {err}"));
     }
-    Ok(Some(analysis))
+    Ok(analysis)
 }
 
 /// `No such file or directory` without Rust's `(os error 2)` suffix.
@@ -182,7 +207,7 @@ pub fn analyze<R: Read + Send, E: Write>(
     // BLF is binary: known by its magic (or forced), read object by object.
     let (reader, magic) = blf::sniff(reader);
     match magic {
-        Err(e) => return consumer.finish(None, gzip, Some(e.to_string())),
+        Err(e) => return consumer.finish(None, gzip, read_error(&e)),
         Ok(magic) if opts.input_format.map_or(magic, |f| f == Format::Blf) => {
             consumer.decided = true;
             let error = read_blf(reader, &mut consumer)?;
@@ -225,7 +250,7 @@ fn read_blf<R: Read, E: Write>(
 ) -> Result<Option<String>, OutputError> {
     let mut reader = match blf::BlfReader::new(reader) {
         Ok(r) => r,
-        Err(e) => return Ok(Some(e.to_string())),
+        Err(e) => return Ok(read_error(&e)),
     };
     if let Some(note) = reader.take_note() {
         consumer.log.note(&format!("{}: {note}", consumer.file));
@@ -238,8 +263,15 @@ fn read_blf<R: Read, E: Write>(
             Ok(Some(Parsed::Skipped)) => consumer.skipped(),
             Ok(Some(Parsed::Malformed(reason))) => consumer.malformed(0, reason),
             Ok(None) => return Ok(None),
-            Err(e) => return Ok(Some(e.to_string())),
+            Err(e) => return Ok(read_error(&e)),
         }
         consumer.lines(1);
     }
+}
+
+/// What a read error means for the input's report: a stop by a signal
+/// (the cancel token) is the end of what was read, not an error; an object
+/// it cut is not counted, as a line it cut is not.
+fn read_error(e: &io::Error) -> Option<String> {
+    (!crate::trace::cancel::is_cancelled(e)).then(|| e.to_string())
 }

@@ -10,6 +10,7 @@ use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex, RwLock};
 
 use super::OutputError;
+use super::batch::spawn_scoped;
 use super::classify::{Foreign, LineSink, classify_block};
 use super::consumer::Consumer;
 use super::interest::is_cob_id_emcy_access;
@@ -209,8 +210,10 @@ enum Message {
 /// order. A block whose start state differs from the state the previous
 /// block ended in (an ASC header changed the base mid-file), or that was
 /// parsed for an older set of wanted ids (an EMCY id moved by 0x1014), is
-/// classified again here, so the result never depends on the split. Returns
-/// the read error, if any, and the detector's final state.
+/// classified again here, so the result never depends on the split. Workers
+/// the system will not start are done without; with none, this thread
+/// reads the input alone. Returns the read error, if any, and the
+/// detector's final state.
 pub(super) fn run<R: Read + Send, E: Write>(
     blocks: BlockReader<R>,
     detector: Detector,
@@ -225,22 +228,23 @@ pub(super) fn run<R: Read + Send, E: Write>(
         consumer.interest.clone(),
     )));
     consumer.shared_interest = Some(Arc::clone(&shared));
-    let feed = Mutex::new(Feed {
+    let feed_lock = Mutex::new(Feed {
         blocks,
         seq: 0,
         done: false,
     });
-    let feed = &feed;
+    let feed = &feed_lock;
     let outcome = std::thread::scope(|scope| {
         let (result_tx, result_rx) = mpsc::channel::<Message>();
         let mut recycle = Vec::new();
-        for worker in 0..threads {
+        for _ in 0..threads {
+            // Workers are numbered as they start: a block goes back to its own.
+            let worker = recycle.len();
             let (recycle_tx, recycle_rx) = mpsc::channel::<Vec<u8>>();
-            recycle.push(recycle_tx);
             let mut det = current.fork();
             let tx = result_tx.clone();
             let shared = Arc::clone(&shared);
-            scope.spawn(move || {
+            let spawned = spawn_scoped(scope, move || {
                 let mut out = 0usize;
                 while let Some((seq, block)) = next_job(feed, &recycle_rx, &mut out, &tx) {
                     let start_context = det.context();
@@ -280,13 +284,53 @@ pub(super) fn run<R: Read + Send, E: Write>(
                     }
                 }
             });
+            if !spawned {
+                break;
+            }
+            recycle.push(recycle_tx);
         }
         drop(result_tx);
-
-        consume_in_order(result_rx, &recycle, &mut current, consumer, max_line)
+        if recycle.is_empty() {
+            return None;
+        }
+        Some(consume_in_order(
+            result_rx,
+            &recycle,
+            &mut current,
+            consumer,
+            max_line,
+        ))
     });
+    let outcome = match outcome {
+        Some(outcome) => outcome,
+        // No worker started, so no block was taken: all are read here.
+        None => {
+            let feed = feed_lock.into_inner().unwrap_or_else(|e| e.into_inner());
+            read_here(feed.blocks, &mut current, consumer, max_line)
+        }
+    };
     consumer.shared_interest = None;
     outcome.map(|error| (error, current))
+}
+
+/// The whole input on this thread, block by block, as without workers.
+fn read_here<R: Read, E: Write>(
+    mut blocks: BlockReader<R>,
+    current: &mut Detector,
+    consumer: &mut Consumer<'_, '_, E>,
+    max_line: usize,
+) -> Result<Option<String>, OutputError> {
+    let mut buf = Vec::new();
+    loop {
+        match blocks.next_block(buf) {
+            Ok(Some(block)) => {
+                classify_block(&block, max_line, current, consumer)?;
+                buf = block.bytes;
+            }
+            Ok(None) => return Ok(None),
+            Err(e) => return Ok(Some(e.to_string())),
+        }
+    }
 }
 
 /// The input, read a block at a time by whichever worker is free. The

@@ -1,28 +1,40 @@
 //! `emcy-decode baseline` and `emcy-decode check`: read the traces, then
-//! write the baseline (atomically) or compare with it and print the
-//! differences. The model and the comparison are library code
-//! ([`crate::baseline`]); this file is their process side.
+//! write the baseline (never over anything but a regular file, and that
+//! atomically) or compare with it and print the differences. The model and
+//! the comparison are library code ([`crate::baseline`]); this file is their
+//! process side.
+//!
+//! A signal (a CI timeout, Ctrl-C) while the traces are read stops reading:
+//! a baseline or a comparison of part of the traces would be wrong, so
+//! nothing is written or compared; an `error:` line says so and the exit
+//! status is the signal's (130, 143, 129), as for decoding.
 
 use std::collections::BTreeMap;
+use std::fs::{self, OpenOptions, Permissions};
 use std::io::{self, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 
 use super::cli::{BaselineArgs, CheckArgs, CheckFormat, TraceArgs};
 use super::decode::auto_threads;
-use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK};
-use crate::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError};
+use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
+use crate::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
 use crate::baseline::Baseline;
 use crate::baseline::compare::{Allow, compare};
 use crate::baseline::key::trace_key;
-use crate::trace::input::{ReadMode, Source};
+use crate::trace::input::{self, ReadMode, Source};
 
-/// Reads every trace through the decode pipeline. `Ok(None)` when a trace
-/// could not be read: each failure has had its `error:` line and the caller
-/// exits 2 without writing or comparing anything.
-fn read_traces(args: &TraceArgs) -> Result<Option<Vec<(String, InputReport)>>> {
+/// Reads every trace through the decode pipeline. `Ok(Err(status))` when a
+/// trace could not be read (2) or a signal stopped reading (its status):
+/// each has had its `error:` line (naming `unwritten`, what is then not
+/// done) and the caller exits with that status without writing or
+/// comparing anything.
+fn read_traces(
+    args: &TraceArgs,
+    unwritten: &str,
+) -> Result<Result<Vec<(String, InputReport)>, ExitCode>> {
     let cwd = std::env::current_dir().ok();
     let mut keys: BTreeMap<String, &Path> = BTreeMap::new();
     for arg in &args.traces {
@@ -36,14 +48,21 @@ fn read_traces(args: &TraceArgs) -> Result<Option<Vec<(String, InputReport)>>> {
         }
     }
     let opts = args.options()?;
+    let caught = signals::catch(&opts.cancel);
     let mut log = DiagnosticLog::new(io::stderr());
     let mut reports = Vec::new();
     let mut failed = false;
     for arg in &args.traces {
         let source = Source::from_arg(arg);
+        // A pipe may be quiet for long: read so that a signal ends the wait.
+        let mode = if matches!(source, Source::Stdin) && input::stdin_is_stream() {
+            ReadMode::Live
+        } else {
+            ReadMode::Finite
+        };
         let analysis = analyze::analyze_source(
             &source,
-            ReadMode::Finite,
+            mode,
             &opts,
             auto_threads,
             |_, reader| reader,
@@ -51,49 +70,261 @@ fn read_traces(args: &TraceArgs) -> Result<Option<Vec<(String, InputReport)>>> {
             &mut log,
         )
         .map_err(|OutputError(e)| anyhow::Error::from(e))?;
-        let Some(analysis) = analysis else {
-            failed = true;
-            continue;
-        };
+        if let Some(stop) = caught.stopped() {
+            log.error(&format!(
+                "stopped by {} while reading {}; {unwritten}",
+                stop.name,
+                source.display_name()
+            ));
+            return Ok(Err(ExitCode::from(stop.status)));
+        }
         failed |= analysis.report.error.is_some();
         reports.push((trace_key(arg, cwd.as_deref()), analysis.report));
     }
-    Ok((!failed).then_some(reports))
+    Ok(if failed {
+        Err(ExitCode::from(EXIT_ERROR))
+    } else {
+        Ok(reports)
+    })
 }
 
-/// Writes `text` to `path` through a temporary file in the same directory,
-/// so a reader (or a crash) never sees half a baseline. `-` is stdout.
-fn write_file(path: &Path, text: &str) -> Result<()> {
-    if path.as_os_str() == "-" {
-        return write_stdout(text);
+/// Writes `text` where `given` says ([`destination`]): over a regular file
+/// or a new path through a temporary file in the same directory, so a reader
+/// (or a crash) never sees half a baseline; into a FIFO or character device
+/// as it is; `-` is stdout.
+fn write_file(given: &Path, text: &str) -> Result<()> {
+    let fail = |e: io::Error| anyhow!("writing {}: {}", given.display(), describe_io(&e));
+    match destination(given)? {
+        Dest::Stdout => write_stdout(text),
+        Dest::Replace { path, old } => replace(&path, old, text).map_err(fail),
+        Dest::Stream(path) => stream(&path, text).map_err(fail),
     }
-    let dir = match path.parent() {
+}
+
+/// Where a baseline written to a path goes. Only a regular file is ever
+/// renamed over, so a device node, a FIFO or a symbolic link survives.
+#[derive(Debug)]
+enum Dest {
+    /// `-`.
+    Stdout,
+    /// A regular file or a path that does not exist yet (the link's target
+    /// when the path is a symbolic link): replaced atomically with the old
+    /// file's permissions (`None`: a new file).
+    Replace {
+        path: PathBuf,
+        old: Option<Permissions>,
+    },
+    /// A FIFO or character device (`/dev/null`, `/dev/stdout` to a pipe or
+    /// a terminal): written into as it is, as the shell's `>` would.
+    Stream(PathBuf),
+}
+
+/// Symbolic links followed at most, as Linux's `MAXSYMLINKS`.
+const MAX_LINKS: usize = 40;
+
+/// Where writing `given` goes; a directory, socket, block device or anything
+/// else that is no file is refused, before anything is written. Symbolic
+/// links are followed one by one (by hand: `canonicalize` fails on a
+/// dangling link); a dangling one gets its target created, as the shell's
+/// `>` does.
+fn destination(given: &Path) -> Result<Dest> {
+    if given.as_os_str() == "-" {
+        return Ok(Dest::Stdout);
+    }
+    let refuse = |path: &Path, what: &str| {
+        let via = if path == given {
+            String::new()
+        } else {
+            format!(" (a link to {})", path.display())
+        };
+        anyhow!(
+            "{}{via} {what}; a baseline is written to a regular file, a FIFO or a \
+             character device",
+            given.display()
+        )
+    };
+    let mut path = given.to_path_buf();
+    for _ in 0..=MAX_LINKS {
+        let meta = match fs::symlink_metadata(&path) {
+            Ok(meta) => meta,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {
+                return Ok(Dest::Replace { path, old: None });
+            }
+            Err(e) => bail!("{}: {}", given.display(), describe_io(&e)),
+        };
+        match Kind::of(meta.file_type()) {
+            Kind::File => {
+                let old = Some(meta.permissions());
+                return Ok(Dest::Replace { path, old });
+            }
+            Kind::Stream => return Ok(Dest::Stream(path)),
+            Kind::Other(what) => return Err(refuse(&path, what)),
+            Kind::Link if is_proc_link(&path) => {
+                // The kernel's link to an open file (`/dev/stdout`,
+                // `/dev/fd/1`): its text (`pipe:[123]`, a file the shell
+                // opened with `>>`) is no path to rename over; write into
+                // what it is open on.
+                let meta = fs::metadata(&path)
+                    .map_err(|e| anyhow!("{}: {}", given.display(), describe_io(&e)))?;
+                return match Kind::of(meta.file_type()) {
+                    Kind::File | Kind::Stream => Ok(Dest::Stream(path)),
+                    Kind::Other(what) => Err(refuse(&path, what)),
+                    Kind::Link => Err(refuse(&path, "is not a file")),
+                };
+            }
+            Kind::Link => {
+                let target = fs::read_link(&path)
+                    .map_err(|e| anyhow!("{}: {}", given.display(), describe_io(&e)))?;
+                // A relative target is relative to the link's directory;
+                // `join` keeps an absolute one as it is.
+                path = path.parent().unwrap_or(Path::new("")).join(target);
+            }
+        }
+    }
+    Err(refuse(&path, "is behind too many symbolic links"))
+}
+
+/// What kind of node a path is, for [`destination`].
+enum Kind {
+    File,
+    Link,
+    /// A FIFO or a character device: written into, never renamed over.
+    Stream,
+    /// Refused: why.
+    Other(&'static str),
+}
+
+impl Kind {
+    fn of(t: fs::FileType) -> Kind {
+        if t.is_file() {
+            Kind::File
+        } else if t.is_symlink() {
+            Kind::Link
+        } else if t.is_dir() {
+            Kind::Other("is a directory")
+        } else {
+            Kind::special(t)
+        }
+    }
+
+    #[cfg(unix)]
+    fn special(t: fs::FileType) -> Kind {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() || t.is_char_device() {
+            Kind::Stream
+        } else if t.is_socket() {
+            Kind::Other("is a socket")
+        } else if t.is_block_device() {
+            Kind::Other("is a block device")
+        } else {
+            Kind::Other("is not a file")
+        }
+    }
+
+    #[cfg(not(unix))]
+    fn special(_: fs::FileType) -> Kind {
+        Kind::Other("is not a file")
+    }
+}
+
+/// Whether `link` is in /proc (`/dev/stdout` leads to `/proc/self/fd/1`,
+/// `/dev/fd` is `/proc/self/fd`): there, links name open files.
+#[cfg(target_os = "linux")]
+fn is_proc_link(link: &Path) -> bool {
+    parent_dir(link)
+        .canonicalize()
+        .is_ok_and(|dir| dir.starts_with("/proc"))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn is_proc_link(_: &Path) -> bool {
+    false
+}
+
+/// The directory `path` is in (`.` for a bare name).
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
-    };
-    let fail = || format!("writing {}", path.display());
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).with_context(fail)?;
-    tmp.write_all(text.as_bytes()).with_context(fail)?;
-    // A temporary file is private (0600); a baseline is an ordinary file.
-    let perms = match std::fs::metadata(path) {
-        Ok(meta) => Some(meta.permissions()),
-        Err(_) => default_permissions(),
-    };
-    if let Some(perms) = perms {
-        tmp.as_file().set_permissions(perms).with_context(fail)?;
     }
-    tmp.persist(path).map_err(|e| e.error).with_context(fail)?;
+}
+
+/// Replaces (or creates) the regular file `path` atomically: a temporary
+/// file in its directory, renamed over it once complete.
+fn replace(path: &Path, old: Option<Permissions>, text: &str) -> io::Result<()> {
+    // Deleted when dropped, so on every error below.
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".emcy-decode-")
+        .suffix(".tmp")
+        .tempfile_in(parent_dir(path))?;
+    tmp.write_all(text.as_bytes())?;
+    // A temporary file is private (0600); a baseline is an ordinary file.
+    if let Some(perms) = old.or_else(default_permissions) {
+        tmp.as_file().set_permissions(perms)?;
+    }
+    // On disk before the name points at it: after a crash the baseline is
+    // the old one or the new one, never an empty file.
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
 }
 
+/// Writes into a FIFO or character device without replacing it.
+fn stream(path: &Path, text: &str) -> io::Result<()> {
+    // Appending never truncates: through `/dev/stdout`, a file the shell
+    // opened with `>>` keeps what it had.
+    let mut file = OpenOptions::new().append(true).open(path)?;
+    // What was opened, not what was looked at: the path may have changed.
+    if let Kind::Other(what) = Kind::of(file.metadata()?.file_type()) {
+        return Err(io::Error::other(what));
+    }
+    match file.write_all(text.as_bytes()).and_then(|()| file.flush()) {
+        // A reader that went away, as for stdout.
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
+        other => other,
+    }
+}
+
+/// Refuses to write the baseline over a file it is made from (a trace or a
+/// profile file given with it), which would be lost. Only a regular file
+/// can be: a stream is written into, a new path is no input.
+fn refuse_overwriting_inputs(out: &Path, read: &TraceArgs) -> Result<()> {
+    if out.as_os_str() == "-" || !fs::metadata(out).is_ok_and(|m| m.is_file()) {
+        return Ok(());
+    }
+    let traces = read.traces.iter().map(|p| (p, "a trace"));
+    let profiles = read.profile_file.iter().map(|p| (p, "a profile file"));
+    for (input, what) in traces.chain(profiles) {
+        if input.as_os_str() != "-" && same_file(out, input) {
+            let alias = if input == out {
+                String::new()
+            } else {
+                format!(" (as {})", input.display())
+            };
+            bail!(
+                "{} is also given as {what}{alias}; the baseline is not written over what it \
+                 is made from",
+                out.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether two paths are one file (through links, hard links too); a path
+/// that cannot be read is no input to protect.
+fn same_file(a: &Path, b: &Path) -> bool {
+    same_file::is_same_file(a, b).unwrap_or(false)
+}
+
 #[cfg(unix)]
-fn default_permissions() -> Option<std::fs::Permissions> {
+fn default_permissions() -> Option<Permissions> {
     use std::os::unix::fs::PermissionsExt;
-    Some(std::fs::Permissions::from_mode(0o644))
+    Some(Permissions::from_mode(0o644))
 }
 
 #[cfg(not(unix))]
-fn default_permissions() -> Option<std::fs::Permissions> {
+fn default_permissions() -> Option<Permissions> {
     None
 }
 
@@ -103,22 +334,47 @@ fn write_stdout(text: &str) -> Result<()> {
 
 /// `emcy-decode baseline TRACE... [-o FILE]`.
 pub(super) fn baseline(args: &BaselineArgs) -> Result<ExitCode> {
-    let Some(reports) = read_traces(&args.read)? else {
-        return Ok(ExitCode::from(EXIT_ERROR));
+    let out = args.output.as_deref().unwrap_or(Path::new("-"));
+    // Refused before the traces are read, not after.
+    destination(out)?;
+    refuse_overwriting_inputs(out, &args.read)?;
+    let reports = match read_traces(&args.read, "no baseline written")? {
+        Ok(reports) => reports,
+        Err(status) => return Ok(status),
     };
     let text = Baseline::from_reports(&reports).to_json()?;
-    write_file(args.output.as_deref().unwrap_or(Path::new("-")), &text)?;
+    write_file(out, &text)?;
     Ok(ExitCode::from(EXIT_OK))
 }
 
 /// `emcy-decode check --baseline FILE TRACE...`.
 pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     let name = args.baseline.display();
-    let text = std::fs::read_to_string(&args.baseline)
-        .map_err(|e| anyhow::anyhow!("{name}: {}", analyze::describe_io(&e)))?;
-    let old = Baseline::from_json(&text).with_context(|| name.to_string())?;
-    let Some(reports) = read_traces(&args.read)? else {
-        return Ok(ExitCode::from(EXIT_ERROR));
+    // `-b -` reads a file named `-`, so `--update` writes that file, not
+    // stdout.
+    let path = if args.baseline.as_os_str() == "-" {
+        Path::new(".").join("-")
+    } else {
+        args.baseline.clone()
+    };
+    let old = {
+        // Dropped once parsed: the text of a big baseline is not kept while
+        // the traces are read.
+        let text = fs::read_to_string(&path).map_err(|e| anyhow!("{name}: {}", describe_io(&e)))?;
+        Baseline::from_json(&text).with_context(|| name.to_string())?
+    };
+    if args.update {
+        destination(&path)?;
+        refuse_overwriting_inputs(&path, &args.read)?;
+    }
+    let unwritten = if args.update {
+        "nothing compared, the baseline left as it was"
+    } else {
+        "nothing compared"
+    };
+    let reports = match read_traces(&args.read, unwritten)? {
+        Ok(reports) => reports,
+        Err(status) => return Ok(status),
     };
     let new = Baseline::from_reports(&reports);
     let allow = Allow {
@@ -132,7 +388,7 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     };
     write_stdout(&out)?;
     if args.update {
-        write_file(&args.baseline, &new.to_json()?)?;
+        write_file(&path, &new.to_json()?)?;
         eprintln!("check: wrote {name}");
         return Ok(ExitCode::from(EXIT_OK));
     }

@@ -31,7 +31,10 @@ Exit status:
   1  the --fail-on condition was met (check: a regression against the baseline)
   2  usage error, unreadable input, unknown format, corrupt gzip,
      or malformed lines with --strict
-  130  stopped by Ctrl-C (what was read is still reported)";
+  129  stopped by SIGHUP
+  130  stopped by Ctrl-C (SIGINT)
+  143  stopped by SIGTERM
+       (what was read is still reported; a second signal ends at once, without it)";
 
 #[derive(Parser, Debug)]
 #[command(
@@ -128,8 +131,9 @@ pub struct DecodeArgs {
     /// Threads for reading large inputs, and for writing the errors listed
     /// in ndjson node objects (0 = automatic: all cores for files over 16 MiB
     /// and gzip input, one for small files and live streams; all cores for
-    /// the node objects)
-    #[arg(long, short = 'j', default_value_t = 0, value_name = "N")]
+    /// the node objects). At most 1024; more than 4 per core counts as 4 per
+    /// core
+    #[arg(long, short = 'j', default_value_t = 0, value_name = "N", value_parser = parse_threads)]
     pub threads: usize,
 
     /// When to colour the table
@@ -299,7 +303,8 @@ pub struct BaselineArgs {
     #[command(flatten)]
     pub read: TraceArgs,
 
-    /// Write the baseline to FILE (replaced atomically) instead of stdout
+    /// Write the baseline to FILE instead of stdout (a regular file is replaced
+    /// atomically; a FIFO or device is written into)
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
 }
@@ -320,7 +325,8 @@ format.
 Exit status:
   0  no regression (or --update)
   1  at least one regression
-  2  usage error, unreadable trace or baseline, baseline of another version";
+  2  usage error, unreadable trace or baseline, baseline of another version
+  129, 130, 143  stopped by SIGHUP, Ctrl-C or SIGTERM: nothing compared or written";
 
 #[derive(Args, Debug)]
 #[command(after_help = CHECK_HELP)]
@@ -355,6 +361,32 @@ pub enum CheckFormat {
     Text,
     /// One JSON document: findings and summary
     Json,
+}
+
+/// `-j` above this is a mistake, not a machine: a usage error.
+const MAX_THREADS: usize = 1024;
+
+/// Threads per core `-j` is cut to: more only wait for a turn, each with its
+/// buffers (and a thread that cannot be started used to end the run).
+const THREADS_PER_CORE: usize = 4;
+
+fn parse_threads(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a thread count (0 = automatic, 1-{MAX_THREADS})"))?;
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    threads_within(n, cores)
+}
+
+/// `-j N` on a machine with `cores` cores: N up to [`THREADS_PER_CORE`]
+/// per core, absurd values refused.
+fn threads_within(n: usize, cores: usize) -> Result<usize, String> {
+    if n > MAX_THREADS {
+        return Err(format!(
+            "{n} threads is more than {MAX_THREADS} (this machine has {cores} cores)"
+        ));
+    }
+    Ok(n.min(THREADS_PER_CORE.saturating_mul(cores.max(1))))
 }
 
 fn parse_code_arg(s: &str) -> Result<u16, String> {
@@ -539,6 +571,21 @@ mod tests {
     #[test]
     fn definition_is_consistent() {
         Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn thread_counts_are_bounded_by_the_cores_and_absurd_ones_refused() {
+        assert_eq!(threads_within(0, 2), Ok(0), "0 stays automatic");
+        assert_eq!(threads_within(3, 2), Ok(3));
+        assert_eq!(threads_within(8, 2), Ok(8));
+        assert_eq!(threads_within(9, 2), Ok(8));
+        assert_eq!(threads_within(1024, 2), Ok(8));
+        assert_eq!(threads_within(1024, 512), Ok(1024));
+        assert_eq!(threads_within(5, 0), Ok(4), "no core count: one core");
+        assert!(threads_within(1025, 512).is_err());
+        assert!(threads_within(usize::MAX, 2).is_err());
+        assert!(parse_threads("18446744073709551616").is_err());
+        assert!(parse_threads("-1").is_err());
     }
 
     #[test]

@@ -11,7 +11,7 @@ use anyhow::Result;
 
 use super::cli::{ColorChoice, DecodeArgs, OutputFormat, View};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
-use crate::analyze::fail_on::{self, FailOn};
+use crate::analyze::fail_on::{self, FailOn, Tally};
 use crate::analyze::{
     self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Sink, WithoutEvents, batch,
 };
@@ -26,15 +26,17 @@ use crate::trace::input::{self, ReadMode, Source};
 /// of all inputs.
 pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
     let opts = args.options()?;
-    let sources = expand_sources(&args.files, args.recursive)?;
-    if args.follow && !matches!(sources.as_slice(), [Source::Path(_)]) {
+    let inputs = expand_inputs(&args.files, args.recursive);
+    if args.follow && !matches!(inputs.as_slice(), [Input::Source(Source::Path(_))]) {
         anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
     }
-    signals::catch(&opts.cancel);
+    let caught = signals::catch(&opts.cancel);
     // Reading a live stream (`candump -L can0 | emcy-decode -`, a followed
     // file): each event must show up when its line arrives, not when a
     // buffer fills.
-    let live = args.follow || (sources == [Source::Stdin] && input::stdin_is_stream());
+    let live = args.follow
+        || (matches!(inputs.as_slice(), [Input::Source(Source::Stdin)])
+            && input::stdin_is_stream());
     let mode = if args.follow {
         ReadMode::Follow
     } else if live {
@@ -79,7 +81,7 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         ),
     };
 
-    let result = decode_all(&sources, &opts, how, renderer.as_mut(), &mut log);
+    let result = decode_all(&inputs, &opts, how, renderer.as_mut(), &mut log);
     let code = match result {
         Ok(outcome) => exit_code(args, &outcome, &mut log),
         // The reader of our output went away (`| head -1`): not an error.
@@ -89,9 +91,12 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
             EXIT_ERROR
         }
     };
-    if opts.cancel.is_cancelled() {
-        log.note("interrupted: the report covers what was read before Ctrl-C");
-        return Ok(ExitCode::from(signals::EXIT_INTERRUPTED));
+    if let Some(stop) = caught.stopped() {
+        log.note(&format!(
+            "interrupted: the report covers what was read before {}",
+            stop.name
+        ));
+        return Ok(ExitCode::from(stop.status));
     }
     Ok(ExitCode::from(code))
 }
@@ -111,34 +116,57 @@ fn report_stdout() -> Box<dyn Write> {
     Box::new(io::stdout().lock())
 }
 
-/// FILE arguments to sources: `-` is stdin, none is stdin; a directory is
-/// walked with `--recursive` (its files in name order) and otherwise left to
-/// fail as "is a directory" like any unreadable input.
-fn expand_sources(files: &[PathBuf], recursive: bool) -> Result<Vec<Source>> {
-    if files.is_empty() {
-        return Ok(vec![Source::Stdin]);
-    }
-    let mut sources = Vec::new();
-    for f in files {
-        if recursive && f.is_dir() {
-            for entry in walkdir::WalkDir::new(f).sort_by_file_name() {
-                let entry = entry.map_err(|e| anyhow::anyhow!("{}: {e}", f.display()))?;
-                if entry.file_type().is_file() {
-                    sources.push(Source::Path(entry.into_path()));
-                }
-            }
-        } else {
-            sources.push(Source::from_arg(f));
-        }
-    }
-    Ok(sources)
+/// One input of the run, in argument order.
+#[derive(Debug, PartialEq, Eq)]
+enum Input {
+    Source(Source),
+    /// A part of a `--recursive` directory that could not be listed (an
+    /// unreadable subdirectory, a path too long): reported like a file that
+    /// cannot be opened, while everything else is still read.
+    Unlisted {
+        name: String,
+        error: String,
+    },
 }
 
-/// What all inputs amounted to.
+/// FILE arguments to inputs: `-` is stdin, none is stdin; a directory is
+/// walked with `--recursive` (its files in name order) and otherwise left to
+/// fail as "is a directory" like any unreadable input.
+fn expand_inputs(files: &[PathBuf], recursive: bool) -> Vec<Input> {
+    if files.is_empty() {
+        return vec![Input::Source(Source::Stdin)];
+    }
+    let mut inputs = Vec::new();
+    for f in files {
+        if !(recursive && f.is_dir()) {
+            inputs.push(Input::Source(Source::from_arg(f)));
+            continue;
+        }
+        for entry in walkdir::WalkDir::new(f).sort_by_file_name() {
+            match entry {
+                Ok(entry) if entry.file_type().is_file() => {
+                    inputs.push(Input::Source(Source::Path(entry.into_path())));
+                }
+                Ok(_) => {}
+                Err(e) => inputs.push(Input::Unlisted {
+                    name: e.path().unwrap_or(f).display().to_string(),
+                    error: match e.io_error() {
+                        Some(io) => analyze::describe_io(io),
+                        None => e.to_string(),
+                    },
+                }),
+            }
+        }
+    }
+    inputs
+}
+
+/// What all inputs amounted to, in argument order (inputs that could not
+/// be opened included, with their error).
 struct Outcome {
-    analyses: Vec<Analysis>,
-    /// Inputs that could not be opened.
-    open_failures: usize,
+    reports: Vec<InputReport>,
+    /// What `--fail-on` needs beside the reports.
+    tally: Tally,
 }
 
 /// How inputs are read.
@@ -197,38 +225,45 @@ impl HowToRead {
 }
 
 fn decode_all(
-    sources: &[Source],
+    inputs: &[Input],
     opts: &Options,
     how: HowToRead,
     renderer: &mut dyn Sink,
     log: &mut DiagnosticLog<io::Stderr>,
 ) -> Result<Outcome, OutputError> {
     let mut analyses = Vec::new();
-    let mut open_failures = 0;
     let workers = if how.threads > 0 {
         how.threads
     } else {
         cores()
     };
     let mut i = 0;
-    while i < sources.len() && !opts.cancel.is_cancelled() {
+    while i < inputs.len() && !opts.cancel.is_cancelled() {
         // A run of small files: side by side, replayed in order.
-        let run = sources[i..]
+        let run: Vec<Source> = inputs[i..]
             .iter()
-            .take_while(|s| how.side_by_side(s))
-            .count();
-        if run >= 2 && workers >= 2 {
-            batch::run_parallel(&sources[i..i + run], opts, workers, |result| {
-                match result.replay(renderer, log)? {
-                    Some(a) => analyses.push(a),
-                    None => open_failures += 1,
-                }
+            .map_while(|input| match input {
+                Input::Source(s) if how.side_by_side(s) => Some(s.clone()),
+                _ => None,
+            })
+            .collect();
+        if run.len() >= 2 && workers >= 2 {
+            batch::run_parallel(&run, opts, workers, log.quiet, |result| {
+                analyses.extend(result.replay(renderer, log)?);
                 Ok(())
             })?;
-            i += run;
+            i += run.len();
             continue;
         }
-        let source = &sources[i];
+        let source = match &inputs[i] {
+            Input::Source(source) => source,
+            Input::Unlisted { name, error } => {
+                log.error(&format!("{name}: {error}"));
+                analyses.push(Analysis::unopened(name.clone(), error.clone()));
+                i += 1;
+                continue;
+            }
+        };
         i += 1;
         let mut bar = None;
         let analysis = analyze::analyze_source(
@@ -246,19 +281,20 @@ fn decode_all(
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
-        match analysis? {
-            Some(a) => analyses.push(a),
-            None => open_failures += 1,
-        }
+        analyses.push(analysis?);
     }
-    let reports: Vec<InputReport> = analyses.iter().map(|a| a.report.clone()).collect();
+    let mut tally = Tally::default();
+    let reports: Vec<InputReport> = analyses
+        .into_iter()
+        .map(|a| {
+            tally.add(&a);
+            a.report
+        })
+        .collect();
     renderer
         .finish(&reports, &log.collected)
         .map_err(OutputError)?;
-    Ok(Outcome {
-        analyses,
-        open_failures,
-    })
+    Ok(Outcome { reports, tally })
 }
 
 /// A bar on stderr for a big regular file, counting the bytes read (after
@@ -287,16 +323,28 @@ fn wants_progress(allowed: bool, size: u64) -> bool {
 }
 
 fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::Stderr>) -> u8 {
-    let reports = outcome.analyses.iter().map(|a| &a.report);
-    let input_failed = outcome.open_failures > 0 || reports.clone().any(|r| r.error.is_some());
-    let strict_failed = args.strict
-        && reports
-            .clone()
-            .any(|r| r.counts.malformed > 0 || r.counts.emcy_invalid > 0);
+    let reports = outcome.reports.iter();
+    let input_failed = reports.clone().any(|r| r.error.is_some());
+    let (malformed, invalid) = reports.fold((0, 0), |(m, i), r| {
+        (m + r.counts.malformed, i + r.counts.emcy_invalid)
+    });
+    let strict_failed = args.strict && malformed + invalid > 0;
+    if strict_failed {
+        log.error(&format!(
+            "--strict: {malformed} malformed line{} and {invalid} EMCY frame{} too short \
+             to decode",
+            if malformed == 1 { "" } else { "s" },
+            if invalid == 1 { "" } else { "s" },
+        ));
+    }
     if input_failed || strict_failed {
         return EXIT_ERROR;
     }
-    let met = fail_on::met(&FailOn::combine(&args.fail_on), &outcome.analyses);
+    let met = fail_on::met(
+        &FailOn::combine(&args.fail_on),
+        &outcome.tally,
+        &outcome.reports,
+    );
     for reason in &met {
         log.note(&format!("fail-on: {reason}"));
     }

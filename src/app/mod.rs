@@ -16,6 +16,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Parser;
 
+use crate::text::printable;
 use cli::{Cli, Command};
 
 /// The exit codes of the contract in `--help`.
@@ -24,14 +25,16 @@ const EXIT_FAIL_ON: u8 = 1;
 const EXIT_ERROR: u8 = 2;
 
 /// The whole program: parse the command line, run the command, map errors
-/// to one `error:` line and exit 2. Clap exits 2 on usage errors and 0 for
-/// `--help`/`--version` itself.
+/// to one `error:` line and exit 2.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage(&e),
+    };
     match run(cli) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", printable(&format!("{e:#}")));
             ExitCode::from(EXIT_ERROR)
         }
     }
@@ -46,6 +49,21 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Baseline(args)) => baseline::baseline(&args),
         Some(Command::Check(args)) => baseline::check(&args),
         None => decode::run(&cli.decode),
+    }
+}
+
+/// What clap has to say instead of a run: a usage error on stderr (exit 2),
+/// or `--help`/`--version` on stdout (exit 0), unless stdout cannot take it
+/// (a full disk: exit 2 with an `error:` line; a reader that went away is
+/// fine, as for every output).
+fn usage(e: &clap::Error) -> ExitCode {
+    let code = u8::try_from(e.exit_code()).unwrap_or(EXIT_ERROR);
+    match e.print() {
+        Err(io) if e.use_stderr() || io.kind() != io::ErrorKind::BrokenPipe => {
+            eprintln!("error: writing output: {io}");
+            ExitCode::from(EXIT_ERROR)
+        }
+        _ => ExitCode::from(code),
     }
 }
 

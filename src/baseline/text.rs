@@ -3,7 +3,7 @@
 use anyhow::Result;
 
 use super::compare::{Diff, Severity};
-use crate::report::text::printable;
+use crate::text::printable;
 
 fn plural(n: u64, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })

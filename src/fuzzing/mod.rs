@@ -728,6 +728,7 @@ pub fn decode_timeline(data: &[u8]) {
                     transition: step.transition,
                     state: step.state,
                     active: &active,
+                    active_total: active.len(),
                     cleared: &step.cleared,
                     warnings: &warnings,
                     profile: Chosen {
@@ -842,7 +843,7 @@ pub fn decode_timeline(data: &[u8]) {
             state: m.timeline.state(),
             active: m.timeline.active_codes().collect(),
             emcy_count: m.timeline.emcy_count(),
-            stats: m.timeline.stats().clone(),
+            stats: Box::new(m.timeline.stats().clone()),
             profile: m.profile,
             profile_source: ProfileSource::Flag,
             profile_reason: None,

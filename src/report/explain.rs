@@ -10,6 +10,17 @@ use serde_json::json;
 use crate::canopen::emcy::Emcy;
 use crate::canopen::profile::{FieldValue, Profile};
 use crate::canopen::register::{self, Register};
+use crate::text::printable;
+
+/// The text with each line escaped: profile texts come from user files.
+fn printable_lines(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        out.push_str(&printable(line));
+        out.push('\n');
+    }
+    out
+}
 
 fn register_bit_text(bit: Option<u8>) -> String {
     match bit {
@@ -40,7 +51,7 @@ pub fn code_text(profile: &Profile, code: u16) -> String {
         register_bit_text(info.class.register_bit())
     );
     let _ = writeln!(s, "listed       {}", if info.listed { "yes" } else { "no" });
-    s
+    printable_lines(&s)
 }
 
 pub fn code_json(profile: &Profile, code: u16) -> serde_json::Value {
@@ -112,7 +123,7 @@ pub fn payload_text(profile: &Profile, data: &[u8]) -> Result<String> {
     for w in &warnings {
         let _ = writeln!(s, "warning       {w}");
     }
-    Ok(s)
+    Ok(printable_lines(&s))
 }
 
 pub fn payload_json(profile: &Profile, data: &[u8]) -> Result<serde_json::Value> {

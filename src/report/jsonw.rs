@@ -411,6 +411,11 @@ impl JsonWriter {
         out.push(b'"');
         key!(self, out, "active");
         self.array(out, ev.active, |_, out, c| push_code(out, c));
+        // `active` was cut (README, JSON contract): how many are active.
+        if ev.active_total > ev.active.len() {
+            key!(self, out, "active_truncated");
+            push_u64(out, ev.active_total as u64);
+        }
         key!(self, out, "cleared");
         self.array(out, ev.cleared, |_, out, c| push_code(out, c));
         key!(self, out, "warnings");

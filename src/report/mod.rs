@@ -13,5 +13,4 @@ pub(crate) mod ndjson;
 pub(crate) mod ordered;
 pub(crate) mod svg;
 pub(crate) mod table;
-pub(crate) mod text;
 pub(crate) mod timefmt;

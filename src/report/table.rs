@@ -2,15 +2,16 @@
 //! with fixed columns, so a trace with a million events prints without holding
 //! them), then the node states and error timeline; at the end the input counts.
 
+use std::borrow::Cow;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
-use super::text::printable;
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
 use crate::canopen::profile::{Decoded, FieldValue};
+use crate::text::printable;
 use crate::timeline::Interval;
 use crate::trace::Timestamp;
 use unicode_width::UnicodeWidthStr;
@@ -73,57 +74,30 @@ impl<W: Write> TableReport<W> {
     /// One line per node: state, errors seen with counts, time in error,
     /// longest error, first and last EMCY.
     fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
+        // Two passes over the nodes, widths then rows, as for the timeline:
+        // a trace can name a million nodes, and a table holding them all
+        // took about 2.5 KB per node on top of the reports.
         self.times.set_origin(input.first_time);
         let times = self.times.clone();
-        let time = |t: Option<Timestamp>| times.show_opt(t);
-        let mut nodes = new_table(&[
-            "CHANNEL",
-            "NODE",
-            "EMCY",
-            "STATE AT END",
-            "ACTIVE",
-            "ERRORS SEEN",
-            "PROFILE",
-            "IN ERROR",
-            "LONGEST",
-            "FIRST EMCY",
-            "LAST EMCY",
-        ]);
+        let mut cells: [String; 11] = Default::default();
+        let mut widths = NODES_HEADER.map(str::len);
         for n in &input.nodes {
-            let seen: Vec<String> = n
-                .stats
-                .raised
-                .iter()
-                .map(|(code, count)| format!("0x{code:04X} x{count}"))
-                .collect();
-            nodes.add_row(vec![
-                printable(&n.channel).into_owned(),
-                n.node.to_string(),
-                n.emcy_count.to_string(),
-                n.state.slug().to_string(),
-                if n.active.is_empty() {
-                    "-".to_string()
-                } else {
-                    codes_list(&n.active)
-                },
-                if seen.is_empty() {
-                    "-".to_string()
-                } else {
-                    seen.join(", ")
-                },
-                format!("{} ({})", n.profile.name(), n.profile_source.slug()),
-                n.time_in_error(input.last_time)
-                    .map_or_else(|| "-".to_string(), |s| s.to_string()),
-                n.stats
-                    .longest
-                    .map_or_else(|| "-".to_string(), |(c, d)| format!("0x{c:04X} {d}")),
-                time(n.stats.first_emcy.and_then(|a| a.time)),
-                time(n.stats.last_emcy.and_then(|a| a.time)),
-            ]);
+            for (w, c) in widths
+                .iter_mut()
+                .zip(node_cells(&mut cells, &times, input, n))
+            {
+                *w = (*w).max(c);
+            }
         }
-        right_align(&mut nodes, &[1, 2, 7]);
         writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
-        write_table(&mut self.out, &nodes)
+        write_row(&mut self.out, &NODES_HEADER, &widths, &NODES_RIGHT)?;
+        let mut line = String::new();
+        for n in &input.nodes {
+            let cell_widths = node_cells(&mut cells, &times, input, n);
+            push_row(&mut line, &cells, &cell_widths, &widths, &NODES_RIGHT);
+            self.out.write_all(line.as_bytes())?;
+        }
+        Ok(())
     }
 
     /// The bus-level line: frames, EMCY rate, nodes with errors.
@@ -268,23 +242,27 @@ fn decoded_text(d: &Decoded) -> String {
 /// A node's code descriptions with their display widths, measured once per
 /// node (its timeline can have millions of rows; descriptions are rarely
 /// ASCII, so measuring is not free).
-struct NodeTexts<'n>(Vec<(u16, &'n str, usize)>);
+struct NodeTexts<'n>(Vec<(u16, Cow<'n, str>, usize)>);
 
 impl<'n> NodeTexts<'n> {
     fn of(node: &'n NodeReport) -> Self {
         NodeTexts(
             node.descriptions
                 .iter()
-                .map(|(code, text)| (code, text, display_width(text)))
+                .map(|(code, text)| {
+                    let text = printable(text);
+                    let width = display_width(&text);
+                    (code, text, width)
+                })
                 .collect(),
         )
     }
 
     /// `code`'s description and width; empty for a code the node never
     /// raised (its errors are all raised by it, so never).
-    fn get(&self, code: u16) -> (&'n str, usize) {
+    fn get(&self, code: u16) -> (&str, usize) {
         match self.0.binary_search_by_key(&code, |(c, _, _)| *c) {
-            Ok(i) => self.0.get(i).map_or(("", 0), |(_, t, w)| (*t, *w)),
+            Ok(i) => self.0.get(i).map_or(("", 0), |(_, t, w)| (&**t, *w)),
             Err(_) => ("", 0),
         }
     }
@@ -342,7 +320,11 @@ impl<W: Write> Sink for TableReport<W> {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
         self.layout = None;
         self.times.origin = None;
-        writeln!(self.out, "{}", self.paint(BOLD, &format!("== {file}")))
+        writeln!(
+            self.out,
+            "{}",
+            self.paint(BOLD, &format!("== {}", printable(file)))
+        )
     }
 
     fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
@@ -395,7 +377,7 @@ impl<W: Write> Sink for TableReport<W> {
         }
         pad_to(&mut line, start + MANUFACTURER_WIDTH);
         line.push_str("  ");
-        line.push_str(ev.description);
+        line.push_str(&printable(ev.description));
         if !ev.cleared.is_empty() {
             line.push_str(" (cleared ");
             for (i, &c) in ev.cleared.iter().enumerate() {
@@ -488,7 +470,7 @@ impl<W: Write> Sink for TableReport<W> {
         for i in inputs {
             let c = &i.counts;
             t.add_row(vec![
-                i.file.clone(),
+                printable(&i.file).into_owned(),
                 i.format.map_or("-", |f| f.name()).to_string(),
                 c.lines.to_string(),
                 c.frames.to_string(),
@@ -503,6 +485,99 @@ impl<W: Write> Sink for TableReport<W> {
         write_table(&mut self.out, &t)?;
         self.out.flush()
     }
+}
+
+const NODES_HEADER: [&str; 11] = [
+    "CHANNEL",
+    "NODE",
+    "EMCY",
+    "STATE AT END",
+    "ACTIVE",
+    "ERRORS SEEN",
+    "PROFILE",
+    "IN ERROR",
+    "LONGEST",
+    "FIRST EMCY",
+    "LAST EMCY",
+];
+const NODES_RIGHT: [bool; 11] = [
+    false, true, true, false, false, false, false, true, false, false, false,
+];
+
+/// Fills the cells of one node row; returns their display widths.
+fn node_cells(
+    cells: &mut [String; 11],
+    times: &TimeFormat,
+    input: &InputReport,
+    n: &NodeReport,
+) -> [usize; 11] {
+    use std::fmt::Write as _;
+    for c in cells.iter_mut() {
+        c.clear();
+    }
+    let [
+        channel,
+        node,
+        emcy,
+        state,
+        active,
+        seen,
+        profile,
+        in_error,
+        longest,
+        first,
+        last,
+    ] = cells;
+    channel.push_str(&printable(&n.channel));
+    node.push_str(itoa::Buffer::new().format(n.node));
+    emcy.push_str(itoa::Buffer::new().format(n.emcy_count));
+    state.push_str(n.state.slug());
+    if n.active.is_empty() {
+        active.push('-');
+    }
+    for (i, &code) in n.active.iter().enumerate() {
+        if i > 0 {
+            active.push_str(", ");
+        }
+        push_code(active, code);
+    }
+    if n.stats.raised.is_empty() {
+        seen.push('-');
+    }
+    for (i, (&code, count)) in n.stats.raised.iter().enumerate() {
+        if i > 0 {
+            seen.push_str(", ");
+        }
+        push_code(seen, code);
+        seen.push_str(" x");
+        seen.push_str(itoa::Buffer::new().format(*count));
+    }
+    let _ = write!(
+        profile,
+        "{} ({})",
+        n.profile.name(),
+        n.profile_source.slug()
+    );
+    match n.time_in_error(input.last_time) {
+        Some(span) => {
+            let _ = write!(in_error, "{span}");
+        }
+        None => in_error.push('-'),
+    }
+    match n.stats.longest {
+        Some((code, span)) => {
+            push_code(longest, code);
+            let _ = write!(longest, " {span}");
+        }
+        None => longest.push('-'),
+    }
+    first.push_str(&times.show_opt(n.stats.first_emcy.and_then(|a| a.time)));
+    last.push_str(&times.show_opt(n.stats.last_emcy.and_then(|a| a.time)));
+    let mut widths = [0; 11];
+    for (w, c) in widths.iter_mut().zip(cells.iter()) {
+        *w = display_width(c);
+    }
+    widths
 }
 
 const TIMELINE_HEADER: [&str; 8] = [

@@ -37,7 +37,8 @@ pub struct Record {
 /// Collects an input's intervals while it is read.
 pub struct History {
     /// Channel names by index; the sort key uses the name (report order).
-    names: Vec<String>,
+    /// Shared with the caller, which knows its channels by them too.
+    names: Vec<Arc<str>>,
     buffer: Vec<Record>,
     spill_at: usize,
     file: Option<File>,
@@ -65,8 +66,8 @@ impl History {
     }
 
     /// Registers a channel name; returns its index for [`History::push`].
-    pub fn add_channel(&mut self, name: &str) -> u32 {
-        self.names.push(name.to_string());
+    pub fn add_channel(&mut self, name: impl Into<Arc<str>>) -> u32 {
+        self.names.push(name.into());
         (self.names.len() - 1) as u32
     }
 
@@ -94,7 +95,7 @@ impl History {
     /// bucket is sorted by raise order, which for a nearly sorted bucket is a
     /// pass too (the stable sort merges runs it finds). Only a history with
     /// a great many channels falls back to one comparison sort.
-    fn order(names: &[String], records: &[Record]) -> Vec<u32> {
+    fn order(names: &[Arc<str>], records: &[Record]) -> Vec<u32> {
         let ranks = Ranks::of(names, records.iter().map(|r| r.channel));
         let seq = |i: &u32| records.get(*i as usize).map_or(0, |r| r.interval.seq);
         let buckets = ranks.channels.len().max(1) * 256;
@@ -144,7 +145,7 @@ impl History {
     }
 
     /// Sorts in report order.
-    fn sort(names: &[String], records: &mut Vec<Record>) {
+    fn sort(names: &[Arc<str>], records: &mut Vec<Record>) {
         let order = Self::order(names, records);
         if order.windows(2).all(|w| w[0] < w[1]) {
             return;
@@ -204,7 +205,7 @@ impl History {
         ErrorHistory {
             ranks: Arc::new(ranks),
             names: Arc::new(self.names),
-            memory: self.buffer,
+            memory: Arc::new(self.buffer),
             file: self.file.map(Arc::new),
             runs: self.runs,
             spill_error: self.spill_error,
@@ -223,13 +224,13 @@ struct Ranks {
     channels: Vec<u32>,
 }
 
-fn name_of(names: &[String], channel: u32) -> &str {
-    names.get(channel as usize).map_or("", String::as_str)
+fn name_of(names: &[Arc<str>], channel: u32) -> &str {
+    names.get(channel as usize).map_or("", |n| n)
 }
 
 impl Ranks {
     /// Ranks of the given channels.
-    fn of(names: &[String], channels: impl Iterator<Item = u32>) -> Ranks {
+    fn of(names: &[Arc<str>], channels: impl Iterator<Item = u32>) -> Ranks {
         let mut ids: Vec<u32> = Vec::new();
         for c in channels {
             // Nearly every history has one or two channels.
@@ -282,7 +283,7 @@ impl Ranks {
 
     /// Where `name` ranks: `Ok(rank)` if a channel has it, else `Err(rank)`
     /// of the first channel named after it.
-    fn find(&self, names: &[String], name: &str) -> Result<u32, u32> {
+    fn find(&self, names: &[Arc<str>], name: &str) -> Result<u32, u32> {
         let at = self.channels.partition_point(|&c| name_of(names, c) < name);
         let found = self
             .channels
@@ -295,9 +296,11 @@ impl Ranks {
 /// A finished history: sorted runs on disk plus a sorted rest in memory.
 #[derive(Clone, Debug)]
 pub struct ErrorHistory {
-    names: Arc<Vec<String>>,
+    names: Arc<Vec<Arc<str>>>,
     ranks: Arc<Ranks>,
-    memory: Vec<Record>,
+    /// Shared: reports are cloned whole (the caller keeps one, the
+    /// renderer gets one), and this part can be most of the history.
+    memory: Arc<Vec<Record>>,
     file: Option<Arc<File>>,
     runs: Vec<Run>,
     spill_error: Option<String>,
@@ -343,7 +346,7 @@ impl ErrorHistory {
 
     #[cfg(test)]
     pub fn channel_name(&self, channel: u32) -> &str {
-        self.names.get(channel as usize).map_or("", String::as_str)
+        name_of(&self.names, channel)
     }
 }
 
@@ -794,7 +797,7 @@ mod tests {
     fn merged_in_report_order(pushes: &[(usize, u8)], channels: usize, spill_at: usize) {
         let mut h = History::new(spill_at);
         let ids: Vec<u32> = (0..channels)
-            .map(|c| h.add_channel(&format!("can{}", c % 300)))
+            .map(|c| h.add_channel(format!("can{}", c % 300)))
             .collect();
         let mut want = Vec::new();
         for (seq, &(c, node)) in pushes.iter().enumerate() {

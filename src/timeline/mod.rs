@@ -126,9 +126,70 @@ pub struct NodeTimeline {
     state: State,
     /// Open intervals, in the order they were raised.
     active: Vec<Interval>,
+    /// Only while [`INDEXED_FROM`] or more errors are active (a trace can
+    /// leave thousands of codes active on a node; a scan per EMCY made that
+    /// quadratic): where each active code is, and what a partial reset can
+    /// close. Nodes with few active errors, nearly all of them, pay 8 bytes.
+    index: Option<Box<ActiveIndex>>,
     next_seq: u64,
     emcy_count: u64,
-    stats: NodeStats,
+    /// Allocated when there is something to count: a node that only ever
+    /// booted has none. Boxed, so the report takes it without a copy.
+    stats: Option<Box<NodeStats>>,
+}
+
+/// From this many active errors on, a node keeps an [`ActiveIndex`]; below
+/// it a scan of the active list is as fast and needs no memory.
+const INDEXED_FROM: usize = 16;
+
+/// The active errors of a node with many of them, by code.
+#[derive(Clone, Debug, Default)]
+struct ActiveIndex {
+    /// Each active code's raise order (`Interval::seq`, ascending in
+    /// `active`, so its position is a binary search away).
+    seq_of: std::collections::BTreeMap<u16, u64>,
+    /// Per error register bit, the active errors a partial reset without
+    /// that bit would close (class bit set when raised): a reset that can
+    /// close none is answered without a scan.
+    closable: [u32; 8],
+}
+
+impl ActiveIndex {
+    fn of(active: &[Interval]) -> Box<ActiveIndex> {
+        let mut index = Box::<ActiveIndex>::default();
+        for iv in active {
+            index.add(iv);
+        }
+        index
+    }
+
+    fn add(&mut self, iv: &Interval) {
+        self.seq_of.insert(iv.code, iv.seq);
+        if let Some(n) = attributable_bit(iv).and_then(|b| self.closable.get_mut(usize::from(b))) {
+            *n += 1;
+        }
+    }
+
+    fn remove(&mut self, iv: &Interval) {
+        self.seq_of.remove(&iv.code);
+        if let Some(n) = attributable_bit(iv).and_then(|b| self.closable.get_mut(usize::from(b))) {
+            *n = n.saturating_sub(1);
+        }
+    }
+
+    /// Whether a partial reset with register `now` can close an error.
+    fn partial_reset_closes_any(&self, now: Register) -> bool {
+        (0u8..8).any(|bit| !now.has(bit) && self.closable.get(usize::from(bit)) != Some(&0))
+    }
+}
+
+/// The register bit whose drop closes `iv` in a partial reset: its class's
+/// bit, if it was set in the register it was raised with.
+fn attributable_bit(iv: &Interval) -> Option<u8> {
+    codes::lookup(iv.code)
+        .class
+        .register_bit()
+        .filter(|&bit| iv.raised_register.has(bit))
 }
 
 /// Running totals for the summary view, kept as the trace goes (bounded
@@ -147,6 +208,15 @@ pub struct NodeStats {
     pub longest: Option<(u16, Span)>,
 }
 
+/// A node's timeline at the end of its input ([`NodeTimeline::into_end`]).
+pub(crate) struct NodeEnd {
+    pub state: State,
+    pub emcy_count: u64,
+    /// Still open, in the order they were raised.
+    pub active: Vec<Interval>,
+    pub stats: Box<NodeStats>,
+}
+
 impl NodeTimeline {
     /// A node that has sent nothing yet: error-free.
     pub fn new() -> Self {
@@ -163,15 +233,27 @@ impl NodeTimeline {
         self.emcy_count
     }
 
-    /// Running totals for the summary view.
+    /// Running totals for the summary view (the program takes them with
+    /// [`NodeTimeline::into_end`]).
+    #[cfg(any(test, feature = "fuzzing"))]
     pub(crate) fn stats(&self) -> &NodeStats {
-        &self.stats
+        static NONE_YET: std::sync::LazyLock<NodeStats> =
+            std::sync::LazyLock::new(NodeStats::default);
+        self.stats.as_deref().unwrap_or(&NONE_YET)
+    }
+
+    fn stats_mut(&mut self) -> &mut NodeStats {
+        self.stats.get_or_insert_with(Box::default)
     }
 
     /// Bookkeeping after every frame: counts, first/last EMCY, time in error,
     /// longest error.
     fn account(&mut self, was: State, at: At, emcy: bool, closed: &[Interval]) {
-        let st = &mut self.stats;
+        if !emcy && closed.is_empty() && was == self.state {
+            return;
+        }
+        let state = self.state;
+        let st = self.stats_mut();
         if emcy {
             st.first_emcy.get_or_insert(at);
             st.last_emcy = Some(at);
@@ -184,7 +266,7 @@ impl NodeTimeline {
                 }
             }
         }
-        match (was, self.state) {
+        match (was, state) {
             (State::ErrorFree, State::ErrorOccurred) => st.in_error_since = at.time,
             (State::ErrorOccurred, State::ErrorFree) => {
                 if let (Some(since), Some(now)) = (st.in_error_since.take(), at.time) {
@@ -198,6 +280,17 @@ impl NodeTimeline {
         }
     }
 
+    /// What is left of the node at the end of its input, taken apart
+    /// (nothing copied: a trace can end with a million nodes).
+    pub(crate) fn into_end(self) -> NodeEnd {
+        NodeEnd {
+            state: self.state,
+            emcy_count: self.emcy_count,
+            active: self.active,
+            stats: self.stats.unwrap_or_default(),
+        }
+    }
+
     /// The open intervals, in the order they were raised (`end: None`).
     pub fn active(&self) -> &[Interval] {
         &self.active
@@ -206,6 +299,40 @@ impl NodeTimeline {
     /// Codes active now, in the order they were raised.
     pub fn active_codes(&self) -> impl Iterator<Item = u16> + '_ {
         self.active.iter().map(|iv| iv.code)
+    }
+
+    /// Where `code`'s open interval is in `active`, if it is active: a scan
+    /// of a few, a lookup in the index of many.
+    fn position(&self, code: u16) -> Option<usize> {
+        match &self.index {
+            Some(index) => {
+                let seq = *index.seq_of.get(&code)?;
+                self.active.binary_search_by_key(&seq, |iv| iv.seq).ok()
+            }
+            None => {
+                work::scanned(self.active.len());
+                self.active.iter().position(|iv| iv.code == code)
+            }
+        }
+    }
+
+    /// Opens an interval (its code is not active).
+    fn open(&mut self, iv: Interval) {
+        if self.active.capacity() == 0 {
+            // Most nodes never have two errors at once: room for one, not
+            // the four a first push reserves (a trace can have a million nodes).
+            self.active.reserve_exact(1);
+        }
+        match &mut self.index {
+            Some(index) => index.add(&iv),
+            None if self.active.len() + 1 >= work::indexed_from() => {
+                let mut index = ActiveIndex::of(&self.active);
+                index.add(&iv);
+                self.index = Some(index);
+            }
+            None => {}
+        }
+        self.active.push(iv);
     }
 
     /// Applies one EMCY. Warnings that depend on the node's history are
@@ -246,8 +373,8 @@ impl NodeTimeline {
         reuse.cleared.clear();
         let mut closed = reuse.closed;
         let transition = if !emcy.is_reset() {
-            if !self.active_codes().any(|c| c == emcy.code) {
-                self.active.push(Interval {
+            if self.position(emcy.code).is_none() {
+                self.open(Interval {
                     seq: self.next_seq,
                     code: emcy.code,
                     start: at,
@@ -257,18 +384,21 @@ impl NodeTimeline {
                     status_bit: None,
                 });
                 self.next_seq += 1;
-                *self.stats.raised.entry(emcy.code).or_insert(0) += 1;
+                *self.stats_mut().raised.entry(emcy.code).or_insert(0) += 1;
             }
             self.state = State::ErrorOccurred;
             Some(if was == State::ErrorFree { 1 } else { 3 })
         } else if emcy.register.0 != 0 {
             let now = emcy.register;
-            self.close_where(at, ClearedBy::PartialReset, &mut closed, |iv| {
-                codes::lookup(iv.code)
-                    .class
-                    .register_bit()
-                    .is_some_and(|bit| iv.raised_register.has(bit) && !now.has(bit))
-            });
+            if self
+                .index
+                .as_ref()
+                .is_none_or(|index| index.partial_reset_closes_any(now))
+            {
+                self.close_where(at, ClearedBy::PartialReset, &mut closed, |iv| {
+                    attributable_bit(iv).is_some_and(|bit| !now.has(bit))
+                });
+            }
             self.state = State::ErrorOccurred;
             if was == State::ErrorFree {
                 warnings.push(Warning::PartialResetWhileErrorFree);
@@ -320,7 +450,10 @@ impl NodeTimeline {
     ) -> Step {
         if !emcy.is_reset() {
             let step = self.emcy_reusing(emcy, at, warnings, reuse);
-            if let Some(iv) = self.active.iter_mut().find(|iv| iv.code == emcy.code) {
+            if let Some(iv) = self
+                .position(emcy.code)
+                .and_then(|i| self.active.get_mut(i))
+            {
                 iv.status_bit.get_or_insert(bit);
             }
             return step;
@@ -370,6 +503,8 @@ impl NodeTimeline {
         closed
     }
 
+    /// Closes the active errors `closes` picks, in one pass (removing them
+    /// one by one moved the rest each time: quadratic in active errors).
     fn close_where(
         &mut self,
         at: At,
@@ -377,17 +512,65 @@ impl NodeTimeline {
         closed: &mut Vec<Interval>,
         mut closes: impl FnMut(&Interval) -> bool,
     ) {
-        let mut i = 0;
-        while i < self.active.len() {
-            if closes(&self.active[i]) {
-                let mut iv = self.active.remove(i);
-                iv.end = Some(at);
-                iv.cleared_by = Some(by);
-                closed.push(iv);
-            } else {
-                i += 1;
+        let from = closed.len();
+        work::scanned(self.active.len());
+        closed.extend(self.active.extract_if(.., |iv| closes(iv)).map(|mut iv| {
+            iv.end = Some(at);
+            iv.cleared_by = Some(by);
+            iv
+        }));
+        if self.active.len() < work::indexed_from() {
+            self.index = None;
+        } else if let Some(index) = &mut self.index {
+            for iv in closed.get(from..).unwrap_or_default() {
+                index.remove(iv);
             }
         }
+    }
+}
+
+/// Active intervals looked at, counted in tests: the work per frame must
+/// not grow with the node's active errors.
+#[cfg(test)]
+mod work {
+    use std::cell::Cell;
+
+    thread_local! {
+        static SCANNED: Cell<usize> = const { Cell::new(0) };
+    }
+
+    pub(super) fn scanned(n: usize) {
+        SCANNED.with(|s| s.set(s.get().saturating_add(n)));
+    }
+
+    /// Intervals looked at by this thread so far.
+    pub(super) fn total() -> usize {
+        SCANNED.with(Cell::get)
+    }
+
+    thread_local! {
+        static INDEXED_FROM: Cell<usize> = const { Cell::new(crate::timeline::INDEXED_FROM) };
+    }
+
+    /// [`INDEXED_FROM`](crate::timeline::INDEXED_FROM), or what a test set for this thread (to
+    /// check the index against the scan it replaces).
+    pub(super) fn indexed_from() -> usize {
+        INDEXED_FROM.with(Cell::get)
+    }
+
+    pub(super) fn index_from(n: usize) {
+        INDEXED_FROM.with(|i| i.set(n));
+    }
+}
+
+#[cfg(not(test))]
+mod work {
+    #[inline(always)]
+    pub(super) fn scanned(_: usize) {}
+
+    #[inline(always)]
+    pub(super) fn indexed_from() -> usize {
+        crate::timeline::INDEXED_FROM
     }
 }
 
@@ -735,5 +918,123 @@ mod tests {
         assert_eq!(second.cleared, [0x2310]);
         assert_eq!(second.closed.len(), 1);
         assert_eq!(second.closed[0].start.line, 3);
+    }
+
+    /// Frames of one node with many active errors: raises, repeats,
+    /// partial resets that close nothing; the intervals looked at per frame
+    /// stay bounded (a scan per frame made it quadratic in active errors).
+    #[test]
+    fn work_per_frame_does_not_grow_with_active_errors() {
+        const N: u16 = 5000;
+        let mut t = NodeTimeline::new();
+        let mut w = Vec::new();
+        let before = work::total();
+        let mut line = 0;
+        let mut frame = |t: &mut NodeTimeline, code: u16, register: u8| {
+            line += 1;
+            t.emcy(&emcy(code, register), at(line), &mut w)
+        };
+        for i in 0..N {
+            frame(&mut t, 0x1001 + i, 0x01);
+        }
+        for i in 0..N {
+            let repeat = (u32::from(i) * 7919 % u32::from(N)) as u16;
+            let step = frame(&mut t, 0x1001 + repeat, 0x01);
+            assert_eq!(step.transition, Some(3));
+        }
+        for _ in 0..N {
+            // The generic bit alone: no error can be attributed.
+            let step = frame(&mut t, 0x0000, 0x01);
+            assert!(step.cleared.is_empty());
+        }
+        assert_eq!(t.active().len(), usize::from(N));
+        let frames = 3 * usize::from(N);
+        let scanned = work::total() - before;
+        assert!(
+            scanned <= INDEXED_FROM * frames,
+            "{scanned} intervals looked at for {frames} frames"
+        );
+        // A reset closes all of them in one pass.
+        let step = frame(&mut t, 0x0000, 0x00);
+        assert_eq!(step.cleared.len(), usize::from(N));
+        assert!(work::total() - before <= INDEXED_FROM * frames + usize::from(N));
+        assert!(t.active().is_empty());
+    }
+
+    /// One frame of a random script.
+    #[derive(Clone, Debug)]
+    enum Frame {
+        Emcy {
+            code: u16,
+            register: u8,
+            bit: Option<u8>,
+        },
+        Boot,
+    }
+
+    fn frame_strategy() -> impl proptest::strategy::Strategy<Value = Frame> {
+        use proptest::prelude::*;
+        // Few codes of every class, registers with any class bits: many
+        // errors active at once, partial resets that close some.
+        let code = prop_oneof![
+            3 => (0u16..40).prop_map(|i| [0x1000, 0x2310, 0x3210, 0x4210, 0x5530, 0x8110, 0xFF00][usize::from(i % 7)] + i),
+            1 => Just(0x0000u16),
+        ];
+        prop_oneof![
+            30 => (code, any::<u8>(), proptest::option::of(0u8..4))
+                .prop_map(|(code, register, bit)| Frame::Emcy { code, register, bit }),
+            1 => Just(Frame::Boot),
+        ]
+    }
+
+    /// Everything a timeline says after each frame of `frames`, with the
+    /// index from `indexed_from` active errors on.
+    fn replay(frames: &[Frame], indexed_from: usize) -> Vec<String> {
+        work::index_from(indexed_from);
+        let mut t = NodeTimeline::new();
+        let mut said = Vec::new();
+        for (i, f) in frames.iter().enumerate() {
+            let at = at(i as u64 + 1);
+            let mut w = Vec::new();
+            let step = match f {
+                Frame::Emcy {
+                    code,
+                    register,
+                    bit,
+                } => t.apply(&emcy(*code, *register), at, *bit, &mut w, Step::default()),
+                Frame::Boot => Step {
+                    closed: t.boot(at),
+                    ..Step::default()
+                },
+            };
+            said.push(format!("{step:?} {w:?} {:?} {:?}", t.active(), t.stats()));
+        }
+        work::index_from(INDEXED_FROM);
+        said
+    }
+
+    proptest::proptest! {
+        /// The index answers exactly what a scan of the active list does.
+        #[test]
+        fn the_index_changes_nothing(frames in proptest::collection::vec(frame_strategy(), 0..400)) {
+            let scanned = replay(&frames, usize::MAX);
+            proptest::prop_assert_eq!(&replay(&frames, 1), &scanned);
+            proptest::prop_assert_eq!(&replay(&frames, 4), &scanned);
+            proptest::prop_assert_eq!(&replay(&frames, INDEXED_FROM), &scanned);
+        }
+    }
+
+    /// A node that never had two errors at once holds room for one, and a
+    /// boot-up alone allocates nothing: a trace can name a million nodes.
+    #[test]
+    fn a_node_holds_only_what_it_needs() {
+        let mut t = NodeTimeline::new();
+        t.boot(at(1));
+        assert_eq!(t.active.capacity(), 0);
+        assert!(t.stats.is_none());
+        let mut w = Vec::new();
+        t.emcy(&emcy(0x4310, 0x09), at(2), &mut w);
+        assert_eq!(t.active.capacity(), 1);
+        assert!(t.index.is_none());
     }
 }

@@ -4,9 +4,16 @@
 //!
 //! A live source (a pipe from candump, a followed file) may block in `read`
 //! for as long as the bus is quiet, so a flag alone would not be seen:
-//! [`Interruptible`] reads such a source on its own thread and turns a
-//! cancel into end-of-input while the reading thread is still blocked.
+//! [`Interruptible`] reads such a source on its own thread and ends the
+//! input on a cancel while the reading thread is still blocked.
+//!
+//! A read ended by a cancel is not the end of the input: the last line read
+//! may be cut anywhere. So once bytes were handed out, a cancelled reader
+//! returns the [`cancelled`] error instead of `Ok(0)`, and the line reader
+//! ends there without the unfinished line (see `lines::BlockReader`);
+//! `Ok(0)` stays the real end, where a last line without newline is whole.
 
+use std::fmt;
 use std::io::{self, Read};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -27,7 +34,9 @@ impl Cancel {
         Self::default()
     }
 
-    /// Ends every read that holds a clone of this token.
+    /// Ends every read that holds a clone of this token. The program
+    /// cancels from its signal handler, through [`Cancel::flag`].
+    #[cfg(test)]
     pub fn cancel(&self) {
         self.0.store(true, Ordering::SeqCst);
     }
@@ -36,21 +45,70 @@ impl Cancel {
     pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::SeqCst)
     }
+
+    /// The flag itself, for a signal handler to set (an atomic store is all
+    /// a handler may do).
+    pub(crate) fn flag(&self) -> Arc<AtomicBool> {
+        Arc::clone(&self.0)
+    }
+}
+
+/// The error of a read stopped by a cancel (see the module header).
+#[derive(Debug)]
+struct Cancelled;
+
+impl fmt::Display for Cancelled {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("reading stopped by a signal")
+    }
+}
+
+impl std::error::Error for Cancelled {}
+
+/// A read stopped by a cancel, after some input was read: the input was cut,
+/// it did not end. Not `Interrupted`, which readers retry.
+pub(crate) fn cancelled() -> io::Error {
+    io::Error::other(Cancelled)
+}
+
+/// Whether `e` is [`cancelled`] (also when passed on by gzip or a buffer).
+pub(crate) fn is_cancelled(e: &io::Error) -> bool {
+    e.get_ref().is_some_and(|inner| inner.is::<Cancelled>())
+}
+
+/// How a cancelled reader ends: `Ok(0)` when it handed out nothing (an
+/// empty input, nothing cut), else [`cancelled`].
+fn stop(passed: bool) -> io::Result<usize> {
+    if passed { Err(cancelled()) } else { Ok(0) }
 }
 
 /// A regular file or other finite source: reading stops at the next read
-/// after a cancel, as if the input ended there.
+/// after a cancel.
 pub(crate) struct StopOnCancel<R> {
-    pub(crate) inner: R,
-    pub(crate) cancel: Cancel,
+    inner: R,
+    cancel: Cancel,
+    /// Bytes were handed out: a cancel now cuts the input.
+    passed: bool,
+}
+
+impl<R> StopOnCancel<R> {
+    pub(crate) fn new(inner: R, cancel: Cancel) -> Self {
+        StopOnCancel {
+            inner,
+            cancel,
+            passed: false,
+        }
+    }
 }
 
 impl<R: Read> Read for StopOnCancel<R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         if self.cancel.is_cancelled() {
-            return Ok(0);
+            return stop(self.passed);
         }
-        self.inner.read(buf)
+        let n = self.inner.read(buf)?;
+        self.passed |= n > 0;
+        Ok(n)
     }
 }
 
@@ -62,6 +120,8 @@ pub(crate) struct Interruptible {
     pos: usize,
     done: bool,
     cancel: Cancel,
+    /// Bytes were handed out: a cancel now cuts the input.
+    passed: bool,
 }
 
 impl Interruptible {
@@ -75,6 +135,7 @@ impl Interruptible {
             pos: 0,
             done: false,
             cancel,
+            passed: false,
         }
     }
 }
@@ -105,14 +166,20 @@ fn pump(mut source: Box<dyn Read + Send>, tx: &SyncSender<io::Result<Vec<u8>>>) 
 impl Read for Interruptible {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         loop {
-            if self.pos < self.current.len() {
+            let buffered = self.pos < self.current.len();
+            if self.done && !buffered {
+                return Ok(0);
+            }
+            // Stop at once: a chunk already received is not read on either.
+            if self.cancel.is_cancelled() {
+                return stop(self.passed);
+            }
+            if buffered {
                 let n = buf.len().min(self.current.len() - self.pos);
                 buf[..n].copy_from_slice(&self.current[self.pos..self.pos + n]);
                 self.pos += n;
+                self.passed |= n > 0;
                 return Ok(n);
-            }
-            if self.done || self.cancel.is_cancelled() {
-                return Ok(0);
             }
             match self.chunks.recv_timeout(POLL) {
                 Ok(Ok(chunk)) if chunk.is_empty() => self.done = true,

@@ -5,7 +5,7 @@ use std::fs::File;
 use std::io::{self, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use super::cancel::{Cancel, Interruptible, StopOnCancel};
+use super::cancel::{self, Cancel, Interruptible, StopOnCancel};
 use super::follow::Follow;
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
@@ -60,10 +60,7 @@ pub enum ReadMode {
 /// Errors carry a message fit for `error: NAME: message`.
 pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Opened> {
     let stop = |inner: Box<dyn Read + Send>| -> Box<dyn Read + Send> {
-        Box::new(StopOnCancel {
-            inner,
-            cancel: cancel.clone(),
-        })
+        Box::new(StopOnCancel::new(inner, cancel.clone()))
     };
     let (raw, size): (Box<dyn Read + Send>, Option<u64>) = match source {
         Source::Stdin if mode == ReadMode::Finite => (stop(Box::new(io::stdin())), None),
@@ -81,7 +78,10 @@ pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Open
                 ));
             }
             match mode {
-                ReadMode::Follow => (Box::new(Follow::new(file, cancel.clone())), None),
+                ReadMode::Follow => (
+                    Box::new(Follow::new(path.clone(), file, cancel.clone())),
+                    None,
+                ),
                 ReadMode::Live => (
                     Box::new(Interruptible::new(Box::new(file), cancel.clone())),
                     None,
@@ -93,7 +93,12 @@ pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Open
             }
         }
     };
-    let mut opened = sniff_gzip(raw)?;
+    let mut opened = match sniff_gzip(raw) {
+        // Cut by a cancel while its first bytes were looked at: no line was
+        // read, so the input is empty rather than unreadable.
+        Err(e) if cancel::is_cancelled(&e) => sniff_gzip(Box::new(io::empty()))?,
+        opened => opened?,
+    };
     opened.size = size;
     Ok(opened)
 }

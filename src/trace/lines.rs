@@ -10,6 +10,8 @@
 
 use std::io::{self, Read};
 
+use super::cancel;
+
 /// Lines longer than this are reported as too long and skipped. Real trace
 /// lines are under 500 bytes (a 64-byte CAN FD frame in ASC is ~400).
 pub const DEFAULT_MAX_LINE: usize = 64 * 1024;
@@ -155,6 +157,9 @@ pub struct BlockReader<R> {
     block: usize,
     max_line: usize,
     eof: bool,
+    /// The input was cut by a cancel, not ended (see `cancel`): an unfinished
+    /// line at the end is not a line.
+    cut: bool,
     /// Length so far of a too-long line being skipped.
     skipping: Option<u64>,
     /// A too-long line that ended; goes in front of the next block.
@@ -184,6 +189,7 @@ impl<R: Read> BlockReader<R> {
             block: block.max(1),
             max_line: max_line.max(1),
             eof: false,
+            cut: false,
             skipping: None,
             too_long: None,
             error: None,
@@ -204,8 +210,9 @@ impl<R: Read> BlockReader<R> {
     }
 
     /// The next block, built in `buf` (a recycled buffer; its contents are
-    /// discarded). `Ok(None)` at end of input. An I/O error (corrupt gzip) is
-    /// returned once; the unfinished line before it is dropped.
+    /// discarded). `Ok(None)` at end of input, or where a cancel stopped it
+    /// (then without the unfinished line it cut). An I/O error (corrupt gzip)
+    /// is returned once; the unfinished line before it is dropped.
     pub fn next_block(&mut self, mut buf: Vec<u8>) -> io::Result<Option<Block>> {
         if let Some(e) = self.error.take() {
             return Err(e);
@@ -328,6 +335,14 @@ impl<R: Read> BlockReader<R> {
         loop {
             match self.inner.read(&mut self.carry[start..end]) {
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) if cancel::is_cancelled(&e) => {
+                    // Stopped, not ended: the bytes after the last newline
+                    // are part of a line that was never read to its end.
+                    self.filled = self.begin;
+                    self.eof = true;
+                    self.cut = true;
+                    return Ok(());
+                }
                 Err(e) => return Err(e),
                 Ok(n) => {
                     self.filled += n;
@@ -362,7 +377,8 @@ impl<R: Read> BlockReader<R> {
             }
             None if self.eof => {
                 self.skipping = None;
-                self.too_long = Some(len);
+                // Cut by a cancel: it never ended, so it is no line at all.
+                self.too_long = (!self.cut).then_some(len);
             }
             None => {
                 len += data.len() as u64;
@@ -668,6 +684,61 @@ mod tests {
             Some("one".to_string())
         );
         assert!(r.next_line().is_err());
+    }
+
+    /// Hands out `parts` one per read and cancels `cancel` after the
+    /// `cancel_after`th, as Ctrl-C between two reads would.
+    struct CancelMidway {
+        parts: Vec<&'static [u8]>,
+        cancel_after: usize,
+        cancel: cancel::Cancel,
+    }
+    impl Read for CancelMidway {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            if self.parts.is_empty() {
+                return Ok(0);
+            }
+            let part = self.parts.remove(0);
+            buf[..part.len()].copy_from_slice(part);
+            self.cancel_after = self.cancel_after.saturating_sub(1);
+            if self.cancel_after == 0 {
+                self.cancel.cancel();
+            }
+            Ok(part.len())
+        }
+    }
+
+    fn lines_until_cancel(parts: Vec<&'static [u8]>, cancel_after: usize) -> Vec<String> {
+        let token = cancel::Cancel::new();
+        let source = CancelMidway {
+            parts,
+            cancel_after,
+            cancel: token.clone(),
+        };
+        collect_blocks(cancel::StopOnCancel::new(source, token), DEFAULT_BLOCK, 16)
+    }
+
+    #[test]
+    fn a_line_cut_by_a_cancel_is_not_read() {
+        // Ctrl-C between the `t` and the `w` of `two`: only `one` was read
+        // to its newline. The end of the input is still the end.
+        assert_eq!(lines_until_cancel(vec![b"one\nt", b"wo\n"], 1), ["one"]);
+        assert_eq!(
+            lines_until_cancel(vec![b"one\nt", b"wo\nlast"], 2),
+            ["one", "two"]
+        );
+        assert_eq!(
+            lines_until_cancel(vec![b"one\nt", b"wo\nlast"], 9),
+            ["one", "two", "last"]
+        );
+        // Cut right after a newline: nothing is lost either.
+        assert_eq!(lines_until_cancel(vec![b"one\n", b"two\n"], 1), ["one"]);
+        // A too-long line cut by a cancel never ended: no line.
+        let long: &'static [u8] = b"0123456789abcdefghij";
+        assert_eq!(
+            lines_until_cancel(vec![b"one\n", long, long, b"\n"], 3),
+            ["one"]
+        );
     }
 
     #[test]

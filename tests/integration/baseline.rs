@@ -565,3 +565,494 @@ fn help_lists_both_commands() {
         .code(0)
         .stdout(predicate::str::contains("baseline").and(predicate::str::contains("check")));
 }
+
+// ---- where the baseline is written: nothing but a regular file is replaced ----------------
+
+/// The names in `dir`, sorted: a temporary file left behind would show.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .expect("read dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort_unstable();
+    names
+}
+
+/// What `baseline traces/rig.log` prints in `dir`.
+fn expected_baseline(dir: &TempDir) -> Vec<u8> {
+    let out = cmd_in(dir)
+        .args(["baseline", "traces/rig.log"])
+        .assert()
+        .code(0);
+    out.get_output().stdout.clone()
+}
+
+#[cfg(unix)]
+fn mkfifo(path: &Path) {
+    let status = std::process::Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(status.success(), "mkfifo {}", path.display());
+}
+
+/// `mknod PATH TYPE MAJOR MINOR`; false where device nodes cannot be made
+/// (not root, or a container without the capability).
+#[cfg(unix)]
+fn mknod(path: &Path, kind: &str, major: u32, minor: u32) -> bool {
+    std::process::Command::new("mknod")
+        .arg(path)
+        .args([kind, &major.to_string(), &minor.to_string()])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+#[cfg(unix)]
+fn file_type(path: &Path) -> fs::FileType {
+    fs::symlink_metadata(path).expect("stat").file_type()
+}
+
+/// Runs `baseline traces/rig.log -o out.fifo` with `cat` reading the FIFO
+/// and returns what `cat` read. Fails (instead of hanging) when the FIFO was
+/// renamed over: `cat` would wait on it for ever.
+#[cfg(unix)]
+fn written_into_fifo(dir: &TempDir, fifo: &str) -> Vec<u8> {
+    use std::os::unix::fs::FileTypeExt;
+    use std::process::Stdio;
+    let path = dir.path().join(fifo);
+    mkfifo(&path);
+    let cat = std::process::Command::new("cat")
+        .arg(&path)
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("cat runs");
+    let status = crate::support::binary()
+        .current_dir(dir.path())
+        .args(["baseline", "traces/rig.log", "-o", fifo])
+        .status()
+        .expect("runs");
+    if !file_type(&path).is_fifo() {
+        let mut cat = cat;
+        let _ = cat.kill();
+        let _ = cat.wait();
+        panic!("the FIFO was replaced (exit {status})");
+    }
+    let out = cat.wait_with_output().expect("cat ends");
+    assert_eq!(status.code(), Some(0));
+    out.stdout
+}
+
+#[cfg(unix)]
+#[test]
+fn a_fifo_given_to_o_is_written_into_not_replaced() {
+    let dir = workspace("rig.log");
+    let expected = expected_baseline(&dir);
+    let read = written_into_fifo(&dir, "out.fifo");
+    assert_eq!(read, expected);
+    assert_eq!(listing(dir.path()), ["out.fifo", "traces"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn dev_null_and_other_character_devices_given_to_o_are_written_into_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = workspace("rig.log");
+    // First a FIFO: a build that renames over one would rename over
+    // /dev/null below too, as root.
+    written_into_fifo(&dir, "guard.fifo");
+    let null = dir.path().join("null");
+    if mknod(&null, "c", 1, 3) {
+        cmd_in(&dir)
+            .args(["baseline", "traces/rig.log", "-o", "null"])
+            .assert()
+            .code(0)
+            .stdout("")
+            .stderr("");
+        assert!(file_type(&null).is_char_device(), "the device was replaced");
+        assert_eq!(listing(dir.path()), ["guard.fifo", "null", "traces"]);
+    } else {
+        eprintln!("note: cannot mknod here; only /dev/null is tried");
+    }
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "-o", "/dev/null"])
+        .assert()
+        .code(0)
+        .stdout("")
+        .stderr("");
+    assert!(file_type(Path::new("/dev/null")).is_char_device());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn dev_stdout_is_written_into_a_pipe_and_appended_to_a_file() {
+    if !Path::new("/dev/stdout").exists() {
+        eprintln!("skipped: no /dev/stdout");
+        return;
+    }
+    let dir = workspace("rig.log");
+    // As for /dev/null: a build that renames over a FIFO would replace
+    // /dev/stdout, as root.
+    written_into_fifo(&dir, "guard.fifo");
+    let expected = expected_baseline(&dir);
+    // The test captures stdout through a pipe.
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "-o", "/dev/stdout"])
+        .assert()
+        .code(0)
+        .stdout(expected.clone())
+        .stderr("");
+    // A file the shell opened with `>>` keeps what it had.
+    fs::write(dir.path().join("log.txt"), "first\n").expect("write");
+    let bin = assert_cmd::cargo::cargo_bin("emcy-decode");
+    let status = std::process::Command::new("sh")
+        .args([
+            "-c",
+            "\"$0\" baseline traces/rig.log -o /dev/stdout >> log.txt",
+        ])
+        .arg(&bin)
+        .current_dir(dir.path())
+        .status()
+        .expect("sh runs");
+    assert_eq!(status.code(), Some(0));
+    let mut want = b"first\n".to_vec();
+    want.extend_from_slice(&expected);
+    assert_eq!(fs::read(dir.path().join("log.txt")).expect("read"), want);
+    assert!(file_type(Path::new("/dev/stdout")).is_symlink());
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symlink_given_to_o_is_written_through_to_its_target_with_its_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = workspace("rig.log");
+    let expected = expected_baseline(&dir);
+    let store = dir.path().join("store");
+    fs::create_dir(&store).expect("mkdir");
+    fs::write(store.join("baseline.json"), "old\n").expect("write");
+    fs::set_permissions(
+        store.join("baseline.json"),
+        fs::Permissions::from_mode(0o640),
+    )
+    .expect("chmod");
+    std::os::unix::fs::symlink("store/baseline.json", dir.path().join("baseline.json"))
+        .expect("symlink");
+
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "-o", "baseline.json"])
+        .assert()
+        .code(0)
+        .stdout("")
+        .stderr("");
+    let link = dir.path().join("baseline.json");
+    assert!(file_type(&link).is_symlink(), "the link was replaced");
+    assert_eq!(
+        fs::read_link(&link).expect("readlink"),
+        Path::new("store/baseline.json")
+    );
+    assert_eq!(
+        fs::read(store.join("baseline.json")).expect("read"),
+        expected
+    );
+    let mode = fs::metadata(store.join("baseline.json"))
+        .expect("stat")
+        .permissions();
+    assert_eq!(mode.mode() & 0o777, 0o640);
+    assert_eq!(listing(dir.path()), ["baseline.json", "store", "traces"]);
+    assert_eq!(listing(&store), ["baseline.json"]);
+
+    // `check --update` rewrites the baseline through the link as well.
+    put(&dir, "new-error.log");
+    check(&dir, &["--update"]).code(0);
+    assert!(file_type(&link).is_symlink(), "--update replaced the link");
+    assert_ne!(
+        fs::read(store.join("baseline.json")).expect("read"),
+        expected
+    );
+    assert_eq!(listing(&store), ["baseline.json"]);
+    check(&dir, &[]).code(0);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_dangling_symlink_given_to_o_gets_its_target_created() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = workspace("rig.log");
+    let expected = expected_baseline(&dir);
+    fs::create_dir(dir.path().join("store")).expect("mkdir");
+    std::os::unix::fs::symlink("store/new.json", dir.path().join("baseline.json"))
+        .expect("symlink");
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "-o", "baseline.json"])
+        .assert()
+        .code(0);
+    assert!(file_type(&dir.path().join("baseline.json")).is_symlink());
+    let target = dir.path().join("store/new.json");
+    assert_eq!(fs::read(&target).expect("read"), expected);
+    let mode = fs::metadata(&target).expect("stat").permissions().mode();
+    assert_eq!(mode & 0o777, 0o644);
+    assert_eq!(listing(&dir.path().join("store")), ["new.json"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_directory_socket_block_device_or_link_loop_given_to_o_is_refused_and_left_alone() {
+    let dir = workspace("rig.log");
+    fs::create_dir(dir.path().join("out")).expect("mkdir");
+    fs::write(dir.path().join("out/keep"), "keep\n").expect("write");
+    std::os::unix::fs::symlink("out", dir.path().join("to-dir")).expect("symlink");
+    let _socket =
+        std::os::unix::net::UnixListener::bind(dir.path().join("sock")).expect("bind socket");
+    std::os::unix::fs::symlink("loop-b", dir.path().join("loop-a")).expect("symlink");
+    std::os::unix::fs::symlink("loop-a", dir.path().join("loop-b")).expect("symlink");
+    let mut cases = vec![
+        ("out", "out is a directory"),
+        ("to-dir", "to-dir (a link to out) is a directory"),
+        ("sock", "sock is a socket"),
+        ("loop-a", "too many symbolic links"),
+    ];
+    // Never written, but refused before anything could be.
+    if mknod(&dir.path().join("blk"), "b", 7, 200) {
+        cases.push(("blk", "blk is a block device"));
+    } else {
+        eprintln!("note: cannot mknod here; no block device tried");
+    }
+    let before = listing(dir.path());
+    let types: Vec<fs::FileType> = before
+        .iter()
+        .map(|n| file_type(&dir.path().join(n)))
+        .collect();
+    for (out, message) in cases {
+        for args in [
+            vec!["baseline", "traces/rig.log", "-o", out],
+            vec!["check", "-b", out, "traces/rig.log", "--update"],
+        ] {
+            let run = cmd_in(&dir).args(&args).assert().code(2).stdout("");
+            let err = one_error_line(&run.get_output().stderr);
+            if args[0] == "baseline" {
+                assert!(err.contains(message), "{args:?}: {err}");
+            }
+        }
+        let after: Vec<fs::FileType> = listing(dir.path())
+            .iter()
+            .map(|n| file_type(&dir.path().join(n)))
+            .collect();
+        assert_eq!(listing(dir.path()), before, "-o {out}");
+        assert_eq!(after, types, "-o {out}");
+    }
+    assert_eq!(listing(&dir.path().join("out")), ["keep"]);
+}
+
+/// Runs `args` in `dir` and checks that it fails with one `error:` line
+/// containing `message`, leaving `baseline.json` as it was and no file
+/// behind.
+fn fails_and_keeps_the_baseline(dir: &TempDir, cmd: &mut Command, message: &str) {
+    let path = dir.path().join("baseline.json");
+    let before = fs::read(&path).expect("read");
+    let names = listing(dir.path());
+    let out = cmd.assert().code(2).stdout("");
+    let err = one_error_line(&out.get_output().stderr);
+    assert!(err.contains(message), "{err}");
+    assert_eq!(fs::read(&path).expect("read"), before);
+    assert_eq!(listing(dir.path()), names);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_read_only_directory_keeps_the_old_baseline_and_no_temporary_file() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = workspace("rig.log");
+    fs::create_dir(dir.path().join("ro")).expect("mkdir");
+    fs::write(dir.path().join("ro/baseline.json"), "old\n").expect("write");
+    let ro = dir.path().join("ro");
+    fs::set_permissions(&ro, fs::Permissions::from_mode(0o555)).expect("chmod");
+    // As root permission bits do not stop a write: then there is nothing
+    // to see here (the write that fails part way is the next test).
+    let probe = ro.join("probe");
+    if fs::write(&probe, "").is_ok() {
+        let _ = fs::remove_file(&probe);
+        eprintln!("note: permission bits do not stop writes here (root); skipped");
+    } else {
+        for args in [
+            vec!["baseline", "traces/rig.log", "-o", "ro/baseline.json"],
+            vec![
+                "check",
+                "-b",
+                "ro/baseline.json",
+                "traces/rig.log",
+                "--update",
+            ],
+        ] {
+            let out = cmd_in(&dir).args(&args).assert().code(2);
+            let err = one_error_line(&out.get_output().stderr);
+            assert!(err.contains("ro/baseline.json"), "{err}");
+            assert_eq!(fs::read(ro.join("baseline.json")).expect("read"), b"old\n");
+            assert_eq!(listing(&ro), ["baseline.json"]);
+        }
+    }
+    fs::set_permissions(&ro, fs::Permissions::from_mode(0o755)).expect("chmod back");
+}
+
+/// A write that fails half way (the file size limit at 0, which also binds
+/// root) leaves the old baseline and no temporary file.
+#[cfg(unix)]
+#[test]
+fn a_write_that_fails_keeps_the_old_baseline_and_no_temporary_file() {
+    let dir = checked_against_rig("new-error.log");
+    let bin = assert_cmd::cargo::cargo_bin("emcy-decode");
+    for args in [
+        "baseline traces/rig.log -o baseline.json",
+        "check -b baseline.json traces/rig.log --update",
+    ] {
+        // SIGXFSZ ignored, so the write fails with EFBIG instead of the
+        // signal ending the process.
+        let line = format!("trap '' XFSZ; ulimit -f 0; exec \"$0\" {args} >/dev/null");
+        let mut cmd = Command::new("sh");
+        cmd.args(["-c", &line]).arg(&bin).current_dir(dir.path());
+        let path = dir.path().join("baseline.json");
+        let before = fs::read(&path).expect("read");
+        let names = listing(dir.path());
+        let out = cmd.assert().code(2);
+        let err = one_error_line(&out.get_output().stderr);
+        assert!(err.starts_with("error: writing baseline.json: "), "{err}");
+        assert_eq!(fs::read(&path).expect("read"), before);
+        assert_eq!(listing(dir.path()), names);
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_trace_that_cannot_be_read_keeps_the_old_baseline_behind_a_link() {
+    let dir = checked_against_rig("rig.log");
+    fs::create_dir(dir.path().join("store")).expect("mkdir");
+    fs::rename(
+        dir.path().join("baseline.json"),
+        dir.path().join("store/baseline.json"),
+    )
+    .expect("move");
+    std::os::unix::fs::symlink("store/baseline.json", dir.path().join("baseline.json"))
+        .expect("symlink");
+    // A gzip cut short: read in part, then an error.
+    let gz =
+        fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/s300.log.gz")).expect("read");
+    fs::write(dir.path().join("traces/cut.log.gz"), &gz[..gz.len() / 2]).expect("write");
+    for args in [
+        vec!["baseline", "traces/nope.log", "-o", "baseline.json"],
+        vec!["baseline", "traces/cut.log.gz", "-o", "baseline.json"],
+        vec![
+            "check",
+            "-b",
+            "baseline.json",
+            "traces/nope.log",
+            "--update",
+        ],
+        vec![
+            "check",
+            "-b",
+            "baseline.json",
+            "traces/cut.log.gz",
+            "--update",
+        ],
+    ] {
+        let before = fs::read(dir.path().join("store/baseline.json")).expect("read");
+        let names = listing(dir.path());
+        let out = cmd_in(&dir).args(&args).assert().code(2).stdout("");
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+        assert!(stderr.contains("error: traces/"), "{args:?}: {stderr}");
+        assert!(file_type(&dir.path().join("baseline.json")).is_symlink());
+        assert_eq!(
+            fs::read(dir.path().join("store/baseline.json")).expect("read"),
+            before,
+            "{args:?}"
+        );
+        assert_eq!(listing(dir.path()), names);
+        assert_eq!(listing(&dir.path().join("store")), ["baseline.json"]);
+    }
+}
+
+#[test]
+fn the_baseline_is_never_written_over_a_trace_or_profile_file_given_with_it() {
+    let dir = checked_against_rig("rig.log");
+    let trace = fs::read(dir.path().join("traces/rig.log")).expect("read");
+    fs::write(dir.path().join("vendor.toml"), "# a profile\n").expect("write");
+    fs::hard_link(
+        dir.path().join("traces/rig.log"),
+        dir.path().join("alias.log"),
+    )
+    .expect("hard link");
+    let mut cases = vec![
+        (
+            vec!["baseline", "traces/rig.log", "-o", "traces/rig.log"],
+            "traces/rig.log is also given as a trace;",
+        ),
+        (
+            vec!["baseline", "traces/rig.log", "-o", "./traces//rig.log"],
+            "./traces//rig.log is also given as a trace (as traces/rig.log);",
+        ),
+        (
+            vec!["baseline", "traces/rig.log", "-o", "alias.log"],
+            "alias.log is also given as a trace (as traces/rig.log);",
+        ),
+        (
+            vec![
+                "baseline",
+                "traces/rig.log",
+                "--profile-file",
+                "vendor.toml",
+                "-o",
+                "vendor.toml",
+            ],
+            "vendor.toml is also given as a profile file;",
+        ),
+        (
+            vec![
+                "check",
+                "-b",
+                "baseline.json",
+                "traces/rig.log",
+                "baseline.json",
+                "--update",
+            ],
+            "baseline.json is also given as a trace;",
+        ),
+    ];
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("traces/rig.log", dir.path().join("link.log")).expect("symlink");
+        cases.push((
+            vec!["baseline", "traces/rig.log", "-o", "link.log"],
+            "link.log is also given as a trace (as traces/rig.log);",
+        ));
+    }
+    for (args, message) in cases {
+        let mut cmd = cmd_in(&dir);
+        cmd.args(&args);
+        fails_and_keeps_the_baseline(&dir, &mut cmd, message);
+        assert_eq!(
+            fs::read(dir.path().join("traces/rig.log")).expect("read"),
+            trace,
+            "{args:?}"
+        );
+        assert_eq!(
+            fs::read(dir.path().join("vendor.toml")).expect("read"),
+            b"# a profile\n"
+        );
+    }
+}
+
+#[test]
+fn check_update_with_a_baseline_file_named_dash_rewrites_that_file() {
+    let dir = checked_against_rig("rig.log");
+    fs::rename(dir.path().join("baseline.json"), dir.path().join("-")).expect("rename");
+    put(&dir, "new-error.log");
+    cmd_in(&dir)
+        .args(["check", "-b", "-", "traces/rig.log", "--update"])
+        .assert()
+        .code(0)
+        .stdout(
+            predicate::str::starts_with("regression: ").and(predicate::str::contains("{").not()),
+        )
+        .stderr("check: wrote -\n");
+    let updated = fs::read(dir.path().join("-")).expect("read");
+    assert_eq!(updated, expected_baseline(&dir));
+}

@@ -90,7 +90,16 @@ fn other_files_are_still_reported_when_one_is_missing() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let objects = ndjson_objects(&out.stdout);
-    assert_eq!(of_type(&objects, "input").len(), 1);
+    let inputs = of_type(&objects, "input");
+    assert_eq!(inputs.len(), 2, "every argument has an input object");
+    assert_eq!(inputs[0]["file"], "nope.log");
+    assert_eq!(inputs[0]["error"], "No such file or directory");
+    assert_eq!(inputs[1]["file"], "fixtures/stoeber.log");
+    assert_eq!(inputs[1]["error"], Value::Null);
+    assert!(
+        !of_type(&objects, "emcy").is_empty(),
+        "the other file is read"
+    );
 }
 
 #[test]
@@ -832,4 +841,79 @@ fn a_node_with_many_errors_is_one_valid_object_in_both_json_formats() {
         .unwrap();
     let doc: Value = serde_json::from_slice(&doc.stdout).expect("one valid document");
     assert_eq!(doc["nodes"][0], node);
+}
+
+// ---- threads (-j) ----------------------------------------------------------------
+
+/// Issue 18: `-j 40000` ended in a panic when a thread could not be
+/// started, `-j 18446744073709551615` grew for minutes. Absurd counts are a
+/// usage error; large plausible ones are cut to 4 per core (the report is
+/// the same whatever the count).
+#[test]
+fn absurd_thread_counts_are_a_usage_error() {
+    for n in [
+        "1025",
+        "40000",
+        "18446744073709551615",
+        "18446744073709551616",
+    ] {
+        emcy_decode()
+            .args(["-j", n, "fixtures/s300.log.gz"])
+            .assert()
+            .code(2)
+            .stdout("")
+            .stderr(predicate::str::contains("--threads").and(predicate::str::contains(n)));
+    }
+}
+
+#[test]
+fn large_thread_counts_give_the_report_of_one_thread() {
+    let run = |j: &str| {
+        let out = emcy_decode()
+            .args(["-j", j, "--format", "ndjson", "fixtures/s300.log.gz"])
+            .args(["fixtures/s300.log", "fixtures/edge.log"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "-j {j}");
+        (out.stdout, out.stderr)
+    };
+    let one = run("1");
+    assert!(!one.0.is_empty());
+    for j in ["64", "1024"] {
+        assert!(run(j) == one, "-j {j}");
+    }
+}
+
+/// `-q` holds when small files are read side by side (`-j 2`) as when they
+/// are read one after another (`-j 1`): it was ignored, and stderr depended
+/// on the thread count.
+#[test]
+fn quiet_is_quiet_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for i in 0..4 {
+        let path = dir.path().join(format!("{i}.log"));
+        std::fs::write(
+            &path,
+            format!(
+                "(1.0) can0 081#1043090100000000\nnot a frame {i}\n(2.0) can0 081#0000000000000000\n"
+            ),
+        )
+        .unwrap();
+        files.push(path);
+    }
+    files.push(dir.path().join("missing.log"));
+    let stderr = |j: &str| {
+        let out = emcy_decode()
+            .args(["-q", "-j", j])
+            .args(&files)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "-j {j}: a file is missing");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let one = stderr("1");
+    assert!(one.contains("missing.log"), "error lines stay: {one}");
+    assert!(!one.contains(".log:2:"), "no diagnostics with -q: {one}");
+    assert_eq!(stderr("2"), one);
 }

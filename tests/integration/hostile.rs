@@ -20,6 +20,7 @@
 //! | formats mixing | `every_pair_of_formats_mixes_only_with_a_warning`, `input_format_turns_mixing_off` |
 //! | `forbid(unsafe_code)` | `the_library_and_the_binary_forbid_unsafe_code` |
 //! | diagnostics name file:line, bounded | `every_diagnostic_names_file_and_line`, `max_diagnostics_bounds_printing_never_counting` |
+//! | codes raised and never cleared | `never_cleared_codes_keep_every_event_bounded` |
 //! | regressions found here | `many_distinct_channels_stay_linear_in_time_and_memory`, `channel_names_cannot_put_control_sequences_on_the_terminal`, `channel_names_that_read_the_same_are_one_channel` (fuzzing) |
 //!
 //! That no EMCY is lost or invented among garbage is a property test:
@@ -958,7 +959,14 @@ fn a_directory_is_an_error_and_other_files_are_still_read() {
     );
     let objects = ndjson(&out.stdout);
     assert_eq!(of_type(&objects, "emcy").len(), 2);
-    assert_eq!(input_of(&objects)["file"], "fixtures/stoeber.log");
+    let inputs = of_type(&objects, "input");
+    assert_eq!(inputs.len(), 2, "every argument has an input object");
+    assert_eq!(
+        (&inputs[0]["file"], &inputs[0]["error"]),
+        (&Value::from("fixtures"), &Value::from("is a directory"))
+    );
+    assert_eq!(inputs[1]["file"], "fixtures/stoeber.log");
+    assert_eq!(inputs[1]["error"], Value::Null);
 }
 
 #[test]
@@ -1280,21 +1288,51 @@ fn max_diagnostics_bounds_printing_never_counting() {
 
 #[test]
 fn many_distinct_channels_stay_linear_in_time_and_memory() {
-    // Every interface name is a channel. Each used to cost 128 node slots
-    // (8 KiB) and a linear search: 20k names took ~160 MiB and quadratic time.
+    // Every interface name is a channel, each with one node. A channel used
+    // to cost 128 node slots (8 KiB) and a linear search; then a node cost
+    // about 2.8 KiB in ndjson and 3.7 KiB in the table (its report was
+    // copied for the renderer, the table held every row): 100k names took
+    // 280 and 380 MB. Now about 0.8 KiB, whatever the format.
+    const CHANNELS: u64 = 100_000;
+    const BASE_KIB: u64 = 16 * 1024;
+    const PER_NODE_BYTES: u64 = 1200;
     let dir = TempDir::new("channels");
     let path = dir.path("channels.log");
-    let trace: String = (0..20_000)
+    let trace: String = (0..CHANNELS)
         .map(|i| format!("(1.0) c{i} 081#1043090100000000\n"))
         .collect();
     fs::write(&path, trace).unwrap();
-    let started = Instant::now();
-    let run = run_measured(&[OsString::from("--format=ndjson"), path.into()], None);
-    assert_eq!(run.status.code(), Some(0));
-    let objects = ndjson(&run.stdout);
-    assert_eq!(of_type(&objects, "node").len(), 20_000);
-    assert_flat("20k channels", run.peak_kib);
-    assert!(started.elapsed() < Duration::from_secs(60));
+    let limit = BASE_KIB + CHANNELS * PER_NODE_BYTES / 1024;
+    for format in ["ndjson", "table"] {
+        let started = Instant::now();
+        let run = run_measured(
+            &[
+                OsString::from("--format"),
+                format.into(),
+                path.clone().into(),
+            ],
+            None,
+        );
+        assert_eq!(run.status.code(), Some(0));
+        if format == "ndjson" {
+            let objects = ndjson(&run.stdout);
+            assert_eq!(of_type(&objects, "node").len(), CHANNELS as usize);
+        } else {
+            let table = String::from_utf8(run.stdout).unwrap();
+            assert!(
+                table.contains("\nc99999      1     1  error_occurred"),
+                "one row per node"
+            );
+        }
+        if let Some(peak) = run.peak_kib {
+            eprintln!("peak RSS for {CHANNELS} channels ({format}): {peak} KiB");
+            assert!(
+                peak < limit,
+                "{format}: peak RSS {peak} KiB, limit {limit} KiB"
+            );
+        }
+        assert!(started.elapsed() < Duration::from_secs(60));
+    }
 }
 
 #[test]
@@ -1338,4 +1376,94 @@ fn channel_names_that_read_the_same_are_one_channel() {
     assert_eq!(nodes[0]["errors"].as_array().map(Vec::len), Some(1));
     // The second frame repeats an active error: no second raise.
     assert_eq!(of_type(&objects, "emcy")[1]["transition"], 3);
+}
+
+/// 200 000 distinct codes raised and never cleared (four nodes, 50 000
+/// each): every event used to list all of its node's active codes, and the
+/// node checked each new code against all of them: 48 MB of such input gave
+/// 36 GB of ndjson. An event lists at most 64 and counts the rest; each line
+/// is bounded, the whole output linear in the input (the node objects list
+/// every error once).
+#[test]
+fn never_cleared_codes_keep_every_event_bounded() {
+    const NODES: u32 = 4;
+    const CODES: u32 = 50_000;
+    const EVENT_MAX: usize = 2048;
+    const ERROR_MAX: usize = 256;
+    let dir = TempDir::new("active");
+    let path = dir.path("active.log");
+    let mut trace = io::BufWriter::new(fs::File::create(&path).unwrap());
+    for code in 1..=CODES {
+        let [lo, hi] = (code as u16).to_le_bytes();
+        for node in 1..=NODES {
+            writeln!(
+                trace,
+                "({code}.{node}) can0 {:03X}#{lo:02X}{hi:02X}0100000000",
+                0x80 + node
+            )
+            .unwrap();
+        }
+    }
+    trace.into_inner().unwrap().sync_all().unwrap();
+    let events = (NODES * CODES) as usize;
+    let mut child = binary()
+        .args(["--format", "ndjson"])
+        .arg(&path)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stdout = io::BufReader::new(child.stdout.take().unwrap());
+    let (mut line, mut total, mut seen) = (Vec::new(), 0usize, 0usize);
+    let mut nodes = Vec::new();
+    let failure = loop {
+        line.clear();
+        match io::BufRead::read_until(&mut stdout, b'\n', &mut line) {
+            Ok(0) => break None,
+            Ok(n) => total += n,
+            Err(e) => break Some(format!("reading stdout: {e}")),
+        }
+        if line.starts_with(br#"{"type":"emcy""#) {
+            seen += 1;
+            if line.len() > EVENT_MAX {
+                break Some(format!("event {seen} is {} bytes", line.len()));
+            }
+            // A sample is read in full: the first codes, the count.
+            if seen % 9973 == 0 {
+                let event: Value = serde_json::from_slice(&line).unwrap();
+                let active = event["active"].as_array().unwrap().len();
+                let node_total = (seen - 1) / NODES as usize + 1;
+                assert_eq!(active, node_total.min(64), "event {seen}");
+                if node_total > 64 {
+                    assert_eq!(event["active_truncated"], node_total, "event {seen}");
+                }
+            }
+        } else if line.starts_with(br#"{"type":"node""#) {
+            if line.len() > CODES as usize * ERROR_MAX {
+                break Some(format!("a node object of {} bytes", line.len()));
+            }
+            nodes.push(serde_json::from_slice::<Value>(&line).unwrap());
+        }
+    };
+    if failure.is_some() {
+        let _ = child.kill();
+    }
+    let status = child.wait().unwrap();
+    if let Some(failure) = failure {
+        panic!("{failure} (the output must stay linear in the input)");
+    }
+    assert!(status.success());
+    assert_eq!(seen, events);
+    assert!(total <= events * (EVENT_MAX + ERROR_MAX), "{total} bytes");
+    assert_eq!(nodes.len(), NODES as usize);
+    for node in &nodes {
+        assert_eq!(
+            node["active"].as_array().map(Vec::len),
+            Some(CODES as usize)
+        );
+        assert_eq!(
+            node["errors"].as_array().map(Vec::len),
+            Some(CODES as usize)
+        );
+    }
 }

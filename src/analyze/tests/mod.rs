@@ -4,7 +4,9 @@
 //!
 //! - [`conservation`]: no EMCY is lost or invented, whatever surrounds it;
 //! - [`parallel`]: output never depends on how the input was split or how
-//!   many threads read it.
+//!   many threads read it;
+//! - [`threads`]: nor on how many threads the system would start;
+//! - [`active`]: an event's size does not grow with its node's active errors.
 //!
 //! The random frames and their renderings are the integration tests'
 //! (`tests/integration/support/frames.rs`), one file compiled in both.
@@ -12,5 +14,7 @@
 #[path = "../../../tests/integration/support/frames.rs"]
 mod frames;
 
+mod active;
 mod conservation;
 mod parallel;
+mod threads;

@@ -1,0 +1,116 @@
+//! What reaches a terminal is safe and what cannot be written is said:
+//! control characters from file names and user profiles are escaped as
+//! trace text is, and output that cannot be written fails the run.
+
+use std::fs;
+
+use crate::support::emcy_decode;
+
+fn no_escape(what: &str, bytes: &[u8]) {
+    let text = String::from_utf8_lossy(bytes);
+    assert!(
+        !text.chars().any(|c| c.is_control() && c != '\n'),
+        "{what} holds a control character: {text:?}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn file_names_cannot_put_control_sequences_on_the_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trace\x1b]0;owned\x07.log");
+    fs::write(
+        &path,
+        "(1.000000) can0 081#1043090000000000\n(2.000000) can0 081#zz\n",
+    )
+    .unwrap();
+    let missing = dir.path().join("gone\x1b[2J.log");
+    let out = emcy_decode().arg(&path).arg(&missing).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    no_escape("the table", &out.stdout);
+    no_escape("stderr", &out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stdout.contains(r"== "), "{stdout}");
+    assert!(stdout.contains(r"trace\u{1b}]0;owned\u{7}.log"), "{stdout}");
+    assert!(
+        stderr.contains(r"trace\u{1b}]0;owned\u{7}.log:2: "),
+        "{stderr}"
+    );
+    assert!(stderr.contains(r"error: "), "{stderr}");
+    assert!(
+        stderr.contains(r"gone\u{1b}[2J.log: No such file"),
+        "{stderr}"
+    );
+    // JSON escapes them its own way and keeps the name exact.
+    let out = emcy_decode()
+        .args(["--format", "ndjson"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    no_escape("ndjson", &out.stdout);
+    assert!(String::from_utf8_lossy(&out.stdout).contains(r"trace\u001b]0;owned\u0007.log"));
+}
+
+#[test]
+fn profile_texts_cannot_put_control_sequences_on_the_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("evil.toml");
+    fs::write(
+        &profile,
+        "name = \"evil\"\nbase = \"cia402\"\n[codes]\n\"0x4310\" = { text = \"hot\\u001b[31m red\", fault = \"F\\u0007\" }\n",
+    )
+    .unwrap();
+    let trace = dir.path().join("t.log");
+    fs::write(&trace, "(1.000000) can0 081#1043090000000000\n").unwrap();
+    let out = emcy_decode()
+        .arg("--profile-file")
+        .arg(&profile)
+        .arg(&trace)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    no_escape("the table", &out.stdout);
+    assert!(String::from_utf8_lossy(&out.stdout).contains(r"F\u{7} hot\u{1b}[31m red"));
+    for args in [
+        &["explain", "4310"][..],
+        &["explain", "--data", "1043090000000000"],
+    ] {
+        let out = emcy_decode()
+            .args(args)
+            .arg("--profile-file")
+            .arg(&profile)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        no_escape("explain", &out.stdout);
+        assert!(String::from_utf8_lossy(&out.stdout).contains(r"hot\u{1b}[31m red"));
+    }
+}
+
+/// `--help` and `--version` into a full disk fail like any output that
+/// cannot be written; into a reader that goes away they succeed.
+#[cfg(target_os = "linux")]
+#[test]
+fn help_and_version_that_cannot_be_written_exit_2() {
+    for flag in ["--help", "--version"] {
+        let full = fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = crate::support::binary()
+            .arg(flag)
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{flag}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.starts_with("error: writing output: "), "{stderr}");
+        emcy_decode().arg(flag).assert().code(0);
+    }
+}
