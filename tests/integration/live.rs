@@ -25,6 +25,27 @@ pub(crate) fn spawn(args: &[&str]) -> Child {
         .expect("spawns")
 }
 
+/// [`spawn`], then one EMCY line written to its stdin (kept open): the
+/// child, its stdin, its stdout and stderr lines.
+fn spawn_with_one_emcy(
+    args: &[&str],
+) -> (
+    Child,
+    std::process::ChildStdin,
+    Receiver<String>,
+    Receiver<String>,
+) {
+    let mut child = spawn(args);
+    let mut stdin = child.stdin.take().unwrap();
+    let out = lines_of(child.stdout.take().unwrap());
+    let err = lines_of(child.stderr.take().unwrap());
+    stdin
+        .write_all(emcy_line(1, "1043090000000000").as_bytes())
+        .unwrap();
+    stdin.flush().unwrap();
+    (child, stdin, out, err)
+}
+
 /// Lines of the child's stdout (or stderr) as they arrive.
 pub(crate) fn lines_of(stdout: impl std::io::Read + Send + 'static) -> Receiver<String> {
     let (tx, rx) = channel();
@@ -165,14 +186,7 @@ fn ctrl_c_prints_the_summary_and_exits_130() {
 fn sigterm_and_sighup_print_the_report_like_ctrl_c_then_exit_143_and_129() {
     // Killed by the signal before: no status code, no report.
     for (name, code) in [("TERM", 143), ("HUP", 129)] {
-        let mut child = spawn(&["--format", "ndjson", "-"]);
-        let mut stdin = child.stdin.take().unwrap();
-        let rx = lines_of(child.stdout.take().unwrap());
-        let err = lines_of(child.stderr.take().unwrap());
-        stdin
-            .write_all(emcy_line(1, "1043090000000000").as_bytes())
-            .unwrap();
-        stdin.flush().unwrap();
+        let (mut child, stdin, rx, err) = spawn_with_one_emcy(&["--format", "ndjson", "-"]);
         assert_eq!(next_json(&rx)["type"], "emcy");
         signal(&child, name);
         assert_eq!(exit_within_wait(&mut child, name), Some(code), "SIG{name}");
@@ -591,21 +605,17 @@ fn a_signal_while_baseline_or_check_reads_writes_nothing() {
     assert_eq!(made.status.code(), Some(0));
     let old_bytes = std::fs::read(&old).unwrap();
     let new = dir.path().join("new.json");
-    let runs: [(Vec<std::ffi::OsString>, &str, u32, i32, &str); 2] = [
+    let (new, old_path) = (new.to_str().unwrap(), old.to_str().unwrap());
+    let runs: [(&[&str], &str, u32, i32, &str); 2] = [
         (
-            vec!["baseline".into(), "-o".into(), new.clone().into()],
+            &["baseline", "-o", new, "-"],
             "TERM",
             SIGTERM,
             143,
             "error: stopped by SIGTERM while reading <stdin>; no baseline written",
         ),
         (
-            vec![
-                "check".into(),
-                "--update".into(),
-                "-b".into(),
-                old.clone().into(),
-            ],
+            &["check", "--update", "-b", old_path, "-"],
             "HUP",
             SIGHUP,
             129,
@@ -614,21 +624,7 @@ fn a_signal_while_baseline_or_check_reads_writes_nothing() {
         ),
     ];
     for (args, name, signo, code, message) in runs {
-        let mut child = binary()
-            .args(&args)
-            .arg("-")
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut stdin = child.stdin.take().unwrap();
-        let out = lines_of(child.stdout.take().unwrap());
-        let err = lines_of(child.stderr.take().unwrap());
-        stdin
-            .write_all(emcy_line(1, "1043090000000000").as_bytes())
-            .unwrap();
-        stdin.flush().unwrap();
+        let (mut child, stdin, out, err) = spawn_with_one_emcy(args);
         wait_until_caught(&child, signo);
         signal(&child, name);
         assert_eq!(exit_within_wait(&mut child, name), Some(code), "SIG{name}");

@@ -22,23 +22,30 @@ fn peak_while_streaming(args: &[&str], format: TraceFormat) -> Option<u64> {
     peak_with_emcy(args, format, TRACE_BYTES, 2)
 }
 
-fn peak_with_emcy(
-    args: &[&str],
-    format: TraceFormat,
-    bytes: u64,
-    emcy_per_mille: u64,
-) -> Option<u64> {
-    let mut child = binary()
-        .args(args)
+/// `cmd` with `-` as its trace, spawned with a buffered writer to its
+/// stdin (its output discarded).
+fn reading_stdin(
+    cmd: &mut std::process::Command,
+) -> (std::process::Child, BufWriter<std::process::ChildStdin>) {
+    let mut child = cmd
         .arg("-")
         .stdin(Stdio::piped())
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .expect("spawn");
-    let pid = child.id();
     let stdin = child.stdin.take().expect("stdin");
-    let mut writer = BufWriter::with_capacity(1 << 20, stdin);
+    (child, BufWriter::with_capacity(1 << 20, stdin))
+}
+
+fn peak_with_emcy(
+    args: &[&str],
+    format: TraceFormat,
+    bytes: u64,
+    emcy_per_mille: u64,
+) -> Option<u64> {
+    let (mut child, mut writer) = reading_stdin(binary().args(args));
+    let pid = child.id();
     let (lines, emcy) =
         write_trace(&mut writer, format, bytes, emcy_per_mille, 7).expect("write trace");
     writer.flush().expect("flush");
@@ -137,19 +144,8 @@ fn check_reads_a_big_baseline_in_bounded_memory() {
     write!(out, "}}}}").expect("write");
     out.into_inner().expect("flush").sync_all().expect("sync");
 
-    let mut child = binary()
-        .arg("check")
-        .arg("-b")
-        .arg(&path)
-        .arg("-")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn");
+    let (mut child, mut writer) = reading_stdin(binary().arg("check").arg("-b").arg(&path));
     let pid = child.id();
-    let stdin = child.stdin.take().expect("stdin");
-    let mut writer = BufWriter::with_capacity(1 << 20, stdin);
     write_trace(&mut writer, TraceFormat::CandumpLog, 4 * 1024 * 1024, 2, 7).expect("write");
     writer.flush().expect("flush");
     let peak = peak_rss_kib(pid).expect("VmHWM readable");
