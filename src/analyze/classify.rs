@@ -22,6 +22,11 @@ pub(super) trait LineSink {
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     fn malformed(&mut self, idx: u64, reason: Reason);
+    /// A diagnostic about the frame on the same line, which the reader made
+    /// good (a contradiction it resolved); the frame follows.
+    fn warning(&mut self, idx: u64, reason: Reason);
+    /// A line that is not a frame made the format known (an ASC header).
+    fn format_known(&mut self);
     fn lines(&mut self, n: u64);
 }
 
@@ -75,14 +80,25 @@ pub(super) fn classify_block(
                 Scan::Plain => sink.plain_frames(1),
                 Scan::Timed(t) => sink.timed_frames(1, t, t),
                 Scan::Frame(frame) => deliver(sink, idx, &frame, None)?,
-                Scan::Parse => match detector.parse(text, sink.interest()) {
-                    Parsed::Frame(frame) => {
-                        let foreign = detector.take_foreign().zip(detector.format());
-                        deliver(sink, idx, &frame, foreign)?;
+                Scan::Parse => {
+                    let known = detector.format().is_some();
+                    match detector.parse(text, sink.interest()) {
+                        Parsed::Frame(frame) => {
+                            if let Some(warning) = detector.take_warning() {
+                                sink.warning(idx, warning);
+                            }
+                            let foreign = detector.take_foreign().zip(detector.format());
+                            deliver(sink, idx, &frame, foreign)?;
+                        }
+                        Parsed::Skipped => {
+                            sink.skipped();
+                            if !known && detector.format().is_some() {
+                                sink.format_known();
+                            }
+                        }
+                        Parsed::Malformed(reason) => sink.malformed(idx, reason),
                     }
-                    Parsed::Skipped => sink.skipped(),
-                    Parsed::Malformed(reason) => sink.malformed(idx, reason),
-                },
+                }
             },
         }
         idx += 1;

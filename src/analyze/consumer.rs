@@ -506,6 +506,16 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             .report(self.log, self.decided, line, reason.into_owned());
     }
 
+    fn warning(&mut self, idx: u64, reason: Reason) {
+        let line = self.line_no(idx);
+        self.diags
+            .report(self.log, self.decided, line, reason.into_owned());
+    }
+
+    fn format_known(&mut self) {
+        self.decide();
+    }
+
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         self.counts.frames += 1;
         let line_no = self.line_no(idx);

@@ -265,6 +265,9 @@ fn read_blf<R: Read, E: Write>(
             Ok(None) => return Ok(None),
             Err(e) => return Ok(read_error(&e)),
         }
+        if let Some(warning) = reader.take_warning() {
+            consumer.warning(0, warning);
+        }
         consumer.lines(1);
     }
 }

@@ -39,6 +39,11 @@ enum BlockRecord {
         idx: u64,
         reason: Reason,
     },
+    /// A diagnostic about a frame the reader made good.
+    Warning {
+        idx: u64,
+        reason: Reason,
+    },
     /// A wanted frame that only moves the input's first/last time (already
     /// counted in `plain_frames`).
     Time(Timestamp),
@@ -64,6 +69,8 @@ struct BlockResult {
     skipped: u64,
     /// Malformed lines beyond the diagnostics limit: counted, not reported.
     unreported: u64,
+    /// Warnings beyond the diagnostics limit: only counted as not shown.
+    unreported_warnings: u64,
     records: Vec<BlockRecord>,
     /// Channel names of the frame records, back to back.
     channels: Vec<u8>,
@@ -78,7 +85,8 @@ struct Recorder {
     time_pending: Option<Timestamp>,
     limit: usize,
     result: BlockResult,
-    malformed_kept: usize,
+    /// Malformed lines and warnings kept (they share the limit).
+    diagnostics_kept: usize,
 }
 
 impl LineSink for Recorder {
@@ -107,8 +115,8 @@ impl LineSink for Recorder {
     fn malformed(&mut self, idx: u64, reason: Reason) {
         // The consumer shows at most `limit` per input, in line order, so no
         // block needs to keep more than that.
-        if self.malformed_kept < self.limit {
-            self.malformed_kept += 1;
+        if self.diagnostics_kept < self.limit {
+            self.diagnostics_kept += 1;
             self.result
                 .records
                 .push(BlockRecord::Malformed { idx, reason });
@@ -116,6 +124,20 @@ impl LineSink for Recorder {
             self.result.unreported += 1;
         }
     }
+
+    fn warning(&mut self, idx: u64, reason: Reason) {
+        if self.diagnostics_kept < self.limit {
+            self.diagnostics_kept += 1;
+            self.result
+                .records
+                .push(BlockRecord::Warning { idx, reason });
+        } else {
+            self.result.unreported_warnings += 1;
+        }
+    }
+
+    // Workers start once the format is known.
+    fn format_known(&mut self) {}
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         self.flush_time();
@@ -166,10 +188,11 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.counts.frames += r.plain_frames;
         self.counts.skipped += r.skipped;
         self.counts.malformed += r.unreported;
-        self.diags.suppressed += r.unreported;
+        self.diags.suppressed += r.unreported + r.unreported_warnings;
         for record in r.records {
             match record {
                 BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
+                BlockRecord::Warning { idx, reason } => self.warning(idx, reason),
                 BlockRecord::Time(t) => self.time(t),
                 BlockRecord::Frame {
                     idx,
@@ -256,7 +279,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                         limit,
                         time_kept: false,
                         time_pending: None,
-                        malformed_kept: 0,
+                        diagnostics_kept: 0,
                         result: BlockResult {
                             seq,
                             worker,
@@ -269,6 +292,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             plain_frames: 0,
                             skipped: 0,
                             unreported: 0,
+                            unreported_warnings: 0,
                             records: Vec::new(),
                             channels: Vec::new(),
                         },

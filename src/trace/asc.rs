@@ -70,6 +70,11 @@ pub struct AscParser {
     /// The layout of the last canonical line (a cache: results never
     /// depend on it, only speed).
     layout: Option<AscLayout>,
+    /// What the last line's frame needed made good (see
+    /// [`LineParser::take_warning`]).
+    warning: Option<Reason>,
+    /// A `base` or `Begin Triggerblock` line was read: only ASC writes them.
+    identified: bool,
 }
 
 impl AscParser {
@@ -81,6 +86,8 @@ impl AscParser {
             relative: false,
             now: Timestamp::ZERO,
             layout: None,
+            warning: None,
+            identified: false,
         }
     }
 }
@@ -127,8 +134,17 @@ impl LineParser for AscParser {
         }
     }
 
+    fn take_warning(&mut self) -> Option<Reason> {
+        self.warning.take()
+    }
+
+    fn identified(&self) -> bool {
+        self.identified
+    }
+
     #[inline]
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        self.warning = None;
         if let Some((frame, now)) = self.canonical(line, interest) {
             self.now = now;
             return Parsed::Frame(frame);
@@ -515,17 +531,24 @@ impl AscParser {
 
     /// Lines without a timestamp: the header and trigger block markers.
     fn header(&mut self, first: &[u8], rest: Tokens<'_>, all: Tokens<'_>) -> Result<(), Reason> {
+        let begin =
+            is(first, b"begin") && rest.clone().next().is_some_and(|t| is(t, b"triggerblock"));
         let known = is(first, b"date")
             || words(rest.clone(), &[b"events", b"logged"]) && is(first, b"internal")
             || words(rest.clone(), &[b"internal", b"events", b"logged"]) && is(first, b"no")
-            || is(first, b"begin") && rest.clone().next().is_some_and(|t| is(t, b"triggerblock"))
+            || begin
             || is(first, b"end") && words(rest.clone(), &[b"triggerblock"])
             || start_of_measurement(all);
         if known {
+            // `date` alone does not identify the format: a pasted shell
+            // `date` looks the same.
+            self.identified |= begin;
             return Ok(());
         }
         if is(first, b"base") {
-            return self.base_line(rest);
+            let read = self.base_line(rest);
+            self.identified |= read.is_ok();
+            return read;
         }
         Err(format!(
             "unknown line: '{}' is neither a timestamp nor an ASC header keyword",
@@ -586,7 +609,7 @@ impl AscParser {
 
     /// Everything after a timestamp.
     fn event<'a>(
-        &self,
+        &mut self,
         time: Timestamp,
         mut toks: Tokens<'a>,
         interest: &Interest,
@@ -719,7 +742,7 @@ impl AscParser {
 
     /// `CANFD CH DIR ID[x] [NAME] BRS ESI DLC DATALEN BYTE* DUR LEN FLAGS ...`
     fn canfd<'a>(
-        &self,
+        &mut self,
         time: Timestamp,
         mut toks: Tokens<'a>,
         interest: &Interest,
@@ -752,6 +775,14 @@ impl AscParser {
         let body = match (plain, named) {
             (Ok(p), Err(_)) => p,
             (Err(_), Ok(n)) => n,
+            // A layout that needs no contradiction resolved beats one that does.
+            (Ok(p), Ok(n)) if p.warning.is_some() != n.warning.is_some() => {
+                if p.warning.is_none() {
+                    p
+                } else {
+                    n
+                }
+            }
             (Ok(p), Ok(n)) => {
                 if p.same_frame(&n)
                     || (p.after_data == FD_TAIL_FULL && n.after_data != FD_TAIL_FULL)
@@ -777,6 +808,7 @@ impl AscParser {
                 });
             }
         };
+        self.warning = body.warning;
         Ok(Some(Frame {
             time: Some(time),
             channel,
@@ -796,6 +828,8 @@ struct FdBody {
     data: Payload,
     /// Number of fields after the data bytes (tie-break between layouts).
     after_data: usize,
+    /// The flags and the byte count disagree; the byte count won.
+    warning: Option<Reason>,
 }
 
 impl FdBody {
@@ -888,12 +922,14 @@ fn fd_body(mut toks: Tokens<'_>, base: Base, wanted: bool) -> Result<FdBody, Rea
 
     // Only FD frames switch bit rate; this also catches a flags field cut
     // short (`303000` -> `3`), which would otherwise read as a classic frame.
-    if brs && flags & FLAG_FDF == 0 {
+    // Over 8 bytes the frame is FD whatever the flags say (below).
+    if brs && flags & FLAG_FDF == 0 && data_len <= 8 {
         return Err(format!(
             "BRS is 1 but flags {flags:X} lack FDF 1000 (only FD frames switch bit rate)"
         )
         .into());
     }
+    let mut warning = None;
     let (kind, len) = if flags & FLAG_FDF != 0 {
         if data_len != fd_len {
             return Err(format!(
@@ -901,6 +937,18 @@ fn fd_body(mut toks: Tokens<'_>, base: Base, wanted: bool) -> Result<FdBody, Rea
             )
             .into());
         }
+        (FrameKind::Fd, data_len)
+    } else if data_len > 8 {
+        // Only a CAN FD frame carries more than 8 bytes (and then
+        // `data_len` is the DLC's FD length, checked above). python-can
+        // writes such lines with flags 0 and reads them as FD by the count.
+        warning = Some(
+            format!(
+                "CANFD line: flags {flags:X} lack FDF 1000 but {data_len} data bytes (DLC \
+                 {dlc:X}) only fit a CAN FD frame; read as one"
+            )
+            .into(),
+        );
         (FrameKind::Fd, data_len)
     } else if flags & FLAG_RTR != 0 {
         if data_len != 0 {
@@ -924,6 +972,7 @@ fn fd_body(mut toks: Tokens<'_>, base: Base, wanted: bool) -> Result<FdBody, Rea
         len,
         data,
         after_data,
+        warning,
     })
 }
 
@@ -1819,17 +1868,93 @@ mod tests {
         // Classic DLC 9..F with 8 bytes.
         let f = frame("1.0 CANFD 1 Rx 81 0 0 f 8 10 43 08 01 00 00 00 00 130000 130 0 0 0 0 0 0");
         assert_eq!((f.kind, f.len), (FrameKind::Data, 8));
-        assert!(
-            malformed(
-                "1.0 CANFD 1 Rx 81 0 0 9 12 00 00 00 00 00 00 00 00 00 00 00 00 1 1 0 0 0 0 0 0"
-            )
-            .contains("lack FDF")
-        );
+        // 12 bytes are not a classic frame whatever the flags say: see
+        // `canfd_line_over_8_bytes_without_fdf_is_fd_with_a_warning`.
+        let mut p = AscParser::new();
+        let line = "1.0 CANFD 1 Rx 81 0 0 9 12 00 00 00 00 00 00 00 00 00 00 00 00 1 1 0 0 0 0 0 0";
+        assert!(matches!(parse_with(&mut p, line), Parsed::Frame(f) if f.kind == FrameKind::Fd));
+        assert!(p.take_warning().is_some_and(|w| w.contains("lack FDF")));
         // A classic frame cannot switch bit rate.
         assert!(
             malformed("1.0 CANFD 1 Rx 81 1 0 8 8 10 43 08 01 00 00 00 00 130000 130 0 0 0 0 0 0")
                 .contains("BRS is 1 but flags 0 lack FDF")
         );
+    }
+
+    #[test]
+    fn canfd_line_over_8_bytes_without_fdf_is_fd_with_a_warning() {
+        // python-can's ASCWriter and hand-edited files: DLC F, 64 bytes,
+        // flags 0 (no FDF); python-can reads the byte count, so do we.
+        let zeros = " 00".repeat(60);
+        let plain = format!(
+            "  30.506898 CANFD   4 Rx        4EE                                   0 1 f 64 A1 02 03 04{zeros} 1331984 11 0 46500250 460a0250 20011736 20010205"
+        );
+        let named = format!(
+            "  31.506898 CANFD   4 Rx        1C4D80A7x    SomeName_2                 1 0 f 64 b1 02 03 04{zeros} 1331984 11 0 46500250 460a0250 20011736 20010205"
+        );
+        let mut p = AscParser::new();
+        for (line, id, first) in [(&plain, 0x4EE, 0xA1), (&named, 0x1C4D_80A7, 0xB1)] {
+            let f = match parse_with(&mut p, line) {
+                Parsed::Frame(f) => f,
+                other => panic!("{line:?} -> {other:?}"),
+            };
+            assert_eq!((f.id, f.kind, f.len), (id, FrameKind::Fd, 64));
+            assert_eq!(f.data.as_slice()[..4], [first, 2, 3, 4]);
+            assert_eq!(f.data.as_slice()[63], 0);
+            assert_eq!(
+                p.take_warning().as_deref(),
+                Some(
+                    "CANFD line: flags 0 lack FDF 1000 but 64 data bytes (DLC F) only fit \
+                     a CAN FD frame; read as one"
+                )
+            );
+            assert_eq!(p.take_warning(), None, "taken once");
+        }
+        // The next line clears it; a line with FDF has none.
+        p.parse(b"not a line", &Interest::all());
+        assert_eq!(p.take_warning(), None);
+        assert!(matches!(parse_with(&mut p, FD_EXAMPLE), Parsed::Frame(_)));
+        assert_eq!(p.take_warning(), None);
+        // Up to 8 bytes the flags still decide: classic, or BRS an error.
+        assert_eq!(
+            frame("1.0 CANFD 1 Rx 81 0 0 8 8 10 43 08 01 00 00 00 00 1 1 0 0 0 0 0 0").kind,
+            FrameKind::Data
+        );
+        assert!(
+            malformed("1.0 CANFD 1 Rx 81 1 0 8 8 10 43 08 01 00 00 00 00 1 1 0 0 0 0 0 0")
+                .contains("BRS is 1")
+        );
+        // The count must still be the DLC's.
+        assert!(
+            malformed(&format!(
+                "1.0 CANFD 1 Rx 81 0 0 e 64{} 1 1 0",
+                " 00".repeat(64)
+            ))
+            .contains("does not match DLC E")
+        );
+    }
+
+    #[test]
+    fn base_and_triggerblock_headers_identify_the_format() {
+        let mut p = AscParser::new();
+        assert!(matches!(
+            parse_with(&mut p, "date Sam Sep 30 15:06:13.191 2017"),
+            Parsed::Skipped
+        ));
+        assert!(!p.identified(), "a shell's `date` looks the same");
+        assert!(matches!(
+            parse_with(&mut p, "base hex  octal"),
+            Parsed::Malformed(_)
+        ));
+        assert!(!p.identified(), "a base line that is not one");
+        assert!(matches!(
+            parse_with(&mut p, "base hex  timestamps absolute"),
+            Parsed::Skipped
+        ));
+        assert!(p.identified());
+        let mut p = AscParser::new();
+        parse_with(&mut p, "Begin Triggerblock Sam Sep 30 15:06:13.191 2017");
+        assert!(p.identified());
     }
 
     #[test]

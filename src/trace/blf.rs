@@ -3,12 +3,16 @@
 //! A file is a 144-byte `LOGG` header, then `LOBJ` objects. Most objects sit
 //! in log containers (object type 10) whose data, plain or zlib-compressed,
 //! is a stream of further objects; an object may start in one container and
-//! end in the next. Every object is padded to a multiple of 4 bytes by
-//! `size % 4` bytes.
+//! end in the next. Objects are padded by `size % 4` bytes, but not every
+//! writer pads every object type (CANoe writes some unpadded), so the next
+//! object is the first `LOBJ` within [`PAD_WINDOW`] bytes of the last one's
+//! end, as python-can finds it; `size % 4` when there is none.
 //!
 //! What is read: CAN messages (types 1 and 86), CAN error frames (2 and 73),
 //! CAN FD messages (100 and 101; one without the EDL flag carries a classic
-//! frame and can be an EMCY), with object header version 1 or 2 and
+//! frame and can be an EMCY; one whose valid data bytes run past the data
+//! stored, as TSMaster writes them, is read zero-padded, as CANoe and
+//! python-can read it, with a warning), with object header version 1 or 2 and
 //! timestamps in 10 us or 1 ns units, added to the header's start time
 //! (a SYSTEMTIME, taken as UTC: the file does not say; all zero means
 //! unknown, and times are then seconds since the measurement start). Every
@@ -36,6 +40,10 @@ const OBJ_MAGIC: &[u8; 4] = b"LOBJ";
 /// Largest object (and log container, compressed or not) read: real
 /// containers hold 128 KiB; anything over this is taken as corruption.
 pub const MAX_OBJECT: usize = 16 * 1024 * 1024;
+/// Where the next object may start, from the last one's unpadded end: its
+/// `LOBJ` within these bytes (at most 4 bytes on: 3 of padding plus one,
+/// python-can's window).
+const PAD_WINDOW: usize = 8;
 /// Bytes of the file header read: up to the end of the start time.
 const HEADER_PREFIX: usize = 72;
 const BASE_HEADER: usize = 16;
@@ -92,11 +100,6 @@ impl Base {
             && self.header_size >= BASE_HEADER
             && self.header_size <= self.size
     }
-
-    /// Bytes from this object's start to the next one's.
-    fn stride(&self) -> usize {
-        self.size + self.size % 4
-    }
 }
 
 /// A decoded frame object, owning everything but the channel text.
@@ -108,6 +111,8 @@ struct Decoded {
     kind: FrameKind,
     len: u8,
     data: Payload,
+    /// Something the writer got wrong that the reader made good.
+    warning: Option<Reason>,
 }
 
 /// What one object is.
@@ -130,13 +135,17 @@ pub struct BlfReader<R> {
     /// The object stream of the log containers read so far.
     buf: Vec<u8>,
     pos: usize,
-    /// Padding bytes still to skip at the start of the next container.
-    skip: usize,
+    /// The last object of the stream ended at `pos` without its padding,
+    /// which `size % 4` says is this long: where the next starts is still
+    /// to find (see [`PAD_WINDOW`]).
+    pad: Option<usize>,
     /// Where a broken container's data ends: objects may not cross it.
     cut: Option<usize>,
     /// Look for the next `LOBJ` instead of expecting one at `pos`.
     resync: bool,
     eof: bool,
+    /// The warning of the last frame returned, until taken.
+    warning: Option<Reason>,
     channel: [u8; 5],
     channel_len: usize,
 }
@@ -187,10 +196,11 @@ impl<R: Read> BlfReader<R> {
             note,
             buf: Vec::new(),
             pos: 0,
-            skip: 0,
+            pad: None,
             cut: None,
             resync: false,
             eof: false,
+            warning: None,
             channel: [0; 5],
             channel_len: 0,
         })
@@ -201,9 +211,18 @@ impl<R: Read> BlfReader<R> {
         self.note.take()
     }
 
+    /// What the reader made good in the last frame [`BlfReader::next_object`]
+    /// returned (data bytes the object lacks, read as zeros); a diagnostic
+    /// for that object, which is still a frame. Cleared by the call and by
+    /// the next object.
+    pub fn take_warning(&mut self) -> Option<Reason> {
+        self.warning.take()
+    }
+
     /// The next object, classified; `Ok(None)` at the end. An error is an
     /// I/O error of the input (a corrupt gzip stream): reading stops.
     pub fn next_object(&mut self) -> io::Result<Option<Parsed<'_>>> {
+        self.warning = None;
         loop {
             let object = match self.inner() {
                 Some(o) => o,
@@ -225,6 +244,7 @@ impl<R: Read> BlfReader<R> {
     }
 
     fn frame(&mut self, d: Decoded) -> Frame<'_> {
+        self.warning = d.warning;
         let mut b = itoa::Buffer::new();
         let text = b.format(d.channel).as_bytes();
         let n = text.len().min(self.channel.len());
@@ -255,6 +275,7 @@ impl<R: Read> BlfReader<R> {
         let limit = self.cut.unwrap_or(self.buf.len());
         let avail = self.buf.get(self.pos..limit).unwrap_or_default();
         if self.resync {
+            self.pad = None;
             match memchr::memmem::find(avail, OBJ_MAGIC) {
                 Some(k) => {
                     self.pos += k;
@@ -270,6 +291,20 @@ impl<R: Read> BlfReader<R> {
                     return None;
                 }
             }
+        }
+        if let Some(pad) = self.pad {
+            let window = avail.get(..PAD_WINDOW).unwrap_or(avail);
+            match memchr::memmem::find(window, OBJ_MAGIC) {
+                Some(k) => self.pos += k,
+                // The bytes that decide are in the next container.
+                None if window.len() < PAD_WINDOW && self.cut.is_none() && !self.eof => {
+                    return None;
+                }
+                // No object there: padding by the rule, and what follows is
+                // reported as bytes between objects.
+                None => self.pos += pad.min(avail.len()),
+            }
+            self.pad = None;
         }
         let avail = self.buf.get(self.pos..limit).unwrap_or_default();
         let complete = match Base::read(avail) {
@@ -313,9 +348,8 @@ impl<R: Read> BlfReader<R> {
         } else {
             decode(base, body, self.start)
         };
-        let next = self.pos + base.stride();
-        self.pos = next.min(self.buf.len());
-        self.skip = next - self.pos;
+        self.pos += base.size;
+        self.pad = Some(base.size % 4);
         Some(object)
     }
 
@@ -325,6 +359,7 @@ impl<R: Read> BlfReader<R> {
         self.buf.clear();
         self.pos = 0;
         self.cut = None;
+        self.pad = None;
         if rest == 0 || self.resync {
             return None;
         }
@@ -357,8 +392,9 @@ impl<R: Read> BlfReader<R> {
                     Some(b) => format!("an object of type {} with a size of {}", b.kind, b.size),
                     None => "no LOBJ signature".to_string(),
                 };
+                // In front of what a search put back before: bytes in order.
                 self.back
-                    .extend_from_slice(head.get(1..).unwrap_or_default());
+                    .splice(0..0, head.get(1..).unwrap_or_default().iter().copied());
                 self.offset -= (BASE_HEADER - 1) as u64;
                 let skipped = 1 + self.find_object()?;
                 return Ok(Some(Object::Malformed(
@@ -380,9 +416,7 @@ impl<R: Read> BlfReader<R> {
                 .into(),
             )));
         }
-        let mut pad = [0u8; 3];
-        let pad_len = base.size % 4;
-        self.read(pad.get_mut(..pad_len).unwrap_or_default())?;
+        self.skip_padding(base.size % 4)?;
         if base.kind != LOG_CONTAINER {
             return Ok(Some(decode(base, &body, self.start)));
         }
@@ -421,10 +455,6 @@ impl<R: Read> BlfReader<R> {
             Some(m) => Some(format!("unknown compression method {m}")),
             None => Some("container header cut off".to_string()),
         };
-        // Padding of an object that ended in the previous container.
-        let skip = self.skip.min(self.buf.len());
-        self.pos = skip;
-        self.skip -= skip;
         match problem {
             None => Object::Skipped,
             Some(p) => {
@@ -434,6 +464,20 @@ impl<R: Read> BlfReader<R> {
                 Object::Malformed(format!("log container at byte {at}: {p}").into())
             }
         }
+    }
+
+    /// After a top-level object: skips to the first `LOBJ` within
+    /// [`PAD_WINDOW`] bytes, or `pad` bytes (the padding by the rule) when
+    /// there is none; what follows is put back for the next read.
+    fn skip_padding(&mut self, pad: usize) -> io::Result<()> {
+        let mut look = [0u8; PAD_WINDOW];
+        let n = self.read(&mut look)?;
+        let got = look.get(..n).unwrap_or_default();
+        let next = memchr::memmem::find(got, OBJ_MAGIC).unwrap_or(pad.min(n));
+        let rest = got.get(next..).unwrap_or_default();
+        self.back.splice(0..0, rest.iter().copied());
+        self.offset -= rest.len() as u64;
+        Ok(())
     }
 
     /// Skips to the next `LOBJ` in the file (put back for the next read);
@@ -560,6 +604,7 @@ fn decode_can(base: Base, body: &[u8], start: (u128, u8)) -> Result<Option<Decod
         kind: FrameKind::Error,
         len: 0,
         data: Payload::new(),
+        warning: None,
     };
     let frame = match base.kind {
         CAN_ERROR | CAN_ERROR_EXT => {
@@ -613,18 +658,53 @@ fn decode_can(base: Base, body: &[u8], start: (u128, u8)) -> Result<Option<Decod
             } else {
                 classic_len(dlc)?
             };
-            short(40 + usize::from(len))?;
-            let data = d.get(40..40 + usize::from(len)).unwrap_or_default();
+            // The data runs to the extended data (its offset counted from
+            // the object's start; 0 = none) or to the object's end.
+            let ext = usize::from(d.get(35).copied().unwrap_or(0));
+            let end = ext
+                .checked_sub(base.header_size)
+                .filter(|e| ext != 0 && (40..=d.len()).contains(e))
+                .unwrap_or(d.len());
+            let stored = d.get(40..end).unwrap_or_default();
+            let want = usize::from(len);
+            let n = stored.len().min(want);
+            let remote = flags & 0x10 != 0 && !fd;
+            // Missing bytes of a classic frame would be invented EMCY bytes.
+            if n < want && !fd && !remote {
+                return Err(format!(
+                    "{n} data bytes stored, DLC {dlc} needs {want} (a classic frame is not read \
+                     zero-padded: it could be an EMCY)"
+                ));
+            }
+            // TSMaster writes 64 valid bytes and stores fewer (python-can
+            // #1905); CANoe shows the frame, the bytes not stored as zeros.
+            let mut data = [0u8; Payload::MAX];
+            if let (Some(dst), Some(src)) = (data.get_mut(..n), stored.get(..n)) {
+                dst.copy_from_slice(src);
+            }
             let channel = d.first().map(|c| u16::from(*c));
-            build(
+            let mut frame = build(
                 time,
                 channel,
                 u32_at(d, 4),
-                flags & 0x10 != 0,
+                remote,
                 fd,
                 len,
-                data,
-            )?
+                data.get(..want).unwrap_or_default(),
+            )?;
+            if n < want && fd {
+                frame.warning = Some(
+                    format!(
+                        "CAN FD message 64 object (type {}) of {} bytes: {want} valid data bytes \
+                         but {n} stored; read with the other {} as zeros, as CANoe does",
+                        base.kind,
+                        base.size,
+                        want - n
+                    )
+                    .into(),
+                );
+            }
+            frame
         }
         _ => return Ok(None),
     };
@@ -673,6 +753,7 @@ fn build(
         kind,
         len,
         data: Payload::from_slice(data).ok_or("more than 64 data bytes")?,
+        warning: None,
     })
 }
 
@@ -775,6 +856,260 @@ pub fn sniff<R: Read>(mut input: R) -> (io::Chain<io::Cursor<Vec<u8>>, R>, io::R
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An object with a version 1 header (1 ns ticks), padded as the rule
+    /// says or, with `padded` false, not at all.
+    fn object(kind: u32, content: &[u8], padded: bool) -> Vec<u8> {
+        let size = 32 + content.len();
+        let mut o = b"LOBJ".to_vec();
+        o.extend(32u16.to_le_bytes());
+        o.extend(1u16.to_le_bytes());
+        o.extend((size as u32).to_le_bytes());
+        o.extend(kind.to_le_bytes());
+        o.extend(2u32.to_le_bytes()); // 1 ns
+        o.extend([0u8; 4]);
+        o.extend(1_000_000_000u64.to_le_bytes());
+        o.extend(content);
+        if padded {
+            o.extend(vec![0u8; size % 4]);
+        }
+        o
+    }
+
+    /// An EMCY of node 1 as a CAN message (type 1).
+    fn emcy(code: u16) -> Vec<u8> {
+        let mut c = 1u16.to_le_bytes().to_vec();
+        c.extend([0, 8]);
+        c.extend(0x81u32.to_le_bytes());
+        c.extend(code.to_le_bytes());
+        c.extend([1, 0, 0, 0, 0, 0]);
+        object(CAN_MESSAGE, &c, true)
+    }
+
+    /// A CAN FD message 64 (type 101) declaring `valid` data bytes and
+    /// storing `stored`, with extended data at `ext` (0 = none).
+    fn fd64(valid: u8, stored: &[u8], ext: u8) -> Vec<u8> {
+        fd64_with(0x3000, 15, valid, stored, ext) // EDL, BRS
+    }
+
+    fn fd64_with(flags: u32, dlc: u8, valid: u8, stored: &[u8], ext: u8) -> Vec<u8> {
+        let mut c = vec![1, dlc, valid, 0];
+        c.extend(0x6A9u32.to_le_bytes());
+        c.extend([0u8; 4]);
+        c.extend(flags.to_le_bytes());
+        c.extend([0u8; 19]);
+        c.push(ext);
+        c.extend([0u8; 4]);
+        c.extend(stored);
+        object(CAN_FD_MESSAGE_64, &c, true)
+    }
+
+    fn container(data: &[u8]) -> Vec<u8> {
+        let size = 32 + data.len();
+        let mut c = b"LOBJ".to_vec();
+        c.extend(16u16.to_le_bytes());
+        c.extend(1u16.to_le_bytes());
+        c.extend((size as u32).to_le_bytes());
+        c.extend(LOG_CONTAINER.to_le_bytes());
+        c.extend([0u8; 8]);
+        c.extend((data.len() as u32).to_le_bytes());
+        c.extend([0u8; 4]);
+        c.extend(data);
+        c.extend(vec![0u8; size % 4]);
+        c
+    }
+
+    fn file(top: &[u8]) -> Vec<u8> {
+        let mut f = b"LOGG".to_vec();
+        f.extend(144u32.to_le_bytes());
+        f.resize(144, 0);
+        f.extend(top);
+        f
+    }
+
+    /// Frames (id, data, warning), skipped and malformed objects, in order.
+    #[derive(Debug, PartialEq)]
+    enum Got {
+        Frame(u32, Vec<u8>, Option<String>),
+        Skipped,
+        Malformed(String),
+    }
+
+    fn read(bytes: &[u8]) -> Vec<Got> {
+        let mut r = BlfReader::new(bytes).expect("a BLF header");
+        let mut out = Vec::new();
+        loop {
+            let got = match r.next_object().expect("no I/O error") {
+                None => return out,
+                Some(Parsed::Frame(f)) => Got::Frame(f.id, f.data.as_slice().to_vec(), None),
+                Some(Parsed::Skipped) => Got::Skipped,
+                Some(Parsed::Malformed(m)) => Got::Malformed(m.into_owned()),
+            };
+            out.push(match got {
+                Got::Frame(id, data, _) => {
+                    Got::Frame(id, data, r.take_warning().map(|w| w.into_owned()))
+                }
+                other => other,
+            });
+            assert!(r.take_warning().is_none(), "taken once");
+        }
+    }
+
+    #[test]
+    fn fd64_data_not_stored_is_read_as_zeros_with_a_warning() {
+        let stored: Vec<u8> = (1..=48).collect();
+        let mut stream = fd64(64, &stored, 0);
+        stream.extend(fd64(12, &[7; 12], 0));
+        let got = read(&file(&container(&stream)));
+        let mut padded = stored.clone();
+        padded.resize(64, 0);
+        assert_eq!(got[0], Got::Skipped, "{got:?}");
+        assert_eq!(
+            got[1],
+            Got::Frame(
+                0x6A9,
+                padded,
+                Some(
+                    "CAN FD message 64 object (type 101) of 120 bytes: 64 valid data bytes \
+                     but 48 stored; read with the other 16 as zeros, as CANoe does"
+                        .into()
+                )
+            )
+        );
+        // The next object, whole, has no warning.
+        assert_eq!(got[2], Got::Frame(0x6A9, vec![7; 12], None));
+        assert_eq!(got.len(), 3);
+    }
+
+    #[test]
+    fn fd64_data_ends_where_the_extended_data_starts() {
+        // 16 bytes stored, then 8 of extended data at 32 + 40 + 16 = 88.
+        let mut content: Vec<u8> = (1..=16).collect();
+        content.extend([0xEE; 8]);
+        let got = read(&file(&fd64(24, &content, 88)));
+        let mut want: Vec<u8> = (1..=16).collect();
+        want.resize(24, 0);
+        match &got[..] {
+            [Got::Frame(0x6A9, data, Some(w))] => {
+                assert_eq!(data, &want);
+                assert!(w.contains("24 valid data bytes but 16 stored"), "{w}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // An offset inside the fixed fields is not one: the object's end is.
+        let got = read(&file(&fd64(24, &content, 40)));
+        assert!(
+            matches!(&got[..], [Got::Frame(_, data, None)] if *data == content),
+            "{got:?}"
+        );
+    }
+
+    #[test]
+    fn a_classic_frame_missing_data_bytes_is_not_padded() {
+        // Without EDL the frame is classic and could be an EMCY: zeros in
+        // place of its bytes would invent a code or a register.
+        let got = read(&file(&fd64_with(0, 8, 8, &[0x10, 0x43], 0)));
+        match &got[..] {
+            [Got::Malformed(m)] => assert!(
+                m.contains("2 data bytes stored, DLC 8 needs 8 (a classic frame is not read"),
+                "{m}"
+            ),
+            other => panic!("{other:?}"),
+        }
+        // A remote frame carries none: nothing is missing.
+        let got = read(&file(&fd64_with(0x10, 4, 0, &[], 0)));
+        assert_eq!(got, [Got::Frame(0x6A9, Vec::new(), None)]);
+    }
+
+    #[test]
+    fn an_object_written_without_padding_does_not_hide_the_next() {
+        // Type 118 of 270 bytes, as CANoe writes it: no 2 padding bytes.
+        let unpadded = object(118, &[0x55; 238], false);
+        assert_eq!(unpadded.len() % 4, 2);
+        let mut stream = emcy(0x4310);
+        stream.extend(&unpadded);
+        stream.extend(emcy(0x0000));
+        stream.extend(object(118, &[0x55; 238], true));
+        stream.extend(emcy(0x2310));
+        let want_frames = 3;
+        // In one container, in containers cut anywhere, and at the top level.
+        let mut files = vec![file(&container(&stream)), file(&stream)];
+        for cut in [1, 3, 17, 49, 300, 318, 319, 320, 321, 322, 323, 330] {
+            let top: Vec<u8> = stream.chunks(cut).flat_map(container).collect();
+            files.push(file(&top));
+        }
+        for f in files {
+            let got = read(&f);
+            let frames = got.iter().filter(|g| matches!(g, Got::Frame(..))).count();
+            assert_eq!(frames, want_frames, "{got:?}");
+            assert!(
+                !got.iter().any(|g| matches!(g, Got::Malformed(_))),
+                "{got:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn bytes_past_the_padding_window_are_still_reported() {
+        // 5 bytes after an object padded by the rule to 4: the next LOBJ
+        // is past the window, so the bytes are reported, not skipped.
+        let mut stream = emcy(0x4310);
+        stream.extend(b"12345");
+        stream.extend(emcy(0x0000));
+        for f in [file(&container(&stream)), file(&stream)] {
+            let got = read(&f);
+            let malformed = got
+                .iter()
+                .filter(|g| matches!(g, Got::Malformed(_)))
+                .count();
+            assert_eq!(malformed, 1, "{got:?}");
+            let frames = got.iter().filter(|g| matches!(g, Got::Frame(..))).count();
+            assert_eq!(frames, 2, "{got:?}");
+        }
+        // Within the window (up to 4 bytes on), they are padding.
+        let mut stream = emcy(0x4310);
+        stream.extend(b"1234");
+        stream.extend(emcy(0x0000));
+        let got = read(&file(&container(&stream)));
+        assert_eq!(
+            got.iter().filter(|g| matches!(g, Got::Frame(..))).count(),
+            2
+        );
+        assert!(!got.iter().any(|g| matches!(g, Got::Malformed(_))));
+    }
+
+    #[test]
+    fn a_bad_object_after_a_search_keeps_the_bytes_in_order() {
+        // Garbage, then an object of insane size, at the top level: the
+        // search after the garbage put the rest back, and the bad header's
+        // bytes must go back in front of it, not after it.
+        let mut insane = emcy(0x1000);
+        insane[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+        let mut top = b"xx".to_vec();
+        top.extend(insane);
+        top.extend(emcy(0x4310));
+        top.extend(emcy(0x0000));
+        let got = read(&file(&top));
+        let frames = got.iter().filter(|g| matches!(g, Got::Frame(..))).count();
+        assert_eq!(frames, 2, "{got:?}");
+        assert_eq!(
+            got.len(),
+            4,
+            "the garbage, the bad object, two frames: {got:?}"
+        );
+    }
+
+    #[test]
+    fn padding_at_the_end_of_the_file_is_not_an_object() {
+        // The last object's padding ends the last container's data, or the
+        // file: nothing is left over.
+        let last = object(118, &[0x55; 238], true);
+        assert_eq!(last.len(), 272);
+        for f in [file(&container(&last)), file(&last)] {
+            assert_eq!(read(&f).last(), Some(&Got::Skipped));
+            assert!(!read(&f).iter().any(|g| matches!(g, Got::Malformed(_))));
+        }
+    }
 
     /// [`system_time`] of a SYSTEMTIME's eight fields: year, month, day of
     /// week, day, hour, minute, second, millisecond.

@@ -2,7 +2,10 @@
 //!
 //! Until a format is known every line goes to every parser (so ASC header
 //! lines still set the base and timestamp mode); the first line that one of
-//! them reads as a frame fixes the format. Lines before that are skipped when
+//! them reads as a frame fixes the format, or a header only one format
+//! writes (ASC `base`, `Begin Triggerblock`): a file of such headers whose
+//! frame lines are all unreadable is that format with malformed lines, not
+//! an unknown format. Lines before that are skipped when
 //! some format knows them as non-frame lines and malformed when none does.
 //!
 //! Formats can mix (a pasted screen excerpt inside a log, two files
@@ -76,6 +79,14 @@ impl Detector {
         self.foreign.take()
     }
 
+    /// After a frame: what the parser that read it made good in the line
+    /// (see [`LineParser::take_warning`]). Cleared by the call.
+    pub fn take_warning(&mut self) -> Option<super::Reason> {
+        // Only the parser that read the frame has one: every parser clears
+        // its own when it parses a line.
+        self.parsers.iter_mut().find_map(|p| p.take_warning())
+    }
+
     /// See [`LineParser::run`]; only once the format is known (nothing
     /// read before), and only for the detected format.
     #[inline]
@@ -136,6 +147,9 @@ impl Detector {
                 Parsed::Skipped => skipped = true,
                 Parsed::Malformed(_) => {}
             }
+        }
+        if let Some(i) = self.parsers.iter().position(|p| p.identified()) {
+            self.primary = Some(i);
         }
         if skipped {
             Parsed::Skipped
@@ -209,6 +223,46 @@ mod tests {
         assert_eq!(got[2], ("frame".to_string(), None));
         assert_eq!(got[3], ("malformed".to_string(), None));
         assert_eq!(d.format(), Some(Format::CandumpLog));
+    }
+
+    #[test]
+    fn asc_headers_make_the_format_known_before_any_frame() {
+        let mut d = Detector::auto();
+        let got = kinds(&["date Sat Sep 30 15:06:13.191 2017", "garbage"], &mut d);
+        assert_eq!(got[0].0, "skipped");
+        assert_eq!(
+            d.format(),
+            None,
+            "`date` alone could be a pasted shell `date`"
+        );
+        d.parse(b"base hex  timestamps absolute", &Interest::all());
+        assert_eq!(d.format(), Some(Format::Asc));
+        // A line no format reads is ASC's to explain.
+        match d.parse(b" 0.000000 1  123x  Rx   d 40 00 01", &Interest::all()) {
+            Parsed::Malformed(r) => assert!(r.contains("DLC '40'"), "{r}"),
+            other => panic!("{other:?}"),
+        }
+        let mut d = Detector::auto();
+        d.parse(
+            b"Begin Triggerblock Sat Sep 30 15:06:13.191 2017",
+            &Interest::all(),
+        );
+        assert_eq!(d.format(), Some(Format::Asc));
+        // Another format's frames are still read, and flagged.
+        let got = kinds(&["(1.0) can0 081#00"], &mut d);
+        assert_eq!(got[0], ("frame".to_string(), Some(Format::CandumpLog)));
+    }
+
+    #[test]
+    fn the_warning_of_a_frame_is_taken_once() {
+        let mut d = Detector::auto();
+        let line = format!("1.0 CANFD 1 Rx 123 0 0 9 12{} 1 1 0", " 00".repeat(12));
+        assert!(matches!(
+            d.parse(line.as_bytes(), &Interest::all()),
+            Parsed::Frame(_)
+        ));
+        assert!(d.take_warning().is_some_and(|w| w.contains("lack FDF")));
+        assert!(d.take_warning().is_none());
     }
 
     #[test]

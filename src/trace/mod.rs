@@ -451,6 +451,20 @@ pub trait LineParser: Send {
         run
     }
 
+    /// After `parse` returned a frame: a contradiction in the line that the
+    /// parser resolved to read it (a diagnostic for that line, which stays
+    /// a frame). Cleared by the call and by the next `parse`.
+    fn take_warning(&mut self) -> Option<Reason> {
+        None
+    }
+
+    /// Whether a line read so far was a header only this format writes
+    /// (an ASC `base` line): the format is known without a frame, and lines
+    /// it cannot read are its malformed lines, not an unknown format.
+    fn identified(&self) -> bool {
+        false
+    }
+
     /// The state later lines depend on, as a small exact value (below 256):
     /// a block parsed from a fork is valid only if the state it started from
     /// equals the state the previous block ended in. `None` when every line
@@ -489,6 +503,26 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.parse(line, interest),
             AnyParser::Trc(p) => p.parse(line, interest),
             AnyParser::Blf(p) => p.parse(line, interest),
+        }
+    }
+
+    fn take_warning(&mut self) -> Option<Reason> {
+        match self {
+            AnyParser::CandumpLog(p) => p.take_warning(),
+            AnyParser::CandumpScreen(p) => p.take_warning(),
+            AnyParser::Asc(p) => p.take_warning(),
+            AnyParser::Trc(p) => p.take_warning(),
+            AnyParser::Blf(p) => p.take_warning(),
+        }
+    }
+
+    fn identified(&self) -> bool {
+        match self {
+            AnyParser::CandumpLog(p) => p.identified(),
+            AnyParser::CandumpScreen(p) => p.identified(),
+            AnyParser::Asc(p) => p.identified(),
+            AnyParser::Trc(p) => p.identified(),
+            AnyParser::Blf(p) => p.identified(),
         }
     }
 

@@ -70,6 +70,16 @@ pub enum Record {
     /// Something about the trace as a whole worth telling, e.g. a BLF
     /// header whose start time is not a date.
     Note(String),
+    /// What the reader made good to read the frame of the same line, which
+    /// comes next: e.g. a BLF CAN FD object storing fewer data bytes than
+    /// it declares (read as zeros), or an ASC CANFD line whose flags lack
+    /// FDF but whose 64 bytes only an FD frame carries. Not a line of its own.
+    Warning {
+        /// 1-based line (for BLF: the object's number), as its frame's.
+        line: u64,
+        /// What was wrong and how it was read.
+        reason: String,
+    },
 }
 
 /// Reads a trace into [`Record`]s, one per line, in order. The format is
@@ -163,7 +173,7 @@ impl<'a> TraceReader<'a> {
                 for raw in block.lines(DEFAULT_MAX_LINE) {
                     self.lines += 1;
                     let line = self.lines;
-                    self.queue.push_back(match raw {
+                    let record = match raw {
                         RawLine::TooLong(n) => Record::Malformed {
                             line,
                             reason: format!(
@@ -172,14 +182,23 @@ impl<'a> TraceReader<'a> {
                             ),
                         },
                         RawLine::Text(text) => match detector.parse(text, &all) {
-                            Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+                            Parsed::Frame(f) => {
+                                if let Some(reason) = detector.take_warning() {
+                                    self.queue.push_back(Record::Warning {
+                                        line,
+                                        reason: reason.into_owned(),
+                                    });
+                                }
+                                Record::Frame(CanFrame::of(line, &f))
+                            }
                             Parsed::Skipped => Record::Skipped { line },
                             Parsed::Malformed(reason) => Record::Malformed {
                                 line,
                                 reason: reason.into_owned(),
                             },
                         },
-                    });
+                    };
+                    self.queue.push_back(record);
                 }
                 self.buf = block.bytes;
                 Ok(true)
@@ -193,14 +212,21 @@ impl<'a> TraceReader<'a> {
                 };
                 self.lines += 1;
                 let line = self.lines;
-                self.queue.push_back(match parsed {
+                let record = match parsed {
                     Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
                     Parsed::Skipped => Record::Skipped { line },
                     Parsed::Malformed(reason) => Record::Malformed {
                         line,
                         reason: reason.into_owned(),
                     },
-                });
+                };
+                if let Some(reason) = reader.take_warning() {
+                    self.queue.push_back(Record::Warning {
+                        line,
+                        reason: reason.into_owned(),
+                    });
+                }
+                self.queue.push_back(record);
                 Ok(true)
             }
             Source::Failed(_) | Source::Done(_) => Ok(false),
@@ -287,6 +313,38 @@ mod tests {
         assert_eq!(r.format(), Some(Format::Asc));
         assert_eq!(frames.len(), 1);
         assert_eq!((frames[0].line, frames[0].channel.as_str()), (3, "1"));
+    }
+
+    #[test]
+    fn a_warning_comes_before_its_frame_with_the_same_line() {
+        let text = format!(
+            "base hex  timestamps absolute\n1.0 CANFD 1 Rx 123 0 0 9 12{} 1 1 0\n",
+            " 00".repeat(12)
+        );
+        let got = records(text.as_bytes());
+        assert!(
+            matches!(&got[1], Record::Warning { line: 2, reason } if reason.contains("lack FDF")),
+            "{got:?}"
+        );
+        assert!(
+            matches!(&got[2], Record::Frame(f) if f.line == 2 && f.kind == FrameKind::Fd),
+            "{got:?}"
+        );
+        assert_eq!(got.len(), 3);
+    }
+
+    #[test]
+    fn asc_headers_without_a_readable_frame_are_asc() {
+        let text = b"date Sat Sep 30 15:06:13.191 2017\nbase hex  timestamps absolute\n\
+                     Begin Triggerblock Sat Sep 30 15:06:13.191 2017\n\
+                     0.000000 1  123x  Rx   d 40 00 01\nEnd TriggerBlock\n";
+        let mut r = TraceReader::new(&text[..]);
+        let got: Vec<Record> = r.by_ref().map(|x| x.unwrap()).collect();
+        assert_eq!(r.format(), Some(Format::Asc));
+        assert!(
+            matches!(&got[3], Record::Malformed { line: 4, reason } if reason.contains("DLC '40'")),
+            "{got:?}"
+        );
     }
 
     #[test]

@@ -175,6 +175,8 @@ enum Got {
     },
     Skipped,
     Malformed(String),
+    /// What the reader made good in the frame that follows.
+    Warning(String),
 }
 
 /// The objects of a BLF file, read as BLF ([`TraceReader::with_format`]);
@@ -193,6 +195,7 @@ fn read(bytes: &[u8]) -> Vec<Got> {
             },
             Record::Skipped { .. } => Got::Skipped,
             Record::Malformed { reason, .. } => Got::Malformed(reason),
+            Record::Warning { reason, .. } => Got::Warning(reason),
             Record::Note(_) => continue,
             other => panic!("a record this test does not know: {other:?}"),
         });
@@ -578,6 +581,105 @@ fn forced_blf_on_text_is_an_error_and_text_formats_ignore_blf() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(0));
+}
+
+/// `object` as a writer that does not pad it leaves it.
+fn unpadded(mut o: Vec<u8>) -> Vec<u8> {
+    let size = u32::from_le_bytes(o[8..12].try_into().unwrap()) as usize;
+    o.truncate(size);
+    o
+}
+
+#[test]
+fn an_object_written_without_padding_does_not_hide_the_next() {
+    // CANoe writes some object types (118 here, 270 bytes) without the
+    // padding `size % 4` asks for: the next LOBJ comes 2 bytes early.
+    let odd = unpadded(object(118, &[0x55; 254], 0, V1_NS));
+    assert_eq!(odd.len() % 4, 2);
+    let mut stream = emcy(1, 0x4310, 1_000_000_000);
+    stream.extend(&odd);
+    stream.extend(emcy(1, 0x2310, 1_100_000_000));
+    stream.extend(unpadded(object(118, &[0x55; 253], 0, V1_NS)));
+    stream.extend(emcy(1, 0x0000, 2_000_000_000));
+    for zlib in [false, true] {
+        for chunk in (1..=70).chain([317, 318, 319, 320, 321, 1 << 17]) {
+            let (v, stderr, code) = run(&blf(&stream, chunk, zlib));
+            assert_eq!(code, 0, "{stderr}");
+            assert_eq!(
+                emcy_codes(&v),
+                ["\"0x4310\"", "\"0x2310\"", "\"0x0000\""],
+                "chunk {chunk}: {stderr}"
+            );
+            assert_eq!(input(&v)["malformed"], 0, "chunk {chunk}: {stderr}");
+            assert_eq!(stderr, "", "chunk {chunk}");
+        }
+    }
+    // Outside containers too.
+    let mut f = file_header(START);
+    f.extend(&stream);
+    let (v, stderr, _) = run(&f);
+    assert_eq!(emcy_codes(&v).len(), 3, "{stderr}");
+    assert_eq!(input(&v)["malformed"], 0, "{stderr}");
+}
+
+#[test]
+fn fd64_data_bytes_not_stored_are_zeros_with_a_warning() {
+    // TSMaster writes CAN FD message 64 objects whose valid byte count (64)
+    // exceeds the data stored (48): CANoe and python-can pad with zeros.
+    let data: Vec<u8> = (1..=64).collect();
+    let (k, mut p) = fd64(2, 0x6A9, false, true, false, &data);
+    p.truncate(40 + 48);
+    let mut stream = emcy(1, 0x4310, 1_000_000_000);
+    stream.extend(object(k, &p, 1_500_000_000, V1_NS));
+    stream.extend(emcy(1, 0x0000, 2_000_000_000));
+    let bytes = blf(&stream, 1 << 17, true);
+    let got = read(&bytes);
+    let mut want = data[..48].to_vec();
+    want.resize(64, 0);
+    assert_eq!(
+        &got[2..4],
+        [
+            Got::Warning(
+                "CAN FD message 64 object (type 101) of 120 bytes: 64 valid data bytes but 48 \
+                 stored; read with the other 16 as zeros, as CANoe does"
+                    .into()
+            ),
+            Got::Frame {
+                time: "1700000001.500000000".into(),
+                channel: "2".into(),
+                id: 0x6A9,
+                extended: false,
+                kind: FrameKind::Fd,
+                data: want,
+            }
+        ],
+        "{got:?}"
+    );
+    // The program: a frame, a diagnostic naming the object, nothing malformed,
+    // so not a failure under --strict either.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("t.blf");
+    std::fs::write(&path, &bytes).unwrap();
+    let out = emcy_decode()
+        .args(["--strict", "--format", "ndjson"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("t.blf:3: CAN FD message 64 object (type 101)"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    let v = support::ndjson([&path]);
+    assert_eq!(
+        (
+            input(&v)["frames"].as_u64(),
+            input(&v)["malformed"].as_u64()
+        ),
+        (Some(3), Some(0))
+    );
 }
 
 // ---- properties ------------------------------------------------------------------------

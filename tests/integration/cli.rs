@@ -117,6 +117,59 @@ fn unknown_format_is_one_error_line_and_exit_2() {
 }
 
 #[test]
+fn asc_headers_make_unreadable_frame_lines_malformed_not_an_unknown_format() {
+    // python-can's ASCWriter writes a 64-byte non-FD message as `d 40`, a
+    // line no classic bus has: the file's only frame line. Its headers say
+    // ASC, so the line is ASC's malformed line, with its place.
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .write_stdin(
+            "date Sat Sep 30 15:06:13.191 2017\nbase hex  timestamps absolute\n\
+             Begin Triggerblock Sat Sep 30 15:06:13.191 2017\n\
+             \x20 0.000000 1  123x  Rx   d 40 00 01 02 03\nnot a line\nEnd TriggerBlock\n",
+        )
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert_eq!(
+        stderr,
+        "<stdin>:4: DLC '40' is not a hex digit 0-F\n\
+         <stdin>:5: unknown line: 'not' is neither a timestamp nor an ASC header keyword\n"
+    );
+    let objects = ndjson_objects(&out.stdout);
+    let input = of_type(&objects, "input")[0];
+    assert_eq!(input["format"], "asc");
+    assert_eq!(
+        (input["frames"].as_u64(), input["malformed"].as_u64()),
+        (Some(0), Some(2))
+    );
+    // Malformed all the same: --strict fails.
+    emcy_decode()
+        .args(["--strict", "fixtures/no-frame.asc"])
+        .assert()
+        .code(2);
+    // A `date` line alone does not make a file ASC (a pasted shell `date`).
+    emcy_decode()
+        .arg("-")
+        .write_stdin("date Sat Sep 30 15:06:13 UTC 2017\nnor is this\n")
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("cannot detect the trace format"));
+}
+
+#[test]
+fn a_canfd_line_read_against_its_flags_is_a_warning_not_malformed() {
+    emcy_decode()
+        .args(["--strict", "fixtures/canfd-no-fdf.asc"])
+        .assert()
+        .code(0)
+        .stderr(predicate::str::contains(
+            "fixtures/canfd-no-fdf.asc:8: CANFD line: flags 0 lack FDF 1000 but 64 data bytes",
+        ));
+}
+
+#[test]
 fn strict_makes_malformed_lines_exit_2() {
     // edge.log contains one malformed line and one 2-byte EMCY.
     emcy_decode().arg("fixtures/edge.log").assert().code(0);

@@ -160,6 +160,12 @@ fn asc_trace(relative: bool) -> Vec<u8> {
         if i % 50 == 7 {
             t.extend(b"   9.999 1  not an asc line at all\n");
         }
+        if i % 40 == 9 {
+            // FD by its 12 bytes, classic by its flags: a frame and a
+            // warning, which shares the diagnostics limit.
+            let zeros = " 0".repeat(12);
+            t.extend(format!("{time:>11} CANFD 1 Rx 100 0 0 9 12{zeros} 1 1 0\n").bytes());
+        }
     }
     t.extend(b"End TriggerBlock\n");
     t
@@ -169,8 +175,9 @@ fn asc_trace(relative: bool) -> Vec<u8> {
 fn asc_with_a_base_change_in_the_middle() {
     let trace = asc_trace(false);
     // The decimal half must decode as decimal (ids 129.. are 0x81..).
-    let (out, _) = run(&trace, 1, 1 << 20);
+    let (out, err) = run(&trace, 1, 1 << 20);
     assert_eq!(out.matches("\"type\":\"emcy\"").count(), 400);
+    assert!(err.contains("lack FDF 1000"), "{err}");
     assert_split_independent("asc absolute", &trace);
 }
 
