@@ -4,7 +4,10 @@
 //! then times `wc -l` and `gzip -dc` (the ceilings) and emcy-decode on the same
 //! files in the same run, and prints MB/s, the ratio to the ceiling and the
 //! peak resident memory. Sizes: `BENCH_MB` (default 1024), `BENCH_GZ_MB`
-//! (default 256); best of `BENCH_RUNS` (default 3).
+//! (default 256); best of `BENCH_RUNS` (default 3). Words after `--` pick
+//! the cases whose name contains one of them (`cargo bench --bench
+//! throughput -- pcapng`): `candump log`, `Vector ASC`, `30% EMCY`, `gzip`,
+//! `pcapng`.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -131,14 +134,37 @@ fn main() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-data");
     std::fs::create_dir_all(&dir).expect("bench dir");
 
+    // Words that are not flags choose the cases (all when none is given).
+    let words: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let chosen = |case: &str| words.is_empty() || words.iter().any(|w| case.contains(w.as_str()));
+
     let log = dir.join(format!("candump-{mb}MB.log"));
     let asc = dir.join(format!("asc-{mb}MB.asc"));
     let emcy30 = dir.join(format!("candump-emcy30-{mb}MB.log"));
     let gz = dir.join(format!("candump-{gz_mb}MB.log.gz"));
-    ensure(&log, TraceFormat::CandumpLog, mb, 2, false);
-    ensure(&asc, TraceFormat::Asc, mb, 2, false);
-    ensure(&emcy30, TraceFormat::CandumpLog, mb, 300, false);
-    ensure(&gz, TraceFormat::CandumpLog, gz_mb, 2, true);
+    let pcapng = dir.join(format!("pcapng-{mb}MB.pcapng"));
+    let files = [
+        ("candump log", &log, TraceFormat::CandumpLog, 2),
+        ("Vector ASC", &asc, TraceFormat::Asc, 2),
+        (
+            "candump log, 30% EMCY",
+            &emcy30,
+            TraceFormat::CandumpLog,
+            300,
+        ),
+        ("pcapng, LINUX_SLL", &pcapng, TraceFormat::Pcapng, 2),
+    ];
+    for (label, file, format, emcy) in files {
+        if chosen(label) {
+            ensure(file, format, mb, emcy, false);
+        }
+    }
+    if chosen("gzip") {
+        ensure(&gz, TraceFormat::CandumpLog, gz_mb, 2, true);
+    }
 
     println!("machine: {}", machine());
     println!("best of {runs} runs, output to /dev/null, warm page cache\n");
@@ -162,11 +188,10 @@ fn main() {
         );
     };
 
-    for (label, file) in [
-        ("candump log", &log),
-        ("Vector ASC", &asc),
-        ("candump log, 30% EMCY", &emcy30),
-    ] {
+    for (label, file, _, _) in files {
+        if !chosen(label) {
+            continue;
+        }
         let bytes = size(file);
         let f = path(file);
         // Only reading the file (one thread, 1 MiB reads): how much of the
@@ -186,11 +211,15 @@ fn main() {
             dd_peak,
         );
         row(&format!("wc -l ({label})"), bytes, wc, None, wc_peak);
-        for (case, args) in [
+        let mut cases = vec![
             ("ndjson", vec!["--format", "ndjson", &f]),
             ("table", vec!["--format", "table", &f]),
-            ("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]),
-        ] {
+        ];
+        // Binary traces are read on one thread whatever -j says.
+        if !label.starts_with("pcapng") {
+            cases.push(("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]));
+        }
+        for (case, args) in cases {
             let (t, peak) = measure(runs, &f, bin, &args);
             row(
                 &format!("emcy-decode {case} ({label})"),
@@ -203,6 +232,9 @@ fn main() {
         println!();
     }
 
+    if !chosen("gzip") {
+        return;
+    }
     let bytes = size(&gz);
     let g = path(&gz);
     let (gunzip, gpeak) = measure(runs, &g, "gzip", &["-dc", &g]);

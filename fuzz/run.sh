@@ -16,7 +16,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-all=(candump_log candump_screen asc trc blf detect decode_timeline)
+all=(candump_log candump_screen asc trc blf pcap detect decode_timeline)
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 
 # The fixtures each target starts from (by the format it forces).
@@ -27,7 +27,8 @@ fixtures_of() {
         asc) ls fixtures/*.asc ;;
         trc) ls fixtures/*.trc ;;
         blf) ls fixtures/*.blf ;;
-        detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.gz ;;
+        pcap) ls fixtures/*.pcap fixtures/*.pcapng ;;
+        detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.pcap fixtures/*.pcapng fixtures/*.gz ;;
         decode_timeline) ;;
         *) echo "unknown target $1 (known: ${all[*]})" >&2; return 1 ;;
     esac

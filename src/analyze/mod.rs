@@ -33,9 +33,10 @@ use crate::trace::Format;
 use crate::trace::Parsed;
 use crate::trace::blf;
 use crate::trace::cancel::Cancel;
-use crate::trace::detect::Detector;
+use crate::trace::detect::{self, Detector};
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE};
+use crate::trace::pcap;
 
 use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
@@ -204,16 +205,31 @@ pub fn analyze<R: Read + Send, E: Write>(
     };
     let mut consumer = Consumer::new(file, opts, sink, log, detector.format().is_some());
 
-    // BLF is binary: known by its magic (or forced), read object by object.
-    let (reader, magic) = blf::sniff(reader);
-    match magic {
+    // BLF, pcap and pcapng are binary: known by their magic (or forced),
+    // read record by record.
+    let (reader, magic) = detect::sniff_binary(reader);
+    let magic = match magic {
+        Ok(magic) => magic,
         Err(e) => return consumer.finish(None, gzip, read_error(&e)),
-        Ok(magic) if opts.input_format.map_or(magic, |f| f == Format::Blf) => {
+    };
+    let binary = match opts.input_format {
+        Some(forced) => forced.is_binary().then_some(forced),
+        None => magic,
+    };
+    match binary {
+        Some(Format::Blf) => {
             consumer.decided = true;
             let error = read_blf(reader, &mut consumer)?;
             return consumer.finish(Some(Format::Blf), gzip, error);
         }
-        Ok(_) => {}
+        Some(forced @ (Format::Pcap | Format::Pcapng)) => {
+            consumer.decided = true;
+            // pcap or pcapng as the magic says; forced on neither, as forced.
+            let flavour = magic.filter(|m| matches!(m, Format::Pcap | Format::Pcapng));
+            let error = read_pcap(reader, &mut consumer)?;
+            return consumer.finish(Some(flavour.unwrap_or(forced)), gzip, error);
+        }
+        _ => {}
     }
     let mut blocks = BlockReader::new(reader, opts.block_size, opts.max_line);
 
@@ -267,6 +283,49 @@ fn read_blf<R: Read, E: Write>(
         }
         if let Some(warning) = reader.take_warning() {
             consumer.warning(0, warning);
+        }
+        consumer.lines(1);
+    }
+}
+
+/// pcap and pcapng into the same consumer: each packet counts as a line,
+/// its number in the file is its line number (as Wireshark numbers frames).
+fn read_pcap<R: Read, E: Write>(
+    reader: R,
+    consumer: &mut Consumer<'_, '_, E>,
+) -> Result<Option<String>, OutputError> {
+    let mut reader = match pcap::PcapReader::new(reader) {
+        Ok(r) => r,
+        Err(e) => return Ok(read_error(&e)),
+    };
+    loop {
+        let more = reader.advance(Some(consumer.interest()));
+        while let Some(note) = reader.take_note() {
+            consumer.log.note(&format!("{}: {note}", consumer.file));
+        }
+        // Frames before the packet read that are only counted (ids nobody
+        // wants) or timed (the content filter rejects their data).
+        let (counted, timed) = reader.take_counted();
+        if counted > 0 {
+            let timed_n = timed.map_or(0, |(n, _, _)| n);
+            if counted > timed_n {
+                consumer.plain_frames(counted - timed_n);
+            }
+            if let Some((n, first, last)) = timed {
+                consumer.timed_frames(n, first, last);
+            }
+            consumer.lines(counted);
+        }
+        match more {
+            Ok(true) => {}
+            Ok(false) => return Ok(None),
+            Err(e) => return Ok(read_error(&e)),
+        }
+        match reader.take() {
+            Some(Parsed::Frame(f)) => deliver(consumer, 0, &f, None)?,
+            Some(Parsed::Skipped) => consumer.skipped(),
+            Some(Parsed::Malformed(reason)) => consumer.malformed(0, reason),
+            None => continue,
         }
         consumer.lines(1);
     }

@@ -24,7 +24,7 @@ Examples:
 
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
 candump screen output (with or without -t/-x/-a), Vector ASC, PEAK TRC
-(1.0-2.1), Vector BLF.
+(1.0-2.1), Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2).
 
 Exit status:
   0  success (also when the reader of stdout goes away, e.g. `| head -1`)
@@ -212,6 +212,9 @@ pub enum InputFormat {
     Trc,
     /// Vector BLF (binary)
     Blf,
+    /// pcap or pcapng capture (binary; SocketCAN, LINUX_SLL, LINUX_SLL2)
+    #[value(alias = "pcapng")]
+    Pcap,
 }
 
 impl From<InputFormat> for Format {
@@ -222,6 +225,7 @@ impl From<InputFormat> for Format {
             InputFormat::Asc => Format::Asc,
             InputFormat::Trc => Format::Trc,
             InputFormat::Blf => Format::Blf,
+            InputFormat::Pcap => Format::Pcap,
         }
     }
 }

@@ -32,7 +32,7 @@ use std::io::{self, Read};
 
 use time::{Date, Month, PrimitiveDateTime, Time};
 
-use super::{Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp};
+use super::{Frame, FrameKind, Parsed, Payload, Reason, Timestamp};
 
 /// The file's magic bytes.
 pub const MAGIC: &[u8; 4] = b"LOGG";
@@ -523,7 +523,8 @@ impl<R: Read> BlfReader<R> {
     }
 }
 
-fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+/// Reads until `buf` is full or the input ends; returns the bytes read.
+pub(crate) fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
     let mut n = 0;
     while n < buf.len() {
         match input.read(buf.get_mut(n..).unwrap_or_default()) {
@@ -795,25 +796,6 @@ fn system_time(b: &[u8]) -> Result<Option<(u128, u8)>, String> {
     )))
 }
 
-/// Lines never reach this parser: BLF input goes to [`BlfReader`]. It
-/// exists so that every [`Format`] has a parser.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct BinaryParser;
-
-impl LineParser for BinaryParser {
-    fn format(&self) -> Format {
-        Format::Blf
-    }
-
-    fn parse<'a>(&mut self, _line: &'a [u8], _interest: &Interest) -> Parsed<'a> {
-        Parsed::Malformed("BLF is a binary format, not read line by line".into())
-    }
-
-    fn context(&self) -> Option<u8> {
-        Some(0)
-    }
-}
-
 /// Fuzz target body: any bytes must read to the end without a panic or an
 /// endless loop, and every frame must be well-formed.
 #[cfg(feature = "fuzzing")]
@@ -840,17 +822,6 @@ pub(crate) fn fuzz_blf(data: &[u8]) {
         }
     }
     assert!(r.buf.len() <= 2 * MAX_OBJECT + 64);
-}
-
-/// Reads up to 4 bytes to look for the `LOGG` magic and puts them back in
-/// front of the stream: `(stream, Ok(is BLF))`.
-pub fn sniff<R: Read>(mut input: R) -> (io::Chain<io::Cursor<Vec<u8>>, R>, io::Result<bool>) {
-    let mut head = [0u8; 4];
-    let got = read_full(&mut input, &mut head);
-    let n = *got.as_ref().unwrap_or(&0);
-    let prefix = head.get(..n).unwrap_or_default().to_vec();
-    let magic = got.map(|n| n == 4 && &head == MAGIC);
-    (io::Cursor::new(prefix).chain(input), magic)
 }
 
 #[cfg(test)]

@@ -13,7 +13,44 @@
 //! in another one is still read, and [`Detector::take_foreign`] says so, so the
 //! caller warns. No EMCY is lost because a file changed its mind.
 
+use std::io::{self, Read};
+
+use super::blf::{self, read_full};
+use super::pcap;
 use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan};
+
+/// The input with the bytes [`sniff_binary`] read put back in front.
+pub type Sniffed<R> = io::Chain<io::Cursor<Vec<u8>>, R>;
+
+/// Looks at the first bytes for the magic of a binary format: `LOGG`
+/// (BLF), a pcap magic number in either byte order, or a pcapng section
+/// header (its block type and byte-order magic: 12 bytes, read only when
+/// the first 4 are the block type). The bytes read are put back in front
+/// of the stream: `(stream, Ok(the binary format, if any))`.
+pub fn sniff_binary<R: Read>(mut input: R) -> (Sniffed<R>, io::Result<Option<Format>>) {
+    let mut head = [0u8; 12];
+    let mut n = 0;
+    let mut result = read_full(&mut input, head.get_mut(..4).unwrap_or_default());
+    if let Ok(k) = result {
+        n = k;
+        if n == 4 && pcap::is_pcapng_block_type(&head) {
+            result = read_full(&mut input, head.get_mut(4..).unwrap_or_default());
+            if let Ok(k) = result {
+                n += k;
+            }
+        }
+    }
+    let format = result.map(|_| {
+        let head = head.get(..n).unwrap_or_default();
+        if head == blf::MAGIC {
+            Some(Format::Blf)
+        } else {
+            pcap::sniff(head)
+        }
+    });
+    let prefix = head.get(..n).unwrap_or_default().to_vec();
+    (io::Cursor::new(prefix).chain(input), format)
+}
 
 pub struct Detector {
     parsers: Vec<AnyParser>,
@@ -263,6 +300,36 @@ mod tests {
         ));
         assert!(d.take_warning().is_some_and(|w| w.contains("lack FDF")));
         assert!(d.take_warning().is_none());
+    }
+
+    #[test]
+    fn binary_formats_are_known_by_their_magic_and_the_bytes_put_back() {
+        let sniff = |bytes: &[u8]| {
+            let (mut stream, format) = sniff_binary(bytes);
+            let mut back = Vec::new();
+            stream.read_to_end(&mut back).unwrap();
+            assert_eq!(back, bytes);
+            format.unwrap()
+        };
+        assert_eq!(sniff(b"LOGG\x90\0\0\0"), Some(Format::Blf));
+        for magic in [
+            [0xD4, 0xC3, 0xB2, 0xA1],
+            [0xA1, 0xB2, 0xC3, 0xD4],
+            [0x4D, 0x3C, 0xB2, 0xA1],
+            [0xA1, 0xB2, 0x3C, 0x4D],
+        ] {
+            assert_eq!(sniff(&magic), Some(Format::Pcap), "{magic:02X?}");
+        }
+        let shb = b"\x0A\x0D\x0D\x0A\x1C\0\0\0\x4D\x3C\x2B\x1A";
+        assert_eq!(sniff(shb), Some(Format::Pcapng));
+        let shb_be = b"\x0A\x0D\x0D\x0A\0\0\0\x1C\x1A\x2B\x3C\x4D";
+        assert_eq!(sniff(shb_be), Some(Format::Pcapng));
+        // The block type without the byte-order magic: blank lines with CRs.
+        assert_eq!(sniff(b"\n\r\r\n(1.0) can0 081#00\n"), None);
+        assert_eq!(sniff(b"\n\r\r\n"), None);
+        assert_eq!(sniff(b"(1.0) can0 081#00\n"), None);
+        assert_eq!(sniff(b"LO"), None);
+        assert_eq!(sniff(b""), None);
     }
 
     #[test]

@@ -1,8 +1,10 @@
-//! Trace readers: one line parser per text format, all yielding [`Frame`].
+//! Trace readers: one line parser per text format, one reader per binary
+//! format (BLF, pcap/pcapng), all yielding [`Frame`].
 //!
 //! Every line is classified as exactly one of: a frame, a known non-frame line
 //! (header, comment, status, blank: "skipped"), or a malformed line with a
 //! reason. Parsers never panic and never stop: the caller counts and reports.
+//! (A binary format's "line" is its record: a BLF object, a pcap packet.)
 
 pub mod asc;
 pub mod blf;
@@ -14,6 +16,7 @@ pub mod follow;
 pub mod hex;
 pub mod input;
 pub mod lines;
+pub mod pcap;
 pub mod reader;
 pub mod scan;
 pub mod time;
@@ -38,6 +41,12 @@ pub enum Format {
     /// Vector BLF, binary: read object by object, not line by line, and
     /// detected by its `LOGG` magic, so it is not in [`Format::ALL`].
     Blf,
+    /// libpcap capture file (tcpdump, scapy, Wireshark's "pcap"), binary:
+    /// read packet by packet, detected by its magic number.
+    Pcap,
+    /// pcapng capture file (Wireshark, dumpcap), binary: read packet by
+    /// packet, detected by its section header block.
+    Pcapng,
 }
 
 impl Format {
@@ -57,7 +66,15 @@ impl Format {
             Format::Asc => "asc",
             Format::Trc => "trc",
             Format::Blf => "blf",
+            Format::Pcap => "pcap",
+            Format::Pcapng => "pcapng",
         }
+    }
+
+    /// A binary format: read record by record by its own reader (its
+    /// "lines" are BLF objects or pcap packets), never by the line parsers.
+    pub fn is_binary(self) -> bool {
+        matches!(self, Format::Blf | Format::Pcap | Format::Pcapng)
     }
 
     pub(crate) fn parser(self) -> AnyParser {
@@ -68,7 +85,7 @@ impl Format {
             }
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
             Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
-            Format::Blf => AnyParser::Blf(blf::BinaryParser),
+            Format::Blf | Format::Pcap | Format::Pcapng => AnyParser::Binary(BinaryParser(self)),
         }
     }
 }
@@ -481,7 +498,7 @@ pub enum AnyParser {
     CandumpScreen(candump_screen::CandumpScreenParser),
     Asc(asc::AscParser),
     Trc(trc::TrcParser),
-    Blf(blf::BinaryParser),
+    Binary(BinaryParser),
 }
 
 impl LineParser for AnyParser {
@@ -491,7 +508,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.format(),
             AnyParser::Asc(p) => p.format(),
             AnyParser::Trc(p) => p.format(),
-            AnyParser::Blf(p) => p.format(),
+            AnyParser::Binary(p) => p.format(),
         }
     }
 
@@ -502,7 +519,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.parse(line, interest),
             AnyParser::Asc(p) => p.parse(line, interest),
             AnyParser::Trc(p) => p.parse(line, interest),
-            AnyParser::Blf(p) => p.parse(line, interest),
+            AnyParser::Binary(p) => p.parse(line, interest),
         }
     }
 
@@ -512,7 +529,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.take_warning(),
             AnyParser::Asc(p) => p.take_warning(),
             AnyParser::Trc(p) => p.take_warning(),
-            AnyParser::Blf(p) => p.take_warning(),
+            AnyParser::Binary(p) => p.take_warning(),
         }
     }
 
@@ -522,7 +539,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.identified(),
             AnyParser::Asc(p) => p.identified(),
             AnyParser::Trc(p) => p.identified(),
-            AnyParser::Blf(p) => p.identified(),
+            AnyParser::Binary(p) => p.identified(),
         }
     }
 
@@ -532,7 +549,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.context(),
             AnyParser::Asc(p) => p.context(),
             AnyParser::Trc(p) => p.context(),
-            AnyParser::Blf(p) => p.context(),
+            AnyParser::Binary(p) => p.context(),
         }
     }
 
@@ -543,7 +560,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest),
             AnyParser::Asc(p) => p.run(bytes, max_line, interest),
             AnyParser::Trc(p) => p.run(bytes, max_line, interest),
-            AnyParser::Blf(p) => p.run(bytes, max_line, interest),
+            AnyParser::Binary(p) => p.run(bytes, max_line, interest),
         }
     }
 
@@ -553,8 +570,27 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.scan(line, interest),
             AnyParser::Asc(p) => p.scan(line, interest),
             AnyParser::Trc(p) => p.scan(line, interest),
-            AnyParser::Blf(p) => p.scan(line, interest),
+            AnyParser::Binary(p) => p.scan(line, interest),
         }
+    }
+}
+
+/// Lines never reach this parser: binary input (BLF, pcap) goes to its own
+/// reader. It exists so that every [`Format`] has a parser.
+#[derive(Clone, Copy, Debug)]
+pub struct BinaryParser(Format);
+
+impl LineParser for BinaryParser {
+    fn format(&self) -> Format {
+        self.0
+    }
+
+    fn parse<'a>(&mut self, _line: &'a [u8], _interest: &Interest) -> Parsed<'a> {
+        Parsed::Malformed(format!("{} is a binary format, not read line by line", self.0).into())
+    }
+
+    fn context(&self) -> Option<u8> {
+        Some(0)
     }
 }
 

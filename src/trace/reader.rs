@@ -8,16 +8,18 @@
 use std::collections::VecDeque;
 use std::io::{self, Read};
 
-use super::blf::{self, BlfReader};
-use super::detect::Detector;
+use super::blf::BlfReader;
+use super::detect::{Detector, sniff_binary};
 use super::input::sniff_gzip_generic;
 use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
+use super::pcap::PcapReader;
 use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
 
 /// One CAN frame of a trace, owned.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CanFrame {
-    /// 1-based line of the trace (for BLF: the object's number).
+    /// 1-based line of the trace (for BLF: the object's number; for pcap
+    /// and pcapng: the packet's, as Wireshark numbers frames).
     pub line: u64,
     /// Seconds as the trace wrote them; `None` when the trace has no times.
     pub time: Option<Timestamp>,
@@ -68,7 +70,8 @@ pub enum Record {
         reason: String,
     },
     /// Something about the trace as a whole worth telling, e.g. a BLF
-    /// header whose start time is not a date.
+    /// header whose start time is not a date, or a pcap whose SocketCAN
+    /// ids are stored little-endian.
     Note(String),
     /// What the reader made good to read the frame of the same line, which
     /// comes next: e.g. a BLF CAN FD object storing fewer data bytes than
@@ -84,7 +87,7 @@ pub enum Record {
 
 /// Reads a trace into [`Record`]s, one per line, in order. The format is
 /// detected from the content (candump log or screen output, Vector ASC,
-/// PEAK TRC, Vector BLF), or forced; gzip is decompressed, known by its
+/// PEAK TRC, Vector BLF, pcap, pcapng), or forced; gzip is decompressed, known by its
 /// magic bytes. Lines longer than 64 KiB are malformed, never buffered.
 ///
 /// An I/O error ends the iteration after it is returned.
@@ -104,6 +107,7 @@ enum Source<'a> {
         detector: Detector,
     },
     Blf(BlfReader<Box<dyn Read + 'a>>),
+    Pcap(Box<PcapReader<Box<dyn Read + 'a>>>),
     Failed(io::Error),
     /// The end, with the format the input had.
     Done(Option<Format>),
@@ -136,10 +140,15 @@ impl<'a> TraceReader<'a> {
 
     fn sniff(input: impl Read + 'a, format: Option<Format>) -> io::Result<Source<'a>> {
         let (input, _) = sniff_gzip_generic(input)?;
-        let (input, magic) = blf::sniff(input);
+        let (input, magic) = sniff_binary(input);
+        let magic = magic?;
         let input: Box<dyn Read + 'a> = Box::new(input);
-        if format.map_or(magic?, |f| f == Format::Blf) {
-            return Ok(Source::Blf(BlfReader::new(input)?));
+        match format.map_or(magic, |f| f.is_binary().then_some(f)) {
+            Some(Format::Blf) => return Ok(Source::Blf(BlfReader::new(input)?)),
+            Some(Format::Pcap | Format::Pcapng) => {
+                return Ok(Source::Pcap(Box::new(PcapReader::new(input)?)));
+            }
+            _ => {}
         }
         let detector = match format {
             Some(f) => Detector::forced(f),
@@ -156,6 +165,7 @@ impl<'a> TraceReader<'a> {
         match &self.source {
             Source::Text { detector, .. } => detector.format(),
             Source::Blf(_) => Some(Format::Blf),
+            Source::Pcap(reader) => Some(reader.format()),
             Source::Failed(_) => None,
             Source::Done(format) => *format,
         }
@@ -227,6 +237,29 @@ impl<'a> TraceReader<'a> {
                     });
                 }
                 self.queue.push_back(record);
+                Ok(true)
+            }
+            Source::Pcap(reader) => {
+                let more = reader.advance(None);
+                while let Some(note) = reader.take_note() {
+                    self.queue.push_back(Record::Note(note));
+                }
+                if !more? {
+                    return Ok(false);
+                }
+                let Some(parsed) = reader.take() else {
+                    return Ok(true);
+                };
+                self.lines += 1;
+                let line = self.lines;
+                self.queue.push_back(match parsed {
+                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+                    Parsed::Skipped => Record::Skipped { line },
+                    Parsed::Malformed(reason) => Record::Malformed {
+                        line,
+                        reason: reason.into_owned(),
+                    },
+                });
                 Ok(true)
             }
             Source::Failed(_) | Source::Done(_) => Ok(false),

@@ -27,5 +27,6 @@ mod inputs;
 mod live;
 mod memory;
 mod output;
+mod pcap;
 mod roundtrip;
 mod trc;

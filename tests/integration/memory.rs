@@ -76,6 +76,7 @@ fn a_200_mb_trace_is_read_in_bounded_memory() {
             TraceFormat::CandumpLog,
         ),
         (&["--format", "table", "-j", "2"][..], TraceFormat::Asc),
+        (&["--format", "ndjson"][..], TraceFormat::Pcapng),
     ] {
         let peak = peak_while_streaming(args, format).expect("VmHWM readable");
         assert!(

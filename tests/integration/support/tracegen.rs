@@ -11,6 +11,9 @@ use std::io::{self, Write};
 pub enum TraceFormat {
     CandumpLog,
     Asc,
+    /// pcapng as dumpcap writes a SocketCAN interface: one LINUX_SLL
+    /// interface, microsecond times, each frame a 16-byte `can_frame`.
+    Pcapng,
 }
 
 /// xorshift64*: deterministic and fast; quality is irrelevant here.
@@ -61,6 +64,11 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         written += header.len() as u64;
         lines += 6;
     }
+    if format == TraceFormat::Pcapng {
+        let header = pcapng_header();
+        out.write_all(&header)?;
+        written += header.len() as u64;
+    }
     while written < bytes {
         micros += 100 + rng.below(400);
         let node = 1 + rng.below(8) as u8;
@@ -108,6 +116,7 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         match format {
             TraceFormat::CandumpLog => candump_line(&mut line, micros, id, &data[..len]),
             TraceFormat::Asc => asc_line(&mut line, micros, id, &data[..len]),
+            TraceFormat::Pcapng => pcapng_packet(&mut line, micros, id, &data[..len]),
         }
         out.write_all(&line)?;
         written += line.len() as u64;
@@ -154,4 +163,52 @@ fn asc_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
         push_hex(line, b);
     }
     let _ = writeln!(line, "  Length = 228000 BitCount = 118 ID = {id}");
+}
+
+/// A pcapng section header and one LINUX_SLL interface named `can0`
+/// (microseconds: no if_tsresol), little-endian.
+fn pcapng_header() -> Vec<u8> {
+    let mut h = Vec::new();
+    let mut block = |kind: u32, body: &[u8]| {
+        let len = 12 + body.len() as u32;
+        h.extend(kind.to_le_bytes());
+        h.extend(len.to_le_bytes());
+        h.extend(body);
+        h.extend(len.to_le_bytes());
+    };
+    let mut shb = 0x1A2B_3C4Du32.to_le_bytes().to_vec();
+    shb.extend(1u16.to_le_bytes());
+    shb.extend(0u16.to_le_bytes());
+    shb.extend((-1i64).to_le_bytes());
+    block(0x0A0D_0D0A, &shb);
+    let mut idb = 113u16.to_le_bytes().to_vec();
+    idb.extend([0, 0]);
+    idb.extend(262_144u32.to_le_bytes());
+    idb.extend(2u16.to_le_bytes()); // if_name
+    idb.extend(4u16.to_le_bytes());
+    idb.extend(b"can0");
+    idb.extend([0; 4]); // opt_endofopt
+    block(1, &idb);
+    h
+}
+
+/// One enhanced packet block: a LINUX_SLL header and a 16-byte `can_frame`.
+fn pcapng_packet(out: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
+    let units = 1_700_000_000_000_000 + micros;
+    out.extend(6u32.to_le_bytes());
+    out.extend(64u32.to_le_bytes());
+    out.extend(0u32.to_le_bytes());
+    out.extend(((units >> 32) as u32).to_le_bytes());
+    out.extend((units as u32).to_le_bytes());
+    out.extend(32u32.to_le_bytes());
+    out.extend(32u32.to_le_bytes());
+    out.extend([0, 0, 0x01, 0x18]); // packet type, ARPHRD_CAN
+    out.extend([0; 10]);
+    out.extend(0x000Cu16.to_be_bytes());
+    out.extend(id.to_le_bytes());
+    out.extend([data.len() as u8, 0, 0, 0]);
+    let mut bytes = [0u8; 8];
+    bytes[..data.len()].copy_from_slice(data);
+    out.extend(bytes);
+    out.extend(64u32.to_le_bytes());
 }
