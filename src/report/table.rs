@@ -309,11 +309,19 @@ fn pad_to(s: &mut String, width: usize) {
 }
 
 pub(crate) fn codes_list(codes: &[u16]) -> String {
-    codes
-        .iter()
-        .map(|c| format!("0x{c:04X}"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    let mut s = String::with_capacity(codes.len() * 8);
+    push_codes(&mut s, codes);
+    s
+}
+
+/// `0x4310, 0x2310`
+fn push_codes(s: &mut String, codes: &[u16]) {
+    for (i, &code) in codes.iter().enumerate() {
+        if i > 0 {
+            s.push_str(", ");
+        }
+        push_code(s, code);
+    }
 }
 
 impl<W: Write> Sink for TableReport<W> {
@@ -535,12 +543,7 @@ fn node_cells(
     if n.active.is_empty() {
         active.push('-');
     }
-    for (i, &code) in n.active.iter().enumerate() {
-        if i > 0 {
-            active.push_str(", ");
-        }
-        push_code(active, code);
-    }
+    push_codes(active, &n.active);
     if n.stats.raised.is_empty() {
         seen.push('-');
     }

@@ -991,11 +991,7 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 reader.consume_noshift(len);
-                self.plain += 1;
-                if let Some(t) = timed {
-                    self.timed.count(t);
-                }
-                if self.plain >= PLAIN_RUN {
+                if !count_plain(&mut self.plain, &mut self.timed, timed) {
                     return;
                 }
             },
@@ -1023,11 +1019,7 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 reader.consume_noshift(len);
-                self.plain += 1;
-                if let Some(t) = timed {
-                    self.timed.count(t);
-                }
-                if self.plain >= PLAIN_RUN {
+                if !count_plain(&mut self.plain, &mut self.timed, timed) {
                     return;
                 }
             },
@@ -1280,6 +1272,18 @@ impl Timed {
         }
         self.last = Some(t);
     }
+}
+
+/// One plain packet of the hot loop counted (and timed, if it is a frame
+/// whose time the report wants); false once the run is long enough to
+/// hand back to the caller.
+#[inline]
+fn count_plain(plain: &mut u64, timed: &mut Timed, time: Option<RawTime>) -> bool {
+    *plain += 1;
+    if let Some(t) = time {
+        timed.count(t);
+    }
+    *plain < PLAIN_RUN
 }
 
 fn held_size(item: &Item, channel: &[u8]) -> usize {
