@@ -67,6 +67,7 @@ pub use canopen::emcy::{Emcy, TooShort, Warning};
 pub use canopen::profile::{Decoded, FieldValue, Profile, ProfileError, VendorCode};
 pub use canopen::register::Register;
 pub use timeline::{At, ClearedBy, Interval, NodeTimeline, State, Step};
+pub use trace::deltas::TimeMode;
 pub use trace::reader::{CanFrame, Record, TraceReader};
 pub use trace::{Format, FrameKind, Span, Timestamp};
 

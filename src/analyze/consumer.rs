@@ -24,6 +24,7 @@ use crate::canopen::profile_choice::{NodeProfiles, ProfileSource, default_profil
 use crate::canopen::sdo;
 use crate::timeline::history::{ErrorHistory, History};
 use crate::timeline::{At, NodeTimeline, Step};
+use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
@@ -233,6 +234,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     frames_with_warnings: u64,
     worst_category: Option<u8>,
     pub(super) decided: bool,
+    /// Set when candump times are summed as deltas: said in the report.
+    pub(super) timestamps: Option<TimeMode>,
     /// Lines before the current block.
     line_base: u64,
     /// Time and line of the last EMCY or boot-up: the trace's clock as far
@@ -289,6 +292,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             opts,
             sink,
             decided,
+            timestamps: None,
             log,
             counts: Counts::default(),
             nodes: Nodes::new(opts.spill_at),
@@ -381,6 +385,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         let report = InputReport {
             first_time: self.first_time,
             last_time: self.last_time,
+            timestamps: self.timestamps,
             file: file.to_string(),
             format,
             gzip,

@@ -12,6 +12,7 @@ use crate::canopen::profile::{Decoded, Profile};
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
 use crate::timeline::history::ErrorHistory;
 use crate::timeline::{NodeStats, State};
+use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Span, Timestamp};
 
 /// Active codes an event lists at most: a node can have thousands active,
@@ -167,6 +168,9 @@ pub struct InputReport {
     /// the summary measures rates and open errors against.
     pub first_time: Option<Timestamp>,
     pub last_time: Option<Timestamp>,
+    /// Candump times summed as `-td` deltas (detected or `--timestamps
+    /// delta`); `None` when times were read as written.
+    pub timestamps: Option<TimeMode>,
     /// Why reading stopped early (I/O error, corrupt gzip, unknown format).
     pub error: Option<String>,
 }

@@ -33,6 +33,7 @@ use crate::trace::Format;
 use crate::trace::Parsed;
 use crate::trace::blf;
 use crate::trace::cancel::Cancel;
+use crate::trace::deltas::{self, TimeMode};
 use crate::trace::detect::{self, Detector};
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE};
@@ -49,6 +50,8 @@ pub(crate) use sink::{Discard, Sink, WithoutEvents};
 pub struct Options {
     /// `--input-format`: skip detection.
     pub input_format: Option<Format>,
+    /// `--timestamps`: what candump times are; `None` detects `-td` deltas.
+    pub timestamps: Option<TimeMode>,
     /// `--node`: report only these nodes (empty = all).
     pub nodes: Vec<u8>,
     /// `--channel`: report only these channels (empty = all).
@@ -83,6 +86,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             input_format: None,
+            timestamps: None,
             nodes: Vec::new(),
             channels: Vec::new(),
             max_diagnostics: 20,
@@ -117,6 +121,7 @@ impl Analysis {
                 history: ErrorHistory::default(),
                 first_time: None,
                 last_time: None,
+                timestamps: None,
                 error: Some(error),
             },
             errors_raised: 0,
@@ -230,6 +235,32 @@ pub fn analyze<R: Read + Send, E: Write>(
             return consumer.finish(Some(flavour.unwrap_or(forced)), gzip, error);
         }
         _ => {}
+    }
+    // What candump times mean is decided before any frame is read: said by
+    // the user, or seen in the first lines of a (possibly) candump input.
+    let candump = matches!(
+        opts.input_format,
+        None | Some(Format::CandumpLog | Format::CandumpScreen)
+    );
+    let reader: Box<dyn Read + Send + '_> = match opts.timestamps {
+        Some(TimeMode::Delta) => {
+            detector.read_deltas();
+            Box::new(reader)
+        }
+        None if candump => {
+            let (reader, evidence) = deltas::read_ahead(reader);
+            if let Some(evidence) = evidence {
+                detector.read_deltas();
+                consumer
+                    .log
+                    .note(&format!("{}: {}", consumer.file, evidence.note()));
+            }
+            Box::new(reader)
+        }
+        _ => Box::new(reader),
+    };
+    if detector.reads_deltas() {
+        consumer.timestamps = Some(TimeMode::Delta);
     }
     let mut blocks = BlockReader::new(reader, opts.block_size, opts.max_line);
 

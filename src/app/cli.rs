@@ -10,6 +10,7 @@ use crate::analyze::fail_on::FailOn;
 use crate::analyze::{EmcyId, Options};
 use crate::canopen::profile_choice::{self, ProfileRequest};
 use crate::report::timefmt::TimeStyle;
+use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, hex};
 
 const EXAMPLES_AND_EXIT_CODES: &str = "\
@@ -84,6 +85,12 @@ pub struct DecodeArgs {
     /// Read inputs as this format instead of detecting it
     #[arg(long, value_enum, value_name = "FORMAT")]
     pub input_format: Option<InputFormat>,
+
+    /// What candump times are: as written (absolute, or zero for -tz), or the delta to the
+    /// previous frame (delta, candump -td: summed). Without it, deltas are detected from
+    /// the first lines, with a note
+    #[arg(long, value_enum, value_name = "MODE")]
+    pub timestamps: Option<TimestampsArg>,
 
     /// Report only these nodes (repeatable or comma-separated; decimal or 0x hex)
     #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
@@ -231,6 +238,26 @@ impl From<InputFormat> for Format {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TimestampsArg {
+    /// As written: Unix time (candump -ta, the default), or each format's own
+    Absolute,
+    /// Each time is the delta to the previous frame (candump -td): summed
+    Delta,
+    /// Seconds since the first frame (candump -tz): as written
+    Zero,
+}
+
+impl From<TimestampsArg> for TimeMode {
+    fn from(t: TimestampsArg) -> TimeMode {
+        match t {
+            TimestampsArg::Absolute => TimeMode::Absolute,
+            TimestampsArg::Delta => TimeMode::Delta,
+            TimestampsArg::Zero => TimeMode::Zero,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum View {
     /// Events as decoded, node states, the error timeline, input counts
     Full,
@@ -284,6 +311,10 @@ pub struct TraceArgs {
     /// Read traces as this format instead of detecting it
     #[arg(long, value_enum, value_name = "FORMAT")]
     pub input_format: Option<InputFormat>,
+
+    /// What candump times are (absolute, zero, delta), as for decoding
+    #[arg(long, value_enum, value_name = "MODE")]
+    pub timestamps: Option<TimestampsArg>,
 
     /// A node's EMCY id moved by object 0x1014: COBID=NODE, e.g. 0x1A5=5 (repeatable)
     #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
@@ -402,6 +433,7 @@ impl DecodeArgs {
     pub(super) fn options(&self) -> Result<Options> {
         Ok(Options {
             input_format: self.input_format.map(Into::into),
+            timestamps: self.timestamps.map(Into::into),
             nodes: self.node.clone(),
             channels: self.channel.clone(),
             max_diagnostics: self.max_diagnostics,
@@ -417,6 +449,7 @@ impl TraceArgs {
     pub(super) fn options(&self) -> Result<Options> {
         Ok(Options {
             input_format: self.input_format.map(Into::into),
+            timestamps: self.timestamps.map(Into::into),
             max_diagnostics: self.max_diagnostics,
             emcy_ids: self.emcy_id.clone(),
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,

@@ -873,6 +873,7 @@ pub fn decode_timeline(data: &[u8]) {
         history: finished,
         first_time,
         last_time,
+        timestamps: None,
         error: None,
     };
     let inputs = std::slice::from_ref(&report);

@@ -600,6 +600,10 @@ impl JsonWriter {
         o.u64("other_format", other_format);
         self.time(o.key("first_time"), input.first_time);
         self.time(o.key("last_time"), input.last_time);
+        // Only where times were summed: the times are not as written.
+        if let Some(mode) = input.timestamps {
+            o.str("timestamps", mode.name());
+        }
         match &input.error {
             Some(e) => o.str("error", e),
             None => o.key("error").extend_from_slice(b"null"),

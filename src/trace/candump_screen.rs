@@ -15,9 +15,9 @@
 //! re-indent pasted lines.
 //!
 //! What candump's options add, all accepted:
-//! - `-t a|z|d|A`: a leading `(...)` time. Numeric times are taken literally
-//!   as printed: `-td` deltas are *not* accumulated (a trace cut from the
-//!   middle has no start, and `-td` lines can't be told from `-tz` ones).
+//! - `-t a|z|d|A`: a leading `(...)` time. This parser takes numeric times
+//!   as printed; `-td` deltas are summed above it, by the detector, when
+//!   the first lines prove them or the user says so ([`super::deltas`]).
 //!   `-tA` local dates carry no zone; they are read as UTC.
 //! - `-x`: `RX`/`TX` and a BRS/ESI pair (`- -`, `B -`, `- E`, `B E`) before the id.
 //! - `-8`: the classic length as a raw DLC in braces, `{0}`..`{F}`; candump

@@ -16,6 +16,7 @@
 use std::io::{self, Read};
 
 use super::blf::{self, read_full};
+use super::deltas::DeltaClock;
 use super::pcap;
 use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan};
 
@@ -60,6 +61,8 @@ pub struct Detector {
     forced: bool,
     /// The format of the last frame when it was not the primary one.
     foreign: Option<Format>,
+    /// Candump times are `-td` deltas, summed here (see [`super::deltas`]).
+    deltas: Option<DeltaClock>,
 }
 
 impl Detector {
@@ -70,6 +73,7 @@ impl Detector {
             primary: None,
             forced: false,
             foreign: None,
+            deltas: None,
         }
     }
 
@@ -80,6 +84,7 @@ impl Detector {
             primary: Some(0),
             forced: true,
             foreign: None,
+            deltas: None,
         }
     }
 
@@ -90,12 +95,34 @@ impl Detector {
             primary: self.primary,
             forced: self.forced,
             foreign: None,
+            deltas: self.deltas,
         }
+    }
+
+    /// From now on, candump times are deltas to the previous frame
+    /// (`candump -td`): each frame's time is the sum so far. Lines then
+    /// chain, so [`Detector::context`] is `None`, and every frame is parsed
+    /// in full for its time.
+    pub fn read_deltas(&mut self) {
+        self.set_deltas(true);
+    }
+
+    /// [`Detector::read_deltas`] or not; before the first line only.
+    pub fn set_deltas(&mut self, on: bool) {
+        self.deltas = on.then(DeltaClock::default);
+    }
+
+    /// Whether candump times are summed as deltas.
+    pub fn reads_deltas(&self) -> bool {
+        self.deltas.is_some()
     }
 
     /// The combined [`LineParser::context`] of every parser plus the detected
     /// format; `None` when some parser chains lines (parse sequentially).
     pub fn context(&self) -> Option<u64> {
+        if self.deltas.is_some() {
+            return None;
+        }
         let mut ctx = u64::from(self.primary.map_or(0xFF, |p| p as u8));
         for p in &self.parsers {
             ctx = (ctx << 8) | u64::from(p.context()?);
@@ -128,6 +155,9 @@ impl Detector {
     /// read before), and only for the detected format.
     #[inline]
     pub fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+        if self.deltas.is_some() {
+            return Run::default();
+        }
         match self.primary.and_then(|i| self.parsers.get_mut(i)) {
             Some(p) => p.run(bytes, max_line, interest),
             None => Run::default(),
@@ -138,6 +168,9 @@ impl Detector {
     /// for the detected format (a frame it returns is never foreign).
     #[inline]
     pub fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        if self.deltas.is_some() {
+            return Scan::Parse;
+        }
         match self.primary.and_then(|i| self.parsers.get_mut(i)) {
             Some(p) => p.scan(line, interest),
             None => Scan::Parse,
@@ -146,6 +179,28 @@ impl Detector {
 
     #[inline]
     pub fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        if self.deltas.is_some() {
+            return self.parse_delta(line);
+        }
+        self.parse_line(line, interest)
+    }
+
+    /// A line of a trace whose candump times are deltas: every frame's time
+    /// is read (every frame moves the clock), and a candump frame gets the
+    /// sum. The caller's interest still decides what it decodes further.
+    fn parse_delta<'a>(&mut self, line: &'a [u8]) -> Parsed<'a> {
+        let mut parsed = self.parse_line(line, &Interest::all());
+        let format = self.foreign.or(self.format());
+        if let (Parsed::Frame(frame), Some(clock)) = (&mut parsed, &mut self.deltas)
+            && matches!(format, Some(Format::CandumpLog | Format::CandumpScreen))
+            && let Some(delta) = frame.time
+        {
+            frame.time = Some(clock.next(delta));
+        }
+        parsed
+    }
+
+    fn parse_line<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         self.foreign = None;
         let Some(primary) = self.primary else {
             return self.parse_undecided(line, interest);
@@ -330,6 +385,60 @@ mod tests {
         assert_eq!(sniff(b"(1.0) can0 081#00\n"), None);
         assert_eq!(sniff(b"LO"), None);
         assert_eq!(sniff(b""), None);
+    }
+
+    #[test]
+    fn deltas_sum_candump_times_only_and_chain_every_line() {
+        let mut d = Detector::auto();
+        assert!(d.context().is_some());
+        d.read_deltas();
+        assert!(d.reads_deltas());
+        assert_eq!(d.context(), None, "every line depends on the one before");
+        fn at(d: &mut Detector, line: &str, interest: &Interest) -> Option<String> {
+            match d.parse(line.as_bytes(), interest) {
+                Parsed::Frame(f) => f.time.map(|t| t.to_string()),
+                other => panic!("{other:?}"),
+            }
+        }
+        let mut time = |line: &str, interest: &Interest| at(&mut d, line, interest);
+        // Frames nobody wants still move the clock.
+        assert_eq!(
+            time("(000.500000) can0 701#05", &Interest::none()),
+            Some("0.500000".into())
+        );
+        assert_eq!(
+            time("(000.250000) can0 081#00", &Interest::none()),
+            Some("0.750000".into())
+        );
+        assert_eq!(
+            time(" (001.000001)  can0  081   [1]  00", &Interest::none()),
+            Some("1.750001".into()),
+            "a screen line of the same trace sums on"
+        );
+        // Another format's own times are not candump deltas.
+        assert_eq!(
+            time(
+                "   0.100000 1  081             Rx   d 1 00",
+                &Interest::all()
+            ),
+            Some("0.100000".into())
+        );
+        assert_eq!(
+            time("(000.000009) can0 081#00", &Interest::all()),
+            Some("1.750010".into())
+        );
+        assert!(matches!(
+            d.scan(b"(000.1) can0 081#00", &Interest::all()),
+            Scan::Parse
+        ));
+        assert_eq!(
+            d.run(b"(000.1) can0 701#05\n", 100, &Interest::none())
+                .bytes,
+            0
+        );
+        d.set_deltas(false);
+        let line = "(000.500000) can0 081#00";
+        assert_eq!(at(&mut d, line, &Interest::all()), Some("0.500000".into()));
     }
 
     #[test]

@@ -11,6 +11,7 @@ pub mod blf;
 pub mod cancel;
 pub mod candump_log;
 pub mod candump_screen;
+pub mod deltas;
 pub mod detect;
 pub mod follow;
 pub mod hex;

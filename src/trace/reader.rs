@@ -9,6 +9,7 @@ use std::collections::VecDeque;
 use std::io::{self, Read};
 
 use super::blf::BlfReader;
+use super::deltas::{self, TimeMode};
 use super::detect::{Detector, sniff_binary};
 use super::input::sniff_gzip_generic;
 use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
@@ -99,6 +100,10 @@ pub struct TraceReader<'a> {
     lines: u64,
     /// The buffer of the last block, reused.
     buf: Vec<u8>,
+    /// Why the candump times are read as `-td` deltas, when the first
+    /// lines said so: the first record, unless [`TraceReader::with_timestamps`]
+    /// says otherwise.
+    deltas_seen: Option<String>,
 }
 
 enum Source<'a> {
@@ -126,38 +131,64 @@ impl<'a> TraceReader<'a> {
     }
 
     fn open(input: impl Read + 'a, format: Option<Format>) -> Self {
-        let source = match Self::sniff(input, format) {
-            Ok(source) => source,
-            Err(e) => Source::Failed(e),
+        let (source, deltas_seen) = match Self::sniff(input, format) {
+            Ok((source, evidence)) => (source, evidence.map(|e| e.note())),
+            Err(e) => (Source::Failed(e), None),
         };
         TraceReader {
             source,
             queue: VecDeque::new(),
             lines: 0,
             buf: Vec::new(),
+            deltas_seen,
         }
     }
 
-    fn sniff(input: impl Read + 'a, format: Option<Format>) -> io::Result<Source<'a>> {
+    /// Says what candump times are instead of detecting `-td` deltas from
+    /// the first lines: [`TimeMode::Delta`] sums them, the others read
+    /// them as written. Call it before the first record.
+    pub fn with_timestamps(mut self, mode: TimeMode) -> Self {
+        self.deltas_seen = None;
+        if let Source::Text { detector, .. } = &mut self.source {
+            detector.set_deltas(mode == TimeMode::Delta);
+        }
+        self
+    }
+
+    /// The source for `input`, and for a text input that may be candump,
+    /// whether its first lines prove `-td` deltas.
+    fn sniff(
+        input: impl Read + 'a,
+        format: Option<Format>,
+    ) -> io::Result<(Source<'a>, Option<deltas::Evidence>)> {
         let (input, _) = sniff_gzip_generic(input)?;
         let (input, magic) = sniff_binary(input);
         let magic = magic?;
         let input: Box<dyn Read + 'a> = Box::new(input);
         match format.map_or(magic, |f| f.is_binary().then_some(f)) {
-            Some(Format::Blf) => return Ok(Source::Blf(BlfReader::new(input)?)),
+            Some(Format::Blf) => return Ok((Source::Blf(BlfReader::new(input)?), None)),
             Some(Format::Pcap | Format::Pcapng) => {
-                return Ok(Source::Pcap(Box::new(PcapReader::new(input)?)));
+                return Ok((Source::Pcap(Box::new(PcapReader::new(input)?)), None));
             }
             _ => {}
         }
-        let detector = match format {
+        let mut detector = match format {
             Some(f) => Detector::forced(f),
             None => Detector::auto(),
         };
-        Ok(Source::Text {
+        let (input, evidence): (Box<dyn Read + 'a>, _) = match format {
+            None | Some(Format::CandumpLog | Format::CandumpScreen) => {
+                let (input, evidence) = deltas::read_ahead(input);
+                (Box::new(input), evidence)
+            }
+            Some(_) => (input, None),
+        };
+        detector.set_deltas(evidence.is_some());
+        let source = Source::Text {
             blocks: BlockReader::new(input, DEFAULT_BLOCK, DEFAULT_MAX_LINE),
             detector,
-        })
+        };
+        Ok((source, evidence))
     }
 
     /// The format: forced, or detected from the lines read so far.
@@ -174,11 +205,16 @@ impl<'a> TraceReader<'a> {
     /// Fills the queue from the next block or BLF object; `Err` ends the
     /// input, `Ok(false)` at its end.
     fn refill(&mut self) -> io::Result<bool> {
+        if let Some(note) = self.deltas_seen.take() {
+            self.queue.push_back(Record::Note(note));
+            return Ok(true);
+        }
         match &mut self.source {
             Source::Text { blocks, detector } => {
                 let Some(block) = blocks.next_block(std::mem::take(&mut self.buf))? else {
                     return Ok(false);
                 };
+
                 let all = Interest::all();
                 for raw in block.lines(DEFAULT_MAX_LINE) {
                     self.lines += 1;

@@ -29,4 +29,5 @@ mod memory;
 mod output;
 mod pcap;
 mod roundtrip;
+mod timestamps;
 mod trc;
