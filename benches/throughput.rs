@@ -6,8 +6,8 @@
 //! peak resident memory. Sizes: `BENCH_MB` (default 1024), `BENCH_GZ_MB`
 //! (default 256); best of `BENCH_RUNS` (default 3). Words after `--` pick
 //! the cases whose name contains one of them (`cargo bench --bench
-//! throughput -- pcapng`): `candump log`, `Vector ASC`, `30% EMCY`, `gzip`,
-//! `pcapng`.
+//! throughput -- pcapng`): `candump log`, `candump -td`, `Vector ASC`,
+//! `30% EMCY`, `gzip`, `pcapng`.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -142,12 +142,19 @@ fn main() {
     let chosen = |case: &str| words.is_empty() || words.iter().any(|w| case.contains(w.as_str()));
 
     let log = dir.join(format!("candump-{mb}MB.log"));
+    let delta = dir.join(format!("candump-td-{mb}MB.log"));
     let asc = dir.join(format!("asc-{mb}MB.asc"));
     let emcy30 = dir.join(format!("candump-emcy30-{mb}MB.log"));
     let gz = dir.join(format!("candump-{gz_mb}MB.log.gz"));
     let pcapng = dir.join(format!("pcapng-{mb}MB.pcapng"));
     let files = [
         ("candump log", &log, TraceFormat::CandumpLog, 2),
+        (
+            "candump -td (deltas summed)",
+            &delta,
+            TraceFormat::CandumpDelta,
+            2,
+        ),
         ("Vector ASC", &asc, TraceFormat::Asc, 2),
         (
             "candump log, 30% EMCY",

@@ -157,7 +157,7 @@ pub fn read_ahead<R: Read>(mut input: R) -> (ReadAhead<R>, Option<Evidence>) {
 
 /// The `(sec.frac)` a candump log or screen line starts with (after blanks
 /// and colour codes), if any.
-fn leading_time(line: &[u8]) -> Option<Timestamp> {
+pub(crate) fn leading_time(line: &[u8]) -> Option<Timestamp> {
     let mut rest = line;
     loop {
         match rest.first()? {

@@ -16,7 +16,7 @@
 use std::io::{self, Read};
 
 use super::blf::{self, read_full};
-use super::deltas::DeltaClock;
+use super::deltas::{self, DeltaClock};
 use super::pcap;
 use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan};
 
@@ -51,6 +51,11 @@ pub fn sniff_binary<R: Read>(mut input: R) -> (Sniffed<R>, io::Result<Option<For
     });
     let prefix = head.get(..n).unwrap_or_default().to_vec();
     (io::Cursor::new(prefix).chain(input), format)
+}
+
+/// The formats whose times may be `-td` deltas.
+fn is_candump(format: Option<Format>) -> bool {
+    matches!(format, Some(Format::CandumpLog | Format::CandumpScreen))
 }
 
 pub struct Detector {
@@ -168,34 +173,48 @@ impl Detector {
     /// for the detected format (a frame it returns is never foreign).
     #[inline]
     pub fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
-        if self.deltas.is_some() {
-            return Scan::Parse;
-        }
-        match self.primary.and_then(|i| self.parsers.get_mut(i)) {
+        let candump = is_candump(self.format());
+        let scan = match self.primary.and_then(|i| self.parsers.get_mut(i)) {
             Some(p) => p.scan(line, interest),
             None => Scan::Parse,
+        };
+        let Some(clock) = self.deltas.as_mut().filter(|_| candump) else {
+            return scan;
+        };
+        match scan {
+            // Not decoded, but its delta moves the clock all the same.
+            Scan::Plain => {
+                if let Some(delta) = deltas::leading_time(line) {
+                    clock.next(delta);
+                }
+                Scan::Plain
+            }
+            Scan::Timed(delta) => Scan::Timed(clock.next(delta)),
+            Scan::Frame(mut frame) => {
+                frame.time = frame.time.map(|delta| clock.next(delta));
+                Scan::Frame(frame)
+            }
+            Scan::Parse => Scan::Parse,
         }
     }
 
     #[inline]
     pub fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
-        if self.deltas.is_some() {
-            return self.parse_delta(line);
-        }
-        self.parse_line(line, interest)
-    }
-
-    /// A line of a trace whose candump times are deltas: every frame's time
-    /// is read (every frame moves the clock), and a candump frame gets the
-    /// sum. The caller's interest still decides what it decodes further.
-    fn parse_delta<'a>(&mut self, line: &'a [u8]) -> Parsed<'a> {
-        let mut parsed = self.parse_line(line, &Interest::all());
-        let format = self.foreign.or(self.format());
-        if let (Parsed::Frame(frame), Some(clock)) = (&mut parsed, &mut self.deltas)
-            && matches!(format, Some(Format::CandumpLog | Format::CandumpScreen))
-            && let Some(delta) = frame.time
+        let mut parsed = self.parse_line(line, interest);
+        let candump = is_candump(self.foreign.or(self.format()));
+        if let Some(clock) = &mut self.deltas
+            && let Parsed::Frame(frame) = &mut parsed
+            && candump
         {
-            frame.time = Some(clock.next(delta));
+            // A frame nobody wants has no time decoded; its delta counts.
+            match frame.time {
+                Some(delta) => frame.time = Some(clock.next(delta)),
+                None => {
+                    if let Some(delta) = deltas::leading_time(line) {
+                        clock.next(delta);
+                    }
+                }
+            }
         }
         parsed
     }
@@ -401,17 +420,14 @@ mod tests {
             }
         }
         let mut time = |line: &str, interest: &Interest| at(&mut d, line, interest);
-        // Frames nobody wants still move the clock.
+        // Frames nobody wants get no time, but move the clock.
+        assert_eq!(time("(000.500000) can0 701#05", &Interest::none()), None);
         assert_eq!(
-            time("(000.500000) can0 701#05", &Interest::none()),
-            Some("0.500000".into())
-        );
-        assert_eq!(
-            time("(000.250000) can0 081#00", &Interest::none()),
+            time("(000.250000) can0 081#00", &Interest::all()),
             Some("0.750000".into())
         );
         assert_eq!(
-            time(" (001.000001)  can0  081   [1]  00", &Interest::none()),
+            time(" (001.000001)  can0  081   [1]  00", &Interest::all()),
             Some("1.750001".into()),
             "a screen line of the same trace sums on"
         );
@@ -427,10 +443,18 @@ mod tests {
             time("(000.000009) can0 081#00", &Interest::all()),
             Some("1.750010".into())
         );
+        // The id-first scan: plain frames move the clock, wanted ones get the sum.
+        let mut wanted = Interest::none();
+        wanted.add_standard(0x81);
         assert!(matches!(
-            d.scan(b"(000.1) can0 081#00", &Interest::all()),
-            Scan::Parse
+            d.scan(b"(000.100000) can0 701#05", &wanted),
+            Scan::Plain
         ));
+        match d.scan(b"(000.100000) can0 081#00", &wanted) {
+            Scan::Frame(f) => assert_eq!(f.time.map(|t| t.to_string()), Some("1.950010".into())),
+            other => panic!("{other:?}"),
+        }
+        // The hot loop cannot report each line's time: it is never run.
         assert_eq!(
             d.run(b"(000.1) can0 701#05\n", 100, &Interest::none())
                 .bytes,

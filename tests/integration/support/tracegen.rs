@@ -10,6 +10,8 @@ use std::io::{self, Write};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TraceFormat {
     CandumpLog,
+    /// `candump -L -td`: each time the delta to the previous frame.
+    CandumpDelta,
     Asc,
     /// pcapng as dumpcap writes a SocketCAN interface: one LINUX_SLL
     /// interface, microsecond times, each frame a 16-byte `can_frame`.
@@ -55,6 +57,7 @@ pub fn write_trace<W: Write>(
     let mut lines = 0u64;
     let mut emcy = 0u64;
     let mut micros: u64 = 0;
+    let mut previous: u64 = 0;
     let mut raised = [false; 128];
     let mut line = Vec::with_capacity(160);
     if format == TraceFormat::Asc {
@@ -115,11 +118,21 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         line.clear();
         match format {
             TraceFormat::CandumpLog => candump_line(&mut line, micros, id, &data[..len]),
+            TraceFormat::CandumpDelta => {
+                let _ = write!(
+                    line,
+                    "({:03}.{:06})",
+                    (micros - previous) / 1_000_000,
+                    (micros - previous) % 1_000_000
+                );
+                candump_frame(&mut line, id, &data[..len]);
+            }
             TraceFormat::Asc => asc_line(&mut line, micros, id, &data[..len]),
             TraceFormat::Pcapng => pcapng_packet(&mut line, micros, id, &data[..len]),
         }
         out.write_all(&line)?;
         written += line.len() as u64;
+        previous = micros;
         lines += 1;
     }
     if format == TraceFormat::Asc {
@@ -137,7 +150,13 @@ fn push_hex(line: &mut Vec<u8>, b: u8) {
 /// `(1700000000.123456) can0 181#1122334455667788`
 fn candump_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
     let secs = 1_700_000_000 + micros / 1_000_000;
-    let _ = write!(line, "({secs}.{:06}) can0 ", micros % 1_000_000);
+    let _ = write!(line, "({secs}.{:06})", micros % 1_000_000);
+    candump_frame(line, id, data);
+}
+
+/// ` can0 181#1122...` and the newline, after a candump time.
+fn candump_frame(line: &mut Vec<u8>, id: u32, data: &[u8]) {
+    line.extend_from_slice(b" can0 ");
     line.push(HEX[(id >> 8) as usize & 15]);
     line.push(HEX[(id >> 4) as usize & 15]);
     line.push(HEX[id as usize & 15]);
