@@ -11,7 +11,7 @@ use emcy_decode::{At, Emcy, NodeTimeline, Profile, Record, TraceReader};
 fn main() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);
     let path = args.next().unwrap_or_else(|| "fixtures/s300.log".into());
-    let node: u8 = args.next().map_or(Ok(1), |n| n.parse())?;
+    let node: u16 = args.next().map_or(Ok(1), |n| n.parse())?;
     let profile = Profile::builtin(&args.next().unwrap_or_else(|| "cia402".into()))
         .ok_or("no such built-in profile")?;
 

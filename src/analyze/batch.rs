@@ -5,6 +5,7 @@
 //! holds a file's events); big ones are read in order with block
 //! parallelism instead.
 
+use crate::canopen::NodeId;
 use std::collections::BTreeMap;
 use std::io;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -31,7 +32,7 @@ enum Recorded {
         line: u64,
         time: Option<Timestamp>,
         channel: String,
-        node: u8,
+        node: NodeId,
         cleared: Vec<u16>,
     },
     End,
@@ -42,7 +43,7 @@ struct OwnedEmcy {
     line: u64,
     time: Option<Timestamp>,
     channel: String,
-    node: u8,
+    node: NodeId,
     cob_id: u32,
     data: Vec<u8>,
     emcy: Emcy,

@@ -1,6 +1,7 @@
 //! The consumer: turns classified lines into timelines, events and counts,
 //! in line order, and hands events to the sink.
 
+use crate::canopen::NodeId;
 use std::borrow::Borrow;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -24,7 +25,7 @@ use crate::canopen::profile_choice::{NodeProfiles, ProfileSource, default_profil
 use crate::canopen::sdo;
 use crate::timeline::history::{ErrorHistory, History};
 use crate::timeline::{At, NodeTimeline, Step};
-use crate::trace::deltas::TimeMode;
+use crate::trace::deltas::{self, TimeMode};
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
@@ -51,7 +52,7 @@ struct ChannelNodes {
     /// The channel's index in the history.
     id: u32,
     /// Sorted by node id (1..=127).
-    nodes: Vec<(u8, NodeTimeline)>,
+    nodes: Vec<(NodeId, NodeTimeline)>,
 }
 
 /// How [`Nodes::index`] knows a channel: its name, shared, or for bytes
@@ -109,7 +110,7 @@ impl Nodes {
         }
     }
 
-    fn get(&mut self, raw: &[u8], node: u8) -> NodeSlot<'_> {
+    fn get(&mut self, raw: &[u8], node: NodeId) -> NodeSlot<'_> {
         let cached = self.last.filter(|&i| {
             self.channels
                 .get(i)
@@ -242,7 +243,7 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// as the timelines see it.
     clock: Option<(Timestamp, u64)>,
     /// EMCY ids other than 0x80 + node, to their node.
-    emcy_ids: HashMap<(u32, bool), u8>,
+    emcy_ids: HashMap<(u32, bool), NodeId>,
     /// First and last time of a decoded frame.
     first_time: Option<Timestamp>,
     last_time: Option<Timestamp>,
@@ -409,7 +410,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
 
     /// The node a data frame's EMCY id belongs to: a moved id first, then
     /// the pre-defined set (standard ids 0x081-0x0FF).
-    pub(super) fn emcy_node(&self, id: u32, extended: bool) -> Option<u8> {
+    pub(super) fn emcy_node(&self, id: u32, extended: bool) -> Option<NodeId> {
         self.emcy_ids
             .get(&(id, extended))
             .copied()
@@ -417,7 +418,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     }
 
     /// A node holds `value` in `object` (SDO upload or confirmed download).
-    fn object_value(&mut self, node: u8, object: sdo::Object, value: u32) {
+    fn object_value(&mut self, node: NodeId, object: sdo::Object, value: u32) {
         self.profiles.object_value(node, object, value);
         if object.index == sdo::COB_ID_EMCY
             && object.sub == 0
@@ -429,7 +430,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
 
     /// A node's EMCY id moved (object 0x1014 seen in the trace): decode
     /// frames on it from here on.
-    fn map_emcy_id(&mut self, id: u32, extended: bool, node: u8) {
+    fn map_emcy_id(&mut self, id: u32, extended: bool, node: NodeId) {
         if self.emcy_ids.insert((id, extended), node) == Some(node) {
             return;
         }
@@ -470,7 +471,15 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
                 at.line,
                 format!(
                     "time {time} is earlier than {previous} at line {line}: the trace's clock \
-                     went backwards (durations across this line are negative)"
+                     went backwards (durations across this line are negative){}",
+                    if self.opts.timestamps.is_none()
+                        && self.timestamps.is_none()
+                        && time.secs() < deltas::DELTA_BELOW_SECS
+                    {
+                        "; if these are candump -td deltas, --timestamps delta sums them"
+                    } else {
+                        ""
+                    }
                 ),
             );
         }

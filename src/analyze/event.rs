@@ -3,6 +3,7 @@
 //! these through [`Sink`](super::Sink); the JSON key names derived from
 //! them are a public contract (README).
 
+use crate::canopen::NodeId;
 use std::borrow::Cow;
 use std::sync::Arc;
 
@@ -26,7 +27,7 @@ pub struct EmcyEvent<'a> {
     pub line: u64,
     pub time: Option<Timestamp>,
     pub channel: &'a str,
-    pub node: u8,
+    pub node: NodeId,
     pub cob_id: u32,
     pub data: &'a [u8],
     pub emcy: &'a Emcy,
@@ -56,7 +57,7 @@ pub struct BootEvent<'a> {
     pub line: u64,
     pub time: Option<Timestamp>,
     pub channel: &'a str,
-    pub node: u8,
+    pub node: NodeId,
     pub cleared: &'a [u16],
 }
 
@@ -65,7 +66,7 @@ pub struct BootEvent<'a> {
 #[derive(Clone, Debug)]
 pub struct NodeReport {
     pub channel: String,
-    pub node: u8,
+    pub node: NodeId,
     pub state: State,
     pub active: Vec<u16>,
     pub emcy_count: u64,

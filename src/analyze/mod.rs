@@ -25,6 +25,7 @@ pub(crate) mod sink;
 #[cfg(test)]
 mod tests;
 
+use crate::canopen::NodeId;
 use std::io::{self, Read, Write};
 
 use crate::canopen::profile_choice::ProfileChoice;
@@ -52,8 +53,11 @@ pub struct Options {
     pub input_format: Option<Format>,
     /// `--timestamps`: what candump times are; `None` detects `-td` deltas.
     pub timestamps: Option<TimeMode>,
+    /// The input is a live stream or a followed file: nothing is read ahead
+    /// (it would wait for lines), so `-td` deltas are not detected.
+    pub live: bool,
     /// `--node`: report only these nodes (empty = all).
-    pub nodes: Vec<u8>,
+    pub nodes: Vec<NodeId>,
     /// `--channel`: report only these channels (empty = all).
     pub channels: Vec<String>,
     /// Diagnostics printed per input; the counts stay exact beyond it.
@@ -79,7 +83,7 @@ pub struct Options {
 pub struct EmcyId {
     pub id: u32,
     pub extended: bool,
-    pub node: u8,
+    pub node: NodeId,
 }
 
 impl Default for Options {
@@ -87,6 +91,7 @@ impl Default for Options {
         Options {
             input_format: None,
             timestamps: None,
+            live: false,
             nodes: Vec::new(),
             channels: Vec::new(),
             max_diagnostics: 20,
@@ -102,7 +107,7 @@ impl Default for Options {
 }
 
 impl Options {
-    pub(crate) fn selects(&self, channel: &str, node: u8) -> bool {
+    pub(crate) fn selects(&self, channel: &str, node: NodeId) -> bool {
         (self.nodes.is_empty() || self.nodes.contains(&node))
             && (self.channels.is_empty() || self.channels.iter().any(|c| c == channel))
     }
@@ -174,6 +179,7 @@ pub fn analyze_source<E: Write>(
     };
     let input_opts = Options {
         threads: threads(&opened),
+        live: mode != ReadMode::Finite,
         ..opts.clone()
     };
     let reader = std::mem::replace(&mut opened.reader, Box::new(io::empty()));
@@ -247,7 +253,7 @@ pub fn analyze<R: Read + Send, E: Write>(
             detector.read_deltas();
             Box::new(reader)
         }
-        None if candump => {
+        None if candump && !opts.live => {
             let (reader, evidence) = deltas::read_ahead(reader);
             if let Some(evidence) = evidence {
                 detector.read_deltas();

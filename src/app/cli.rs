@@ -1,6 +1,7 @@
 //! Command-line definitions. Flag names, JSON keys and exit codes are the
 //! contract users script against: change them only with a major version.
 
+use crate::canopen::NodeId;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
@@ -94,7 +95,7 @@ pub struct DecodeArgs {
 
     /// Report only these nodes (repeatable or comma-separated; decimal or 0x hex)
     #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
-    pub node: Vec<u8>,
+    pub node: Vec<NodeId>,
 
     /// Report only this channel (candump interface or ASC channel number; repeatable)
     #[arg(long, value_name = "NAME")]
@@ -383,7 +384,7 @@ pub struct CheckArgs {
 
     /// Accept every difference of this node, on any channel (repeatable or comma list)
     #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
-    pub allow_node: Vec<u8>,
+    pub allow_node: Vec<NodeId>,
 
     /// Rewrite the baseline from these traces after printing the differences; exit 0
     #[arg(long)]
@@ -545,11 +546,11 @@ fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
 }
 
 /// A CANopen node id, 1..=127, decimal or 0x hex.
-fn parse_node(s: &str) -> Result<u8, String> {
+fn parse_node(s: &str) -> Result<NodeId, String> {
     let t = s.trim();
     let value = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-        Some(hex) => u8::from_str_radix(hex, 16),
-        None => t.parse::<u8>(),
+        Some(hex) => NodeId::from_str_radix(hex, 16),
+        None => t.parse::<NodeId>(),
     };
     match value {
         Ok(n @ 1..=127) => Ok(n),

@@ -1,6 +1,7 @@
 //! Comparing a new record of traces with the baseline: one finding per
 //! difference, each a regression, an improvement or a change.
 
+use crate::canopen::NodeId;
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::Serialize;
@@ -12,7 +13,7 @@ use crate::canopen::codes;
 #[derive(Clone, Debug, Default)]
 pub struct Allow {
     pub codes: BTreeSet<u16>,
-    pub nodes: BTreeSet<u8>,
+    pub nodes: BTreeSet<NodeId>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
@@ -77,7 +78,7 @@ pub struct Finding {
     pub allowed: bool,
     pub file: String,
     pub channel: Option<String>,
-    pub node: Option<u8>,
+    pub node: Option<NodeId>,
     pub code: Option<Code>,
     /// The number now (raised count, line count) and in the baseline.
     pub count: Option<u64>,
@@ -109,7 +110,7 @@ pub struct Diff {
 #[derive(Clone, Copy)]
 struct Place<'a> {
     file: &'a str,
-    node: Option<(&'a str, u8)>,
+    node: Option<(&'a str, NodeId)>,
 }
 
 /// No counts.
@@ -272,7 +273,7 @@ fn compare_trace(c: &mut Collector<'_>, file: &str, old: &TraceEntry, new: &Trac
     for channel in channels {
         let o = old.nodes.get(channel).unwrap_or(&empty);
         let n = new.nodes.get(channel).unwrap_or(&empty);
-        let ids: BTreeSet<u8> = o.keys().chain(n.keys()).copied().collect();
+        let ids: BTreeSet<NodeId> = o.keys().chain(n.keys()).copied().collect();
         for id in ids {
             let at = Place {
                 file,
@@ -394,7 +395,7 @@ mod tests {
         }
     }
 
-    fn one(nodes: &[(u8, NodeEntry)]) -> Baseline {
+    fn one(nodes: &[(NodeId, NodeEntry)]) -> Baseline {
         let mut trace = TraceEntry::default();
         trace
             .nodes
@@ -422,7 +423,7 @@ mod tests {
             (3, node(&[(0x8130, 1, true)])),
         ]);
         let diff = compare(&old, &new, &Allow::default());
-        let kinds: Vec<(Option<u8>, Option<Code>, Kind, Severity)> = diff
+        let kinds: Vec<(Option<NodeId>, Option<Code>, Kind, Severity)> = diff
             .findings
             .iter()
             .map(|f| (f.node, f.code, f.kind, f.severity))

@@ -11,6 +11,7 @@ pub(crate) mod compare;
 pub(crate) mod key;
 pub(crate) mod text;
 
+use crate::canopen::NodeId;
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -41,7 +42,7 @@ pub struct TraceEntry {
     /// `candump`, `candump-screen`, `asc`, or null when no frame was found.
     pub format: Option<String>,
     /// Channel -> node -> what the node did.
-    pub nodes: BTreeMap<String, BTreeMap<u8, NodeEntry>>,
+    pub nodes: BTreeMap<String, BTreeMap<NodeId, NodeEntry>>,
 }
 
 /// The input counts of the JSON contract, in alphabetical order.
@@ -155,7 +156,7 @@ impl Baseline {
 impl TraceEntry {
     fn from_report(report: &InputReport) -> TraceEntry {
         let c = report.counts;
-        let mut nodes: BTreeMap<String, BTreeMap<u8, NodeEntry>> = BTreeMap::new();
+        let mut nodes: BTreeMap<String, BTreeMap<NodeId, NodeEntry>> = BTreeMap::new();
         for n in &report.nodes {
             let mut errors: BTreeMap<Code, ErrorEntry> = n
                 .stats

@@ -2,6 +2,7 @@
 //! only the frame itself. Checks that need the node's history (a reset while
 //! error-free) live in the timeline.
 
+use super::NodeId;
 use std::fmt;
 
 use super::codes::{self, Class, CodeInfo};
@@ -18,10 +19,10 @@ pub const LAST_EMCY_ID: u32 = 0x0FF;
 pub const NMT_ERROR_CONTROL_BASE: u32 = 0x700;
 
 /// The node an id of the pre-defined EMCY set belongs to.
-pub fn emcy_node(id: u32) -> Option<u8> {
+pub fn emcy_node(id: u32) -> Option<NodeId> {
     (FIRST_EMCY_ID..=LAST_EMCY_ID)
         .contains(&id)
-        .then(|| (id - EMCY_BASE) as u8)
+        .then(|| (id - EMCY_BASE) as NodeId)
 }
 
 /// Whether `id` is a node's NMT error control id (0x701-0x77F).
@@ -30,16 +31,16 @@ pub fn is_nmt_error_control(id: u32) -> bool {
 }
 
 /// The node a boot-up frame (0x700 + node, one byte 0x00) announces.
-pub fn boot_node(id: u32, data: &[u8]) -> Option<u8> {
+pub fn boot_node(id: u32, data: &[u8]) -> Option<NodeId> {
     let node = id.checked_sub(NMT_ERROR_CONTROL_BASE)?;
-    ((1..=127).contains(&node) && data == [0x00]).then_some(node as u8)
+    ((1..=127).contains(&node) && data == [0x00]).then_some(node as NodeId)
 }
 
 /// What a frame read by [`crate::TraceReader`] is to CANopen.
 impl CanFrame {
     /// The node whose EMCY this frame is, by the pre-defined connection
     /// set: a classic 11-bit data frame on 0x081-0x0FF (node = id - 0x80).
-    pub fn emcy_node(&self) -> Option<u8> {
+    pub fn emcy_node(&self) -> Option<NodeId> {
         if self.kind != FrameKind::Data || self.extended {
             return None;
         }
@@ -47,7 +48,7 @@ impl CanFrame {
     }
 
     /// The node an NMT boot-up frame (0x700 + node, one byte 0x00) announces.
-    pub fn boot_node(&self) -> Option<u8> {
+    pub fn boot_node(&self) -> Option<NodeId> {
         if self.kind != FrameKind::Data || self.extended {
             return None;
         }

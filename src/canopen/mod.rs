@@ -7,3 +7,8 @@ pub mod profile;
 pub mod profile_choice;
 pub mod register;
 pub mod sdo;
+
+/// A node: a CANopen node id (1 to 127, from the COB-ID), or an EtherCAT
+/// slave's station address for CANopen over EtherCAT (e.g. 1001), which
+/// does not fit a byte.
+pub type NodeId = u16;

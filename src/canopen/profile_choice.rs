@@ -3,6 +3,7 @@
 //! the node's identity as the trace shows it (SDO uploads of 0x1000 and
 //! 0x1018 sub 1), or the default, in that order.
 
+use super::NodeId;
 use std::path::PathBuf;
 
 use super::profile::{self, Profile};
@@ -13,7 +14,7 @@ use super::sdo::{self, Object};
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ProfileRequest {
     /// The node it is for; `None` for every node.
-    pub node: Option<u8>,
+    pub node: Option<NodeId>,
     /// A built-in profile's name or a user profile's.
     pub name: String,
 }
@@ -49,7 +50,7 @@ pub struct Chosen {
 #[derive(Clone, Debug, Default)]
 pub struct ProfileChoice {
     /// `--profile NODE=NAME`.
-    pub nodes: Vec<(u8, &'static Profile)>,
+    pub nodes: Vec<(NodeId, &'static Profile)>,
     /// `--profile NAME`: every node not named above.
     pub all: Option<&'static Profile>,
     /// `--profile-file FILE` not named by a `--profile` flag: every node not
@@ -84,7 +85,7 @@ impl<'c> NodeProfiles<'c> {
         }
     }
 
-    pub fn get(&self, node: u8) -> Chosen {
+    pub fn get(&self, node: NodeId) -> Chosen {
         let flag = |profile| Chosen {
             profile,
             source: ProfileSource::Flag,
@@ -115,7 +116,7 @@ impl<'c> NodeProfiles<'c> {
 
     /// Why the trace chose the node's profile ("vendor id 0x... (...)"), when
     /// it did and nothing on the command line overrode it.
-    pub fn reason(&self, node: u8) -> Option<&str> {
+    pub fn reason(&self, node: NodeId) -> Option<&str> {
         if self.get(node).source != ProfileSource::Trace {
             return None;
         }
@@ -127,7 +128,7 @@ impl<'c> NodeProfiles<'c> {
 
     /// A value the node holds (SDO upload or confirmed download): device
     /// type and vendor id choose its profile.
-    pub fn object_value(&mut self, node: u8, object: Object, value: u32) {
+    pub fn object_value(&mut self, node: NodeId, object: Object, value: u32) {
         let Some(id) = self.identity.get_mut(usize::from(node)) else {
             return;
         };
@@ -248,7 +249,7 @@ mod tests {
         );
     }
 
-    fn arg(node: Option<u8>, name: &str) -> ProfileRequest {
+    fn arg(node: Option<NodeId>, name: &str) -> ProfileRequest {
         ProfileRequest {
             node,
             name: name.to_string(),
@@ -267,7 +268,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(c.all.map(Profile::name), Some("cia301"));
-        let nodes: Vec<(u8, &str)> = c.nodes.iter().map(|(n, p)| (*n, p.name())).collect();
+        let nodes: Vec<(NodeId, &str)> = c.nodes.iter().map(|(n, p)| (*n, p.name())).collect();
         assert_eq!(nodes, [(5, "cia402")], "the last flag for a node wins");
         assert!(c.file.is_none());
         let err = resolve(&[arg(None, "nope")], &[]).unwrap_err().to_string();

@@ -4,6 +4,8 @@
 //! carry nothing the decoder needs (device type, vendor id and COB-ID EMCY
 //! all fit in four bytes) and are ignored.
 
+use super::NodeId;
+
 /// Server-to-client (response) ids are 0x580 + node.
 pub const RESPONSE_BASE: u32 = 0x580;
 /// Client-to-server (request) ids are 0x600 + node.
@@ -21,20 +23,20 @@ pub const IDENTITY: u16 = 0x1018;
 pub enum Sdo {
     /// Expedited upload response: the node reports `value`.
     Uploaded {
-        node: u8,
+        node: NodeId,
         object: Object,
         value: u32,
     },
     /// Expedited download request: a client writes `value` (not yet confirmed).
     Writing {
-        node: u8,
+        node: NodeId,
         object: Object,
         value: u32,
     },
     /// Download response: the node accepted the last write to `object`.
-    Written { node: u8, object: Object },
+    Written { node: NodeId, object: Object },
     /// Abort (either direction): a pending write to `object` failed.
-    Aborted { node: u8, object: Object },
+    Aborted { node: NodeId, object: Object },
 }
 
 /// An object dictionary entry.
@@ -91,7 +93,7 @@ pub fn parse(id: u32, data: &[u8]) -> Option<Sdo> {
     } else {
         return None;
     };
-    let node = node as u8;
+    let node = node as NodeId;
     // Every SDO frame is 8 bytes; a shorter one is not trusted.
     let &[cmd, lo, hi, sub, b4, b5, b6, b7] = data else {
         return None;
@@ -156,12 +158,12 @@ pub fn cob_id_emcy(value: u32) -> Option<(u32, bool)> {
 /// frames for other objects can be skipped without reading them.
 #[derive(Debug, Default)]
 pub struct Tracker {
-    pending: Vec<(u8, Object, u32)>,
+    pending: Vec<(NodeId, Object, u32)>,
 }
 
 impl Tracker {
     /// Feeds one SDO frame; returns an object value the node now holds.
-    pub fn feed(&mut self, sdo: Sdo) -> Option<(u8, Object, u32)> {
+    pub fn feed(&mut self, sdo: Sdo) -> Option<(NodeId, Object, u32)> {
         let (Sdo::Uploaded { object, .. }
         | Sdo::Writing { object, .. }
         | Sdo::Written { object, .. }

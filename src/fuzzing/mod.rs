@@ -12,6 +12,7 @@ mod lines;
 
 pub use lines::{Detector, Ids, Parser, Scanned};
 
+use crate::canopen::NodeId;
 use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
 use std::io::{self, Read};
@@ -618,12 +619,13 @@ impl Bytes<'_> {
 }
 
 const CHANNELS: [&str; 2] = ["can0", "can1"];
-const NODES: [u8; 4] = [1, 2, 3, 127];
+// 1001: an EtherCAT station address, past a byte (the spilled history keeps both).
+const NODES: [NodeId; 5] = [1, 2, 3, 127, 1001];
 
 /// One node of the model: its timeline and what the checks know about it.
 struct ModelNode {
     channel: u32,
-    node: u8,
+    node: NodeId,
     /// Every built-in profile decodes some node's frames.
     profile: &'static Profile,
     timeline: NodeTimeline,
@@ -833,7 +835,7 @@ pub fn decode_timeline(data: &[u8]) {
     let finished = history.finish(open);
     let mut merge = finished.merge();
     let mut seen = 0u64;
-    let mut previous: Option<(u32, u8, u64)> = None;
+    let mut previous: Option<(u32, NodeId, u64)> = None;
     while let Some(r) = merge.next_record() {
         seen += 1;
         let key = (r.channel, r.node, r.interval.seq);
@@ -1059,7 +1061,7 @@ fn check_step(
 /// SDO parsing and the write tracker.
 fn check_sdo(tracker: &mut sdo::Tracker, id: u32, data: &[u8]) {
     let parsed = sdo::parse(id, data);
-    let node_ok = |node: u8| (1..=127).contains(&node);
+    let node_ok = |node: NodeId| (1..=127).contains(&node);
     let Some(access) = parsed else {
         return;
     };

@@ -8,6 +8,7 @@
 //! draws all of them; `--format table` or `ndjson` list every event).
 
 use super::table::codes_list;
+use crate::canopen::NodeId;
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
@@ -25,7 +26,7 @@ struct Row {
     time: Option<Timestamp>,
     line: u64,
     channel: String,
-    node: u8,
+    node: NodeId,
     /// `None` for an NMT boot-up.
     code: Option<u16>,
     register: u8,

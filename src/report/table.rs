@@ -2,6 +2,7 @@
 //! with fixed columns, so a trace with a million events prints without holding
 //! them), then the node states and error timeline; at the end the input counts.
 
+use crate::canopen::NodeId;
 use std::borrow::Cow;
 use std::io::{self, Write};
 
@@ -153,7 +154,7 @@ impl<W: Write> TableReport<W> {
         Ok(l)
     }
 
-    fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: u8) -> String {
+    fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: NodeId) -> String {
         let mut s = String::with_capacity(64);
         self.push_prefix(&mut s, l, time, channel, node);
         s
@@ -166,7 +167,7 @@ impl<W: Write> TableReport<W> {
         l: Layout,
         time: Option<Timestamp>,
         channel: &str,
-        node: u8,
+        node: NodeId,
     ) {
         let start = line.len();
         self.times.push_opt(line, time);

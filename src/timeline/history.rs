@@ -8,6 +8,7 @@
 //! anonymous temporary file as one sorted run. Reports read the runs back with
 //! a k-way merge, node by node, so no renderer ever holds the whole history.
 
+use crate::canopen::NodeId;
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 use std::collections::binary_heap::PeekMut;
@@ -30,7 +31,7 @@ const MAX_BUCKETS: usize = 256 * 256;
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Record {
     pub channel: u32,
-    pub node: u8,
+    pub node: NodeId,
     pub interval: Interval,
 }
 
@@ -71,7 +72,7 @@ impl History {
         (self.names.len() - 1) as u32
     }
 
-    pub fn push(&mut self, channel: u32, node: u8, interval: Interval) {
+    pub fn push(&mut self, channel: u32, node: NodeId, interval: Interval) {
         self.buffer.push(Record {
             channel,
             node,
@@ -99,7 +100,9 @@ impl History {
         let ranks = Ranks::of(names, records.iter().map(|r| r.channel));
         let seq = |i: &u32| records.get(*i as usize).map_or(0, |r| r.interval.seq);
         let buckets = ranks.channels.len().max(1) * 256;
-        if buckets > MAX_BUCKETS {
+        // Buckets are per CANopen node id (below 256); a history with an
+        // EtherCAT station address past a byte sorts by comparison.
+        if buckets > MAX_BUCKETS || records.iter().any(|r| r.node > 255) {
             let mut keys: Vec<(u128, u32)> = records
                 .iter()
                 .enumerate()
@@ -276,7 +279,7 @@ impl Ranks {
     }
 
     fn key(&self, r: &Record) -> u128 {
-        (u128::from(self.rank_of(r)) << 72)
+        (u128::from(self.rank_of(r)) << 80)
             | (u128::from(r.node) << 64)
             | u128::from(r.interval.seq)
     }
@@ -492,7 +495,7 @@ impl<'h> Merge<'h> {
     }
 
     /// The intervals of one node, skipping any before it (unselected nodes).
-    pub fn node_errors<'m>(&'m mut self, channel: &'m str, node: u8) -> NodeErrors<'m, 'h> {
+    pub fn node_errors<'m>(&'m mut self, channel: &'m str, node: NodeId) -> NodeErrors<'m, 'h> {
         let history = self.history;
         NodeErrors {
             merge: self,
@@ -519,7 +522,7 @@ pub struct NodeErrors<'m, 'h> {
     merge: &'m mut Merge<'h>,
     /// The channel's rank, or where it would rank.
     channel: Result<u32, u32>,
-    node: u8,
+    node: NodeId,
 }
 
 impl Iterator for NodeErrors<'_, '_> {
@@ -548,10 +551,11 @@ impl Iterator for NodeErrors<'_, '_> {
 
 // ---- the record encoding ------------------------------------------------------
 
-/// channel u32, node u8, code u16, cleared_by u8, register u8, seq u64,
-/// start line u64, end line u64 (+ flag u8), start time and end time
-/// (flag u8, digits u8, secs u64, atto u64 each), status bit (flag u8, u8).
-const RECORD: usize = 4 + 1 + 2 + 1 + 1 + 8 + 8 + 9 + 18 + 18 + 2;
+/// channel u32, node's low byte, code u16, cleared_by u8, register u8, seq
+/// u64, start line u64, end line u64 (+ flag u8), start time and end time
+/// (flag u8, digits u8, secs u64, atto u64 each), status bit (flag u8, u8),
+/// node's high byte (an EtherCAT station address is 16 bits).
+const RECORD: usize = 4 + 1 + 2 + 1 + 1 + 8 + 8 + 9 + 18 + 18 + 2 + 1;
 
 fn put_time(out: &mut [u8], t: Option<Timestamp>) {
     match t {
@@ -569,7 +573,8 @@ fn put_time(out: &mut [u8], t: Option<Timestamp>) {
 fn encode(r: &Record, out: &mut [u8; RECORD]) {
     let iv = &r.interval;
     out[0..4].copy_from_slice(&r.channel.to_le_bytes());
-    out[4] = r.node;
+    let [node_low, node_high] = r.node.to_le_bytes();
+    out[4] = node_low;
     out[5..7].copy_from_slice(&iv.code.to_le_bytes());
     out[7] = match iv.cleared_by {
         None => 0,
@@ -587,6 +592,7 @@ fn encode(r: &Record, out: &mut [u8; RECORD]) {
     put_time(&mut out[52..70], iv.end.and_then(|e| e.time));
     out[70] = u8::from(iv.status_bit.is_some());
     out[71] = iv.status_bit.unwrap_or(0);
+    out[72] = node_high;
 }
 
 fn corrupt() -> io::Error {
@@ -639,7 +645,7 @@ fn decode(b: &[u8; RECORD]) -> io::Result<Record> {
     };
     Ok(Record {
         channel,
-        node: b[4],
+        node: NodeId::from_le_bytes([b[4], b[72]]),
         interval: Interval {
             seq: get_u64(b, 9),
             code,
@@ -701,13 +707,14 @@ mod tests {
 
     /// Pushes intervals of three nodes on two channels in close order and
     /// reads them back; the order must be the report order whatever spilled.
-    fn roundtrip(spill_at: usize) -> Vec<(String, u8, u64)> {
+    fn roundtrip(spill_at: usize) -> Vec<(String, NodeId, u64)> {
         let mut h = History::new(spill_at);
         let b = h.add_channel("can1");
         let a = h.add_channel("can0");
         let mut open = Vec::new();
         for seq in (0..300u64).rev() {
-            for (ch, node) in [(b, 5u8), (a, 9), (a, 2)] {
+            // 1001: a station address, whose high byte the spilled record keeps.
+            for (ch, node) in [(b, 1001), (a, 9), (a, 2)] {
                 let rec = Record {
                     channel: ch,
                     node,
@@ -724,7 +731,7 @@ mod tests {
     }
 
     /// (channel name, node, raise order) of every record, as merged.
-    fn read_back(hist: &ErrorHistory) -> Vec<(String, u8, u64)> {
+    fn read_back(hist: &ErrorHistory) -> Vec<(String, NodeId, u64)> {
         let mut m = hist.merge();
         let mut out = Vec::new();
         while let Some(r) = m.next_record() {
@@ -744,7 +751,7 @@ mod tests {
         assert_eq!(in_memory.len(), 900);
         assert_eq!(in_memory[0], ("can0".to_string(), 2, 0));
         assert_eq!(in_memory[300], ("can0".to_string(), 9, 0));
-        assert_eq!(in_memory[899], ("can1".to_string(), 5, 299));
+        assert_eq!(in_memory[899], ("can1".to_string(), 1001, 299));
         let mut sorted = in_memory.clone();
         sorted.sort();
         assert_eq!(in_memory, sorted);
@@ -777,7 +784,7 @@ mod tests {
         let mut h = History::new(5);
         let ch = h.add_channel("can0");
         for seq in 0..20 {
-            for node in [1u8, 2, 3] {
+            for node in [1, 2, 3] {
                 h.push(ch, node, interval(seq, 0x2310, true));
             }
         }
@@ -794,7 +801,7 @@ mod tests {
     /// Any push order, spill size and channel set (also more channels than
     /// the bucket sort takes, and channels sharing a name) reads back in
     /// report order: (channel name, node, raise order).
-    fn merged_in_report_order(pushes: &[(usize, u8)], channels: usize, spill_at: usize) {
+    fn merged_in_report_order(pushes: &[(usize, NodeId)], channels: usize, spill_at: usize) {
         let mut h = History::new(spill_at);
         let ids: Vec<u32> = (0..channels)
             .map(|c| h.add_channel(format!("can{}", c % 300)))
@@ -813,7 +820,9 @@ mod tests {
 
     #[test]
     fn many_channels_sort_without_buckets() {
-        let pushes: Vec<(usize, u8)> = (0..2000).map(|i| (i * 7 % 400, (i % 5) as u8)).collect();
+        let pushes: Vec<(usize, NodeId)> = (0..2000)
+            .map(|i| (i * 7 % 400, (i % 5) as NodeId * 300))
+            .collect();
         merged_in_report_order(&pushes, 400, 300);
         merged_in_report_order(&pushes, 400, usize::MAX);
     }
@@ -821,7 +830,7 @@ mod tests {
     proptest::proptest! {
         #[test]
         fn any_history_merges_in_report_order(
-            pushes in proptest::collection::vec((0usize..8, 0u8..4), 0..400),
+            pushes in proptest::collection::vec((0usize..8, 0u16..1100), 0..400),
             channels in 1usize..5,
             spill_at in 1usize..64,
         ) {

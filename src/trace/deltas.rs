@@ -38,19 +38,19 @@ impl TimeMode {
     }
 }
 
-/// Lines at the start of the input looked at: enough to see deltas jitter,
-/// few enough that a live stream (`candump -td can0 | emcy-decode -`)
-/// starts at once. The sample is the same however the input arrives (a
-/// block or a byte at a time), so the decision is too.
+/// Lines at the start of the input looked at: enough to see deltas jitter.
+/// The sample is the same however the input arrives (a block or a byte at
+/// a time), so the decision is too.
 pub const SAMPLE_LINES: usize = 16;
-/// Bytes at the start of the input the sample lines must lie in.
+/// Bytes at the start of the input the sample lines must lie in: what
+/// [`read_ahead`] reads at most.
 pub const SAMPLE_BYTES: usize = 64 * 1024;
 /// Times needed before the sample can prove anything.
 const MIN_TIMES: usize = 8;
 /// A time at or above this is a date (Unix time), never a delta: candump
 /// prints deltas with 3 integer digits, and a gap of over a day between two
 /// frames is not what a `-td` trace is made of.
-const DELTA_BELOW_SECS: u64 = 100_000;
+pub const DELTA_BELOW_SECS: u64 = 100_000;
 
 /// Why a sample was read as deltas: how many of its consecutive times
 /// decreased, out of how many pairs.
@@ -123,9 +123,11 @@ impl<R: Read> Read for ReadAhead<R> {
     }
 }
 
-/// Reads the sample of [`sniff`] from the start of `input` (no more than
-/// its lines, or [`SAMPLE_BYTES`], or to the end) and decides: the input
-/// as it was, and the evidence when its times are deltas.
+/// Reads the sample of [`sniff`] from the start of `input` (its first
+/// [`SAMPLE_LINES`] lines, or [`SAMPLE_BYTES`], or to the end, however
+/// the reads come) and decides: the input as it was, and the evidence when
+/// its times are deltas. For inputs that are read to their end: a live
+/// stream would wait here for 16 lines before its first event.
 pub fn read_ahead<R: Read>(mut input: R) -> (ReadAhead<R>, Option<Evidence>) {
     let mut head = Vec::new();
     let mut error = None;
@@ -314,20 +316,19 @@ mod tests {
         }
     }
 
-    /// A reader that hands out one byte per read, then fails.
-    struct Trickle<'a>(&'a [u8]);
+    /// A reader that hands out `n` bytes per read, then fails.
+    struct Trickle<'a>(&'a [u8], usize);
 
     impl Read for Trickle<'_> {
         fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-            match (self.0.split_first(), buf.first_mut()) {
-                (Some((b, rest)), Some(out)) => {
-                    *out = *b;
-                    self.0 = rest;
-                    Ok(1)
-                }
-                (None, _) => Err(io::Error::other("gone")),
-                (_, None) => Ok(0),
+            if self.0.is_empty() {
+                return Err(io::Error::other("gone"));
             }
+            let n = self.1.min(buf.len()).min(self.0.len());
+            let (head, rest) = self.0.split_at(n);
+            buf[..n].copy_from_slice(head);
+            self.0 = rest;
+            Ok(n)
         }
     }
 
@@ -335,26 +336,31 @@ mod tests {
     fn read_ahead_decides_the_same_however_the_bytes_come_and_gives_them_all_back() {
         let mut text = screen(&JITTER);
         text.push_str(&screen(&["000.010000"; 30]));
-        let whole = read_ahead(text.as_bytes());
-        let trickled = read_ahead(Trickle(text.as_bytes()));
-        assert_eq!(whole.1, trickled.1);
-        assert!(whole.1.is_some());
-        let (mut ahead, _) = trickled;
-        let mut back = Vec::new();
-        let err = ahead
-            .read_to_end(&mut back)
-            .expect_err("the error comes after the bytes");
-        assert_eq!(err.to_string(), "gone");
-        assert_eq!(back, text.as_bytes());
-        // Only the sample is read ahead: 16 lines here, at one byte a read.
-        let (ahead, _) = read_ahead(Trickle(text.as_bytes()));
-        let sample: usize = text
-            .split_inclusive('\n')
-            .take(SAMPLE_LINES)
-            .map(str::len)
-            .sum();
-        assert_eq!(ahead.head.get_ref().len(), sample);
-        // The sample ends at 16 lines: jitter after it proves nothing.
+        let (_, whole) = read_ahead(text.as_bytes());
+        assert!(whole.is_some());
+        for step in [1, 3, 40, 4096] {
+            let (mut ahead, evidence) = read_ahead(Trickle(text.as_bytes(), step));
+            assert_eq!(evidence, whole, "{step} bytes a read");
+            // Only the sample is read ahead.
+            let sample: usize = text
+                .split_inclusive('\n')
+                .take(SAMPLE_LINES)
+                .map(str::len)
+                .sum();
+            assert!(ahead.head.get_ref().len() >= sample.min(text.len()));
+            assert!(ahead.head.get_ref().len() < sample + step);
+            let mut back = Vec::new();
+            let err = ahead
+                .read_to_end(&mut back)
+                .expect_err("the error comes after the bytes");
+            assert_eq!(err.to_string(), "gone");
+            assert_eq!(back, text.as_bytes());
+        }
+        // An error on the first read comes back after nothing.
+        let (mut ahead, evidence) = read_ahead(Trickle(b"", 1));
+        assert_eq!(evidence, None);
+        assert!(ahead.read(&mut [0u8; 4]).is_err());
+        // Only the first 16 lines count: jitter after them proves nothing.
         let mut late = screen(&["000.010000"; 16]);
         late.push_str(&screen(&JITTER));
         assert_eq!(read_ahead(late.as_bytes()).1, None);

@@ -713,7 +713,8 @@ fn timestamps_going_backwards_get_a_diagnostic_and_a_negative_duration() {
     assert_eq!(
         String::from_utf8(out.stderr).unwrap(),
         "<stdin>:2: time 4.500000 is earlier than 10.000000 at line 1: the trace's clock \
-         went backwards (durations across this line are negative)\n"
+         went backwards (durations across this line are negative); if these are candump -td \
+         deltas, --timestamps delta sums them\n"
     );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("\"duration\":-5.500000,"), "{text}");

@@ -8,7 +8,7 @@ use std::fs::File;
 use emcy_decode::{Record, TimeMode, TraceReader};
 use serde_json::Value;
 
-use crate::support::{PLACE, TIMES, emcy_decode, ndjson, semantic};
+use crate::support::{PLACE, TIMES, binary, emcy_decode, ndjson, semantic};
 
 /// The `"time"` texts of the EMCY events in ndjson output, exactly as
 /// printed (a JSON number read as f64 would round them).
@@ -111,6 +111,10 @@ fn timestamps_absolute_reads_deltas_as_written() {
     let (out, err) = run(&["--timestamps", "absolute", "fixtures/s300.td.txt"]);
     assert!(!err.contains("deltas and summed"), "{err}");
     assert!(err.contains("went backwards"), "{err}");
+    assert!(
+        !err.contains("--timestamps delta sums"),
+        "said, so no hint: {err}"
+    );
     assert!(input(&out).get("timestamps").is_none());
     assert_eq!(
         event_times(&out).last().map(String::as_str),
@@ -146,13 +150,49 @@ fn equal_deltas_are_not_detected_and_timestamps_delta_sums_them() {
     assert_eq!(input(&summed)["timestamps"], "delta");
 }
 
-/// A -td trace on stdin (a pipe) is detected as from a file.
+/// A live stream is not read ahead (its first event would wait for 16
+/// lines): deltas there are said with the flag, and a time going backwards
+/// says so.
 #[test]
-fn a_piped_td_trace_is_detected() {
-    let out = emcy_decode()
+fn a_live_td_stream_is_summed_when_said_and_hinted_when_not() {
+    let trace = std::fs::read_to_string("fixtures/s300.td.txt").expect("fixture");
+    let read = |flags: &[&str]| {
+        let out = emcy_decode()
+            .args(["--format", "ndjson", "-"])
+            .args(flags)
+            .write_stdin(trace.clone())
+            .output()
+            .expect("runs");
+        (
+            String::from_utf8(out.stdout).expect("utf-8"),
+            String::from_utf8(out.stderr).expect("utf-8"),
+        )
+    };
+    let (out, err) = read(&[]);
+    assert_eq!(
+        event_times(&out).last().map(String::as_str),
+        Some("0.900000")
+    );
+    assert!(
+        err.contains("went backwards (durations across this line are negative); if these are candump -td deltas, --timestamps delta sums them"),
+        "{err}"
+    );
+    let (out, err) = read(&["--timestamps", "delta"]);
+    assert_eq!(
+        event_times(&out).last().map(String::as_str),
+        Some("7.000000")
+    );
+    assert!(err.is_empty(), "{err}");
+    assert_eq!(input(&out)["timestamps"], "delta");
+}
+
+/// A -td trace on stdin redirected from a file (`< trace.txt`: not a
+/// stream) is detected as from a file.
+#[test]
+fn a_td_trace_redirected_to_stdin_is_detected() {
+    let out = binary()
         .args(["--format", "ndjson", "-"])
-        .pipe_stdin("fixtures/s300.td.txt")
-        .expect("fixture")
+        .stdin(File::open("fixtures/s300.td.txt").expect("fixture"))
         .output()
         .expect("runs");
     let stdout = String::from_utf8(out.stdout).expect("utf-8");

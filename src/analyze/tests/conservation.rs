@@ -20,6 +20,7 @@
 //! bases) to be malformed, so the oracle never counts a line as garbage that
 //! a reader could take for a frame.
 
+use crate::canopen::NodeId;
 use std::io::{self, Read, Write};
 
 use super::frames::*;
@@ -446,7 +447,7 @@ struct EmcyOut<'a> {
     #[serde(borrow)]
     time: &'a RawValue,
     channel: String,
-    node: u8,
+    node: NodeId,
     cob_id: u32,
     data: String,
 }
@@ -456,7 +457,7 @@ struct Event {
     line: u64,
     time: String,
     channel: String,
-    node: u8,
+    node: NodeId,
     cob_id: u32,
     data: String,
 }
@@ -548,7 +549,7 @@ fn check(case: &Case) -> Result<(), TestCaseError> {
                         line,
                         time: time.clone().unwrap_or_else(|| "null".to_string()),
                         channel: channel.clone(),
-                        node: (f.id - 0x80) as u8,
+                        node: (f.id - 0x80) as NodeId,
                         cob_id: f.id,
                         data: HexBytes(&f.data).to_string(),
                     });

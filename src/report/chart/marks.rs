@@ -2,6 +2,7 @@
 //! the axis while the input is read, and coalesced as they come so memory
 //! stays bounded by the chart's pixels, not by the trace.
 
+use crate::canopen::NodeId;
 use std::collections::BTreeMap;
 
 use crate::timeline::At;
@@ -120,7 +121,7 @@ pub(super) struct Streamed {
     pub(super) timed: Option<bool>,
     /// Marker values are seconds after this time (timed inputs).
     pub(super) origin: Option<Timestamp>,
-    pub(super) lanes: BTreeMap<String, BTreeMap<u8, LaneMarks>>,
+    pub(super) lanes: BTreeMap<String, BTreeMap<NodeId, LaneMarks>>,
     pub(super) lo: Option<f64>,
     pub(super) hi: Option<f64>,
     /// Events that could not be placed (no time in a timed trace).
@@ -132,7 +133,7 @@ impl Streamed {
     pub(super) fn mark(
         &mut self,
         channel: &str,
-        node: u8,
+        node: NodeId,
         time: Option<Timestamp>,
         line: u64,
         mark: Mark,

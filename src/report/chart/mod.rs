@@ -34,6 +34,7 @@ mod marks;
 mod style;
 mod text;
 
+use crate::canopen::NodeId;
 use std::io;
 
 use crate::analyze::{BootEvent, EmcyEvent, InputReport, NodeReport};
@@ -116,7 +117,7 @@ fn lane_label(node: &NodeReport) -> LaneLabel {
 }
 
 /// Key of a lane in the HTML filter: `channel/node`.
-pub(super) fn lane_key(channel: &str, node: u8) -> String {
+pub(super) fn lane_key(channel: &str, node: NodeId) -> String {
     format!("{channel}/{node}")
 }
 
