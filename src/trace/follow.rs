@@ -68,6 +68,9 @@ pub(crate) struct Follow {
     scratch: Vec<u8>,
     /// Bytes read since the last newline: an unfinished line.
     unfinished: u64,
+    /// A NUL byte was read: a binary trace (BLF, pcap, MF4; text traces
+    /// have none), which has no lines to finish or cut.
+    binary: bool,
     /// A new file found at the path, read once `file` is finished.
     next: Option<(File, Option<FileId>)>,
     /// `file` had no more data: look at the path before reading on.
@@ -94,6 +97,7 @@ impl Follow {
             tail: Vec::new(),
             scratch: Vec::new(),
             unfinished: 0,
+            binary: false,
             next: None,
             at_end: false,
             owe_newline: false,
@@ -118,7 +122,9 @@ impl Follow {
     fn took(&mut self, data: &[u8]) {
         self.pos += data.len() as u64;
         self.passed = true;
+        self.binary = self.binary || memchr::memchr(0, data).is_some();
         self.unfinished = match memchr::memrchr(b'\n', data) {
+            _ if self.binary => 0,
             Some(i) => (data.len() - i - 1) as u64,
             None => self.unfinished + data.len() as u64,
         };
@@ -372,6 +378,30 @@ mod tests {
         assert_eq!(read_n(&mut f, 5), "\ntwo\n");
         let notes = notes.lock().unwrap();
         assert!(notes[0].contains("(2 bytes, no newline)"), "{notes:?}");
+    }
+
+    /// A binary trace (a NUL byte in it) has no lines: a truncation gets
+    /// no newline between the files and a cancel no note about a line.
+    #[test]
+    fn a_binary_file_is_never_cut_into_lines() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("can.pcap");
+        fs::write(&path, b"PCAP\x00\x00ab").unwrap();
+        let (mut f, notes, _) = follow(&path);
+        assert_eq!(read_n(&mut f, 8), "PCAP\0\0ab");
+        fs::write(&path, b"cd").unwrap();
+        assert_eq!(read_n(&mut f, 2), "cd", "no newline put in");
+        {
+            let notes = notes.lock().unwrap();
+            assert!(notes[0].contains("truncated"), "{notes:?}");
+            assert!(!notes[0].contains("line"), "{notes:?}");
+        }
+        fs::write(&path, b"\x00x").unwrap();
+        let (mut f, notes, cancel) = follow(&path);
+        assert_eq!(read_n(&mut f, 2), "\0x");
+        cancel.cancel();
+        assert!(f.read(&mut [0u8; 8]).is_err());
+        assert!(notes.lock().unwrap().is_empty(), "no line was cut");
     }
 
     #[test]

@@ -355,3 +355,55 @@ fn the_library_reads_captures_packet_by_packet() {
     );
     assert!(Path::new("scripts/make_pcap_fixtures.py").exists());
 }
+
+/// `--follow` on a capture that grows (dumpcap writing it): each event is
+/// printed as its packet is written, not held for the byte-order sample or
+/// until Ctrl-C, and Ctrl-C says nothing about lines (a capture has none).
+#[cfg(unix)]
+#[test]
+fn a_followed_capture_prints_events_as_it_grows() {
+    use crate::live::{WAIT, exit_within_wait, interrupt, lines_of, spawn};
+
+    let whole = std::fs::read("fixtures/s300.pcap").expect("fixture");
+    // The pcap header and the first 8 packets (16-byte record header and
+    // 16-byte frame each): up to the boot-up and before the first EMCY.
+    let cut = 24 + 8 * 32;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("live.pcap");
+    std::fs::write(&path, &whole[..cut]).expect("write");
+    let mut child = spawn(&[
+        "--follow",
+        "--format",
+        "ndjson",
+        path.to_str().expect("utf-8"),
+    ]);
+    let out = lines_of(child.stdout.take().expect("stdout"));
+    let err = lines_of(child.stderr.take().expect("stderr"));
+    let next = || -> Value {
+        let line = out
+            .recv_timeout(WAIT)
+            .expect("an event while the capture grows");
+        serde_json::from_str(&line).expect("JSON")
+    };
+    assert_eq!(
+        next()["type"],
+        "boot",
+        "the boot-up, before more is written"
+    );
+    let mut file = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&path)
+        .expect("open");
+    file.write_all(&whole[cut..]).expect("append");
+    drop(file);
+    let mut emcy = 0;
+    while emcy < 7 {
+        if next()["type"] == "emcy" {
+            emcy += 1;
+        }
+    }
+    interrupt(&child);
+    assert_eq!(exit_within_wait(&mut child, "--follow"), Some(130));
+    let notes: Vec<String> = err.try_iter().collect();
+    assert!(!notes.iter().any(|n| n.contains("line")), "{notes:?}");
+}

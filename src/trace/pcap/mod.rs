@@ -26,8 +26,10 @@
 //! Link type 227 defines its id word as big-endian, but some writers
 //! (scapy) store it little-endian. The first packets of that link type
 //! decide which it is (see [`packet::evidence`]): they are held, at most
-//! [`SAMPLE`] of them with what came between (bounded), and read once the
-//! order is known; a note says when it is little-endian.
+//! [`SAMPLE`] of them with what came between (bounded), until the order is
+//! known: at once when one order makes no packet impossible and the other
+//! two (a live capture is not held for 32 packets), else after the sample.
+//! A note says when it is little-endian.
 //!
 //! Speed: frames on ids the caller does not want are only validated and
 //! counted, in a hot loop ([`PcapReader::advance`] with an interest) that
@@ -898,7 +900,13 @@ impl<R: Read> PcapReader<R> {
         }
         self.held_bytes += held_size(&item, &channel);
         self.held.push_back((item, channel));
-        if self.sampled >= SAMPLE
+        let [big, little] = self.evidence;
+        // Clear evidence decides at once, so a live capture or a followed
+        // file is not held for 32 packets: one order with no impossible
+        // packet, the other with two.
+        let clear = (big == 0 && little >= 2) || (little == 0 && big >= 2);
+        if clear
+            || self.sampled >= SAMPLE
             || self.held.len() >= MAX_HELD
             || self.held_bytes >= MAX_HELD_BYTES
         {
