@@ -122,8 +122,22 @@ fn timestamps_absolute_reads_deltas_as_written() {
     );
 }
 
-/// Equal deltas never go backwards: nothing proves them, so they are read
-/// as written unless the user says what they are.
+/// `trace` piped to the binary (a live stream) with `flags`: (stdout, stderr).
+fn piped(trace: &str, flags: &[&str]) -> (String, String) {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "-"])
+        .args(flags)
+        .write_stdin(trace.to_string())
+        .output()
+        .expect("runs");
+    (
+        String::from_utf8(out.stdout).expect("utf-8"),
+        String::from_utf8(out.stderr).expect("utf-8"),
+    )
+}
+
+/// Equal deltas never go backwards: nothing proves them, so a file of
+/// them is read as written unless the user says what they are.
 #[test]
 fn equal_deltas_are_not_detected_and_timestamps_delta_sums_them() {
     let mut trace = String::new();
@@ -135,17 +149,13 @@ fn equal_deltas_are_not_detected_and_timestamps_delta_sums_them() {
         };
         writeln!(trace, "(000.100000) can0 {frame}").unwrap();
     }
-    let read = |flags: &[&str]| {
-        let out = emcy_decode()
-            .args(["--format", "ndjson", "-"])
-            .args(flags)
-            .write_stdin(trace.clone())
-            .output()
-            .expect("runs");
-        String::from_utf8(out.stdout).expect("utf-8")
-    };
-    assert_eq!(event_times(&read(&[])), ["0.100000"]);
-    let summed = read(&["--timestamps", "delta"]);
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("equal.td.log");
+    std::fs::write(&path, &trace).expect("write");
+    let (out, err) = run(&[path.to_str().expect("utf-8")]);
+    assert_eq!(event_times(&out), ["0.100000"]);
+    assert!(err.is_empty(), "{err}");
+    let (summed, _) = piped(&trace, &["--timestamps", "delta"]);
     assert_eq!(event_times(&summed), ["1.100000"]);
     assert_eq!(input(&summed)["timestamps"], "delta");
 }
@@ -156,18 +166,7 @@ fn equal_deltas_are_not_detected_and_timestamps_delta_sums_them() {
 #[test]
 fn a_live_td_stream_is_summed_when_said_and_hinted_when_not() {
     let trace = std::fs::read_to_string("fixtures/s300.td.txt").expect("fixture");
-    let read = |flags: &[&str]| {
-        let out = emcy_decode()
-            .args(["--format", "ndjson", "-"])
-            .args(flags)
-            .write_stdin(trace.clone())
-            .output()
-            .expect("runs");
-        (
-            String::from_utf8(out.stdout).expect("utf-8"),
-            String::from_utf8(out.stderr).expect("utf-8"),
-        )
-    };
+    let read = |flags: &[&str]| piped(&trace, flags);
     let (out, err) = read(&[]);
     assert_eq!(
         event_times(&out).last().map(String::as_str),
