@@ -8,6 +8,7 @@
 
 pub mod asc;
 pub mod blf;
+pub mod busmaster;
 pub mod cancel;
 pub mod candump_log;
 pub mod candump_screen;
@@ -38,6 +39,8 @@ pub enum Format {
     Asc,
     /// PEAK TRC (PCAN-View, PCAN-Explorer), versions 1.0 to 2.1.
     Trc,
+    /// BUSMASTER log (`***BUSMASTER Ver 2.0.0***`, `14:19:11:4184 Tx 1 0x099 s 8 ...`).
+    Busmaster,
     /// Vector BLF, binary: read object by object, not line by line, and
     /// detected by its `LOGG` magic, so it is not in [`Format::ALL`].
     Blf,
@@ -51,11 +54,12 @@ pub enum Format {
 
 impl Format {
     /// The text formats, read line by line and detected from their lines.
-    pub const ALL: [Format; 4] = [
+    pub const ALL: [Format; 5] = [
         Format::CandumpLog,
         Format::CandumpScreen,
         Format::Asc,
         Format::Trc,
+        Format::Busmaster,
     ];
 
     /// The name used on the command line and in the `format` JSON key.
@@ -65,6 +69,7 @@ impl Format {
             Format::CandumpScreen => "candump-screen",
             Format::Asc => "asc",
             Format::Trc => "trc",
+            Format::Busmaster => "busmaster",
             Format::Blf => "blf",
             Format::Pcap => "pcap",
             Format::Pcapng => "pcapng",
@@ -85,6 +90,7 @@ impl Format {
             }
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
             Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
+            Format::Busmaster => AnyParser::Busmaster(busmaster::BusmasterParser::new()),
             Format::Blf | Format::Pcap | Format::Pcapng => AnyParser::Binary(BinaryParser(self)),
         }
     }
@@ -498,6 +504,7 @@ pub enum AnyParser {
     CandumpScreen(candump_screen::CandumpScreenParser),
     Asc(asc::AscParser),
     Trc(trc::TrcParser),
+    Busmaster(busmaster::BusmasterParser),
     Binary(BinaryParser),
 }
 
@@ -508,6 +515,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.format(),
             AnyParser::Asc(p) => p.format(),
             AnyParser::Trc(p) => p.format(),
+            AnyParser::Busmaster(p) => p.format(),
             AnyParser::Binary(p) => p.format(),
         }
     }
@@ -519,6 +527,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.parse(line, interest),
             AnyParser::Asc(p) => p.parse(line, interest),
             AnyParser::Trc(p) => p.parse(line, interest),
+            AnyParser::Busmaster(p) => p.parse(line, interest),
             AnyParser::Binary(p) => p.parse(line, interest),
         }
     }
@@ -529,6 +538,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.take_warning(),
             AnyParser::Asc(p) => p.take_warning(),
             AnyParser::Trc(p) => p.take_warning(),
+            AnyParser::Busmaster(p) => p.take_warning(),
             AnyParser::Binary(p) => p.take_warning(),
         }
     }
@@ -539,6 +549,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.identified(),
             AnyParser::Asc(p) => p.identified(),
             AnyParser::Trc(p) => p.identified(),
+            AnyParser::Busmaster(p) => p.identified(),
             AnyParser::Binary(p) => p.identified(),
         }
     }
@@ -549,6 +560,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.context(),
             AnyParser::Asc(p) => p.context(),
             AnyParser::Trc(p) => p.context(),
+            AnyParser::Busmaster(p) => p.context(),
             AnyParser::Binary(p) => p.context(),
         }
     }
@@ -560,6 +572,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest),
             AnyParser::Asc(p) => p.run(bytes, max_line, interest),
             AnyParser::Trc(p) => p.run(bytes, max_line, interest),
+            AnyParser::Busmaster(p) => p.run(bytes, max_line, interest),
             AnyParser::Binary(p) => p.run(bytes, max_line, interest),
         }
     }
@@ -570,6 +583,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.scan(line, interest),
             AnyParser::Asc(p) => p.scan(line, interest),
             AnyParser::Trc(p) => p.scan(line, interest),
+            AnyParser::Busmaster(p) => p.scan(line, interest),
             AnyParser::Binary(p) => p.scan(line, interest),
         }
     }

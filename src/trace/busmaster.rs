@@ -1,0 +1,748 @@
+//! BUSMASTER log files (`.log`, versions 1.6 to 2.4 seen), which CANopen
+//! users paste into bug reports:
+//!
+//! ```text
+//! ***BUSMASTER Ver 2.0.0***
+//! ***PROTOCOL CAN***
+//! ***NOTE: PLEASE DO NOT EDIT THIS DOCUMENT***
+//! ***[START LOGGING SESSION]***
+//! ***START DATE AND TIME 20:11:2013 14:19:9:538***
+//! ***HEX***
+//! ***SYSTEM MODE***
+//! ***<Time><Tx/Rx><Channel><CAN ID><Type><DLC><DataBytes>***
+//! 14:19:11:4184 Tx 1 0x099 s 8 00 00 00 00 00 00 00 00
+//! 17:42:08:8830 Tx 1 0x103 xr 8 00 00 00 00 00 00 00 00
+//! ***END DATE AND TIME 20:11:2013 14:19:24:711***
+//! ***[STOP LOGGING SESSION]***
+//! ```
+//!
+//! Every `***...***` line is a header (skipped). A file is a run of
+//! sessions, each from `***BUSMASTER Ver` (or `***[START LOGGING SESSION]***`)
+//! on; a session starts with nothing known and its headers set:
+//!
+//! - the number base of ids and data bytes: `***HEX***` or `***DEC***`. The
+//!   data length is always decimal. Older writers (1.6.3, the 2.2 format
+//!   converter) write no base line: then the numbers decide (see
+//!   [`Base::from_byte_width`]), once per session.
+//! - the time mode: `***SYSTEM MODE***` (time of day), `***ABSOLUTE MODE***`
+//!   (time since logging started) or `***RELATIVE MODE***` (each stamp the
+//!   delta to the previous frame). Without a mode line times are read as
+//!   the time of day (what the writers without one wrote).
+//! - the start date (`***START DATE AND TIME d:m:yyyy h:m:s:ms***`): system
+//!   times are that day's time of day, as UTC seconds since the Unix epoch
+//!   (the file does not say its zone, as TRC). A time more than 12 hours
+//!   before the session's start time is on the next day (a session across
+//!   midnight); 12 hours, not any earlier time, because Tx and Rx copies of
+//!   one frame are written a few 100 us out of order and one writer (2.2)
+//!   wrote start times on a 12-hour clock. Without a date, system times are
+//!   seconds since midnight.
+//! - the protocol: `***PROTOCOL CAN***`, `J1939` (its own line layout) or
+//!   another bus (`LIN`: its lines are not CAN frames, skipped).
+//!
+//! Times are `H:M:S:F`, fields not always zero-padded: up to version 2.2, F
+//! is 4 digits of 1/10000 s; version 2.4 writes milliseconds without padding
+//! (`22:20:15:2` is 15.002 s, by the 10 ms steps around it), so a field of
+//! 1 to 3 digits is milliseconds.
+//!
+//! Frame types: `s` and `x` (11- and 29-bit data), `sr` and `xr` (remote:
+//! the DLC is the requested length, data bytes may follow and are ignored),
+//! `s-fd` and `x-fd` (CAN FD, the length a byte count), and `ERR...` (error
+//! frames). Rx and Tx are both frames; the channel is kept as written.
+
+use super::{
+    Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
+};
+use super::{hex, is_blank, trim_start};
+
+const STANDARD_MAX: u32 = 0x7FF;
+const EXTENDED_MAX: u32 = 0x1FFF_FFFF;
+const SECS_PER_DAY: u64 = 86_400;
+
+/// CAN FD payload lengths.
+const FD_LEN: [u8; 16] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64];
+
+/// Number base of ids and data bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Base {
+    Hex,
+    Dec,
+    /// No `***HEX***`/`***DEC***` line in this session and no data byte
+    /// read yet that tells.
+    Undecided,
+}
+
+impl Base {
+    /// The base a data byte's width proves. BUSMASTER writes a byte as two
+    /// hex digits (`%02X`) in HEX mode and as three decimal digits (`%03d`,
+    /// `000`-`255`) in DEC mode: three digits cannot be a hex byte (`153`
+    /// would be 0x153, over 255), and a decimal byte is never two digits
+    /// wide. So the first data byte of a session without a base line
+    /// decides the session.
+    fn from_byte_width(token: &[u8]) -> Option<Base> {
+        match token.len() {
+            2 => Some(Base::Hex),
+            3 => Some(Base::Dec),
+            _ => None,
+        }
+    }
+
+    /// For a line with no data byte in an undecided session (nothing is
+    /// decided from it): `0x` or a hex letter means hex; four or ten
+    /// digits is how DEC mode writes 11- and 29-bit ids (`%04d`, `0940`);
+    /// anything else is read as hex, HEX mode's `%03X`/`%08X` widths.
+    fn guess_from_id(id: &[u8]) -> Base {
+        let digits = id.iter().all(u8::is_ascii_digit);
+        if digits && (id.len() == 4 || id.len() == 10) {
+            Base::Dec
+        } else {
+            Base::Hex
+        }
+    }
+}
+
+/// How a session writes times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TimeMode {
+    /// Time of day (also sessions without a mode line).
+    System,
+    /// Time since logging started.
+    Absolute,
+    /// Each time the delta to the previous frame's.
+    Relative,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Protocol {
+    Can,
+    J1939,
+    /// LIN or another bus: its lines are not CAN frames.
+    Other,
+}
+
+/// A session's start: the Unix second of its date's midnight and its time
+/// of day in seconds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Start {
+    midnight: u64,
+    time_of_day: u64,
+}
+
+/// Reads BUSMASTER log lines; the session headers set base, time mode,
+/// protocol and start date; relative times are summed here.
+#[derive(Clone, Debug)]
+pub struct BusmasterParser {
+    base: Base,
+    mode: TimeMode,
+    protocol: Protocol,
+    start: Option<Start>,
+    /// Start date lines read (the parallel reader's context: a block read
+    /// from a fork is valid only if it saw every date line; saturates).
+    dates: u8,
+    /// The running time of a relative session.
+    now: Timestamp,
+    /// A `***BUSMASTER` header was read: only BUSMASTER writes it.
+    identified: bool,
+}
+
+impl BusmasterParser {
+    pub fn new() -> Self {
+        BusmasterParser {
+            base: Base::Undecided,
+            mode: TimeMode::System,
+            protocol: Protocol::Can,
+            start: None,
+            dates: 0,
+            now: Timestamp::ZERO,
+            identified: false,
+        }
+    }
+
+    /// A new session: nothing known until its headers say.
+    fn new_session(&mut self) {
+        self.base = Base::Undecided;
+        self.mode = TimeMode::System;
+        self.start = None;
+        self.now = Timestamp::ZERO;
+    }
+}
+
+impl Default for BusmasterParser {
+    fn default() -> Self {
+        BusmasterParser::new()
+    }
+}
+
+/// Date lines counted in the context: 3 bits (more: parse sequentially).
+const MAX_DATES: u8 = 7;
+
+impl LineParser for BusmasterParser {
+    fn format(&self) -> Format {
+        Format::Busmaster
+    }
+
+    /// Base, time mode and protocol exactly, plus how many start dates were
+    /// read (a fork that missed a date line has a lower count; one that saw
+    /// them all has the last one). Relative times chain every frame to the
+    /// one before: `None`, parse sequentially.
+    fn context(&self) -> Option<u8> {
+        if self.mode == TimeMode::Relative || self.dates > MAX_DATES {
+            return None;
+        }
+        let base = match self.base {
+            Base::Hex => 0,
+            Base::Dec => 1,
+            Base::Undecided => 2,
+        };
+        let mode = u8::from(self.mode == TimeMode::Absolute);
+        let protocol = match self.protocol {
+            Protocol::Can => 0,
+            Protocol::J1939 => 1,
+            Protocol::Other => 2,
+        };
+        // 3 * 2 * 3 = 18 states below 32: 5 bits, then the count.
+        Some((base * 6 + mode * 3 + protocol) | self.dates << 5)
+    }
+
+    fn identified(&self) -> bool {
+        self.identified
+    }
+
+    #[inline]
+    fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        // Headers, sessions still deciding their base and other protocols'
+        // layouts go to `parse`.
+        if self.base == Base::Undecided
+            || self.protocol != Protocol::Can
+            || !line.first().is_some_and(u8::is_ascii_digit)
+        {
+            return Scan::Parse;
+        }
+        let mut fields = Fields::EMPTY;
+        if !fields.split(line) {
+            return Scan::Parse;
+        }
+        let Ok(line) = self.can_line(&fields, interest) else {
+            return Scan::Parse;
+        };
+        let Line { frame, time, .. } = line;
+        let Ok(time) = self.commit(time) else {
+            return Scan::Parse;
+        };
+        if !interest.wants(frame.id, frame.extended) {
+            return Scan::Plain;
+        }
+        let t = time;
+        if frame.kind == FrameKind::Data
+            && interest.timed_only(frame.id, frame.extended, frame.data.as_slice())
+        {
+            return Scan::Timed(t);
+        }
+        Scan::Frame(Frame {
+            time: Some(t),
+            ..frame
+        })
+    }
+
+    fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        let t = trim_start(line);
+        if let Some(header) = t.strip_prefix(b"***") {
+            self.header(header);
+            return Parsed::Skipped;
+        }
+        if is_blank(t) || t == b"\r" {
+            return Parsed::Skipped;
+        }
+        let mut fields = Fields::EMPTY;
+        if !fields.split(line) {
+            return Parsed::Malformed("too many fields for a BUSMASTER line".into());
+        }
+        let parsed = match self.protocol {
+            Protocol::Can => self.can_line(&fields, interest),
+            Protocol::J1939 if j1939_message(&fields) => return Parsed::Skipped,
+            Protocol::J1939 => self.j1939_line(&fields, interest),
+            Protocol::Other => {
+                // Lines of another bus: known, not CAN frames.
+                return if fields.get(0).is_some_and(is_time_shape) {
+                    Parsed::Skipped
+                } else {
+                    Parsed::Malformed(not_a_line())
+                };
+            }
+        };
+        match parsed {
+            Ok(Line {
+                frame,
+                time,
+                decided,
+            }) => {
+                if let Some(base) = decided {
+                    self.base = base;
+                }
+                match self.commit(time) {
+                    // The time is kept for wanted ids and error frames.
+                    Ok(t) if frame.kind == FrameKind::Error
+                        || interest.wants(frame.id, frame.extended) =>
+                    {
+                        Parsed::Frame(Frame {
+                            time: Some(t),
+                            ..frame
+                        })
+                    }
+                    Ok(_) => Parsed::Frame(frame),
+                    Err(reason) => Parsed::Malformed(reason),
+                }
+            }
+            Err((time, reason)) => {
+                // A relative stamp still adds to the running time, even on a
+                // line that is not a frame: the next delta is from it.
+                if let Some(time) = time
+                    && self.mode == TimeMode::Relative
+                {
+                    let _ = self.commit(time);
+                }
+                Parsed::Malformed(reason)
+            }
+        }
+    }
+}
+
+/// At most this many fields: 11 J1939 columns and 64 data bytes, with room.
+const MAX_FIELDS: usize = 80;
+
+/// The blank-separated fields of a line.
+struct Fields<'a> {
+    at: [&'a [u8]; MAX_FIELDS],
+    n: usize,
+}
+
+impl<'a> Fields<'a> {
+    const EMPTY: Fields<'static> = Fields {
+        at: [&[]; MAX_FIELDS],
+        n: 0,
+    };
+
+    /// `false` when the line has too many fields.
+    #[inline]
+    fn split(&mut self, line: &'a [u8]) -> bool {
+        for f in line
+            .split(|b| matches!(b, b' ' | b'\t' | b'\r'))
+            .filter(|f| !f.is_empty())
+        {
+            let Some(slot) = self.at.get_mut(self.n) else {
+                return false;
+            };
+            *slot = f;
+            self.n += 1;
+        }
+        true
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> Option<&'a [u8]> {
+        self.all().get(i).copied()
+    }
+
+    #[inline]
+    fn all(&self) -> &[&'a [u8]] {
+        self.at.get(..self.n).unwrap_or_default()
+    }
+}
+
+/// A time as written: `H:M:S:F`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Written {
+    /// Hours, minutes and seconds in seconds.
+    secs: u64,
+    frac: u64,
+    digits: u8,
+}
+
+/// What a frame line gave: the frame (time not yet set), its time as
+/// written, and the base its numbers decided for the session.
+struct Line<'a> {
+    frame: Frame<'a>,
+    time: Written,
+    decided: Option<Base>,
+}
+
+/// A line that is not a frame: its time when that much was read (a
+/// relative session still counts it), and why.
+type Failed = (Option<Written>, Reason);
+
+impl BusmasterParser {
+    /// A `***` line (the `***` removed): session boundaries and settings.
+    fn header(&mut self, header: &[u8]) {
+        let text = header.strip_suffix(b"\r").unwrap_or(header);
+        let text = super::trim_end(text);
+        let text = text.strip_suffix(b"***").unwrap_or(text);
+        if text.starts_with(b"BUSMASTER") {
+            self.identified = true;
+            self.protocol = Protocol::Can;
+            self.new_session();
+            return;
+        }
+        match text {
+            b"[START LOGGING SESSION]" => self.new_session(),
+            b"HEX" => self.base = Base::Hex,
+            b"DEC" => self.base = Base::Dec,
+            b"SYSTEM MODE" => self.mode = TimeMode::System,
+            b"ABSOLUTE MODE" => self.mode = TimeMode::Absolute,
+            b"RELATIVE MODE" => {
+                if self.mode != TimeMode::Relative {
+                    self.now = Timestamp::ZERO;
+                }
+                self.mode = TimeMode::Relative;
+            }
+            b"PROTOCOL CAN" => self.protocol = Protocol::Can,
+            b"PROTOCOL J1939" => self.protocol = Protocol::J1939,
+            _ => {
+                if text.starts_with(b"PROTOCOL ") {
+                    self.protocol = Protocol::Other;
+                } else if let Some(when) = text.strip_prefix(b"START DATE AND TIME") {
+                    // An unreadable date leaves the session without one.
+                    self.start = start_date(trim_start(when));
+                    self.dates = self.dates.saturating_add(1);
+                }
+            }
+        }
+    }
+
+    /// `Time Rx|Tx Channel Id Type DLC Data...` (or `... Id ERR...`).
+    fn can_line<'a>(&self, f: &Fields<'a>, interest: &Interest) -> Result<Line<'a>, Failed> {
+        let time_text = f.get(0).ok_or((None, not_a_line()))?;
+        let time = written_time(time_text).map_err(|r| (None, r))?;
+        let fail = |reason: Reason| (Some(time), reason);
+        let [_, dir, channel, id_text, kind, rest @ ..] = f.all() else {
+            return Err(fail("line ends before the frame type".into()));
+        };
+        direction(dir).map_err(fail)?;
+        let channel = channel_of(channel).map_err(fail)?;
+        if kind.starts_with(b"ERR") {
+            return Ok(Line {
+                frame: error_frame(channel),
+                time,
+                decided: None,
+            });
+        }
+        let (kind, extended) = frame_type(kind).map_err(fail)?;
+        let [len_text, data @ ..] = rest else {
+            return Err(fail("line ends before the data length".into()));
+        };
+        self.frame(
+            (channel, id_text, kind, extended),
+            len_text,
+            data,
+            interest,
+        )
+        .map(|(frame, decided)| Line {
+            frame,
+            time,
+            decided,
+        })
+        .map_err(fail)
+    }
+
+    /// J1939 sessions: `Time Channel Id PGN Type Src Dest Prio Rx|Tx DLC
+    /// Data...`, a CAN frame with a 29-bit id (see [`j1939_message`]).
+    fn j1939_line<'a>(&self, f: &Fields<'a>, interest: &Interest) -> Result<Line<'a>, Failed> {
+        let time_text = f.get(0).ok_or((None, not_a_line()))?;
+        let time = written_time(time_text).map_err(|r| (None, r))?;
+        let fail = |reason: Reason| (Some(time), reason);
+        let [_, channel, id_text, _pgn, _kind, _src, _dst, _prio, dir, len_text, data @ ..] =
+            f.all()
+        else {
+            return Err(fail("J1939 line ends before the data length".into()));
+        };
+        direction(dir).map_err(fail)?;
+        let channel = channel_of(channel).map_err(fail)?;
+        self.frame(
+            (channel, id_text, FrameKind::Data, true),
+            len_text,
+            data,
+            interest,
+        )
+        .map(|(frame, decided)| Line {
+            frame,
+            time,
+            decided,
+        })
+        .map_err(fail)
+    }
+
+    /// The id, length and data of a frame; the data decoded only when the
+    /// id is wanted. Returns the base the data bytes decided, if undecided.
+    fn frame<'a>(
+        &self,
+        (channel, id_text, kind, extended): (&'a [u8], &[u8], FrameKind, bool),
+        len_text: &[u8],
+        data: &[&[u8]],
+        interest: &Interest,
+    ) -> Result<(Frame<'a>, Option<Base>), Reason> {
+        let (base, decided) = match self.base {
+            Base::Undecided => match data.first().and_then(|b| Base::from_byte_width(b)) {
+                Some(b) => (b, Some(b)),
+                None if data.is_empty() => (Base::guess_from_id(id_text), None),
+                None => {
+                    return Err(format!(
+                        "'{}' is not a data byte (2 hex or 3 decimal digits)",
+                        show(data.first().copied().unwrap_or_default())
+                    )
+                    .into());
+                }
+            },
+            b => (b, None),
+        };
+        let id = parse_id(id_text, base)?;
+        let max = if extended { EXTENDED_MAX } else { STANDARD_MAX };
+        if id > max {
+            return Err(format!(
+                "id {id:#X} is out of range for a {}-bit id",
+                if extended { 29 } else { 11 }
+            )
+            .into());
+        }
+        // The length is decimal in both bases.
+        let value = hex::parse_dec_u32(len_text)
+            .ok_or_else(|| format!("'{}' is not a data length", show(len_text)))?;
+        let len = match kind {
+            FrameKind::Fd => u8::try_from(value)
+                .ok()
+                .filter(|l| FD_LEN.contains(l))
+                .ok_or_else(|| format!("{value} is not a CAN FD data length"))?,
+            _ if value <= 8 => value as u8,
+            _ => return Err(format!("data length {value} is over 8").into()),
+        };
+        let remote = kind == FrameKind::Remote;
+        // A remote request may be written with its DLC's worth of bytes.
+        if data.len() != usize::from(len) && !(remote && data.is_empty()) {
+            return Err(format!(
+                "the length says {len} data bytes but the line has {}",
+                data.len()
+            )
+            .into());
+        }
+        let wanted = interest.wants(id, extended) && !remote;
+        let mut payload = Payload::new();
+        for b in data {
+            let byte = parse_byte(b, base)?;
+            if wanted {
+                payload.push(byte);
+            }
+        }
+        Ok((
+            Frame {
+                time: None,
+                channel,
+                id,
+                extended,
+                kind,
+                len: if remote { 0 } else { len },
+                data: payload,
+            },
+            decided,
+        ))
+    }
+
+    /// The frame's time in this session; the running time moves on in a
+    /// relative session.
+    fn commit(&mut self, written: Written) -> Result<Timestamp, Reason> {
+        let here = Timestamp::from_parts(written.secs, written.frac, written.digits);
+        let t = match self.mode {
+            TimeMode::Relative => {
+                let t = self
+                    .now
+                    .checked_add(here)
+                    .ok_or("relative times add up past 2^64 seconds")?;
+                self.now = t;
+                t
+            }
+            TimeMode::Absolute => here,
+            TimeMode::System => {
+                if written.secs >= SECS_PER_DAY {
+                    return Err("the time of day is past 23:59:59".into());
+                }
+                match self.start {
+                    Some(start) => {
+                        let next_day = written.secs + SECS_PER_DAY / 2 < start.time_of_day;
+                        let secs = start.midnight + written.secs + u64::from(next_day) * SECS_PER_DAY;
+                        Timestamp::from_parts(secs, written.frac, written.digits)
+                    }
+                    None => here,
+                }
+            }
+        };
+        Ok(t)
+    }
+}
+
+/// A J1939 line of more than 8 data bytes: a message the transport protocol
+/// reassembled from frames, not a frame on the bus (skipped).
+fn j1939_message(f: &Fields<'_>) -> bool {
+    f.get(9)
+        .and_then(hex::parse_dec_u32)
+        .is_some_and(|len| len > 8)
+}
+
+fn not_a_line() -> Reason {
+    "not a BUSMASTER line (expected H:M:S:F Rx|Tx channel id type DLC data)".into()
+}
+
+/// `H:M:S:F` with 1 to 4 digits in F (a 4-digit F is 1/10000 s, fewer
+/// digits are milliseconds: see the module documentation).
+fn written_time(text: &[u8]) -> Result<Written, Reason> {
+    let bad = || -> Reason { format!("'{}' is not a time (H:M:S:F)", show(text)).into() };
+    let mut parts = text.split(|b| *b == b':');
+    let mut field = |max_len: usize| -> Result<u64, Reason> {
+        let p = parts.next().ok_or_else(bad)?;
+        if p.is_empty() || p.len() > max_len || !p.iter().all(u8::is_ascii_digit) {
+            return Err(bad());
+        }
+        Ok(super::scan::decimal_u64(p))
+    };
+    // Hours may pass 24 in absolute and relative sessions.
+    let (h, m, s) = (field(9)?, field(2)?, field(2)?);
+    let f_text = parts.next().ok_or_else(bad)?;
+    if parts.next().is_some() || m > 59 || s > 59 {
+        return Err(bad());
+    }
+    if f_text.is_empty() || f_text.len() > 4 || !f_text.iter().all(u8::is_ascii_digit) {
+        return Err(bad());
+    }
+    let frac = super::scan::decimal_u64(f_text);
+    let digits = if f_text.len() == 4 { 4 } else { 3 };
+    Ok(Written {
+        secs: h * 3600 + m * 60 + s,
+        frac,
+        digits,
+    })
+}
+
+/// Whether a field looks like a BUSMASTER time (for other buses' lines).
+fn is_time_shape(text: &[u8]) -> bool {
+    written_time(text).is_ok()
+}
+
+/// `d:m:yyyy h:m:s:ms` (the `***` already removed); `None` when unreadable
+/// or before 1970.
+fn start_date(text: &[u8]) -> Option<Start> {
+    let mut words = text
+        .split(|b| *b == b' ')
+        .filter(|w| !w.is_empty() && *w != b"***");
+    let date = words.next()?;
+    let time = words.next()?;
+    let num = |p: &[u8]| -> Option<u64> {
+        (!p.is_empty() && p.len() <= 4 && p.iter().all(u8::is_ascii_digit))
+            .then(|| super::scan::decimal_u64(p))
+    };
+    let mut d = date.split(|b| *b == b':');
+    let (day, month, year) = (num(d.next()?)?, num(d.next()?)?, num(d.next()?)?);
+    let mut t = time.split(|b| *b == b':');
+    let (h, m, s) = (num(t.next()?)?, num(t.next()?)?, num(t.next()?)?);
+    if d.next().is_some() || h > 23 || m > 59 || s > 59 || year < 1970 {
+        return None;
+    }
+    let month = time::Month::try_from(u8::try_from(month).ok()?).ok()?;
+    let date =
+        time::Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?)
+            .ok()?;
+    let days = date.to_julian_day() - time::Date::from_calendar_date(1970, time::Month::January, 1)
+        .ok()?
+        .to_julian_day();
+    Some(Start {
+        midnight: u64::try_from(days).ok()? * SECS_PER_DAY,
+        time_of_day: h * 3600 + m * 60 + s,
+    })
+}
+
+fn direction(dir: &[u8]) -> Result<(), Reason> {
+    match dir {
+        b"Rx" | b"Tx" => Ok(()),
+        other => Err(format!("expected Rx or Tx, not '{}'", show(other)).into()),
+    }
+}
+
+fn channel_of(channel: &[u8]) -> Result<&[u8], Reason> {
+    if !channel.is_empty() && channel.len() <= 3 && channel.iter().all(u8::is_ascii_digit) {
+        Ok(channel)
+    } else {
+        Err(format!("'{}' is not a channel number", show(channel)).into())
+    }
+}
+
+/// `s`, `x`, `sr`, `xr`, `s-fd`, `x-fd`: the kind and whether 29-bit.
+fn frame_type(kind: &[u8]) -> Result<(FrameKind, bool), Reason> {
+    Ok(match kind {
+        b"s" => (FrameKind::Data, false),
+        b"x" => (FrameKind::Data, true),
+        b"sr" => (FrameKind::Remote, false),
+        b"xr" => (FrameKind::Remote, true),
+        b"s-fd" => (FrameKind::Fd, false),
+        b"x-fd" => (FrameKind::Fd, true),
+        other => {
+            return Err(format!(
+                "unknown frame type '{}' (s, x, sr, xr, s-fd, x-fd)",
+                show(other)
+            )
+            .into());
+        }
+    })
+}
+
+/// An id in the session's base: hex with or without `0x`, or decimal.
+fn parse_id(text: &[u8], base: Base) -> Result<u32, Reason> {
+    let id = match base {
+        Base::Dec => hex::parse_dec_u32(text),
+        _ => hex::parse_u32(
+            text.strip_prefix(b"0x")
+                .or_else(|| text.strip_prefix(b"0X"))
+                .unwrap_or(text),
+        ),
+    };
+    id.ok_or_else(|| {
+        let what = if base == Base::Dec { "decimal" } else { "hex" };
+        format!("'{}' is not a {what} id", show(text)).into()
+    })
+}
+
+/// A data byte: two hex digits, or up to three decimal digits (`000`-`255`).
+#[inline]
+fn parse_byte(text: &[u8], base: Base) -> Result<u8, Reason> {
+    let byte = match (base, text) {
+        (Base::Dec, _) if !text.is_empty() && text.len() <= 3 => hex::parse_dec_u32(text)
+            .and_then(|v| u8::try_from(v).ok()),
+        (Base::Dec, _) => None,
+        (_, [hi, lo]) => hex::parse_byte(*hi, *lo),
+        _ => None,
+    };
+    byte.ok_or_else(|| {
+        let what = if base == Base::Dec {
+            "a decimal data byte (0-255)"
+        } else {
+            "a hex data byte (two digits)"
+        };
+        format!("'{}' is not {what}", show(text)).into()
+    })
+}
+
+fn error_frame(channel: &[u8]) -> Frame<'_> {
+    Frame {
+        time: None,
+        channel,
+        id: 0,
+        extended: false,
+        kind: FrameKind::Error,
+        len: 0,
+        data: Payload::new(),
+    }
+}
+
+fn show(token: &[u8]) -> String {
+    let text = String::from_utf8_lossy(token);
+    let mut out: String = text.chars().take(40).collect();
+    if text.chars().count() > 40 {
+        out.push('…');
+    }
+    out.chars()
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect()
+}
