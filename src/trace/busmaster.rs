@@ -280,8 +280,9 @@ impl LineParser for BusmasterParser {
                 }
                 match self.commit(time) {
                     // The time is kept for wanted ids and error frames.
-                    Ok(t) if frame.kind == FrameKind::Error
-                        || interest.wants(frame.id, frame.extended) =>
+                    Ok(t)
+                        if frame.kind == FrameKind::Error
+                            || interest.wants(frame.id, frame.extended) =>
                     {
                         Parsed::Frame(Frame {
                             time: Some(t),
@@ -428,18 +429,13 @@ impl BusmasterParser {
         let [len_text, data @ ..] = rest else {
             return Err(fail("line ends before the data length".into()));
         };
-        self.frame(
-            (channel, id_text, kind, extended),
-            len_text,
-            data,
-            interest,
-        )
-        .map(|(frame, decided)| Line {
-            frame,
-            time,
-            decided,
-        })
-        .map_err(fail)
+        self.frame((channel, id_text, kind, extended), len_text, data, interest)
+            .map(|(frame, decided)| Line {
+                frame,
+                time,
+                decided,
+            })
+            .map_err(fail)
     }
 
     /// J1939 sessions: `Time Channel Id PGN Type Src Dest Prio Rx|Tx DLC
@@ -448,8 +444,19 @@ impl BusmasterParser {
         let time_text = f.get(0).ok_or((None, not_a_line()))?;
         let time = written_time(time_text).map_err(|r| (None, r))?;
         let fail = |reason: Reason| (Some(time), reason);
-        let [_, channel, id_text, _pgn, _kind, _src, _dst, _prio, dir, len_text, data @ ..] =
-            f.all()
+        let [
+            _,
+            channel,
+            id_text,
+            _pgn,
+            _kind,
+            _src,
+            _dst,
+            _prio,
+            dir,
+            len_text,
+            data @ ..,
+        ] = f.all()
         else {
             return Err(fail("J1939 line ends before the data length".into()));
         };
@@ -564,7 +571,8 @@ impl BusmasterParser {
                 match self.start {
                     Some(start) => {
                         let next_day = written.secs + SECS_PER_DAY / 2 < start.time_of_day;
-                        let secs = start.midnight + written.secs + u64::from(next_day) * SECS_PER_DAY;
+                        let secs =
+                            start.midnight + written.secs + u64::from(next_day) * SECS_PER_DAY;
                         Timestamp::from_parts(secs, written.frac, written.digits)
                     }
                     None => here,
@@ -645,9 +653,10 @@ fn start_date(text: &[u8]) -> Option<Start> {
     let date =
         time::Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?)
             .ok()?;
-    let days = date.to_julian_day() - time::Date::from_calendar_date(1970, time::Month::January, 1)
-        .ok()?
-        .to_julian_day();
+    let days = date.to_julian_day()
+        - time::Date::from_calendar_date(1970, time::Month::January, 1)
+            .ok()?
+            .to_julian_day();
     Some(Start {
         midnight: u64::try_from(days).ok()? * SECS_PER_DAY,
         time_of_day: h * 3600 + m * 60 + s,
@@ -708,8 +717,9 @@ fn parse_id(text: &[u8], base: Base) -> Result<u32, Reason> {
 #[inline]
 fn parse_byte(text: &[u8], base: Base) -> Result<u8, Reason> {
     let byte = match (base, text) {
-        (Base::Dec, _) if !text.is_empty() && text.len() <= 3 => hex::parse_dec_u32(text)
-            .and_then(|v| u8::try_from(v).ok()),
+        (Base::Dec, _) if !text.is_empty() && text.len() <= 3 => {
+            hex::parse_dec_u32(text).and_then(|v| u8::try_from(v).ok())
+        }
         (Base::Dec, _) => None,
         (_, [hi, lo]) => hex::parse_byte(*hi, *lo),
         _ => None,
@@ -745,4 +755,477 @@ fn show(token: &[u8]) -> String {
     out.chars()
         .map(|c| if c.is_control() { '?' } else { c })
         .collect()
+}
+
+/// Fuzz target body: any bytes, line by line, must classify without a
+/// panic, frames must be well-formed, and the scan shortcut must agree
+/// with `parse` (same frame, same state after it).
+#[cfg(feature = "fuzzing")]
+pub(crate) fn fuzz_busmaster(data: &[u8]) {
+    let mut p = BusmasterParser::new();
+    let all = Interest::all();
+    let none = Interest::none();
+    for line in data.split(|b| *b == b'\n') {
+        let mut scanned = p.clone();
+        let scan = scanned.scan(line, &none);
+        let parsed = p.parse(line, &all);
+        if let Parsed::Frame(f) = &parsed {
+            assert!(usize::from(f.len) <= Payload::MAX);
+            if f.kind == FrameKind::Data || f.kind == FrameKind::Fd {
+                assert_eq!(f.data.len(), usize::from(f.len));
+            }
+            assert!(f.extended || f.id <= STANDARD_MAX);
+            assert!(f.id <= EXTENDED_MAX);
+            assert!(f.time.is_some());
+        }
+        if scan == Scan::Plain {
+            assert!(matches!(parsed, Parsed::Frame(_)), "scan took a non-frame");
+            assert_eq!(scanned.context(), p.context());
+            assert_eq!(scanned.now, p.now);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(p: &mut BusmasterParser, lines: &str) -> Vec<Parsed<'static>> {
+        let text: &'static str = Box::leak(lines.to_string().into_boxed_str());
+        text.lines()
+            .map(|l| p.parse(l.as_bytes(), &Interest::all()))
+            .collect()
+    }
+
+    /// (time, channel, id, extended, kind, len, data) of each frame.
+    fn frames(parsed: &[Parsed<'_>]) -> Vec<(String, String, u32, bool, FrameKind, u8, Vec<u8>)> {
+        parsed
+            .iter()
+            .filter_map(|p| match p {
+                Parsed::Frame(f) => Some((
+                    f.time.map(|t| t.to_string()).unwrap_or_default(),
+                    String::from_utf8_lossy(f.channel).into_owned(),
+                    f.id,
+                    f.extended,
+                    f.kind,
+                    f.len,
+                    f.data.as_slice().to_vec(),
+                )),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn malformed(parsed: &[Parsed<'_>]) -> Vec<String> {
+        parsed
+            .iter()
+            .filter_map(|p| match p {
+                Parsed::Malformed(r) => Some(r.to_string()),
+                _ => None,
+            })
+            .collect()
+    }
+
+    const HEADER_HEX_SYSTEM: &str = "***BUSMASTER Ver 2.0.0***
+***PROTOCOL CAN***
+***NOTE: PLEASE DO NOT EDIT THIS DOCUMENT***
+***[START LOGGING SESSION]***
+***START DATE AND TIME 14:11:2023 22:13:19:538***
+***HEX***
+***SYSTEM MODE***
+***START CHANNEL BAUD RATE***
+***CHANNEL 1 - Kvaser - Virtual #0 (Channel 0) - 500000 bps***
+***END CHANNEL BAUD RATE***
+***<Time><Tx/Rx><Channel><CAN ID><Type><DLC><DataBytes>***
+";
+
+    #[test]
+    fn headers_are_skipped_and_identify_the_format() {
+        let mut p = BusmasterParser::new();
+        assert!(!p.identified());
+        let parsed = read(&mut p, HEADER_HEX_SYSTEM);
+        assert!(parsed.iter().all(|r| *r == Parsed::Skipped));
+        assert!(p.identified());
+        assert_eq!(p.base, Base::Hex);
+        assert_eq!(p.mode, TimeMode::System);
+    }
+
+    #[test]
+    fn system_times_are_the_time_of_day_on_the_start_date() {
+        let mut p = BusmasterParser::new();
+        let text = format!(
+            "{HEADER_HEX_SYSTEM}22:13:20:0000 Rx 1 0x081 s 8 10 43 08 01 00 00 00 00 \n\
+             22:13:21:2500 Tx 2 701 s 1 05\n"
+        );
+        let got = frames(&read(&mut p, &text));
+        assert_eq!(
+            got,
+            [
+                (
+                    "1700000000.0000".into(),
+                    "1".into(),
+                    0x81,
+                    false,
+                    FrameKind::Data,
+                    8,
+                    vec![0x10, 0x43, 8, 1, 0, 0, 0, 0]
+                ),
+                (
+                    "1700000001.2500".into(),
+                    "2".into(),
+                    0x701,
+                    false,
+                    FrameKind::Data,
+                    1,
+                    vec![5]
+                ),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_session_across_midnight_goes_on_to_the_next_day() {
+        let mut p = BusmasterParser::new();
+        let got = frames(&read(
+            &mut p,
+            "***BUSMASTER Ver 2.0.0***\n***START DATE AND TIME 14:11:2023 23:59:59:000***\n\
+             ***HEX***\n23:59:59:9000 Rx 1 081 s 0\n0:0:1:0000 Rx 1 081 s 0\n\
+             23:59:59:8990 Tx 1 081 s 0\n",
+        ));
+        let times: Vec<_> = got.iter().map(|f| f.0.as_str()).collect();
+        // 2023-11-15 00:00:01 UTC is 1700006401; Tx just before the Rx
+        // stays on the same day.
+        assert_eq!(
+            times,
+            ["1700006399.9000", "1700006401.0000", "1700006399.8990"]
+        );
+    }
+
+    #[test]
+    fn absolute_times_are_seconds_since_logging_started() {
+        let mut p = BusmasterParser::new();
+        let got = frames(&read(
+            &mut p,
+            "***BUSMASTER Ver 1.6.4***\n***START DATE AND TIME 29:6:2012 11:39:2:250***\n\
+             ***DEC***\n***ABSOLUTE MODE***\n00:00:01:2549 Tx 1 0129 s 2 016 067\n\
+             25:00:00:0001 Tx 1 0129 s 0\n",
+        ));
+        assert_eq!(got[0].0, "1.2549");
+        assert_eq!(got[0].2, 129);
+        assert_eq!(got[0].6, [16, 67]);
+        assert_eq!(got[1].0, "90000.0001");
+    }
+
+    #[test]
+    fn relative_times_add_up_and_make_parsing_sequential() {
+        let mut p = BusmasterParser::new();
+        let parsed = read(
+            &mut p,
+            "***BUSMASTER Ver 1.6.4***\n***HEX***\n***RELATIVE MODE***\n\
+             00:00:00:0000 Tx 1 0x013 s 0\n00:00:01:0005 Tx 1 0x013 s 0\n\
+             00:00:00:0005 Tx 1 0x013 q 0\n00:00:00:0010 Tx 1 0x013 s 0\n",
+        );
+        assert_eq!(p.context(), None);
+        let times: Vec<_> = frames(&parsed).into_iter().map(|f| f.0).collect();
+        // The malformed line's delta still counts.
+        assert_eq!(times, ["0.0000", "1.0005", "1.0020"]);
+        // A new session starts over, in its own mode.
+        read(
+            &mut p,
+            "***BUSMASTER Ver 1.6.4***\n***HEX***\n***ABSOLUTE MODE***\n",
+        );
+        assert!(p.context().is_some());
+    }
+
+    #[test]
+    fn a_session_without_a_base_line_is_decided_by_its_byte_widths() {
+        // 1.6.3 writes no base line: three-digit bytes are decimal.
+        let mut p = BusmasterParser::new();
+        let got = frames(&read(
+            &mut p,
+            "***BUSMASTER Ver 1.6.3***\n***[START LOGGING SESSION]***\n\
+             ***START DATE AND TIME 30:5:2012 13:29:58:000***\n\
+             13:56:5:4749 Tx 1 0940 s 0\n\
+             13:57:9:9759 Tx 1 0151 s 8 153 000 000 102 000 000 153 000 \n\
+             13:57:9:9760 Tx 1 0166 s 1 039\n",
+        ));
+        // The empty frame comes before any byte: the 4-digit id reads decimal.
+        assert_eq!(got[0].2, 940);
+        assert_eq!(
+            (got[1].2, got[1].6.clone()),
+            (151, vec![153, 0, 0, 102, 0, 0, 153, 0])
+        );
+        assert_eq!(got[2].2, 166);
+        assert_eq!(p.base, Base::Dec);
+        // The 2.2 converter: no base line either, two-digit bytes are hex;
+        // the next session decides again.
+        let got = frames(&read(
+            &mut p,
+            "***BUSMASTER Ver 2.2.0***\n***[START LOGGING SESSION]***\n\
+             12:26:55:3602 Tx 1 124 s 2 0A 10\n12:26:55:3603 Tx 1 0FF s 0\n",
+        ));
+        assert_eq!((got[0].2, got[0].6.clone()), (0x124, vec![0x0A, 0x10]));
+        assert_eq!(got[1].2, 0xFF);
+        assert_eq!(p.base, Base::Hex);
+    }
+
+    #[test]
+    fn appended_sessions_switch_base_and_channels_stay_as_written() {
+        let mut p = BusmasterParser::new();
+        let parsed = read(
+            &mut p,
+            "***BUSMASTER Ver 2.0.0***\n***DEC***\n***SYSTEM MODE***\n\
+             17:9:36:0000 Rx 2 0000000259 x 1 255\n***[STOP LOGGING SESSION]***\n\n\
+             ***BUSMASTER Ver 2.0.0***\n***HEX***\n***SYSTEM MODE***\n\
+             17:42:08:8830 Tx 1 0x103 xr 8 00 00 00 00 00 00 00 00 \n\
+             17:42:08:8840 Rx 2 0x103 sr 2\n\
+             17:42:08:8850 Rx 0 00000103 s-fd 12 00 01 02 03 04 05 06 07 08 09 0A 0B\n\
+             17:42:08:8860 Rx 1 0 ERR Bus Off\n",
+        );
+        let got = frames(&parsed);
+        assert_eq!(got[0].1, "2");
+        assert_eq!(
+            (got[0].2, got[0].3, got[0].6.clone()),
+            (259, true, vec![255])
+        );
+        assert_eq!(
+            (got[1].2, got[1].3, got[1].4, got[1].5),
+            (0x103, true, FrameKind::Remote, 0)
+        );
+        assert_eq!((got[2].3, got[2].4), (false, FrameKind::Remote));
+        assert_eq!(
+            (got[3].1.as_str(), got[3].4, got[3].5),
+            ("0", FrameKind::Fd, 12)
+        );
+        assert_eq!(got[3].6, (0..12).collect::<Vec<u8>>());
+        assert_eq!(got[4].4, FrameKind::Error);
+        assert!(malformed(&parsed).is_empty());
+    }
+
+    #[test]
+    fn version_2_4_writes_unpadded_milliseconds() {
+        let mut p = BusmasterParser::new();
+        let got = frames(&read(
+            &mut p,
+            "***BUSMASTER Ver 2.4.0***\n***START DATE AND TIME 14:11:2023 22:13:19:000***\n\
+             ***HEX***\n***SYSTEM MODE***\n22:13:20:992 Rx 0 0000021A s 1 FE\n\
+             22:13:21:2 Rx 0 0000021A s 1 FE\n",
+        ));
+        let times: Vec<_> = got.iter().map(|f| f.0.as_str()).collect();
+        assert_eq!(times, ["1700000000.992", "1700000001.002"]);
+        assert_eq!(got[0].2, 0x21A);
+    }
+
+    #[test]
+    fn bad_lines_are_malformed_with_a_reason() {
+        let mut p = BusmasterParser::new();
+        let cases = [
+            ("22:13:20:0000 Rx 1 081 s 1 123", "not a hex data byte"),
+            ("22:13:20:0000 Rx 1 081 s 2 12", "length says 2"),
+            ("22:13:20:0000 Rx 1 800 s 0", "out of range for a 11-bit id"),
+            ("22:13:20:0000 Rx 1 081 s 9", "over 8"),
+            ("22:13:20:0000 Rx 1 081 q 0", "unknown frame type"),
+            ("22:13:20:0000 Xx 1 081 s 0", "expected Rx or Tx"),
+            ("22:13:20:0000 Rx one 081 s 0", "not a channel number"),
+            ("22:61:20:0000 Rx 1 081 s 0", "not a time"),
+            ("24:00:00:0000 Rx 1 081 s 0", "past 23:59:59"),
+            ("22:13:20:00000 Rx 1 081 s 0", "not a time"),
+            ("22:13:20:0000 Rx 1 081", "ends before the frame type"),
+            ("22:13:20:0000 Rx 1 08G s 0", "not a hex id"),
+            (
+                "22:13:20:0000 Rx 1 081 s-fd 9 00 00 00 00 00 00 00 00 00",
+                "not a CAN FD",
+            ),
+            ("(1700000000.000000) can0 081#00", "not a time"),
+        ];
+        read(&mut p, "***HEX***\n");
+        for (line, why) in cases {
+            let parsed = p.parse(line.as_bytes(), &Interest::all());
+            match parsed {
+                Parsed::Malformed(r) => assert!(r.contains(why), "{line}: {r}"),
+                other => panic!("{line}: {other:?}"),
+            }
+        }
+        read(&mut p, "***DEC***\n");
+        let parsed = p.parse(b"22:13:20:0000 Rx 1 0129 s 1 256", &Interest::all());
+        assert!(matches!(parsed, Parsed::Malformed(r) if r.contains("decimal data byte")));
+    }
+
+    #[test]
+    fn other_buses_are_skipped_and_j1939_lines_are_29_bit_frames() {
+        let mut p = BusmasterParser::new();
+        let parsed = read(
+            &mut p,
+            "***BUSMASTER Ver 2.0.0***\n***PROTOCOL LIN***\n***HEX***\n\
+             10:00:00:0000 Rx 1 0x01 s 2 12 34\n\
+             ***BUSMASTER Ver 2.0.0***\n***PROTOCOL J1939***\n***HEX***\n\
+             10:00:00:0000 1 0x18FEF100 0x00FEF1 BROADCAST 0x00 0xFF 6 Rx 8 01 02 03 04 05 06 07 08\n\
+             10:00:00:0001 1 0x18EBFF00 0x00EB00 DATA 0x00 0xFF 7 Rx 20 01 02 03 04 05 06 07 08 09 0A 0B 0C 0D 0E 0F 10 11 12 13 14\n",
+        );
+        assert_eq!(parsed[3], Parsed::Skipped);
+        let got = frames(&parsed);
+        assert_eq!(got.len(), 1);
+        assert_eq!((got[0].2, got[0].3, got[0].5), (0x18FE_F100, true, 8));
+        assert_eq!(parsed.last(), Some(&Parsed::Skipped));
+    }
+
+    #[test]
+    fn context_holds_base_mode_protocol_and_the_dates_read() {
+        let mut p = BusmasterParser::new();
+        let start = p.context();
+        read(&mut p, "***HEX***\n");
+        let hex = p.context();
+        read(&mut p, "***DEC***\n");
+        let dec = p.context();
+        read(&mut p, "***ABSOLUTE MODE***\n");
+        let abs = p.context();
+        read(&mut p, "***START DATE AND TIME 1:1:2020 0:0:0:0***\n");
+        let dated = p.context();
+        let all = [start, hex, dec, abs, dated];
+        for (i, a) in all.iter().enumerate() {
+            assert!(a.is_some());
+            for b in &all[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+        for _ in 0..MAX_DATES {
+            read(&mut p, "***START DATE AND TIME 1:1:2020 0:0:0:0***\n");
+        }
+        assert_eq!(p.context(), None, "past the count: sequential");
+    }
+
+    #[test]
+    fn scan_counts_unwanted_frames_and_decodes_wanted_ones() {
+        let mut p = BusmasterParser::new();
+        read(&mut p, HEADER_HEX_SYSTEM);
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        assert_eq!(
+            p.scan(b"22:13:20:0000 Rx 1 0x181 s 1 00", &interest),
+            Scan::Plain
+        );
+        assert!(matches!(
+            p.scan(b"22:13:20:0000 Rx 1 0x081 s 1 10", &interest),
+            Scan::Frame(f) if f.data.as_slice() == [0x10] && f.time.is_some()
+        ));
+        // Headers and bad lines go to `parse`.
+        assert_eq!(p.scan(b"***DEC***", &interest), Scan::Parse);
+        assert_eq!(
+            p.scan(b"22:13:20:0000 Rx 1 0x081 s 1 1", &interest),
+            Scan::Parse
+        );
+        // An undecided base is decided by `parse`.
+        let mut q = BusmasterParser::new();
+        assert_eq!(
+            q.scan(b"22:13:20:0000 Rx 1 181 s 1 00", &interest),
+            Scan::Parse
+        );
+    }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        /// A frame as BUSMASTER writes it, in either base, and what it is.
+        fn written_frame() -> impl Strategy<Value = (bool, String, u32, bool, Vec<u8>, u64)> {
+            (
+                any::<bool>(),
+                any::<bool>(),
+                0u32..=EXTENDED_MAX,
+                prop::collection::vec(any::<u8>(), 0..=8),
+                0u64..86_400 * 10_000,
+                any::<bool>(),
+            )
+                .prop_map(|(dec, extended, id, data, tenths, prefix)| {
+                    let id = if extended { id } else { id & STANDARD_MAX };
+                    let (secs, frac) = (tenths / 10_000, tenths % 10_000);
+                    let time =
+                        format!("{}:{}:{}:{frac:04}", secs / 3600, secs / 60 % 60, secs % 60);
+                    let id_text = match (dec, extended, prefix) {
+                        (true, true, _) => format!("{id:010}"),
+                        (true, false, _) => format!("{id:04}"),
+                        (false, true, true) => format!("0x{id:08X}"),
+                        (false, true, false) => format!("{id:08X}"),
+                        (false, false, true) => format!("0x{id:03X}"),
+                        (false, false, false) => format!("{id:03X}"),
+                    };
+                    let bytes: String = data
+                        .iter()
+                        .map(|b| {
+                            if dec {
+                                format!(" {b:03}")
+                            } else {
+                                format!(" {b:02X}")
+                            }
+                        })
+                        .collect();
+                    let line = format!(
+                        "{time} Rx 1 {id_text} {} {}{bytes} ",
+                        if extended { "x" } else { "s" },
+                        data.len()
+                    );
+                    (dec, line, id, extended, data, tenths)
+                })
+        }
+
+        proptest! {
+            /// Generated lines read back as the frame they were made from, with
+            /// or without a base line (the bytes decide, or the id width), and
+            /// `scan` agrees with `parse`.
+            #[test]
+            fn generated_lines_round_trip((dec, line, id, extended, data, tenths) in written_frame(), headerless in any::<bool>()) {
+                let mut p = BusmasterParser::new();
+                let header = match (headerless, dec) {
+                    (true, _) => "***BUSMASTER Ver 1.6.3***\n***ABSOLUTE MODE***\n",
+                    (false, true) => "***BUSMASTER Ver 2.0.0***\n***DEC***\n***ABSOLUTE MODE***\n",
+                    (false, false) => "***BUSMASTER Ver 2.0.0***\n***HEX***\n***ABSOLUTE MODE***\n",
+                };
+                read(&mut p, header);
+                let mut scanned = p.clone();
+                let parsed = p.parse(line.as_bytes(), &Interest::all());
+                let Parsed::Frame(f) = parsed.clone() else {
+                    // Headerless without data: only the id width can tell, and
+                    // a 3-digit hex id of digits only reads as hex.
+                    prop_assert!(headerless && data.is_empty(), "{line}: {parsed:?}");
+                    return Ok(());
+                };
+                if !(headerless && data.is_empty()) {
+                    prop_assert_eq!((f.id, f.extended), (id, extended), "{}", line);
+                }
+                prop_assert_eq!(f.data.as_slice(), &data[..]);
+                prop_assert_eq!(f.time, Some(Timestamp::from_parts(tenths / 10_000, tenths % 10_000, 4)));
+                match scanned.scan(line.as_bytes(), &Interest::all()) {
+                    Scan::Parse => prop_assert!(headerless),
+                    Scan::Frame(g) => prop_assert_eq!(Parsed::Frame(g), parsed),
+                    other => prop_assert!(false, "{:?}", other),
+                }
+            }
+
+            /// Any line: scan only counts frames, and leaves the same state.
+            #[test]
+            fn scan_agrees_with_parse(
+                line in "[0-9]{1,3}:[0-9]{1,2}:[0-9]{1,2}:[0-9]{1,5} (Rx|Tx|Qx) [0-9a]{1,2} (0x)?[0-9A-Fa-f]{1,9} (s|x|sr|xr|s-fd|ERR|q) [0-9]{1,2}( [0-9A-F]{1,3}){0,10} ?",
+                relative in any::<bool>(),
+                dec in any::<bool>(),
+            ) {
+                let mut p = BusmasterParser::new();
+                read(&mut p, if dec { "***DEC***\n" } else { "***HEX***\n" });
+                if relative {
+                    read(&mut p, "***RELATIVE MODE***\n00:00:01:0000 Rx 1 1 s 0\n");
+                }
+                let mut scanned = p.clone();
+                let scan = scanned.scan(line.as_bytes(), &Interest::none());
+                let parsed = p.parse(line.as_bytes(), &Interest::none());
+                match scan {
+                    Scan::Plain => {
+                        prop_assert!(matches!(parsed, Parsed::Frame(_)), "{}", line);
+                        prop_assert_eq!(scanned.now, p.now);
+                        prop_assert_eq!(scanned.context(), p.context());
+                    }
+                    Scan::Parse => {}
+                    other => prop_assert!(false, "nothing is wanted: {:?}", other),
+                }
+            }
+        }
+    }
 }
