@@ -211,35 +211,41 @@ impl LineParser for BusmasterParser {
     fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
         // Headers, sessions still deciding their base and other protocols'
         // layouts go to `parse`.
-        if self.base == Base::Undecided
-            || self.protocol != Protocol::Can
-            || !line.first().is_some_and(u8::is_ascii_digit)
-        {
+        if self.base == Base::Undecided || self.protocol != Protocol::Can {
             return Scan::Parse;
         }
-        let mut fields = Fields::EMPTY;
-        if !fields.split(line) {
-            return Scan::Parse;
-        }
-        let Ok(line) = self.can_line(&fields, interest) else {
+        let Some(c) = self.common(line) else {
             return Scan::Parse;
         };
-        let Line { frame, time, .. } = line;
-        let Ok(time) = self.commit(time) else {
-            return Scan::Parse;
-        };
-        if !interest.wants(frame.id, frame.extended) {
+        let wanted = interest.wants(c.id, c.extended);
+        if !wanted && self.mode != TimeMode::Relative {
+            // `common` checked the time; only a relative one moves the state.
             return Scan::Plain;
         }
-        let t = time;
-        if frame.kind == FrameKind::Data
-            && interest.timed_only(frame.id, frame.extended, frame.data.as_slice())
-        {
+        let Ok(t) = self.commit(c.time) else {
+            return Scan::Parse;
+        };
+        if !wanted {
+            return Scan::Plain;
+        }
+        let mut data = Payload::new();
+        let mut at = c.data;
+        for _ in 0..c.len {
+            let (byte, next) = self.byte_at(line, at).unwrap_or_default();
+            data.push(byte);
+            at = next;
+        }
+        if interest.timed_only(c.id, c.extended, data.as_slice()) {
             return Scan::Timed(t);
         }
         Scan::Frame(Frame {
             time: Some(t),
-            ..frame
+            channel: c.channel,
+            id: c.id,
+            extended: c.extended,
+            kind: FrameKind::Data,
+            len: c.len,
+            data,
         })
     }
 
@@ -366,6 +372,38 @@ struct Line<'a> {
     decided: Option<Base>,
 }
 
+/// The digits at `*at` (1 to `max` of them) and the byte `stop` after
+/// them: their value and count; `*at` moves past `stop`.
+#[inline]
+fn number(line: &[u8], at: &mut usize, max: usize, stop: u8) -> Option<(u64, usize)> {
+    let start = *at;
+    let mut v = 0u64;
+    while let Some(&b) = line.get(*at)
+        && b.is_ascii_digit()
+        && *at - start < max
+    {
+        v = v * 10 + u64::from(b - b'0');
+        *at += 1;
+    }
+    let n = *at - start;
+    if n == 0 || line.get(*at) != Some(&stop) {
+        return None;
+    }
+    *at += 1;
+    Some((v, n))
+}
+
+/// A data frame line of the common shape ([`BusmasterParser::common`]).
+struct Common<'a> {
+    time: Written,
+    channel: &'a [u8],
+    id: u32,
+    extended: bool,
+    len: u8,
+    /// Where the first data byte starts.
+    data: usize,
+}
+
 /// A line that is not a frame: its time when that much was read (a
 /// relative session still counts it), and why.
 type Failed = (Option<Written>, Reason);
@@ -405,6 +443,113 @@ impl BusmasterParser {
                     self.dates = self.dates.saturating_add(1);
                 }
             }
+        }
+    }
+
+    /// The shape BUSMASTER writes for a data frame, read in one pass
+    /// without splitting the line (the hot path, ~4x faster than the
+    /// general reading): `H:M:S:F Rx|Tx CH ID s|x D BYTE*` with single
+    /// spaces, trailing spaces allowed. Validated exactly as
+    /// [`BusmasterParser::can_line`] and [`BusmasterParser::commit`] do;
+    /// `None` for anything else (which the general reading then takes).
+    #[inline]
+    fn common<'a>(&self, line: &'a [u8]) -> Option<Common<'a>> {
+        let mut at = 0;
+        let (h, _) = number(line, &mut at, 9, b':')?;
+        let (m, _) = number(line, &mut at, 2, b':')?;
+        let (s, _) = number(line, &mut at, 2, b':')?;
+        let (frac, f_digits) = number(line, &mut at, 4, b' ')?;
+        if m > 59 || s > 59 {
+            return None;
+        }
+        let secs = h * 3600 + m * 60 + s;
+        if self.mode == TimeMode::System && secs >= SECS_PER_DAY {
+            return None;
+        }
+        let time = Written {
+            secs,
+            frac,
+            digits: if f_digits == 4 { 4 } else { 3 },
+        };
+        match line.get(at..at + 3)? {
+            b"Rx " | b"Tx " => at += 3,
+            _ => return None,
+        }
+        let ch_start = at;
+        number(line, &mut at, 3, b' ')?;
+        let channel = line.get(ch_start..at - 1)?;
+        let id_start = at;
+        // At most `0x` and 10 digits: a short loop, not a search.
+        let id_end = id_start
+            + line
+                .get(id_start..)?
+                .iter()
+                .take(13)
+                .position(|b| *b == b' ')?;
+        let id = parse_id(line.get(id_start..id_end)?, self.base).ok()?;
+        at = id_end + 1;
+        let extended = match line.get(at..at + 2)? {
+            b"s " => false,
+            b"x " => true,
+            _ => return None,
+        };
+        at += 2;
+        if id > if extended { EXTENDED_MAX } else { STANDARD_MAX } {
+            return None;
+        }
+        let len = match (line.get(at), line.get(at + 1)) {
+            (Some(d @ b'0'..=b'8'), None | Some(b' ')) => d - b'0',
+            _ => return None,
+        };
+        at = (at + 2).min(line.len());
+        let data = at;
+        for _ in 0..len {
+            at = self.byte_at(line, at)?.1;
+        }
+        if !line
+            .get(at..)
+            .unwrap_or_default()
+            .iter()
+            .all(|b| *b == b' ')
+        {
+            return None;
+        }
+        Some(Common {
+            time,
+            channel,
+            id,
+            extended,
+            len,
+            data,
+        })
+    }
+
+    /// The data byte at `at` and where the next one starts (after one
+    /// space, or at the end of the line). Bytes are 2 or 3 characters: a
+    /// loop of ours, a search for the blank cost more than the byte.
+    #[inline]
+    fn byte_at(&self, line: &[u8], at: usize) -> Option<(u8, usize)> {
+        let (byte, end) = if self.base == Base::Dec {
+            let mut v = 0u32;
+            let mut end = at;
+            while let Some(&b) = line.get(end)
+                && b.is_ascii_digit()
+                && end - at < 3
+            {
+                v = v * 10 + u32::from(b - b'0');
+                end += 1;
+            }
+            if end == at {
+                return None;
+            }
+            (u8::try_from(v).ok()?, end)
+        } else {
+            (hex::parse_byte(*line.get(at)?, *line.get(at + 1)?)?, at + 2)
+        };
+        match line.get(end) {
+            None => Some((byte, end)),
+            Some(b' ') => Some((byte, end + 1)),
+            Some(_) => None,
         }
     }
 
@@ -1197,6 +1342,39 @@ mod tests {
                 match scanned.scan(line.as_bytes(), &Interest::all()) {
                     Scan::Parse => prop_assert!(headerless),
                     Scan::Frame(g) => prop_assert_eq!(Parsed::Frame(g), parsed),
+                    other => prop_assert!(false, "{:?}", other),
+                }
+            }
+
+            /// The one-pass reading of the common shape accepts only lines the
+            /// general reading reads, and reads them alike.
+            #[test]
+            fn common_shape_agrees_with_the_general_reading(
+                line in "[0-9]{1,3}:[0-9]{1,3}:[0-9]{1,2}:[0-9]{1,5}[ ]{1,2}(Rx|Tx|Qx) [0-9]{1,4} (0x)?[0-9A-Fa-f]{1,11} (s|x|sr)[ ]{1,2}[0-9]{1,2}( [0-9A-F]{1,3}){0,9}[ ]{0,2}",
+                dec in any::<bool>(),
+                absolute in any::<bool>(),
+            ) {
+                let mut p = BusmasterParser::new();
+                read(&mut p, if dec { "***DEC***\n" } else { "***HEX***\n" });
+                if absolute {
+                    read(&mut p, "***ABSOLUTE MODE***\n");
+                }
+                let Some(c) = p.common(line.as_bytes()) else {
+                    return Ok(());
+                };
+                let mut fields = Fields::EMPTY;
+                prop_assert!(fields.split(line.as_bytes()));
+                let general = p.can_line(&fields, &Interest::all());
+                let Ok(g) = general else {
+                    prop_assert!(false, "only the fast path reads {}", line);
+                    return Ok(());
+                };
+                prop_assert_eq!((c.id, c.extended, c.len, c.channel), (g.frame.id, g.frame.extended, g.frame.len, g.frame.channel));
+                prop_assert_eq!(c.time, g.time);
+                prop_assert_eq!(p.clone().commit(c.time).is_ok(), p.clone().commit(g.time).is_ok());
+                let mut q = p.clone();
+                match q.scan(line.as_bytes(), &Interest::all()) {
+                    Scan::Frame(f) => prop_assert_eq!(f.data, g.frame.data),
                     other => prop_assert!(false, "{:?}", other),
                 }
             }
