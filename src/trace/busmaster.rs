@@ -942,8 +942,10 @@ mod tests {
             .collect()
     }
 
-    /// (time, channel, id, extended, kind, len, data) of each frame.
-    fn frames(parsed: &[Parsed<'_>]) -> Vec<(String, String, u32, bool, FrameKind, u8, Vec<u8>)> {
+    /// (time, channel, id, extended, kind, len, data) of a frame.
+    type Seen = (String, String, u32, bool, FrameKind, u8, Vec<u8>);
+
+    fn frames(parsed: &[Parsed<'_>]) -> Vec<Seen> {
         parsed
             .iter()
             .filter_map(|p| match p {
