@@ -17,8 +17,9 @@
 //! ```
 //!
 //! Every `***...***` line is a header (skipped). A file is a run of
-//! sessions, each from `***BUSMASTER Ver` (or `***[START LOGGING SESSION]***`)
-//! on; a session starts with nothing known and its headers set:
+//! sessions, each from `***BUSMASTER Ver` (or `***[START LOGGING SESSION]***`,
+//! which keeps the start date of a file without version lines) on; a session
+//! starts with nothing known and its headers set:
 //!
 //! - the number base of ids and data bytes: `***HEX***` or `***DEC***`. The
 //!   data length is always decimal. Older writers (1.6.3, the 2.2 format
@@ -135,8 +136,9 @@ pub struct BusmasterParser {
     mode: TimeMode,
     protocol: Protocol,
     start: Option<Start>,
-    /// Start date lines read (the parallel reader's context: a block read
-    /// from a fork is valid only if it saw every date line; saturates).
+    /// Lines that set the start date, read: `***BUSMASTER` (none yet)
+    /// and `***START DATE AND TIME` (the parallel reader's context: a block
+    /// read from a fork is valid only if the fork saw every one; saturates).
     dates: u8,
     /// The running time of a relative session.
     now: Timestamp,
@@ -157,11 +159,11 @@ impl BusmasterParser {
         }
     }
 
-    /// A new session: nothing known until its headers say.
+    /// A new session: nothing known until its headers say. The start date
+    /// is reset by `***BUSMASTER` only (see [`BusmasterParser::header`]).
     fn new_session(&mut self) {
         self.base = Base::Undecided;
         self.mode = TimeMode::System;
-        self.start = None;
         self.now = Timestamp::ZERO;
     }
 }
@@ -172,7 +174,8 @@ impl Default for BusmasterParser {
     }
 }
 
-/// Date lines counted in the context: 3 bits (more: parse sequentially).
+/// Start-setting lines counted in the context: 3 bits, two a session, so
+/// files of up to 3 sessions are read in parallel (more: sequentially).
 const MAX_DATES: u8 = 7;
 
 impl LineParser for BusmasterParser {
@@ -180,9 +183,9 @@ impl LineParser for BusmasterParser {
         Format::Busmaster
     }
 
-    /// Base, time mode and protocol exactly, plus how many start dates were
-    /// read (a fork that missed a date line has a lower count; one that saw
-    /// them all has the last one). Relative times chain every frame to the
+    /// Base, time mode and protocol exactly, plus how many lines that set
+    /// the start date were read (a fork that missed one has a lower count;
+    /// one that saw them all has the same start). Relative times chain every frame to the
     /// one before: `None`, parse sequentially.
     fn context(&self) -> Option<u8> {
         if self.mode == TimeMode::Relative || self.dates > MAX_DATES {
@@ -418,6 +421,11 @@ impl BusmasterParser {
             self.identified = true;
             self.protocol = Protocol::Can;
             self.new_session();
+            // Every line that sets the start is counted, whatever it was
+            // before: the count is then the same for a fork only if the fork
+            // read every such line, and so holds the same start.
+            self.start = None;
+            self.dates = self.dates.saturating_add(1);
             return;
         }
         match text {
@@ -1235,6 +1243,18 @@ mod tests {
                 assert_ne!(a, b);
             }
         }
+        // A new session with the same settings but no date: the start
+        // differs, so must the context (a fork that missed this line would
+        // keep the old date).
+        read(&mut p, "***HEX***\n***SYSTEM MODE***\n");
+        let mut q = p.clone();
+        read(
+            &mut q,
+            "***BUSMASTER Ver 2.0.0***\n***HEX***\n***SYSTEM MODE***\n",
+        );
+        assert_eq!((q.base, q.mode, q.start), (p.base, p.mode, None));
+        assert!(p.start.is_some());
+        assert_ne!(q.context(), p.context());
         for _ in 0..MAX_DATES {
             read(&mut p, "***START DATE AND TIME 1:1:2020 0:0:0:0***\n");
         }
