@@ -48,6 +48,16 @@ const LINES: &[(&str, Format, &str)] = &[
         "   3.098426 1  81              Rx   d 8 10 43 09 01 00 00 00 00",
     ),
     (
+        "busmaster_pdo",
+        Format::Busmaster,
+        "22:13:20:1234 Rx 1 0x181 s 8 11 22 33 44 55 66 77 88 ",
+    ),
+    (
+        "busmaster_emcy",
+        Format::Busmaster,
+        "22:13:20:1234 Rx 1 0x081 s 8 10 43 09 01 00 00 00 00 ",
+    ),
+    (
         "asc_canfd",
         Format::Asc,
         "  30.005071 CANFD   3 Rx        30a  Generic_Name_12                  1 1 8  8 01 02 03 04 05 06 07 08   102203  133   303000 e0006659 46500250 4b140250 20011736 2001040d",

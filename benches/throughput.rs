@@ -7,7 +7,7 @@
 //! (default 256); best of `BENCH_RUNS` (default 3). Words after `--` pick
 //! the cases whose name contains one of them (`cargo bench --bench
 //! throughput -- pcapng`): `candump log`, `candump -td`, `Vector ASC`,
-//! `30% EMCY`, `gzip`, `pcapng`.
+//! `30% EMCY`, `gzip`, `pcapng`, `BUSMASTER`.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -147,6 +147,7 @@ fn main() {
     let emcy30 = dir.join(format!("candump-emcy30-{mb}MB.log"));
     let gz = dir.join(format!("candump-{gz_mb}MB.log.gz"));
     let pcapng = dir.join(format!("pcapng-{mb}MB.pcapng"));
+    let busmaster = dir.join(format!("busmaster-{mb}MB.log"));
     let files = [
         ("candump log", &log, TraceFormat::CandumpLog, 2),
         (
@@ -163,6 +164,7 @@ fn main() {
             300,
         ),
         ("pcapng, LINUX_SLL", &pcapng, TraceFormat::Pcapng, 2),
+        ("BUSMASTER HEX", &busmaster, TraceFormat::Busmaster, 2),
     ];
     for (label, file, format, emcy) in files {
         if chosen(label) {

@@ -16,16 +16,17 @@ cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-all=(candump_log candump_screen asc trc blf pcap detect decode_timeline)
+all=(candump_log candump_screen asc trc busmaster blf pcap detect decode_timeline)
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 
 # The fixtures each target starts from (by the format it forces).
 fixtures_of() {
     case "$1" in
-        candump_log) ls fixtures/*.log fixtures/baseline/*.log ;;
+        candump_log) ls fixtures/*.log fixtures/baseline/*.log | grep -v busmaster ;;
         candump_screen) ls fixtures/*.txt ;;
         asc) ls fixtures/*.asc ;;
         trc) ls fixtures/*.trc ;;
+        busmaster) ls fixtures/*.busmaster.log ;;
         blf) ls fixtures/*.blf ;;
         pcap) ls fixtures/*.pcap fixtures/*.pcapng ;;
         detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.pcap fixtures/*.pcapng fixtures/*.gz ;;

@@ -3,7 +3,8 @@
 //! library under the `emcy-decode` program; what it offers a Rust program:
 //!
 //! - [`TraceReader`]: a trace (candump log or screen output, Vector ASC,
-//!   PEAK TRC, Vector BLF; gzip too; the format detected from the content)
+//!   PEAK TRC, BUSMASTER log, Vector BLF, pcap; gzip too; the format detected
+//!   from the content)
 //!   read into [`Record`]s, one per line, each frame a [`CanFrame`];
 //! - [`Emcy::decode`]: an EMCY payload into its code, error register and
 //!   manufacturer bytes;

@@ -26,7 +26,8 @@ Examples:
 
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
 candump screen output (with or without -t/-x/-a), Vector ASC, PEAK TRC
-(1.0-2.1), Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2).
+(1.0-2.1), BUSMASTER log (HEX or DEC, system/absolute/relative times),
+Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2).
 
 Exit status:
   0  success (also when the reader of stdout goes away, e.g. `| head -1`)
@@ -218,6 +219,8 @@ pub enum InputFormat {
     Asc,
     /// PEAK TRC, versions 1.0 to 2.1
     Trc,
+    /// BUSMASTER log: ***BUSMASTER Ver ...***, 14:19:11:4184 Tx 1 0x099 s 8 ...
+    Busmaster,
     /// Vector BLF (binary)
     Blf,
     /// pcap or pcapng capture (binary; SocketCAN, LINUX_SLL, LINUX_SLL2)
@@ -232,6 +235,7 @@ impl From<InputFormat> for Format {
             InputFormat::CandumpScreen => Format::CandumpScreen,
             InputFormat::Asc => Format::Asc,
             InputFormat::Trc => Format::Trc,
+            InputFormat::Busmaster => Format::Busmaster,
             InputFormat::Blf => Format::Blf,
             InputFormat::Pcap => Format::Pcap,
         }

@@ -57,6 +57,14 @@ pub fn trc(data: &[u8]) {
     reader(Some(Format::Trc), data);
 }
 
+/// The `busmaster` target: the reader's own checks (well-formed frames, the
+/// scan shortcut leaves the state `parse` does), then [`reader`] with the
+/// format forced.
+pub fn busmaster(data: &[u8]) {
+    crate::trace::busmaster::fuzz_busmaster(data);
+    reader(Some(Format::Busmaster), data);
+}
+
 /// The `blf` target: the reader's own checks (well-formed frames, no endless
 /// loop, bounded buffers), then [`reader`] with the format forced.
 pub fn blf(data: &[u8]) {

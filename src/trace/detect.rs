@@ -266,7 +266,7 @@ impl Detector {
             Parsed::Skipped
         } else {
             Parsed::Malformed(
-                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC)"
+                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC, BUSMASTER)"
                     .into(),
             )
         }

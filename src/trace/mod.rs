@@ -8,6 +8,7 @@
 
 pub mod asc;
 pub mod blf;
+pub mod busmaster;
 pub mod cancel;
 pub mod candump_log;
 pub mod candump_screen;
@@ -39,6 +40,8 @@ pub enum Format {
     Asc,
     /// PEAK TRC (PCAN-View, PCAN-Explorer), versions 1.0 to 2.1.
     Trc,
+    /// BUSMASTER log (`***BUSMASTER Ver 2.0.0***`, `14:19:11:4184 Tx 1 0x099 s 8 ...`).
+    Busmaster,
     /// Vector BLF, binary: read object by object, not line by line, and
     /// detected by its `LOGG` magic, so it is not in [`Format::ALL`].
     Blf,
@@ -52,11 +55,12 @@ pub enum Format {
 
 impl Format {
     /// The text formats, read line by line and detected from their lines.
-    pub const ALL: [Format; 4] = [
+    pub const ALL: [Format; 5] = [
         Format::CandumpLog,
         Format::CandumpScreen,
         Format::Asc,
         Format::Trc,
+        Format::Busmaster,
     ];
 
     /// The name used on the command line and in the `format` JSON key.
@@ -66,6 +70,7 @@ impl Format {
             Format::CandumpScreen => "candump-screen",
             Format::Asc => "asc",
             Format::Trc => "trc",
+            Format::Busmaster => "busmaster",
             Format::Blf => "blf",
             Format::Pcap => "pcap",
             Format::Pcapng => "pcapng",
@@ -86,6 +91,7 @@ impl Format {
             }
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
             Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
+            Format::Busmaster => AnyParser::Busmaster(busmaster::BusmasterParser::new()),
             Format::Blf | Format::Pcap | Format::Pcapng => AnyParser::Binary(BinaryParser(self)),
         }
     }
@@ -499,6 +505,7 @@ pub enum AnyParser {
     CandumpScreen(candump_screen::CandumpScreenParser),
     Asc(asc::AscParser),
     Trc(trc::TrcParser),
+    Busmaster(busmaster::BusmasterParser),
     Binary(BinaryParser),
 }
 
@@ -509,6 +516,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.format(),
             AnyParser::Asc(p) => p.format(),
             AnyParser::Trc(p) => p.format(),
+            AnyParser::Busmaster(p) => p.format(),
             AnyParser::Binary(p) => p.format(),
         }
     }
@@ -520,6 +528,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.parse(line, interest),
             AnyParser::Asc(p) => p.parse(line, interest),
             AnyParser::Trc(p) => p.parse(line, interest),
+            AnyParser::Busmaster(p) => p.parse(line, interest),
             AnyParser::Binary(p) => p.parse(line, interest),
         }
     }
@@ -530,6 +539,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.take_warning(),
             AnyParser::Asc(p) => p.take_warning(),
             AnyParser::Trc(p) => p.take_warning(),
+            AnyParser::Busmaster(p) => p.take_warning(),
             AnyParser::Binary(p) => p.take_warning(),
         }
     }
@@ -540,6 +550,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.identified(),
             AnyParser::Asc(p) => p.identified(),
             AnyParser::Trc(p) => p.identified(),
+            AnyParser::Busmaster(p) => p.identified(),
             AnyParser::Binary(p) => p.identified(),
         }
     }
@@ -550,6 +561,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.context(),
             AnyParser::Asc(p) => p.context(),
             AnyParser::Trc(p) => p.context(),
+            AnyParser::Busmaster(p) => p.context(),
             AnyParser::Binary(p) => p.context(),
         }
     }
@@ -561,6 +573,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest),
             AnyParser::Asc(p) => p.run(bytes, max_line, interest),
             AnyParser::Trc(p) => p.run(bytes, max_line, interest),
+            AnyParser::Busmaster(p) => p.run(bytes, max_line, interest),
             AnyParser::Binary(p) => p.run(bytes, max_line, interest),
         }
     }
@@ -571,6 +584,7 @@ impl LineParser for AnyParser {
             AnyParser::CandumpScreen(p) => p.scan(line, interest),
             AnyParser::Asc(p) => p.scan(line, interest),
             AnyParser::Trc(p) => p.scan(line, interest),
+            AnyParser::Busmaster(p) => p.scan(line, interest),
             AnyParser::Binary(p) => p.scan(line, interest),
         }
     }

@@ -16,6 +16,8 @@ pub enum TraceFormat {
     /// pcapng as dumpcap writes a SocketCAN interface: one LINUX_SLL
     /// interface, microsecond times, each frame a 16-byte `can_frame`.
     Pcapng,
+    /// BUSMASTER log as 2.0 writes it: HEX, system time, ids as `0x181`.
+    Busmaster,
 }
 
 /// xorshift64*: deterministic and fast; quality is irrelevant here.
@@ -66,6 +68,15 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         out.write_all(header)?;
         written += header.len() as u64;
         lines += 6;
+    }
+    if format == TraceFormat::Busmaster {
+        let header = b"***BUSMASTER Ver 2.0.0***\n***PROTOCOL CAN***\n\
+***NOTE: PLEASE DO NOT EDIT THIS DOCUMENT***\n***[START LOGGING SESSION]***\n\
+***START DATE AND TIME 14:11:2023 22:13:20:000***\n***HEX***\n***SYSTEM MODE***\n\
+***<Time><Tx/Rx><Channel><CAN ID><Type><DLC><DataBytes>***\n";
+        out.write_all(header)?;
+        written += header.len() as u64;
+        lines += 8;
     }
     if format == TraceFormat::Pcapng {
         let header = pcapng_header();
@@ -129,6 +140,7 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
             }
             TraceFormat::Asc => asc_line(&mut line, micros, id, &data[..len]),
             TraceFormat::Pcapng => pcapng_packet(&mut line, micros, id, &data[..len]),
+            TraceFormat::Busmaster => busmaster_line(&mut line, micros, id, &data[..len]),
         }
         out.write_all(&line)?;
         written += line.len() as u64;
@@ -182,6 +194,30 @@ fn asc_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
         push_hex(line, b);
     }
     let _ = writeln!(line, "  Length = 228000 BitCount = 118 ID = {id}");
+}
+
+/// `22:13:20:1234 Rx 1 0x181 s 8 11 22 33 44 55 66 77 88 ` (time of day
+/// from 22:13:20, past midnight after 2 hours: those times the reader puts
+/// on the next day).
+fn busmaster_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
+    let secs = (80_000 + micros / 1_000_000) % 86_400;
+    let _ = write!(
+        line,
+        "{:02}:{:02}:{:02}:{:04} Rx 1 0x",
+        secs / 3600,
+        secs / 60 % 60,
+        secs % 60,
+        micros % 1_000_000 / 100
+    );
+    line.push(HEX[(id >> 8) as usize & 15]);
+    line.push(HEX[(id >> 4) as usize & 15]);
+    line.push(HEX[id as usize & 15]);
+    let _ = write!(line, " s {} ", data.len());
+    for &b in data {
+        push_hex(line, b);
+        line.push(b' ');
+    }
+    line.push(b'\n');
 }
 
 /// A pcapng section header and one LINUX_SLL interface named `can0`
