@@ -16,6 +16,7 @@ pub mod follow;
 pub mod hex;
 pub mod input;
 pub mod lines;
+pub mod mf4;
 pub mod pcap;
 pub mod reader;
 pub mod scan;
@@ -47,6 +48,9 @@ pub enum Format {
     /// pcapng capture file (Wireshark, dumpcap), binary: read packet by
     /// packet, detected by its section header block.
     Pcapng,
+    /// ASAM MDF 4 bus logging (CANedge, Vector, python-can), binary: read
+    /// record by record, detected by its identification block.
+    Mf4,
 }
 
 impl Format {
@@ -68,13 +72,17 @@ impl Format {
             Format::Blf => "blf",
             Format::Pcap => "pcap",
             Format::Pcapng => "pcapng",
+            Format::Mf4 => "mf4",
         }
     }
 
     /// A binary format: read record by record by its own reader (its
     /// "lines" are BLF objects or pcap packets), never by the line parsers.
     pub fn is_binary(self) -> bool {
-        matches!(self, Format::Blf | Format::Pcap | Format::Pcapng)
+        matches!(
+            self,
+            Format::Blf | Format::Pcap | Format::Pcapng | Format::Mf4
+        )
     }
 
     pub(crate) fn parser(self) -> AnyParser {
@@ -85,7 +93,9 @@ impl Format {
             }
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
             Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
-            Format::Blf | Format::Pcap | Format::Pcapng => AnyParser::Binary(BinaryParser(self)),
+            Format::Blf | Format::Pcap | Format::Pcapng | Format::Mf4 => {
+                AnyParser::Binary(BinaryParser(self))
+            }
         }
     }
 }

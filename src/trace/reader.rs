@@ -12,6 +12,7 @@ use super::blf::BlfReader;
 use super::detect::{Detector, sniff_binary};
 use super::input::sniff_gzip_generic;
 use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
+use super::mf4::Mf4Reader;
 use super::pcap::PcapReader;
 use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
 
@@ -108,6 +109,7 @@ enum Source<'a> {
     },
     Blf(BlfReader<Box<dyn Read + 'a>>),
     Pcap(Box<PcapReader<Box<dyn Read + 'a>>>),
+    Mf4(Box<Mf4Reader<Box<dyn Read + 'a>>>),
     Failed(io::Error),
     /// The end, with the format the input had.
     Done(Option<Format>),
@@ -148,6 +150,7 @@ impl<'a> TraceReader<'a> {
             Some(Format::Pcap | Format::Pcapng) => {
                 return Ok(Source::Pcap(Box::new(PcapReader::new(input)?)));
             }
+            Some(Format::Mf4) => return Ok(Source::Mf4(Box::new(Mf4Reader::new(input)?))),
             _ => {}
         }
         let detector = match format {
@@ -166,6 +169,7 @@ impl<'a> TraceReader<'a> {
             Source::Text { detector, .. } => detector.format(),
             Source::Blf(_) => Some(Format::Blf),
             Source::Pcap(reader) => Some(reader.format()),
+            Source::Mf4(_) => Some(Format::Mf4),
             Source::Failed(_) => None,
             Source::Done(format) => *format,
         }
@@ -260,6 +264,26 @@ impl<'a> TraceReader<'a> {
                         reason: reason.into_owned(),
                     },
                 });
+                Ok(true)
+            }
+            Source::Mf4(reader) => {
+                let line = self.lines + 1;
+                let record = reader.next_record()?.map(|parsed| match parsed {
+                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+                    Parsed::Skipped => Record::Skipped { line },
+                    Parsed::Malformed(reason) => Record::Malformed {
+                        line,
+                        reason: reason.into_owned(),
+                    },
+                });
+                while let Some(note) = reader.take_note() {
+                    self.queue.push_back(Record::Note(note));
+                }
+                let Some(record) = record else {
+                    return Ok(false);
+                };
+                self.lines = line;
+                self.queue.push_back(record);
                 Ok(true)
             }
             Source::Failed(_) | Source::Done(_) => Ok(false),

@@ -163,7 +163,13 @@ impl Panel {
         let origin = input.first_time.or(streamed.origin);
         let wall = matches!(
             input.format,
-            Some(Format::CandumpLog | Format::CandumpScreen | Format::Pcap | Format::Pcapng)
+            Some(
+                Format::CandumpLog
+                    | Format::CandumpScreen
+                    | Format::Pcap
+                    | Format::Pcapng
+                    | Format::Mf4
+            )
         ) && origin.is_some_and(|t| t.secs() >= UNIX_FROM);
         let axis = match (timed, wall) {
             (false, _) => Axis::Lines,
