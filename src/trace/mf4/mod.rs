@@ -58,7 +58,7 @@ use std::io::{self, Read, Seek, SeekFrom, Write};
 use super::blf::read_full;
 use super::{Frame, FrameKind, Parsed, Payload, Reason, Timestamp};
 use block::{Block, HEADER, Header, ID_LEN, Id};
-use layout::{Blocks, Channel, Layout};
+use layout::{Blocks, Channel, Layout, Raw};
 
 pub use block::is_magic;
 
@@ -1013,7 +1013,8 @@ impl<R: Read> Mf4Reader<R> {
             len: 0,
             data: Payload::new(),
         };
-        if kind == FrameKind::Remote {
+        if matches!(kind, FrameKind::Remote | FrameKind::Error) {
+            // No data, as every reader here gives these frames.
             return Ok(Out::Frame(base));
         }
         if len > 64 {
@@ -1223,8 +1224,10 @@ fn dlc_len(dlc: u64) -> u64 {
 /// master counts units of 10^-k s.
 fn time(c: &Channel, record: &[u8], sample: u64, start: (u128, u8)) -> Option<Timestamp> {
     let raw = c.raw(record, sample)?;
+    // Float seconds without a scale are no count of units (python-can).
+    let counts = !matches!((raw, c.conversion.decimal_scale()), (Raw::F(_), Some(0)));
     let (offset, digits): (i128, u8) = match (c.conversion.decimal_scale(), raw.integer()) {
-        (Some(k), Some(units)) => {
+        (Some(k), Some(units)) if counts => {
             let scale = 10i128.pow(18 - u32::from(k));
             (units.checked_mul(scale)?, k)
         }
@@ -1233,7 +1236,10 @@ fn time(c: &Channel, record: &[u8], sample: u64, start: (u128, u8)) -> Option<Ti
             if !secs.is_finite() || secs.abs() > 1.0e12 {
                 return None;
             }
-            ((secs * 1e9).round() as i128 * 1_000_000_000, 9)
+            // Float seconds (python-can, asammdf) to the nanosecond; six
+            // digits when that is what they hold (microsecond loggers).
+            let ns = (secs * 1e9).round() as i128;
+            (ns * 1_000_000_000, if ns % 1000 == 0 { 6 } else { 9 })
         }
     };
     let total = u128::try_from(i128::try_from(start.0).ok()?.checked_add(offset)?).ok()?;
