@@ -30,7 +30,10 @@ pub fn f64_at(b: &[u8], at: usize) -> Option<f64> {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Id {
     /// MDF 4: `unfinished` for `UnFinMF ` with its standard flags.
-    Mdf4 { unfinished: bool, flags: u16 },
+    Mdf4 {
+        unfinished: bool,
+        flags: u16,
+    },
     /// Another MDF version (3.x): its version text.
     OtherVersion(String),
     NotMdf,
@@ -268,7 +271,10 @@ pub fn text(b: Block<'_>) -> String {
 pub enum Conversion {
     Identity,
     /// `offset + factor * x`.
-    Linear { offset: f64, factor: f64 },
+    Linear {
+        offset: f64,
+        factor: f64,
+    },
     /// `(p1 x² + p2 x + p3) / (p4 x² + p5 x + p6)`.
     Rational([f64; 6]),
     /// Value to value: sorted (key, value) pairs; with interpolation or

@@ -14,6 +14,9 @@ use crate::trace::FrameKind;
 
 /// Blocks followed along one chain at most (a loop in the links ends it).
 const MAX_CHAIN: usize = 1 << 16;
+/// Blocks visited to build one layout at most: real files need hundreds;
+/// links that share chains could otherwise make the walk quadratic.
+const MAX_VISITS: usize = 1 << 20;
 
 /// How to find a linked block.
 pub trait Blocks {
@@ -81,6 +84,7 @@ impl Channel {
         let big = self.data_type % 2 == 1;
         match self.data_type {
             0 | 1 => Some(Raw::U(uint(record, self.byte, self.bit, self.bits, big)?)),
+            2 | 3 if self.bits == 0 => Some(Raw::I(0)),
             2 | 3 => {
                 let v = uint(record, self.byte, self.bit, self.bits, big)?;
                 let shift = 64u32.checked_sub(self.bits)?;
@@ -168,6 +172,13 @@ pub struct Layout {
     pub problems: Vec<String>,
 }
 
+/// What building a layout found wrong, and the blocks it visited.
+#[derive(Default)]
+pub struct Cx {
+    problems: Vec<String>,
+    visits: usize,
+}
+
 /// Follows a chain of blocks by their "next" link.
 fn chain<B: Blocks, T>(
     blocks: &B,
@@ -175,12 +186,18 @@ fn chain<B: Blocks, T>(
     what: &str,
     read: impl Fn(Block<'_>) -> Option<T>,
     next: impl Fn(&T) -> u64,
-    problems: &mut Vec<String>,
+    cx: &mut Cx,
 ) -> Result<Vec<(u64, T)>, Missing> {
     let mut out = Vec::new();
     let mut seen = HashSet::new();
     let mut at = first;
     while at != 0 && out.len() < MAX_CHAIN && seen.insert(at) {
+        cx.visits += 1;
+        if cx.visits > MAX_VISITS {
+            cx.problems
+                .push("more linked blocks than read at most".into());
+            break;
+        }
         match blocks.block(at) {
             Ok(b) => match read(b) {
                 Some(t) => {
@@ -189,13 +206,15 @@ fn chain<B: Blocks, T>(
                     at = n;
                 }
                 None => {
-                    problems.push(format!("{what} block at byte offset {at} is not one"));
+                    cx.problems
+                        .push(format!("{what} block at byte offset {at} is not one"));
                     break;
                 }
             },
             Err(true) => return Err(Missing::Ahead),
             Err(false) => {
-                problems.push(format!("no {what} block at byte offset {at}"));
+                cx.problems
+                    .push(format!("no {what} block at byte offset {at}"));
                 break;
             }
         }
@@ -215,14 +234,14 @@ fn named<B: Blocks>(blocks: &B, link: u64) -> Result<String, Missing> {
 }
 
 /// The channel (with its conversion) of a CN block.
-fn channel<B: Blocks>(blocks: &B, cn: &Cn, problems: &mut Vec<String>) -> Result<Channel, Missing> {
+fn channel<B: Blocks>(blocks: &B, cn: &Cn, cx: &mut Cx) -> Result<Channel, Missing> {
     let conversion = match cn.conversion {
         0 => Conversion::Identity,
         at => match blocks.block(at) {
             Ok(b) if b.header.is(b"CC") => match Conversion::read(b) {
                 Ok(c) => c,
                 Err(kind) => {
-                    problems.push(format!(
+                    cx.problems.push(format!(
                         "conversion of type {kind} at byte offset {at} is not numeric; \
                          the raw value is used"
                     ));
@@ -247,15 +266,11 @@ fn channel<B: Blocks>(blocks: &B, cn: &Cn, problems: &mut Vec<String>) -> Result
 
 /// The channels of a group by name, with the members of structures
 /// (composition) as `Parent.Member` names as the writers give them.
-fn channels<B: Blocks>(
-    blocks: &B,
-    first: u64,
-    problems: &mut Vec<String>,
-) -> Result<Vec<(String, Cn)>, Missing> {
+fn channels<B: Blocks>(blocks: &B, first: u64, cx: &mut Cx) -> Result<Vec<(String, Cn)>, Missing> {
     let mut out = Vec::new();
     let mut todo = vec![(first, 0u8)];
     while let Some((at, depth)) = todo.pop() {
-        for (_, cn) in chain(blocks, at, "CN", Cn::read, |c| c.next, problems)? {
+        for (_, cn) in chain(blocks, at, "CN", Cn::read, |c| c.next, cx)? {
             let name = named(blocks, cn.name)?;
             if cn.composition != 0 && depth < 4 {
                 // A CA block (array) is no structure: its link leads nowhere here.
@@ -278,25 +293,19 @@ const KINDS: [(&str, FrameKind); 3] = [
     ("CAN_ErrorFrame", FrameKind::Error),
 ];
 
-fn group<B: Blocks>(
-    blocks: &B,
-    offset: u64,
-    cg: &Cg,
-    problems: &mut Vec<String>,
-) -> Result<Group, Missing> {
-    let cns = channels(blocks, cg.cn_first, problems)?;
+fn group<B: Blocks>(blocks: &B, offset: u64, cg: &Cg, cx: &mut Cx) -> Result<Group, Missing> {
+    let cns = channels(blocks, cg.cn_first, cx)?;
     let mut time = None;
     for (_, cn) in &cns {
         if matches!(cn.kind, CN_MASTER | CN_VIRTUAL_MASTER) && cn.sync == SYNC_TIME {
-            time = Some(channel(blocks, cn, problems)?);
+            time = Some(channel(blocks, cn, cx)?);
             break;
         }
     }
     // A bus-logging group: its structure channel or its members say which.
     let kind = KINDS.iter().find(|(name, _)| {
-        cns.iter().any(|(n, _)| {
-            n == name || n.strip_prefix(name).is_some_and(|rest| rest == ".ID")
-        })
+        cns.iter()
+            .any(|(n, _)| n == name || n.strip_prefix(name).is_some_and(|rest| rest == ".ID"))
     });
     let can = match kind {
         Some((name, kind)) => {
@@ -316,7 +325,7 @@ fn group<B: Blocks>(
                     _ => continue,
                 };
                 if slot.is_none() {
-                    *slot = Some(channel(blocks, cn, problems)?);
+                    *slot = Some(channel(blocks, cn, cx)?);
                 }
             }
             Some((*kind, fields))
@@ -337,20 +346,21 @@ fn group<B: Blocks>(
 /// `Err` while a block it needs is still ahead of the reader.
 pub fn build<B: Blocks>(blocks: &B, dg_first: u64) -> Result<Layout, Missing> {
     let mut layout = Layout::default();
-    let problems = &mut layout.problems;
-    for (_, dg) in chain(blocks, dg_first, "DG", Dg::read, |d| d.next, problems)? {
+    let mut cx = Cx::default();
+    let cx = &mut cx;
+    for (_, dg) in chain(blocks, dg_first, "DG", Dg::read, |d| d.next, cx)? {
         let mut groups = Vec::new();
-        for (at, cg) in chain(blocks, dg.cg_first, "CG", Cg::read, |c| c.next, problems)? {
-            groups.push(group(blocks, at, &cg, problems)?);
+        for (at, cg) in chain(blocks, dg.cg_first, "CG", Cg::read, |c| c.next, cx)? {
+            groups.push(group(blocks, at, &cg, cx)?);
         }
         if dg.rec_id_size == 0 && groups.len() > 1 {
-            problems.push(format!(
+            cx.problems.push(format!(
                 "a data group without record ids has {} channel groups; only the first is read",
                 groups.len()
             ));
         }
         if !matches!(dg.rec_id_size, 0 | 1 | 2 | 4 | 8) {
-            problems.push(format!(
+            cx.problems.push(format!(
                 "record ids of {} bytes: the data group is not read",
                 dg.rec_id_size
             ));
@@ -362,6 +372,7 @@ pub fn build<B: Blocks>(blocks: &B, dg_first: u64) -> Result<Layout, Missing> {
             data: dg.data,
         });
     }
+    layout.problems = std::mem::take(&mut cx.problems);
     Ok(layout)
 }
 

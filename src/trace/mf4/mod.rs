@@ -256,6 +256,8 @@ pub struct Mf4Reader<R> {
     start: (u128, u8),
     meta: Meta,
     layout: Option<Layout>,
+    /// The metadata a failed layout build had: retried only when it grew.
+    tried: Option<(usize, bool)>,
     owners: HashMap<u64, usize>,
     owners_stale: bool,
     states: Vec<DgState>,
@@ -332,8 +334,7 @@ impl<R: Read> Mf4Reader<R> {
         let start_ns = u128::from(hd_block.start_ns);
         let start_digits = if start_ns % 1_000_000_000 == 0 { 0 } else { 9 };
         Ok(Mf4Reader {
-            unfinished_dt: unfinished_flags
-                .is_some_and(|f| f & block::UNFIN_LAST_DT_LENGTH != 0),
+            unfinished_dt: unfinished_flags.is_some_and(|f| f & block::UNFIN_LAST_DT_LENGTH != 0),
             dg_first: hd_block.dg_first,
             start: (start_ns * 1_000_000_000, start_digits),
             meta: Meta {
@@ -344,6 +345,7 @@ impl<R: Read> Mf4Reader<R> {
             },
             input,
             layout: None,
+            tried: None,
             owners: HashMap::new(),
             owners_stale: false,
             states: Vec::new(),
@@ -474,14 +476,21 @@ impl<R: Read> Mf4Reader<R> {
         self.meta.read_up_to = at + 1;
         let body = header.len - HEADER as u64;
         match &header.id {
-            b"DG" | b"CG" | b"CN" | b"CC" | b"TX" | b"DL" | b"HL" if header.len <= MAX_META_BLOCK => {
+            b"DG" | b"CG" | b"CN" | b"CC" | b"TX" | b"DL" | b"HL"
+                if header.len <= MAX_META_BLOCK =>
+            {
                 let mut bytes = head.to_vec();
                 bytes.resize(header.len as usize, 0);
-                let k = self.input.full(bytes.get_mut(HEADER..).unwrap_or_default())?;
+                let k = self
+                    .input
+                    .full(bytes.get_mut(HEADER..).unwrap_or_default())?;
                 if (k as u64) < body {
                     self.queue.push_back(Out::Malformed(
-                        format!("{} block at byte offset {at} cut off by the end", id(&header))
-                            .into(),
+                        format!(
+                            "{} block at byte offset {at} cut off by the end",
+                            id(&header)
+                        )
+                        .into(),
                     ));
                     return Ok(());
                 }
@@ -546,7 +555,9 @@ impl<R: Read> Mf4Reader<R> {
 
     /// The layout, once every block it links to has been read.
     fn layout_ready(&mut self) -> bool {
-        if self.layout.is_none() {
+        let known = (self.meta.blocks.len(), self.meta.done);
+        if self.layout.is_none() && self.tried != Some(known) {
+            self.tried = Some(known);
             match layout::build(&self.meta, self.dg_first) {
                 Ok(l) => {
                     for p in &l.problems {
@@ -567,6 +578,9 @@ impl<R: Read> Mf4Reader<R> {
                 }
                 Err(layout::Missing::Ahead) => return false,
             }
+        }
+        if self.layout.is_none() {
+            return false;
         }
         if self.owners_stale
             && let Some(l) = &self.layout
@@ -599,7 +613,8 @@ impl<R: Read> Mf4Reader<R> {
             }
             match layout::data_blocks(&self.meta, data.data) {
                 Ok(list) => {
-                    let spooled = |b: &u64| self.spool.as_ref().is_some_and(|s| s.sd.contains_key(b));
+                    let spooled =
+                        |b: &u64| self.spool.as_ref().is_some_and(|s| s.sd.contains_key(b));
                     if !list.iter().all(spooled) {
                         return false;
                     }
@@ -712,8 +727,7 @@ impl<R: Read> Mf4Reader<R> {
         if body > block::MAX_INFLATED {
             self.input.skip(body)?;
             self.queue.push_back(Out::Malformed(
-                format!("DZ block at byte offset {at} of {body} bytes is too large to read")
-                    .into(),
+                format!("DZ block at byte offset {at} of {body} bytes is too large to read").into(),
             ));
             return Ok(None);
         }
@@ -896,10 +910,15 @@ impl<R: Read> Mf4Reader<R> {
                  the rest of the data block cannot be read"
             )));
         }
-        let Some(record) = rest.get(id_size..id_size + size) else {
+        let used = id_size + size;
+        if used == 0 {
+            return Ok(Err(
+                "records of 0 bytes: the data block cannot be read".to_string()
+            ));
+        }
+        let Some(record) = rest.get(id_size..used) else {
             return Ok(Ok(None));
         };
-        let used = id_size + size;
         let Some(state) = self.states.get_mut(dg) else {
             return Ok(Ok(None));
         };
@@ -1024,7 +1043,12 @@ impl<R: Read> Mf4Reader<R> {
         }
         let len = len as usize;
         let (link, offset) = match &f.data_bytes {
-            None => return Ok(Out::Frame(Decoded { len: len as u8, ..base })),
+            None => {
+                return Ok(Out::Frame(Decoded {
+                    len: len as u8,
+                    ..base
+                }));
+            }
             Some(c) if c.vlsd => {
                 let Some(offset) = block::uint(record, c.byte, c.bit, c.bits.min(64), false) else {
                     return Ok(Out::Malformed("record too short for its data bytes".into()));
