@@ -1006,10 +1006,12 @@ impl<R: Read> Mf4Reader<R> {
         let get = |c: &Option<Channel>| c.as_ref().and_then(|c| c.uint(record, sample));
         let raw_id = get(&f.id).unwrap_or(0);
         let id = (raw_id & 0x1FFF_FFFF) as u32;
-        let extended = match get(&f.ide) {
-            Some(v) => v != 0,
-            None => raw_id & 0x8000_0000 != 0 || id > 0x7FF,
-        };
+        // An id over 11 bits is extended whatever a broken IDE says.
+        let extended = id > 0x7FF
+            || match get(&f.ide) {
+                Some(v) => v != 0,
+                None => raw_id & 0x8000_0000 != 0,
+            };
         let channel = get(&f.bus).unwrap_or(0);
         let edl = get(&f.edl).is_some_and(|v| v != 0);
         let dlc = get(&f.dlc);
@@ -1272,4 +1274,49 @@ fn time(c: &Channel, record: &[u8], sample: u64, start: (u128, u8)) -> Option<Ti
         (total % ATTO) as u64,
         digits.max(start.1),
     )
+}
+
+/// Fuzz target body: any bytes must read to the end without a panic or an
+/// endless loop, every frame well-formed, the memory bounded.
+#[cfg(feature = "fuzzing")]
+pub(crate) fn fuzz_mf4(data: &[u8]) {
+    let Ok(mut r) = Mf4Reader::new(data) else {
+        return;
+    };
+    let mut records = 0usize;
+    loop {
+        let next = r.next_record();
+        let Ok(Some(parsed)) = next else {
+            break;
+        };
+        records += 1;
+        // A record is at least one byte of input (or one of a DZ block's
+        // inflated bytes, at most 1032 of them a byte).
+        assert!(
+            records <= data.len().saturating_mul(1032).max(64),
+            "no progress"
+        );
+        if let Parsed::Frame(f) = parsed {
+            assert!(usize::from(f.len) <= Payload::MAX);
+            match f.kind {
+                FrameKind::Data => {
+                    assert!(f.len <= 8);
+                    assert_eq!(f.data.as_slice().len(), usize::from(f.len));
+                }
+                FrameKind::Fd => assert_eq!(f.data.as_slice().len(), usize::from(f.len)),
+                FrameKind::Remote | FrameKind::Error => assert!(f.data.as_slice().is_empty()),
+            }
+            assert!(f.id <= if f.extended { 0x1FFF_FFFF } else { 0x7FF });
+            assert!(!f.channel.is_empty());
+        }
+        assert!(r.queue.len() <= MAX_QUEUE + CHUNK + 16);
+        assert!(r.waiting.len() <= MAX_WAITING + CHUNK + 16);
+        assert!(r.meta.bytes <= MAX_META);
+        assert!(
+            r.states
+                .iter()
+                .all(|s| s.carry.len() <= MAX_RECORD + CHUNK + 8)
+        );
+    }
+    while r.take_note().is_some() {}
 }
