@@ -351,10 +351,16 @@ fn read_mf4<R: Read, E: Write>(
         while let Some(note) = reader.take_note() {
             consumer.log.note(&format!("{}: {note}", consumer.file));
         }
-        match reader.next_record() {
-            Ok(Some(Parsed::Frame(f))) => deliver(consumer, 0, &f, None)?,
-            Ok(Some(Parsed::Skipped)) => consumer.skipped(),
-            Ok(Some(Parsed::Malformed(reason))) => consumer.malformed(0, reason),
+        match reader.next_item(Some(consumer.interest())) {
+            Ok(Some(mf4::Next::Plain(n))) => {
+                // Frames on ids nobody wants: only counted.
+                consumer.plain_frames(n);
+                consumer.lines(n);
+                continue;
+            }
+            Ok(Some(mf4::Next::Record(Parsed::Frame(f)))) => deliver(consumer, 0, &f, None)?,
+            Ok(Some(mf4::Next::Record(Parsed::Skipped))) => consumer.skipped(),
+            Ok(Some(mf4::Next::Record(Parsed::Malformed(reason)))) => consumer.malformed(0, reason),
             Ok(None) => {
                 while let Some(note) = reader.take_note() {
                     consumer.log.note(&format!("{}: {note}", consumer.file));

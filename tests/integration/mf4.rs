@@ -121,7 +121,11 @@ fn counts_of_every_fixture_are_pinned() {
             &i["emcy"],
         ]
         .map(|x| x.as_u64().unwrap());
-        assert_eq!(got, [lines, frames, skipped, malformed, emcy], "{file}: {i}");
+        assert_eq!(
+            got,
+            [lines, frames, skipped, malformed, emcy],
+            "{file}: {i}"
+        );
     }
 }
 
@@ -132,7 +136,10 @@ fn frames_are_what_python_can_reads() {
     let f = frames("fixtures/canedge.mf4");
     assert_eq!(f.len(), 22);
     let remote = f.iter().find(|f| f.kind == FrameKind::Remote).unwrap();
-    assert_eq!((remote.id, remote.extended, remote.data.len()), (0x81, false, 0));
+    assert_eq!(
+        (remote.id, remote.extended, remote.data.len()),
+        (0x81, false, 0)
+    );
     let error = f.iter().find(|f| f.kind == FrameKind::Error).unwrap();
     assert_eq!(error.channel, "1");
     let ext = f.iter().find(|f| f.extended).unwrap();

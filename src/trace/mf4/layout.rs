@@ -74,6 +74,8 @@ pub struct Channel {
     pub vlsd: bool,
     /// Where VLSD data is: a VLSD channel group or an SD/DZ/DL block.
     pub data: u64,
+    /// The conversion's [`Conversion::decimal_scale`], once.
+    pub scale: Option<u8>,
 }
 
 impl Channel {
@@ -253,6 +255,7 @@ fn channel<B: Blocks>(blocks: &B, cn: &Cn, cx: &mut Cx) -> Result<Channel, Missi
         },
     };
     Ok(Channel {
+        scale: conversion.decimal_scale(),
         byte: cn.byte_offset as usize,
         bit: cn.bit_offset,
         bits: cn.bit_count,

@@ -56,7 +56,7 @@ use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
 use super::blf::read_full;
-use super::{Frame, FrameKind, Parsed, Payload, Reason, Timestamp};
+use super::{Frame, FrameKind, Interest, Parsed, Payload, Reason, Timestamp};
 use block::{Block, HEADER, Header, ID_LEN, Id};
 use layout::{Blocks, Channel, Layout, Raw};
 
@@ -73,6 +73,8 @@ pub const MAX_RECORD: usize = 16 * 1024 * 1024;
 pub const VLSD_WINDOW: usize = 256;
 /// Bytes of data decoded at a time.
 const CHUNK: usize = 64 * 1024;
+/// Records decoded before the queue is handed out.
+const RUN: usize = 4096;
 const ATTO: u128 = 1_000_000_000_000_000_000;
 
 /// What one record is.
@@ -85,6 +87,18 @@ enum Out {
     /// (CANedge writes it after the frame): data group, VLSD group, offset
     /// of the record, data length.
     Waiting(Decoded, Key, usize),
+    /// Data frames on ids the caller does not want: only counted.
+    Plain(u64),
+}
+
+/// What [`Mf4Reader::next_item`] read.
+#[derive(Debug)]
+pub enum Next<'a> {
+    /// A record: a frame, a skipped or a malformed one.
+    Record(Parsed<'a>),
+    /// So many records in a row that are data frames on ids the caller's
+    /// interest does not want: only to count.
+    Plain(u64),
 }
 
 /// A VLSD record: data group, channel group, offset in the group's data.
@@ -114,6 +128,12 @@ struct Input<R> {
     at: usize,
     offset: u64,
     eof: bool,
+}
+
+impl<R: Read> Read for Input<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        Input::read(self, buf)
+    }
 }
 
 impl<R: Read> Input<R> {
@@ -232,12 +252,14 @@ enum Active {
     /// A spooled DT block's data.
     Spooled { dg: usize, pos: u64, left: u64 },
     /// An inflated DZ block.
-    Inflated { dg: usize, data: Vec<u8>, at: usize },
+    Inflated { dg: usize, data: Vec<u8> },
 }
 
 /// Decoding state of a data group.
 #[derive(Default)]
 struct DgState {
+    /// The start of a record cut by the end of a block, while another
+    /// group's block is decoded (DL lists may interleave).
     carry: Vec<u8>,
     /// The rest of the current block cannot be read (unknown record id).
     lost: bool,
@@ -278,6 +300,18 @@ pub struct Mf4Reader<R> {
     channel: [u8; 20],
     channel_len: usize,
     buf: Vec<u8>,
+    /// A DZ block's bytes, its inflated data and the transposed bytes:
+    /// kept from block to block.
+    zbuf: Vec<u8>,
+    spare: Vec<u8>,
+    scratch: Vec<u8>,
+    /// Data bytes of group `win_dg` being split into records, from `win_pos`.
+    win: Vec<u8>,
+    win_pos: usize,
+    win_dg: usize,
+    /// Decoding stopped after a wanted frame (the caller's interest may
+    /// change with it): go on in the window before reading more.
+    resume: bool,
 }
 
 impl<R: Read> Mf4Reader<R> {
@@ -362,6 +396,13 @@ impl<R: Read> Mf4Reader<R> {
             channel: [0; 20],
             channel_len: 0,
             buf: vec![0; CHUNK],
+            zbuf: Vec::new(),
+            spare: Vec::new(),
+            scratch: Vec::new(),
+            win: Vec::new(),
+            win_pos: 0,
+            win_dg: 0,
+            resume: false,
         })
     }
 
@@ -379,6 +420,18 @@ impl<R: Read> Mf4Reader<R> {
     /// The next record, classified; `Ok(None)` at the end. An error is an
     /// I/O error of the input (or of the temporary file): reading stops.
     pub fn next_record(&mut self) -> io::Result<Option<Parsed<'_>>> {
+        // Without an interest every frame is a record (never `Plain`).
+        Ok(self.next_item(None)?.map(|next| match next {
+            Next::Record(parsed) => parsed,
+            Next::Plain(_) => Parsed::Skipped,
+        }))
+    }
+
+    /// The next record, or a run of data frames on ids `interest` does not
+    /// want (only counted: their time and data are not decoded); decoding
+    /// stops after each wanted frame, so an interest that changes with it
+    /// applies from the next record on.
+    pub fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
         loop {
             if let Some(Out::Waiting(_, key, _)) = self.queue.front() {
                 let key = *key;
@@ -400,23 +453,26 @@ impl<R: Read> Mf4Reader<R> {
                         );
                     }
                 } else {
-                    self.step()?;
+                    self.step(interest)?;
                     continue;
                 }
             }
             if let Some(out) = self.queue.pop_front() {
                 self.popped += 1;
                 return Ok(Some(match out {
-                    Out::Frame(d) => Parsed::Frame(self.frame(d)),
-                    Out::Skipped => Parsed::Skipped,
-                    Out::Malformed(r) => Parsed::Malformed(r),
-                    Out::Waiting(..) => Parsed::Malformed("frame without its data bytes".into()),
+                    Out::Frame(d) => Next::Record(Parsed::Frame(self.frame(d))),
+                    Out::Skipped => Next::Record(Parsed::Skipped),
+                    Out::Malformed(r) => Next::Record(Parsed::Malformed(r)),
+                    Out::Plain(n) => Next::Plain(n),
+                    Out::Waiting(..) => {
+                        Next::Record(Parsed::Malformed("frame without its data bytes".into()))
+                    }
                 }));
             }
             if self.finished {
                 return Ok(None);
             }
-            self.step()?;
+            self.step(interest)?;
         }
     }
 
@@ -440,9 +496,13 @@ impl<R: Read> Mf4Reader<R> {
     }
 
     /// Does one piece of work: decodes a chunk, or reads a block.
-    fn step(&mut self) -> io::Result<()> {
+    fn step(&mut self, interest: Option<&Interest>) -> io::Result<()> {
+        if self.resume {
+            self.resume = false;
+            return self.records(interest);
+        }
         if let Some(active) = self.active.take() {
-            return self.decode_chunk(active);
+            return self.decode_chunk(active, interest);
         }
         if let Some(i) = self.replay {
             return self.replay_next(i);
@@ -641,10 +701,10 @@ impl<R: Read> Mf4Reader<R> {
         {
             self.start_block(dg);
             if header.is(b"DZ") {
-                let zipped = self.read_body(at, body)?;
+                let read = self.read_body(at, body)?;
                 self.meta.read_up_to = self.input.offset;
-                if let Some(zipped) = zipped {
-                    self.inflate(dg, at, &zipped);
+                if read {
+                    self.inflate(dg, at);
                 }
             } else {
                 self.meta.read_up_to = at + header.len;
@@ -722,34 +782,37 @@ impl<R: Read> Mf4Reader<R> {
         Ok(total)
     }
 
-    /// Reads a block's data into memory (DZ: bounded by its limit).
-    fn read_body(&mut self, at: u64, body: u64) -> io::Result<Option<Vec<u8>>> {
+    /// Reads a DZ block's data into `zbuf` (bounded by its limit).
+    fn read_body(&mut self, at: u64, body: u64) -> io::Result<bool> {
         if body > block::MAX_INFLATED {
             self.input.skip(body)?;
             self.queue.push_back(Out::Malformed(
                 format!("DZ block at byte offset {at} of {body} bytes is too large to read").into(),
             ));
-            return Ok(None);
+            return Ok(false);
         }
-        let mut bytes = vec![0u8; body as usize];
-        let n = self.input.full(&mut bytes)?;
+        let mut bytes = std::mem::take(&mut self.zbuf);
+        bytes.clear();
+        let n = (&mut self.input).take(body).read_to_end(&mut bytes);
+        self.zbuf = bytes;
+        let n = n?;
         if (n as u64) < body {
             self.queue.push_back(Out::Malformed(
                 format!("DZ block at byte offset {at} cut off by the end").into(),
             ));
-            return Ok(None);
+            return Ok(false);
         }
-        Ok(Some(bytes))
+        Ok(true)
     }
 
     /// An SD block (or a DZ holding one) goes to the spool, inflated.
     fn spool_sd(&mut self, at: u64, header: Header) -> io::Result<()> {
         let body = header.len - HEADER as u64;
         let data = if header.is(b"DZ") {
-            let Some(zipped) = self.read_body(at, body)? else {
+            if !self.read_body(at, body)? {
                 return Ok(());
-            };
-            match inflate(&zipped) {
+            }
+            match inflate(&self.zbuf) {
                 Ok(d) => Some(d),
                 Err(e) => {
                     self.queue.push_back(Out::Malformed(
@@ -777,108 +840,176 @@ impl<R: Read> Mf4Reader<R> {
     /// A new data block of `dg` begins: records may go on from the last
     /// block of the group (DL lists), unless that one was lost.
     fn start_block(&mut self, dg: usize) {
+        self.switch(dg);
         if let Some(s) = self.states.get_mut(dg)
             && s.lost
         {
             s.lost = false;
-            s.carry.clear();
+            self.win.clear();
+            self.win_pos = 0;
         }
     }
 
-    fn inflate(&mut self, dg: usize, at: u64, zipped: &[u8]) {
-        match inflate(zipped) {
-            Ok(data) => self.active = Some(Active::Inflated { dg, data, at: 0 }),
-            Err(e) => self.queue.push_back(Out::Malformed(
-                format!("DZ block at byte offset {at}: {e}").into(),
-            )),
+    /// Makes `dg` the window's group: what is left of another group's
+    /// record waits in that group's carry.
+    fn switch(&mut self, dg: usize) {
+        if self.win_dg == dg {
+            return;
+        }
+        let left = self.win.get(self.win_pos..).unwrap_or_default().to_vec();
+        if let Some(s) = self.states.get_mut(self.win_dg) {
+            s.carry = left;
+        }
+        self.win = self
+            .states
+            .get_mut(dg)
+            .map(|s| std::mem::take(&mut s.carry))
+            .unwrap_or_default();
+        self.win_pos = 0;
+        self.win_dg = dg;
+    }
+
+    /// Appends data bytes of group `dg` to the window, after what is left
+    /// of a record.
+    fn feed(&mut self, dg: usize, bytes: &[u8]) {
+        self.switch(dg);
+        if self.win_pos > 0 {
+            self.win.drain(..self.win_pos.min(self.win.len()));
+            self.win_pos = 0;
+        }
+        self.win.extend_from_slice(bytes);
+    }
+
+    /// Inflates the DZ block in `zbuf` for group `dg`.
+    fn inflate(&mut self, dg: usize, at: u64) {
+        let mut out = std::mem::take(&mut self.spare);
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let done = block::Dz::read(&self.zbuf).and_then(|dz| {
+            let end = 24usize.saturating_add(usize::try_from(dz.len).unwrap_or(usize::MAX));
+            let zipped = self
+                .zbuf
+                .get(24..end.min(self.zbuf.len()))
+                .unwrap_or_default();
+            dz.inflate_into(zipped, &mut out, &mut scratch)
+        });
+        self.scratch = scratch;
+        match done {
+            Ok(()) => self.active = Some(Active::Inflated { dg, data: out }),
+            Err(e) => {
+                self.spare = out;
+                self.queue.push_back(Out::Malformed(
+                    format!("DZ block at byte offset {at}: {e}").into(),
+                ));
+            }
         }
     }
 
-    fn decode_chunk(&mut self, active: Active) -> io::Result<()> {
+    fn decode_chunk(&mut self, active: Active, interest: Option<&Interest>) -> io::Result<()> {
         let mut buf = std::mem::take(&mut self.buf);
-        let (dg, n, next) = match active {
+        match active {
             Active::Input { dg, left } => {
                 let want = left.map_or(buf.len(), |l| l.min(buf.len() as u64) as usize);
                 let n = self.input.read(buf.get_mut(..want).unwrap_or_default())?;
                 let left = left.map(|l| l - n as u64);
-                let more = n > 0 && left != Some(0);
                 self.meta.read_up_to = self.input.offset;
-                (dg, n, more.then_some(Active::Input { dg, left }))
+                self.feed(dg, buf.get(..n).unwrap_or_default());
+                if n > 0 && left != Some(0) {
+                    self.active = Some(Active::Input { dg, left });
+                }
             }
             Active::Spooled { dg, pos, left } => {
                 let want = left.min(buf.len() as u64) as usize;
-                let spool = self.spool()?;
-                let n = spool.read_at(pos, buf.get_mut(..want).unwrap_or_default())?;
+                let n = self
+                    .spool()?
+                    .read_at(pos, buf.get_mut(..want).unwrap_or_default())?;
                 let left = left - n as u64;
-                let more = n > 0 && left > 0;
-                let next = Active::Spooled {
-                    dg,
-                    pos: pos + n as u64,
-                    left,
-                };
-                (dg, n, more.then_some(next))
-            }
-            Active::Inflated { dg, data, at } => {
-                let n = data.len().saturating_sub(at).min(buf.len());
-                if let (Some(d), Some(s)) = (buf.get_mut(..n), data.get(at..at + n)) {
-                    d.copy_from_slice(s);
+                self.feed(dg, buf.get(..n).unwrap_or_default());
+                if n > 0 && left > 0 {
+                    let pos = pos + n as u64;
+                    self.active = Some(Active::Spooled { dg, pos, left });
                 }
-                let at = at + n;
-                let more = at < data.len();
-                (dg, n, more.then_some(Active::Inflated { dg, data, at }))
             }
-        };
-        self.records(dg, buf.get(..n).unwrap_or_default())?;
+            Active::Inflated { dg, data, .. } => {
+                self.switch(dg);
+                if self.win_pos >= self.win.len() {
+                    // Nothing left of a record: the block becomes the
+                    // window, no copy (records stop every RUN of them).
+                    let old = std::mem::replace(&mut self.win, data);
+                    self.win_pos = 0;
+                    self.spare = old;
+                } else {
+                    self.feed(dg, &data);
+                    self.spare = data;
+                }
+            }
+        }
         self.buf = buf;
-        self.active = next;
-        Ok(())
+        self.records(interest)
     }
 
-    /// Splits data bytes of group `dg` into records and decodes them.
-    fn records(&mut self, dg: usize, chunk: &[u8]) -> io::Result<()> {
-        let Some(state) = self.states.get_mut(dg) else {
-            return Ok(());
-        };
-        if state.lost {
+    /// Splits the window into records and decodes them, up to a record it
+    /// holds only part of, or (with an interest) after a wanted frame.
+    fn records(&mut self, interest: Option<&Interest>) -> io::Result<()> {
+        let dg = self.win_dg;
+        if self.states.get(dg).is_none_or(|s| s.lost) {
+            self.win.clear();
+            self.win_pos = 0;
             return Ok(());
         }
-        let mut carry = std::mem::take(&mut state.carry);
-        let data: &[u8] = if carry.is_empty() {
-            chunk
-        } else {
-            carry.extend_from_slice(chunk);
-            &carry
-        };
-        let mut pos = 0;
-        while let Some(rest) = data.get(pos..)
+        let win = std::mem::take(&mut self.win);
+        let mut pos = self.win_pos;
+        let mut result = Ok(());
+        let mut n = 0;
+        while let Some(rest) = win.get(pos..)
             && !rest.is_empty()
         {
-            match self.record(dg, rest)? {
-                Ok(Some(used)) => pos += used,
-                Ok(None) => break,
-                Err(why) => {
+            n += 1;
+            if n > RUN {
+                // The queue stays short whatever the window's size.
+                self.resume = true;
+                break;
+            }
+            match self.record(dg, rest, interest) {
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+                Ok(Ok(Some((used, wanted)))) => {
+                    pos += used;
+                    if wanted && interest.is_some() {
+                        self.resume = true;
+                        break;
+                    }
+                }
+                Ok(Ok(None)) => break,
+                Ok(Err(why)) => {
                     self.queue.push_back(Out::Malformed(why.into()));
                     if let Some(s) = self.states.get_mut(dg) {
                         s.lost = true;
                     }
+                    pos = win.len();
                     break;
                 }
             }
         }
-        let left = data.get(pos..).unwrap_or_default().to_vec();
-        if let Some(state) = self.states.get_mut(dg) {
-            if state.lost {
-                state.carry.clear();
-            } else {
-                state.carry = left;
-            }
+        self.win = win;
+        self.win_pos = pos;
+        if self.states.get(dg).is_some_and(|s| s.lost) {
+            self.win.clear();
+            self.win_pos = 0;
         }
-        Ok(())
+        result
     }
 
-    /// Decodes the record at the start of `rest`: its length, `None` when
-    /// it needs more bytes, `Err` when the rest of the block is lost.
-    fn record(&mut self, dg: usize, rest: &[u8]) -> io::Result<Result<Option<usize>, String>> {
+    /// Decodes the record at the start of `rest`: its length and whether
+    /// it was a wanted frame, `None` when it needs more bytes, `Err` when
+    /// the rest of the block is lost.
+    fn record(
+        &mut self,
+        dg: usize,
+        rest: &[u8],
+        interest: Option<&Interest>,
+    ) -> io::Result<Result<Option<(usize, bool)>, String>> {
         let Some(g) = self.layout.as_ref().and_then(|l| l.groups.get(dg)) else {
             return Ok(Ok(None));
         };
@@ -938,15 +1069,23 @@ impl<R: Read> Mf4Reader<R> {
                 self.resolve((dg, gi, offset), bytes);
             }
             self.queue.push_back(Out::Skipped);
-            return Ok(Ok(Some(used)));
+            return Ok(Ok(Some((used, false))));
         }
-        let out = self.decode(dg, gi, record, sample)?;
-        if let Out::Waiting(_, key, _) = &out {
-            self.waiting
-                .insert(*key, self.popped + self.queue.len() as u64);
+        let out = self.decode(dg, gi, record, sample, interest)?;
+        let wanted = matches!(out, Out::Frame(_) | Out::Waiting(..));
+        match out {
+            Out::Plain(n) => match self.queue.back_mut() {
+                Some(Out::Plain(k)) => *k += n,
+                _ => self.queue.push_back(Out::Plain(n)),
+            },
+            Out::Waiting(_, key, _) => {
+                self.waiting
+                    .insert(key, self.popped + self.queue.len() as u64);
+                self.queue.push_back(out);
+            }
+            out => self.queue.push_back(out),
         }
-        self.queue.push_back(out);
-        Ok(Ok(Some(used)))
+        Ok(Ok(Some((used, wanted))))
     }
 
     /// The VLSD record `key` came: the frame waiting for it gets its data.
@@ -987,7 +1126,14 @@ impl<R: Read> Mf4Reader<R> {
         }
     }
 
-    fn decode(&mut self, dg: usize, gi: usize, record: &[u8], sample: u64) -> io::Result<Out> {
+    fn decode(
+        &mut self,
+        dg: usize,
+        gi: usize,
+        record: &[u8],
+        sample: u64,
+        interest: Option<&Interest>,
+    ) -> io::Result<Out> {
         let Some(group) = self
             .layout
             .as_ref()
@@ -999,10 +1145,6 @@ impl<R: Read> Mf4Reader<R> {
         let Some((kind, f)) = &group.can else {
             return Ok(Out::Skipped);
         };
-        let time = group
-            .time
-            .as_ref()
-            .and_then(|c| time(c, record, sample, self.start));
         let get = |c: &Option<Channel>| c.as_ref().and_then(|c| c.uint(record, sample));
         let raw_id = get(&f.id).unwrap_or(0);
         let id = (raw_id & 0x1FFF_FFFF) as u32;
@@ -1012,7 +1154,6 @@ impl<R: Read> Mf4Reader<R> {
                 Some(v) => v != 0,
                 None => raw_id & 0x8000_0000 != 0,
             };
-        let channel = get(&f.bus).unwrap_or(0);
         let edl = get(&f.edl).is_some_and(|v| v != 0);
         let dlc = get(&f.dlc);
         let len = match (get(&f.data_length), dlc) {
@@ -1025,6 +1166,24 @@ impl<R: Read> Mf4Reader<R> {
         if kind == FrameKind::Data && (edl || len > 8) {
             kind = FrameKind::Fd;
         }
+        // A frame on an id nobody wants is only counted, when that is all
+        // it can be: the same checks as below, without time and data (a
+        // VLSD frame's data may not have come yet: decoded in full).
+        if let Some(interest) = interest
+            && matches!(kind, FrameKind::Data | FrameKind::Fd)
+            && !interest.wants(id, extended)
+            && len <= 64
+            && f.data_bytes.as_ref().map_or(len == 0, |c| {
+                !c.vlsd && c.bytes(record).len() >= len as usize
+            })
+        {
+            return Ok(Out::Plain(1));
+        }
+        let time = group
+            .time
+            .as_ref()
+            .and_then(|c| time(c, record, sample, self.start));
+        let channel = get(&f.bus).unwrap_or(0);
         let base = Decoded {
             time,
             channel,
@@ -1045,11 +1204,11 @@ impl<R: Read> Mf4Reader<R> {
         }
         let len = len as usize;
         let (link, offset) = match &f.data_bytes {
+            None if len == 0 => return Ok(Out::Frame(base)),
             None => {
-                return Ok(Out::Frame(Decoded {
-                    len: len as u8,
-                    ..base
-                }));
+                return Ok(Out::Malformed(
+                    format!("a frame of {len} data bytes in a group without DataBytes").into(),
+                ));
             }
             Some(c) if c.vlsd => {
                 let Some(offset) = block::uint(record, c.byte, c.bit, c.bits.min(64), false) else {
@@ -1181,9 +1340,14 @@ impl<R: Read> Mf4Reader<R> {
                 ));
                 return Ok(());
             }
-            let mut zipped = vec![0u8; len as usize];
-            self.spool()?.read_at(pos, &mut zipped)?;
-            self.inflate(dg, at, &zipped);
+            let mut zipped = std::mem::take(&mut self.zbuf);
+            zipped.clear();
+            let spool = self.spool()?;
+            spool.file.seek(SeekFrom::Start(pos))?;
+            let read = (&mut spool.file).take(len).read_to_end(&mut zipped);
+            self.zbuf = zipped;
+            read?;
+            self.inflate(dg, at);
         } else {
             self.active = Some(Active::Spooled { dg, pos, left: len });
         }
@@ -1192,6 +1356,14 @@ impl<R: Read> Mf4Reader<R> {
 
     /// Records cut off by the end of their data.
     fn finish(&mut self) {
+        let left = self.win.len().saturating_sub(self.win_pos);
+        if left > 0 && self.states.get(self.win_dg).is_some_and(|s| !s.lost) {
+            self.queue.push_back(Out::Malformed(
+                format!("record cut off by the end of its data ({left} bytes)").into(),
+            ));
+        }
+        self.win.clear();
+        self.win_pos = 0;
         for s in &mut self.states {
             if !s.carry.is_empty() && !s.lost {
                 let n = s.carry.len();
@@ -1224,6 +1396,13 @@ fn inflate(body: &[u8]) -> Result<Vec<u8>, String> {
 
 fn take(bytes: &[u8], len: usize) -> Result<Payload, String> {
     match bytes.get(..len) {
+        Some(b) if len <= 8 => {
+            let mut inline = [0u8; 8];
+            if let Some(d) = inline.get_mut(..len) {
+                d.copy_from_slice(b);
+            }
+            Ok(Payload::inline(inline, len as u8))
+        }
         Some(b) => Payload::from_slice(b).ok_or_else(|| "more than 64 data bytes".to_string()),
         None => Err(format!(
             "DataLength {len} is more than the {} data bytes stored",
@@ -1251,8 +1430,8 @@ fn dlc_len(dlc: u64) -> u64 {
 fn time(c: &Channel, record: &[u8], sample: u64, start: (u128, u8)) -> Option<Timestamp> {
     let raw = c.raw(record, sample)?;
     // Float seconds without a scale are no count of units (python-can).
-    let counts = !matches!((raw, c.conversion.decimal_scale()), (Raw::F(_), Some(0)));
-    let (offset, digits): (i128, u8) = match (c.conversion.decimal_scale(), raw.integer()) {
+    let counts = !matches!((raw, c.scale), (Raw::F(_), Some(0)));
+    let (offset, digits): (i128, u8) = match (c.scale, raw.integer()) {
         (Some(k), Some(units)) if counts => {
             let scale = 10i128.pow(18 - u32::from(k));
             (units.checked_mul(scale)?, k)
