@@ -136,6 +136,64 @@ pub struct CanFields {
     pub edl: Option<Channel>,
 }
 
+/// A field read as it is stored: an unsigned little-endian integer, not
+/// converted, not virtual.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Field {
+    pub byte: usize,
+    pub bit: u8,
+    pub bits: u32,
+}
+
+impl Field {
+    fn of(c: &Channel) -> Option<Field> {
+        (c.data_type == 0 && !c.virtual_ && !c.vlsd && c.conversion == Conversion::Identity)
+            .then_some(Field {
+                byte: c.byte,
+                bit: c.bit,
+                bits: c.bits,
+            })
+    }
+
+    #[inline]
+    pub fn get(self, record: &[u8]) -> Option<u64> {
+        uint(record, self.byte, self.bit, self.bits, false)
+    }
+}
+
+/// The fields a data frame on an unwanted id is counted by, when all are
+/// stored as they are (python-can's and asammdf's layout): the counting
+/// loop reads only these.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Counting {
+    pub id: Field,
+    pub ide: Option<Field>,
+    pub data_length: Field,
+    pub edl: Option<Field>,
+    /// Bytes of the fixed data bytes.
+    pub data_bytes: usize,
+}
+
+impl Counting {
+    fn of(fields: &CanFields) -> Option<Counting> {
+        let opt = |c: &Option<Channel>| match c {
+            None => Some(None),
+            Some(c) => Field::of(c).map(Some),
+        };
+        let data = fields.data_bytes.as_ref()?;
+        if data.vlsd || data.virtual_ {
+            return None;
+        }
+        Some(Counting {
+            id: Field::of(fields.id.as_ref()?)?,
+            ide: opt(&fields.ide)?,
+            data_length: Field::of(fields.data_length.as_ref()?)?,
+            edl: opt(&fields.edl)?,
+            data_bytes: (data.bits / 8) as usize,
+        })
+    }
+}
+
 /// One channel group.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Group {
@@ -148,6 +206,8 @@ pub struct Group {
     /// The frames a CAN group holds, with their fields.
     pub can: Option<(FrameKind, CanFields)>,
     pub time: Option<Channel>,
+    /// For a data frame group stored plainly: how to count its frames.
+    pub counting: Option<Counting>,
 }
 
 /// One data group.
@@ -335,7 +395,12 @@ fn group<B: Blocks>(blocks: &B, offset: u64, cg: &Cg, cx: &mut Cx) -> Result<Gro
         }
         None => None,
     };
+    let counting = match &can {
+        Some((FrameKind::Data, fields)) => Counting::of(fields),
+        _ => None,
+    };
     Ok(Group {
+        counting,
         offset,
         record_id: cg.record_id,
         size: cg.data_bytes as usize + cg.inval_bytes as usize,

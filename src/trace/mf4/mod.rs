@@ -960,9 +960,13 @@ impl<R: Read> Mf4Reader<R> {
         let mut pos = self.win_pos;
         let mut result = Ok(());
         let mut n = 0;
-        while let Some(rest) = win.get(pos..)
-            && !rest.is_empty()
-        {
+        loop {
+            if let Some(interest) = interest {
+                pos += self.count_plain(dg, win.get(pos..).unwrap_or_default(), interest);
+            }
+            let Some(rest) = win.get(pos..).filter(|r| !r.is_empty()) else {
+                break;
+            };
             n += 1;
             if n > RUN {
                 // The queue stays short whatever the window's size.
@@ -999,6 +1003,69 @@ impl<R: Read> Mf4Reader<R> {
             self.win_pos = 0;
         }
         result
+    }
+
+    /// The hot loop: counts the data frames at the start of `data` on ids
+    /// `interest` does not want, of a group whose fields are stored as they
+    /// are, exactly as [`Mf4Reader::decode`] would count them, and stops
+    /// at any other record: the bytes counted.
+    fn count_plain(&mut self, dg: usize, data: &[u8], interest: &Interest) -> usize {
+        let Some(g) = self.layout.as_ref().and_then(|l| l.groups.get(dg)) else {
+            return 0;
+        };
+        // The group whose records lead (sorted: the only one).
+        let id_size = usize::from(g.rec_id_size);
+        let Some(rid) = block::uint(data, 0, 0, 8 * id_size as u32, false) else {
+            return 0;
+        };
+        let Some(gi) = g.group(rid) else {
+            return 0;
+        };
+        let Some((group, c)) = g
+            .groups
+            .get(gi)
+            .and_then(|gr| Some((gr, gr.counting?)))
+            .filter(|(gr, _)| !gr.vlsd && gr.size > 0)
+        else {
+            return 0;
+        };
+        let step = id_size + group.size;
+        let mut pos = 0;
+        let mut n = 0u64;
+        while let Some(rest) = data.get(pos..pos + step) {
+            if id_size > 0 && block::uint(rest, 0, 0, 8 * id_size as u32, false) != Some(rid) {
+                break;
+            }
+            let record = rest.get(id_size..).unwrap_or_default();
+            let (Some(raw_id), Some(len)) = (c.id.get(record), c.data_length.get(record)) else {
+                break;
+            };
+            let id = (raw_id & 0x1FFF_FFFF) as u32;
+            let extended = id > 0x7FF
+                || match c.ide {
+                    Some(f) => f.get(record).is_some_and(|v| v != 0),
+                    None => raw_id & 0x8000_0000 != 0,
+                };
+            let fd = match c.edl {
+                Some(f) => f.get(record).is_none_or(|v| v != 0),
+                None => false,
+            };
+            if fd || len > 8 || len as usize > c.data_bytes || interest.wants(id, extended) {
+                break;
+            }
+            n += 1;
+            pos += step;
+        }
+        if n > 0 {
+            if let Some(s) = self.states.get_mut(dg).and_then(|s| s.samples.get_mut(gi)) {
+                *s += n;
+            }
+            match self.queue.back_mut() {
+                Some(Out::Plain(k)) => *k += n,
+                _ => self.queue.push_back(Out::Plain(n)),
+            }
+        }
+        pos
     }
 
     /// Decodes the record at the start of `rest`: its length and whether
