@@ -170,7 +170,8 @@ pub struct Counting {
     pub ide: Option<Field>,
     pub data_length: Field,
     pub edl: Option<Field>,
-    /// Bytes of the fixed data bytes.
+    /// Where the fixed data bytes are, and how many.
+    pub data_at: usize,
     pub data_bytes: usize,
 }
 
@@ -189,6 +190,7 @@ impl Counting {
             ide: opt(&fields.ide)?,
             data_length: Field::of(fields.data_length.as_ref()?)?,
             edl: opt(&fields.edl)?,
+            data_at: data.byte,
             data_bytes: (data.bits / 8) as usize,
         })
     }

@@ -1050,7 +1050,9 @@ impl<R: Read> Mf4Reader<R> {
                 Some(f) => f.get(record).is_none_or(|v| v != 0),
                 None => false,
             };
-            if fd || len > 8 || len as usize > c.data_bytes || interest.wants(id, extended) {
+            // As `decode` reads them: bytes the record holds, up to the width.
+            let stored = record.len().saturating_sub(c.data_at).min(c.data_bytes);
+            if fd || len > 8 || len as usize > stored || interest.wants(id, extended) {
                 break;
             }
             n += 1;
@@ -1565,4 +1567,39 @@ pub(crate) fn fuzz_mf4(data: &[u8]) {
         );
     }
     while r.take_note().is_some() {}
+
+    // Read again with the EMCY ids as the interest: the frames it does not
+    // want are only counted, everything else comes out as without it.
+    let mut interest = Interest::none();
+    interest.add_standard_range(0x81..=0xFF);
+    let summary = |p: &Parsed<'_>| match p {
+        Parsed::Frame(f)
+            if matches!(f.kind, FrameKind::Data | FrameKind::Fd)
+                && !interest.wants(f.id, f.extended) =>
+        {
+            "plain".to_string()
+        }
+        other => format!("{other:?}"),
+    };
+    let (Ok(mut all), Ok(mut some)) = (Mf4Reader::new(data), Mf4Reader::new(data)) else {
+        return;
+    };
+    let mut without = Vec::new();
+    while let Ok(Some(p)) = all.next_record() {
+        without.push(summary(&p));
+    }
+    let mut with = Vec::new();
+    while let Ok(Some(next)) = some.next_item(Some(&interest)) {
+        match next {
+            Next::Plain(n) => {
+                with.extend((0..n).map(|_| "plain".to_string()));
+                assert!(
+                    with.len() <= without.len(),
+                    "more plain frames than records"
+                );
+            }
+            Next::Record(p) => with.push(summary(&p)),
+        }
+    }
+    assert_eq!(with, without, "the interest changes what is read");
 }
