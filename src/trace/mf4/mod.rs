@@ -41,10 +41,20 @@
 //! data groups, SD blocks after the records that point into them) it goes
 //! to a temporary file, with every data block after it, and is decoded
 //! from there at the end of the input, in file order. SD blocks always go
-//! to the temporary file: records look their data up there. Memory is
-//! bounded by the kept metadata, one DZ block inflated (at most
+//! to the temporary file: records look their data up there. CANedge writes
+//! a frame before the VLSD record holding its data bytes: the frame waits
+//! for it (at most [`MAX_WAITING`] frames, [`MAX_QUEUE`] records queued).
+//! Memory is bounded by the kept metadata, one DZ block inflated (at most
 //! [`block::MAX_INFLATED`]), a 64 KiB chunk, one record and the last
-//! [`VLSD_WINDOW`] VLSD records of each VLSD group; the disk by the input.
+//! [`VLSD_WINDOW`] VLSD records of each VLSD group; the disk by the input
+//! (measured: a 200 MB CANedge-like file in 8 MiB peak RSS).
+//!
+//! Speed: with the caller's interest ([`Mf4Reader::next_item`]), data
+//! frames on ids nobody wants are only counted, by a loop that reads just
+//! ID, IDE, DataLength and EDL where a group stores them as they are; a
+//! DZ block is decoded where it was inflated. 512 MiB of records: 482 MB/s
+//! uncompressed, 2.06x the time of inflating the DZ blocks alone with
+//! transposed deflate (docs/performance.md).
 
 mod block;
 mod layout;
@@ -255,6 +265,9 @@ enum Active {
     Inflated { dg: usize, data: Vec<u8> },
 }
 
+/// The last VLSD records of a group: (offset in the group's data, bytes).
+type Window = VecDeque<(u64, Vec<u8>)>;
+
 /// Decoding state of a data group.
 #[derive(Default)]
 struct DgState {
@@ -266,7 +279,7 @@ struct DgState {
     /// Records read per channel group (the value of virtual channels).
     samples: Vec<u64>,
     /// Per VLSD group: the offset of its next record, and its last records.
-    vlsd: Vec<(u64, VecDeque<(u64, Vec<u8>)>)>,
+    vlsd: Vec<(u64, Window)>,
 }
 
 /// Reads an MDF 4 stream record by record.
@@ -583,10 +596,7 @@ impl<R: Read> Mf4Reader<R> {
         let mut window = head.to_vec();
         let mut skipped = 0u64;
         let mut nonzero = false;
-        loop {
-            let Some(first) = window.first().copied() else {
-                break;
-            };
+        while let Some(first) = window.first().copied() {
             nonzero |= first != 0;
             window.remove(0);
             skipped += 1;

@@ -256,7 +256,7 @@ pub fn mf4_header(unfinished: bool, rec_id_size: u8) -> (Vec<u8>, u64) {
     out.extend(if unfinished { 0x25u16 } else { 0 }.to_le_bytes());
     out.extend([0, 0]);
     let block = |out: &mut Vec<u8>, id: &[u8; 2], links: &[u64], data: &[u8]| -> u64 {
-        while out.len() % 8 != 0 {
+        while !out.len().is_multiple_of(8) {
             out.push(0);
         }
         let at = out.len() as u64;
