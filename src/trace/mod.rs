@@ -1,10 +1,11 @@
 //! Trace readers: one line parser per text format, one reader per binary
-//! format (BLF, pcap/pcapng), all yielding [`Frame`].
+//! format (BLF, pcap/pcapng, MF4), all yielding [`Frame`].
 //!
 //! Every line is classified as exactly one of: a frame, a known non-frame line
 //! (header, comment, status, blank: "skipped"), or a malformed line with a
 //! reason. Parsers never panic and never stop: the caller counts and reports.
-//! (A binary format's "line" is its record: a BLF object, a pcap packet.)
+//! (A binary format's "line" is its record: a BLF object, a pcap packet,
+//! an MF4 record.)
 
 pub mod asc;
 pub mod blf;

@@ -20,7 +20,8 @@ use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CanFrame {
     /// 1-based line of the trace (for BLF: the object's number; for pcap
-    /// and pcapng: the packet's, as Wireshark numbers frames).
+    /// and pcapng: the packet's, as Wireshark numbers frames; for MF4: the
+    /// record's, in file order).
     pub line: u64,
     /// Seconds as the trace wrote them; `None` when the trace has no times.
     pub time: Option<Timestamp>,
@@ -88,7 +89,7 @@ pub enum Record {
 
 /// Reads a trace into [`Record`]s, one per line, in order. The format is
 /// detected from the content (candump log or screen output, Vector ASC,
-/// PEAK TRC, Vector BLF, pcap, pcapng), or forced; gzip is decompressed, known by its
+/// PEAK TRC, Vector BLF, pcap, pcapng, MF4), or forced; gzip is decompressed, known by its
 /// magic bytes. Lines longer than 64 KiB are malformed, never buffered.
 ///
 /// An I/O error ends the iteration after it is returned.

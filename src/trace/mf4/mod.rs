@@ -725,7 +725,7 @@ impl<R: Read> Mf4Reader<R> {
             }
             return Ok(());
         }
-        if direct && owner.is_none() && self.layout.is_some() && !self.could_own(at) {
+        if direct && owner.is_none() && self.layout.is_some() && !self.could_own() {
             // No data group's data: not records anyone reads.
             self.input.skip(if to_end { u64::MAX } else { body })?;
             self.meta.read_up_to = self.input.offset;
@@ -743,9 +743,9 @@ impl<R: Read> Mf4Reader<R> {
         Ok(())
     }
 
-    /// Whether a data block at `at` may still turn out to be listed by a
-    /// DL block not read yet.
-    fn could_own(&self, _at: u64) -> bool {
+    /// Whether a data block nobody owns yet may still turn out to be listed
+    /// by a DL block not read yet.
+    fn could_own(&self) -> bool {
         self.layout.as_ref().is_some_and(|l| {
             l.groups.iter().any(|g| {
                 g.data != 0
