@@ -7,7 +7,8 @@
 //! (default 256); best of `BENCH_RUNS` (default 3). Words after `--` pick
 //! the cases whose name contains one of them (`cargo bench --bench
 //! throughput -- pcapng`): `candump log`, `candump -td`, `Vector ASC`,
-//! `30% EMCY`, `gzip`, `pcapng`, `BUSMASTER`.
+//! `30% EMCY`, `gzip`, `pcapng`, `BUSMASTER`, `MF4` (both MF4 cases),
+//! `MF4 DZ`.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -18,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use tracegen::{TraceFormat, write_trace};
+use tracegen::{TraceFormat, write_mf4_dz, write_trace};
 
 fn env_u64(name: &str, default: u64) -> u64 {
     std::env::var(name)
@@ -148,6 +149,8 @@ fn main() {
     let gz = dir.join(format!("candump-{gz_mb}MB.log.gz"));
     let pcapng = dir.join(format!("pcapng-{mb}MB.pcapng"));
     let busmaster = dir.join(format!("busmaster-{mb}MB.log"));
+    let mf4 = dir.join(format!("canedge-{mb}MB.mf4"));
+    let mf4_dz = dir.join(format!("dz-{mb}MB.mf4"));
     let files = [
         ("candump log", &log, TraceFormat::CandumpLog, 2),
         (
@@ -165,6 +168,7 @@ fn main() {
         ),
         ("pcapng, LINUX_SLL", &pcapng, TraceFormat::Pcapng, 2),
         ("BUSMASTER HEX", &busmaster, TraceFormat::Busmaster, 2),
+        ("MF4, CANedge unfinalized", &mf4, TraceFormat::Mf4, 2),
     ];
     for (label, file, format, emcy) in files {
         if chosen(label) {
@@ -173,6 +177,15 @@ fn main() {
     }
     if chosen("gzip") {
         ensure(&gz, TraceFormat::CandumpLog, gz_mb, 2, true);
+    }
+    if chosen("MF4 DZ") && !mf4_dz.exists() {
+        eprintln!("generating {} ...", mf4_dz.display());
+        let tmp = mf4_dz.with_extension("tmp");
+        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp).expect("create"));
+        write_mf4_dz(&mut w, mb * 1024 * 1024, 2, 42).expect("write");
+        w.flush().expect("flush");
+        drop(w);
+        std::fs::rename(&tmp, &mf4_dz).expect("rename");
     }
 
     println!("machine: {}", machine());
@@ -225,7 +238,7 @@ fn main() {
             ("table", vec!["--format", "table", &f]),
         ];
         // Binary traces are read on one thread whatever -j says.
-        if !label.starts_with("pcapng") {
+        if !label.starts_with("pcapng") && !label.starts_with("MF4") {
             cases.push(("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]));
         }
         for (case, args) in cases {
@@ -239,6 +252,39 @@ fn main() {
             );
         }
         println!();
+    }
+
+    if chosen("MF4 DZ") {
+        // The ceiling: inflating the file's DZ blocks (flate2, as the
+        // reader does), nothing else; best of `runs`, in this process.
+        let bytes = size(&mf4_dz);
+        let f = path(&mf4_dz);
+        let mut inflate = Duration::MAX;
+        let mut inflated = 0;
+        for _ in 0..runs {
+            warm(&f);
+            let start = Instant::now();
+            inflated = inflate_dz_blocks(&mf4_dz);
+            inflate = inflate.min(start.elapsed());
+        }
+        row("inflate DZ blocks (MF4 DZ)", bytes, inflate, None, 0);
+        for (case, args) in [
+            ("ndjson", vec!["--format", "ndjson", &f]),
+            ("table", vec!["--format", "table", &f]),
+        ] {
+            let (t, peak) = measure(runs, &f, bin, &args);
+            row(
+                &format!("emcy-decode {case} (MF4 DZ)"),
+                bytes,
+                t,
+                Some(inflate),
+                peak,
+            );
+        }
+        println!(
+            "(MF4 DZ: {:.0} MB of records inflated)\n",
+            inflated as f64 / 1e6
+        );
     }
 
     if !chosen("gzip") {
@@ -257,4 +303,31 @@ fn main() {
         peak,
     );
     println!("\n(MB/s of the gzip rows are compressed bytes.)");
+}
+
+/// Inflates every DZ block of an MF4 file (walking its blocks by their
+/// lengths): the bytes inflated.
+fn inflate_dz_blocks(path: &Path) -> u64 {
+    let data = std::fs::read(path).expect("read MF4");
+    let mut at = 64usize;
+    let mut total = 0u64;
+    let mut out = Vec::new();
+    while let Some(head) = data.get(at..at + 24) {
+        let len = u64::from_le_bytes(head[8..16].try_into().unwrap()) as usize;
+        if len < 24 {
+            break;
+        }
+        if &head[..4] == b"##DZ" {
+            let body = &data[at + 24..at + len];
+            let original = u64::from_le_bytes(body[8..16].try_into().unwrap());
+            out.clear();
+            out.reserve(original as usize);
+            flate2::read::ZlibDecoder::new(&body[24..])
+                .read_to_end(&mut out)
+                .expect("inflate");
+            total += out.len() as u64;
+        }
+        at = (at + len).div_ceil(8) * 8;
+    }
+    total
 }

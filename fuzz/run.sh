@@ -16,7 +16,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-all=(candump_log candump_screen asc trc busmaster blf pcap detect decode_timeline)
+all=(candump_log candump_screen asc trc busmaster blf pcap mf4 detect decode_timeline)
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 
 # The fixtures each target starts from (by the format it forces).
@@ -29,7 +29,8 @@ fixtures_of() {
         busmaster) ls fixtures/*.busmaster.log ;;
         blf) ls fixtures/*.blf ;;
         pcap) ls fixtures/*.pcap fixtures/*.pcapng ;;
-        detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.pcap fixtures/*.pcapng fixtures/*.gz ;;
+        mf4) ls fixtures/*.mf4 ;;
+        detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.pcap fixtures/*.pcapng fixtures/*.mf4 fixtures/*.gz ;;
         decode_timeline) ;;
         *) echo "unknown target $1 (known: ${all[*]})" >&2; return 1 ;;
     esac
@@ -39,6 +40,8 @@ failed=()
 for t in "${targets[@]}"; do
     max_len=4096
     [ "$t" = decode_timeline ] && max_len=1024
+    # MF4 files put their metadata first: a few KiB before any record.
+    [ "$t" = mf4 ] && max_len=16384
     # detect starts worker threads; LeakSanitizer reports std's per-thread
     # channel context of a worker still exiting (a race, not a leak).
     leaks=1

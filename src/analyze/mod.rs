@@ -38,6 +38,7 @@ use crate::trace::deltas::{self, TimeMode};
 use crate::trace::detect::{self, Detector};
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE};
+use crate::trace::mf4;
 use crate::trace::pcap;
 
 use classify::{LineSink, classify_block, deliver};
@@ -216,7 +217,7 @@ pub fn analyze<R: Read + Send, E: Write>(
     };
     let mut consumer = Consumer::new(file, opts, sink, log, detector.format().is_some());
 
-    // BLF, pcap and pcapng are binary: known by their magic (or forced),
+    // BLF, pcap, pcapng and MDF 4 are binary: known by their magic (or forced),
     // read record by record.
     let (reader, magic) = detect::sniff_binary(reader);
     let magic = match magic {
@@ -239,6 +240,11 @@ pub fn analyze<R: Read + Send, E: Write>(
             let flavour = magic.filter(|m| matches!(m, Format::Pcap | Format::Pcapng));
             let error = read_pcap(reader, &mut consumer)?;
             return consumer.finish(Some(flavour.unwrap_or(forced)), gzip, error);
+        }
+        Some(Format::Mf4) => {
+            consumer.decided = true;
+            let error = read_mf4(reader, &mut consumer)?;
+            return consumer.finish(Some(Format::Mf4), gzip, error);
         }
         _ => {}
     }
@@ -363,6 +369,42 @@ fn read_pcap<R: Read, E: Write>(
             Some(Parsed::Skipped) => consumer.skipped(),
             Some(Parsed::Malformed(reason)) => consumer.malformed(0, reason),
             None => continue,
+        }
+        consumer.lines(1);
+    }
+}
+
+/// MDF 4 into the same consumer: each record counts as a line, numbered
+/// in file order.
+fn read_mf4<R: Read, E: Write>(
+    reader: R,
+    consumer: &mut Consumer<'_, '_, E>,
+) -> Result<Option<String>, OutputError> {
+    let mut reader = match mf4::Mf4Reader::new(reader) {
+        Ok(r) => r,
+        Err(e) => return Ok(read_error(&e)),
+    };
+    loop {
+        while let Some(note) = reader.take_note() {
+            consumer.log.note(&format!("{}: {note}", consumer.file));
+        }
+        match reader.next_item(Some(consumer.interest())) {
+            Ok(Some(mf4::Next::Plain(n))) => {
+                // Frames on ids nobody wants: only counted.
+                consumer.plain_frames(n);
+                consumer.lines(n);
+                continue;
+            }
+            Ok(Some(mf4::Next::Record(Parsed::Frame(f)))) => deliver(consumer, 0, &f, None)?,
+            Ok(Some(mf4::Next::Record(Parsed::Skipped))) => consumer.skipped(),
+            Ok(Some(mf4::Next::Record(Parsed::Malformed(reason)))) => consumer.malformed(0, reason),
+            Ok(None) => {
+                while let Some(note) = reader.take_note() {
+                    consumer.log.note(&format!("{}: {note}", consumer.file));
+                }
+                return Ok(None);
+            }
+            Err(e) => return Ok(read_error(&e)),
         }
         consumer.lines(1);
     }

@@ -27,7 +27,8 @@ Examples:
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
 candump screen output (with or without -t/-x/-a), Vector ASC, PEAK TRC
 (1.0-2.1), BUSMASTER log (HEX or DEC, system/absolute/relative times),
-Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2).
+Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2), ASAM MDF 4
+bus logging (MF4: CANedge, Vector, python-can).
 
 Exit status:
   0  success (also when the reader of stdout goes away, e.g. `| head -1`)
@@ -226,6 +227,8 @@ pub enum InputFormat {
     /// pcap or pcapng capture (binary; SocketCAN, LINUX_SLL, LINUX_SLL2)
     #[value(alias = "pcapng")]
     Pcap,
+    /// ASAM MDF 4 bus logging (binary; CANedge, Vector, python-can)
+    Mf4,
 }
 
 impl From<InputFormat> for Format {
@@ -238,6 +241,7 @@ impl From<InputFormat> for Format {
             InputFormat::Busmaster => Format::Busmaster,
             InputFormat::Blf => Format::Blf,
             InputFormat::Pcap => Format::Pcap,
+            InputFormat::Mf4 => Format::Mf4,
         }
     }
 }

@@ -80,6 +80,14 @@ pub fn pcap(data: &[u8]) {
     reader(Some(Format::Pcap), data);
 }
 
+/// The `mf4` target: the reader's own checks (well-formed frames, no
+/// endless loop, bounded queues and metadata), then [`reader`] with the
+/// format forced (as `--input-format mf4`).
+pub fn mf4(data: &[u8]) {
+    crate::trace::mf4::fuzz_mf4(data);
+    reader(Some(Format::Mf4), data);
+}
+
 /// The `candump_log`, `candump_screen` and `asc` targets (`Some(format)`,
 /// forced as with `--input-format`), and the plain-bytes half of `detect`.
 ///

@@ -17,6 +17,7 @@ use std::io::{self, Read};
 
 use super::blf::{self, read_full};
 use super::deltas::{self, DeltaClock};
+use super::mf4;
 use super::pcap;
 use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan};
 
@@ -26,7 +27,10 @@ pub type Sniffed<R> = io::Chain<io::Cursor<Vec<u8>>, R>;
 /// Looks at the first bytes for the magic of a binary format: `LOGG`
 /// (BLF), a pcap magic number in either byte order, or a pcapng section
 /// header (its block type and byte-order magic: 12 bytes, read only when
-/// the first 4 are the block type). The bytes read are put back in front
+/// the first 4 are the block type), or an MDF identification block
+/// (`MDF     ` or `UnFinMF `: 8 bytes, read only when the first 4 start
+/// one; MDF 3 too, which its reader refuses with a clear error). The
+/// bytes read are put back in front
 /// of the stream: `(stream, Ok(the binary format, if any))`.
 pub fn sniff_binary<R: Read>(mut input: R) -> (Sniffed<R>, io::Result<Option<Format>>) {
     let mut head = [0u8; 12];
@@ -34,8 +38,13 @@ pub fn sniff_binary<R: Read>(mut input: R) -> (Sniffed<R>, io::Result<Option<For
     let mut result = read_full(&mut input, head.get_mut(..4).unwrap_or_default());
     if let Ok(k) = result {
         n = k;
-        if n == 4 && pcap::is_pcapng_block_type(&head) {
-            result = read_full(&mut input, head.get_mut(4..).unwrap_or_default());
+        let more = match head.get(..4) {
+            Some(b"MDF " | b"UnFi") if n == 4 => 8,
+            _ if n == 4 && pcap::is_pcapng_block_type(&head) => 12,
+            _ => n,
+        };
+        if more > n {
+            result = read_full(&mut input, head.get_mut(4..more).unwrap_or_default());
             if let Ok(k) = result {
                 n += k;
             }
@@ -45,6 +54,8 @@ pub fn sniff_binary<R: Read>(mut input: R) -> (Sniffed<R>, io::Result<Option<For
         let head = head.get(..n).unwrap_or_default();
         if head == blf::MAGIC {
             Some(Format::Blf)
+        } else if mf4::is_magic(head) {
+            Some(Format::Mf4)
         } else {
             pcap::sniff(head)
         }
@@ -403,6 +414,12 @@ mod tests {
         assert_eq!(sniff(b"\n\r\r\n"), None);
         assert_eq!(sniff(b"(1.0) can0 081#00\n"), None);
         assert_eq!(sniff(b"LO"), None);
+        assert_eq!(sniff(b"MDF     4.11    "), Some(Format::Mf4));
+        assert_eq!(sniff(b"UnFinMF 4.11    "), Some(Format::Mf4));
+        // MDF 3 is known, to be refused by its reader with a clear error.
+        assert_eq!(sniff(b"MDF     3.30    "), Some(Format::Mf4));
+        assert_eq!(sniff(b"MDF (1.0) can0 081#00\n"), None);
+        assert_eq!(sniff(b"UnFi"), None);
         assert_eq!(sniff(b""), None);
     }
 

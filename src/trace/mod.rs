@@ -1,10 +1,11 @@
 //! Trace readers: one line parser per text format, one reader per binary
-//! format (BLF, pcap/pcapng), all yielding [`Frame`].
+//! format (BLF, pcap/pcapng, MF4), all yielding [`Frame`].
 //!
 //! Every line is classified as exactly one of: a frame, a known non-frame line
 //! (header, comment, status, blank: "skipped"), or a malformed line with a
 //! reason. Parsers never panic and never stop: the caller counts and reports.
-//! (A binary format's "line" is its record: a BLF object, a pcap packet.)
+//! (A binary format's "line" is its record: a BLF object, a pcap packet,
+//! an MF4 record.)
 
 pub mod asc;
 pub mod blf;
@@ -18,6 +19,7 @@ pub mod follow;
 pub mod hex;
 pub mod input;
 pub mod lines;
+pub mod mf4;
 pub mod pcap;
 pub mod reader;
 pub mod scan;
@@ -51,6 +53,9 @@ pub enum Format {
     /// pcapng capture file (Wireshark, dumpcap), binary: read packet by
     /// packet, detected by its section header block.
     Pcapng,
+    /// ASAM MDF 4 bus logging (CANedge, Vector, python-can), binary: read
+    /// record by record, detected by its identification block.
+    Mf4,
 }
 
 impl Format {
@@ -74,13 +79,17 @@ impl Format {
             Format::Blf => "blf",
             Format::Pcap => "pcap",
             Format::Pcapng => "pcapng",
+            Format::Mf4 => "mf4",
         }
     }
 
     /// A binary format: read record by record by its own reader (its
     /// "lines" are BLF objects or pcap packets), never by the line parsers.
     pub fn is_binary(self) -> bool {
-        matches!(self, Format::Blf | Format::Pcap | Format::Pcapng)
+        matches!(
+            self,
+            Format::Blf | Format::Pcap | Format::Pcapng | Format::Mf4
+        )
     }
 
     pub(crate) fn parser(self) -> AnyParser {
@@ -92,7 +101,9 @@ impl Format {
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
             Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
             Format::Busmaster => AnyParser::Busmaster(busmaster::BusmasterParser::new()),
-            Format::Blf | Format::Pcap | Format::Pcapng => AnyParser::Binary(BinaryParser(self)),
+            Format::Blf | Format::Pcap | Format::Pcapng | Format::Mf4 => {
+                AnyParser::Binary(BinaryParser(self))
+            }
         }
     }
 }

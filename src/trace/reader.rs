@@ -13,6 +13,7 @@ use super::deltas::{self, TimeMode};
 use super::detect::{Detector, sniff_binary};
 use super::input::sniff_gzip_generic;
 use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
+use super::mf4::Mf4Reader;
 use super::pcap::PcapReader;
 use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
 
@@ -20,7 +21,8 @@ use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CanFrame {
     /// 1-based line of the trace (for BLF: the object's number; for pcap
-    /// and pcapng: the packet's, as Wireshark numbers frames).
+    /// and pcapng: the packet's, as Wireshark numbers frames; for MF4: the
+    /// record's, in file order).
     pub line: u64,
     /// Seconds as the trace wrote them; `None` when the trace has no times.
     pub time: Option<Timestamp>,
@@ -88,7 +90,7 @@ pub enum Record {
 
 /// Reads a trace into [`Record`]s, one per line, in order. The format is
 /// detected from the content (candump log or screen output, Vector ASC,
-/// PEAK TRC, Vector BLF, pcap, pcapng), or forced; gzip is decompressed, known by its
+/// PEAK TRC, Vector BLF, pcap, pcapng, MF4), or forced; gzip is decompressed, known by its
 /// magic bytes. Lines longer than 64 KiB are malformed, never buffered.
 ///
 /// An I/O error ends the iteration after it is returned.
@@ -113,6 +115,7 @@ enum Source<'a> {
     },
     Blf(BlfReader<Box<dyn Read + 'a>>),
     Pcap(Box<PcapReader<Box<dyn Read + 'a>>>),
+    Mf4(Box<Mf4Reader<Box<dyn Read + 'a>>>),
     Failed(io::Error),
     /// The end, with the format the input had.
     Done(Option<Format>),
@@ -170,6 +173,7 @@ impl<'a> TraceReader<'a> {
             Some(Format::Pcap | Format::Pcapng) => {
                 return Ok((Source::Pcap(Box::new(PcapReader::new(input)?)), None));
             }
+            Some(Format::Mf4) => return Ok((Source::Mf4(Box::new(Mf4Reader::new(input)?)), None)),
             _ => {}
         }
         let mut detector = match format {
@@ -197,6 +201,7 @@ impl<'a> TraceReader<'a> {
             Source::Text { detector, .. } => detector.format(),
             Source::Blf(_) => Some(Format::Blf),
             Source::Pcap(reader) => Some(reader.format()),
+            Source::Mf4(_) => Some(Format::Mf4),
             Source::Failed(_) => None,
             Source::Done(format) => *format,
         }
@@ -296,6 +301,26 @@ impl<'a> TraceReader<'a> {
                         reason: reason.into_owned(),
                     },
                 });
+                Ok(true)
+            }
+            Source::Mf4(reader) => {
+                let line = self.lines + 1;
+                let record = reader.next_record()?.map(|parsed| match parsed {
+                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+                    Parsed::Skipped => Record::Skipped { line },
+                    Parsed::Malformed(reason) => Record::Malformed {
+                        line,
+                        reason: reason.into_owned(),
+                    },
+                });
+                while let Some(note) = reader.take_note() {
+                    self.queue.push_back(Record::Note(note));
+                }
+                let Some(record) = record else {
+                    return Ok(false);
+                };
+                self.lines = line;
+                self.queue.push_back(record);
                 Ok(true)
             }
             Source::Failed(_) | Source::Done(_) => Ok(false),

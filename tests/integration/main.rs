@@ -27,6 +27,7 @@ mod hostile;
 mod inputs;
 mod live;
 mod memory;
+mod mf4;
 mod output;
 mod pcap;
 mod roundtrip;

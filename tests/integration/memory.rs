@@ -77,6 +77,7 @@ fn a_200_mb_trace_is_read_in_bounded_memory() {
         ),
         (&["--format", "table", "-j", "2"][..], TraceFormat::Asc),
         (&["--format", "ndjson"][..], TraceFormat::Pcapng),
+        (&["--format", "ndjson"][..], TraceFormat::Mf4),
     ] {
         let peak = peak_while_streaming(args, format).expect("VmHWM readable");
         assert!(

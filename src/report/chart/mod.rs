@@ -170,6 +170,7 @@ impl Panel {
                     | Format::Pcap
                     | Format::Pcapng
                     | Format::Busmaster
+                    | Format::Mf4
             )
         ) && origin.is_some_and(|t| t.secs() >= UNIX_FROM);
         let axis = match (timed, wall) {

@@ -18,6 +18,14 @@ pub enum TraceFormat {
     Pcapng,
     /// BUSMASTER log as 2.0 writes it: HEX, system time, ids as `0x181`.
     Busmaster,
+    /// MDF 4 as a CANedge logger writes it: unfinalized, the DT block's
+    /// length 24 and its records to the end; one unsorted group (1-byte
+    /// record ids) of `CAN_DataFrame` records (u64 microseconds, u32 ID
+    /// with the IDE bit, u8 DataLength, 8 data bytes).
+    Mf4,
+    /// The same records without ids and without the file around them:
+    /// what [`write_mf4_dz`] packs into DZ blocks.
+    Mf4Records,
 }
 
 /// xorshift64*: deterministic and fast; quality is irrelevant here.
@@ -77,6 +85,11 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         out.write_all(header)?;
         written += header.len() as u64;
         lines += 8;
+    }
+    if format == TraceFormat::Mf4 {
+        let (header, _) = mf4_header(true, 1);
+        out.write_all(&header)?;
+        written += header.len() as u64;
     }
     if format == TraceFormat::Pcapng {
         let header = pcapng_header();
@@ -141,6 +154,11 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
             TraceFormat::Asc => asc_line(&mut line, micros, id, &data[..len]),
             TraceFormat::Pcapng => pcapng_packet(&mut line, micros, id, &data[..len]),
             TraceFormat::Busmaster => busmaster_line(&mut line, micros, id, &data[..len]),
+            TraceFormat::Mf4 => {
+                line.push(1);
+                mf4_record(&mut line, micros, id, &data[..len]);
+            }
+            TraceFormat::Mf4Records => mf4_record(&mut line, micros, id, &data[..len]),
         }
         out.write_all(&line)?;
         written += line.len() as u64;
@@ -266,4 +284,197 @@ fn pcapng_packet(out: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
     bytes[..data.len()].copy_from_slice(data);
     out.extend(bytes);
     out.extend(64u32.to_le_bytes());
+}
+
+/// An MDF 4 record of the `CAN_DataFrame` group of [`mf4_header`].
+fn mf4_record(out: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
+    out.extend(micros.to_le_bytes());
+    out.extend(id.to_le_bytes());
+    out.push(data.len() as u8);
+    let mut bytes = [0u8; 8];
+    bytes[..data.len()].copy_from_slice(data);
+    out.extend(bytes);
+}
+
+/// Bytes of an [`mf4_record`].
+pub const MF4_RECORD: usize = 21;
+
+/// The blocks of an MDF 4 file up to its data: identification, header
+/// (start 1700000000 s), one data group (record ids of `rec_id_size`
+/// bytes) with one `CAN_DataFrame` group, and, when `unfinished`, an
+/// `UnFinMF` DT block of length 24 whose records follow. Returns the bytes
+/// and the data group's offset (its data link is at offset + 40).
+pub fn mf4_header(unfinished: bool, rec_id_size: u8) -> (Vec<u8>, u64) {
+    let mut out = if unfinished { b"UnFinMF " } else { b"MDF     " }.to_vec();
+    out.extend(b"4.11    GEN     ");
+    out.resize(60, 0);
+    out.extend(if unfinished { 0x25u16 } else { 0 }.to_le_bytes());
+    out.extend([0, 0]);
+    let block = |out: &mut Vec<u8>, id: &[u8; 2], links: &[u64], data: &[u8]| -> u64 {
+        while !out.len().is_multiple_of(8) {
+            out.push(0);
+        }
+        let at = out.len() as u64;
+        out.extend(b"##");
+        out.extend(id);
+        out.extend([0; 4]);
+        out.extend(((24 + 8 * links.len() + data.len()) as u64).to_le_bytes());
+        out.extend((links.len() as u64).to_le_bytes());
+        for l in links {
+            out.extend(l.to_le_bytes());
+        }
+        out.extend(data);
+        at
+    };
+    let link = |out: &mut Vec<u8>, at: u64, i: usize, v: u64| {
+        let p = at as usize + 24 + 8 * i;
+        out[p..p + 8].copy_from_slice(&v.to_le_bytes());
+    };
+    let mut hd_data = (1_700_000_000u64 * 1_000_000_000).to_le_bytes().to_vec();
+    hd_data.extend([0, 0, 0, 0, 2, 0, 0, 0]);
+    hd_data.extend([0; 16]);
+    let hd = block(&mut out, b"HD", &[0; 6], &hd_data);
+    let mut cc = vec![1, 0, 0, 0, 0, 0, 2, 0];
+    cc.extend([0; 16]);
+    cc.extend(0f64.to_le_bytes());
+    cc.extend(1e-6f64.to_le_bytes());
+    let us = block(&mut out, b"CC", &[0; 4], &cc);
+    let cn = |out: &mut Vec<u8>, name: &str, kind: u8, dtype: u8, byte: u32, bits: u32, cc: u64| {
+        let mut t = name.as_bytes().to_vec();
+        t.push(0);
+        let name = block(out, b"TX", &[], &t);
+        let mut d = vec![kind, u8::from(kind == 2), dtype, 0];
+        d.extend(byte.to_le_bytes());
+        d.extend(bits.to_le_bytes());
+        d.extend([0; 68]);
+        block(out, b"CN", &[0, 0, name, 0, cc, 0, 0, 0], &d)
+    };
+    let t = cn(&mut out, "Timestamp", 2, 0, 0, 64, us);
+    let id = cn(&mut out, "CAN_DataFrame.ID", 0, 0, 8, 32, 0);
+    let len = cn(&mut out, "CAN_DataFrame.DataLength", 0, 0, 12, 8, 0);
+    let data = cn(&mut out, "CAN_DataFrame.DataBytes", 0, 10, 13, 64, 0);
+    link(&mut out, t, 0, id);
+    link(&mut out, id, 0, len);
+    link(&mut out, len, 0, data);
+    let mut name = b"CAN_DataFrame".to_vec();
+    name.push(0);
+    let name = block(&mut out, b"TX", &[], &name);
+    let mut cg = 1u64.to_le_bytes().to_vec();
+    cg.extend(0u64.to_le_bytes());
+    cg.extend(6u16.to_le_bytes());
+    cg.extend([0; 6]);
+    cg.extend((MF4_RECORD as u32).to_le_bytes());
+    cg.extend(0u32.to_le_bytes());
+    let cg = block(&mut out, b"CG", &[0, t, name, 0, 0, 0], &cg);
+    let mut dg_data = vec![rec_id_size];
+    dg_data.extend([0; 7]);
+    let dg = block(&mut out, b"DG", &[0, cg, 0, 0], &dg_data);
+    link(&mut out, hd, 0, dg);
+    if unfinished {
+        let dt = block(&mut out, b"DT", &[], &[]);
+        link(&mut out, dg, 2, dt);
+    }
+    (out, dg)
+}
+
+/// Bytes of records per DZ block (python-can's writer, through asammdf,
+/// splits at 4 MiB), a whole number of records.
+const DZ_RECORDS: usize = 4 * 1024 * 1024 / MF4_RECORD * MF4_RECORD;
+
+/// An MDF 4 file of about `bytes` bytes of records as python-can's writer
+/// (through asammdf) saves it with its default compression: one sorted
+/// data group whose records are in DZ blocks (transposed deflate, 4 MiB
+/// each) listed by a DL block written after them. Returns (records, EMCY
+/// frames, bytes of records).
+pub fn write_mf4_dz<W: Write + io::Seek>(
+    out: &mut W,
+    bytes: u64,
+    emcy_per_mille: u64,
+    seed: u64,
+) -> io::Result<(u64, u64, u64)> {
+    struct Packer<'w, W: Write> {
+        out: &'w mut W,
+        at: u64,
+        block: Vec<u8>,
+        blocks: Vec<u64>,
+        raw: u64,
+    }
+    impl<W: Write> Packer<'_, W> {
+        fn flush_block(&mut self) -> io::Result<()> {
+            if self.block.is_empty() {
+                return Ok(());
+            }
+            let rows = self.block.len() / MF4_RECORD;
+            let mut t = vec![0u8; self.block.len()];
+            for (i, b) in self.block.iter().enumerate() {
+                let (row, col) = (i / MF4_RECORD, i % MF4_RECORD);
+                t[col * rows + row] = *b;
+            }
+            let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+            z.write_all(&t)?;
+            let z = z.finish()?;
+            let mut head = b"##DZ\0\0\0\0".to_vec();
+            head.extend(((24 + 24 + z.len()) as u64).to_le_bytes());
+            head.extend(0u64.to_le_bytes());
+            head.extend(b"DT\x01\0");
+            head.extend((MF4_RECORD as u32).to_le_bytes());
+            head.extend((self.block.len() as u64).to_le_bytes());
+            head.extend((z.len() as u64).to_le_bytes());
+            self.blocks.push(self.at);
+            self.out.write_all(&head)?;
+            self.out.write_all(&z)?;
+            let n = head.len() + z.len();
+            let pad = (8 - n % 8) % 8;
+            self.out.write_all(&[0; 8][..pad])?;
+            self.at += (n + pad) as u64;
+            self.block.clear();
+            Ok(())
+        }
+    }
+    impl<W: Write> Write for Packer<'_, W> {
+        fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+            self.block.extend_from_slice(buf);
+            self.raw += buf.len() as u64;
+            if self.block.len() >= DZ_RECORDS {
+                let rest = self.block.split_off(DZ_RECORDS);
+                self.flush_block()?;
+                self.block = rest;
+            }
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+    let (header, dg) = mf4_header(false, 0);
+    out.write_all(&header)?;
+    let mut p = Packer {
+        at: header.len() as u64,
+        out,
+        block: Vec::with_capacity(DZ_RECORDS + 64),
+        blocks: Vec::new(),
+        raw: 0,
+    };
+    let (records, emcy) =
+        write_trace(&mut p, TraceFormat::Mf4Records, bytes, emcy_per_mille, seed)?;
+    p.flush_block()?;
+    let (at, blocks, raw) = (p.at, p.blocks, p.raw);
+    let mut dl = b"##DL\0\0\0\0".to_vec();
+    let n = blocks.len() as u64;
+    dl.extend((24 + 8 * (n + 1) + 8 + 8 * n).to_le_bytes());
+    dl.extend((n + 1).to_le_bytes());
+    dl.extend(0u64.to_le_bytes());
+    for b in &blocks {
+        dl.extend(b.to_le_bytes());
+    }
+    dl.extend([0, 0, 0, 0]);
+    dl.extend((n as u32).to_le_bytes());
+    for i in 0..n {
+        dl.extend((i * DZ_RECORDS as u64).to_le_bytes());
+    }
+    out.write_all(&dl)?;
+    out.seek(io::SeekFrom::Start(dg + 24 + 16))?;
+    out.write_all(&at.to_le_bytes())?;
+    out.seek(io::SeekFrom::End(0))?;
+    Ok((records, emcy, raw))
 }

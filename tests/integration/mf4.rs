@@ -1,0 +1,268 @@
+//! MF4 (ASAM MDF 4) bus logging through the binary and the library: the
+//! fixtures of `scripts/make_mf4_fixtures.py`, each of which python-can
+//! (through asammdf) reads as the frames it was written with (the script
+//! checks that): python-can's own MF4Writer output, plain and transposed-
+//! deflate DZ; CANedge's unfinalized layouts (DT length 24, records to the
+//! end, VLSD data after its frame; the 73-group one with virtual constant
+//! channels, a DLC table and 48-bit times); a finalized sorted file with an
+//! HL/DL list of a DT and a DZ block and its SD block after the records;
+//! and a damaged file.
+
+use std::io::Write;
+
+use emcy_decode::{Format, FrameKind, Record, TraceReader};
+use serde_json::Value;
+
+use crate::support::{self, PLACE, emcy_decode};
+
+fn ndjson(args: &[&str]) -> Vec<Value> {
+    support::ndjson(args)
+}
+
+fn input(v: &[Value]) -> &Value {
+    v.iter()
+        .find(|o| o["type"] == "input")
+        .expect("input object")
+}
+
+/// Events and nodes without where they were, times with 6 decimals (MF4
+/// times carry 6 or 9 digits, as the master channel counts them).
+fn semantic(objects: &[Value]) -> Vec<Value> {
+    let mut v = support::semantic(objects, &PLACE);
+    v.iter_mut().for_each(normalise_times);
+    v
+}
+
+fn normalise_times(v: &mut Value) {
+    match v {
+        Value::Number(n) => {
+            if let Some(f) = n.as_f64()
+                && n.to_string().contains('.')
+            {
+                *v = Value::String(format!("{f:.6}"));
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(normalise_times),
+        Value::Object(o) => o.values_mut().for_each(normalise_times),
+        _ => {}
+    }
+}
+
+fn run(args: &[&str], stdin: &[u8]) -> (String, String, i32) {
+    let out = emcy_decode()
+        .args(args)
+        .write_stdin(stdin.to_vec())
+        .output()
+        .expect("runs");
+    (
+        String::from_utf8(out.stdout).expect("utf-8"),
+        String::from_utf8(out.stderr).expect("utf-8"),
+        out.status.code().unwrap_or(-1),
+    )
+}
+
+fn frames(path: &str) -> Vec<emcy_decode::CanFrame> {
+    let mut r = TraceReader::new(std::fs::File::open(path).unwrap());
+    let frames: Vec<_> = r
+        .by_ref()
+        .filter_map(|x| match x.unwrap() {
+            Record::Frame(f) => Some(f),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(r.format(), Some(Format::Mf4), "{path}");
+    frames
+}
+
+#[test]
+fn every_s300_mf4_decodes_like_the_candump_log() {
+    let log = semantic(&ndjson(&["fixtures/s300.log"]));
+    assert!(log.iter().any(|o| o["type"] == "emcy"));
+    for (file, channel) in [
+        ("fixtures/s300.mf4", "1"),
+        ("fixtures/s300.dz.mf4", "1"),
+        ("fixtures/canedge.mf4", "1"),
+        ("fixtures/canedge73.mf4", "1"),
+        ("fixtures/sorted-sd.mf4", "3"),
+    ] {
+        let v = ndjson(&["--channel", channel, file]);
+        let strip = |v: Vec<Value>| -> Vec<Value> {
+            v.iter()
+                .map(|o| support::without(o, &["time_in_error"]))
+                .collect()
+        };
+        assert_eq!(strip(semantic(&v)), strip(log.clone()), "{file}");
+        let i = input(&v);
+        assert_eq!(i["format"], "mf4", "{file}");
+        assert_eq!(i["malformed"], 0, "{file}");
+    }
+}
+
+#[test]
+fn counts_of_every_fixture_are_pinned() {
+    // (file, lines, frames, skipped, malformed, emcy): a line per record.
+    for (file, lines, frames, skipped, malformed, emcy) in [
+        ("fixtures/s300.mf4", 19, 19, 0, 0, 7),
+        ("fixtures/s300.dz.mf4", 19, 19, 0, 0, 7),
+        // 22 frames, their 20 VLSD records and 3 LIN frames (skipped).
+        ("fixtures/canedge.mf4", 45, 22, 23, 0, 7),
+        // 22 frames, the VLSD records of the 2 FD frames.
+        ("fixtures/canedge73.mf4", 24, 22, 2, 0, 7),
+        ("fixtures/sorted-sd.mf4", 20, 20, 0, 0, 7),
+        ("fixtures/damaged.mf4", 13, 9, 0, 4, 2),
+    ] {
+        let v = ndjson(&[file]);
+        let i = input(&v);
+        let got = [
+            &i["lines"],
+            &i["frames"],
+            &i["skipped"],
+            &i["malformed"],
+            &i["emcy"],
+        ]
+        .map(|x| x.as_u64().unwrap());
+        assert_eq!(
+            got,
+            [lines, frames, skipped, malformed, emcy],
+            "{file}: {i}"
+        );
+    }
+}
+
+#[test]
+fn frames_are_what_python_can_reads() {
+    // canedge.mf4: S300 on channel 1, a remote frame on 0x081, an error
+    // frame, a 29-bit frame on channel 2 (as the generator checked).
+    let f = frames("fixtures/canedge.mf4");
+    assert_eq!(f.len(), 22);
+    let remote = f.iter().find(|f| f.kind == FrameKind::Remote).unwrap();
+    assert_eq!(
+        (remote.id, remote.extended, remote.data.len()),
+        (0x81, false, 0)
+    );
+    let error = f.iter().find(|f| f.kind == FrameKind::Error).unwrap();
+    assert_eq!(error.channel, "1");
+    let ext = f.iter().find(|f| f.extended).unwrap();
+    assert_eq!(
+        (ext.id, ext.channel.as_str(), ext.data.as_slice()),
+        (0x100_0085, "2", &[0x10, 0x43, 8, 1, 0, 0, 0, 0][..])
+    );
+    // Lines are records in file order: LIN and VLSD records count too.
+    assert_eq!(f[0].line, 1);
+    assert_eq!(f[1].line, 3);
+    // canedge73.mf4: FD frames of 12 and 64 bytes through the DLC table
+    // and the VLSD group, 29 bits from a virtual IDE channel.
+    let f = frames("fixtures/canedge73.mf4");
+    let fd: Vec<_> = f.iter().filter(|f| f.kind == FrameKind::Fd).collect();
+    assert_eq!(fd.len(), 2);
+    assert_eq!((fd[0].id, fd[0].channel.as_str()), (0x085, "2"));
+    assert_eq!(fd[0].data, (0..12).collect::<Vec<u8>>());
+    assert_eq!(fd[1].data, (0..64).collect::<Vec<u8>>());
+    let ide: Vec<_> = f.iter().filter(|f| f.extended).collect();
+    assert_eq!(ide.len(), 1);
+    assert_eq!(ide[0].id, 0x100_0085);
+    // sorted-sd.mf4: the remote frame of the second data group comes after
+    // the data frames (file order), the record split across DT and DZ whole.
+    let f = frames("fixtures/sorted-sd.mf4");
+    assert_eq!(f.last().map(|f| f.kind), Some(FrameKind::Remote));
+    let s300 = frames("fixtures/s300.mf4");
+    let data: Vec<_> = f.iter().take(19).map(|f| (f.id, f.data.clone())).collect();
+    let want: Vec<_> = s300.iter().map(|f| (f.id, f.data.clone())).collect();
+    assert_eq!(data, want);
+}
+
+#[test]
+fn times_are_the_start_plus_the_master_channel_exactly() {
+    let time = |file: &str, i: usize| {
+        frames(file)[i]
+            .time
+            .map(|t| t.to_string())
+            .unwrap_or_default()
+    };
+    // python-can: float seconds, to the microsecond here.
+    assert_eq!(time("fixtures/s300.mf4", 8), "1700000001.250000");
+    // CANedge: float nanoseconds x 1e-9 (9 digits); the HD's time zone
+    // (+60 min) does not move UTC times.
+    assert_eq!(time("fixtures/canedge.mf4", 8), "1700000001.250000000");
+    // The 48-bit microsecond master x 1e-6.
+    assert_eq!(time("fixtures/canedge73.mf4", 8), "1700000001.250000");
+    // uint64 nanoseconds x 1e-9.
+    assert_eq!(time("fixtures/sorted-sd.mf4", 8), "1700000001.250000000");
+}
+
+#[test]
+fn gzip_and_stdin_read_as_the_file() {
+    for file in ["fixtures/canedge.mf4", "fixtures/sorted-sd.mf4"] {
+        let plain = std::fs::read(file).unwrap();
+        let reference = semantic(&ndjson(&[file]));
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        enc.write_all(&plain).unwrap();
+        let gz = enc.finish().unwrap();
+        for bytes in [plain, gz] {
+            let (out, err, code) = run(&["--format", "ndjson", "-"], &bytes);
+            assert_eq!(code, 0, "{err}");
+            let v: Vec<Value> = out
+                .lines()
+                .map(|l| serde_json::from_str(l).unwrap())
+                .collect();
+            assert_eq!(semantic(&v), reference, "{file}");
+            assert_eq!(input(&v)["format"], "mf4");
+        }
+    }
+}
+
+#[test]
+fn input_format_mf4_is_forced_and_other_files_and_mdf3_are_refused() {
+    let v = ndjson(&["--input-format", "mf4", "fixtures/s300.mf4"]);
+    assert_eq!(input(&v)["emcy"], 7);
+    let out = emcy_decode()
+        .args(["--input-format", "mf4", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("not an MDF file"), "{stderr}");
+    // MDF 3: a clear one-line error, not garbage.
+    let mut mdf3 = b"MDF     3.30    TOOL    ".to_vec();
+    mdf3.resize(512, 0);
+    let (_, err, code) = run(&["-"], &mdf3);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("MDF version 3.30 is not read, only MDF 4"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let help = emcy_decode().arg("--help").output().unwrap();
+    assert!(String::from_utf8(help.stdout).unwrap().contains("- mf4:"));
+}
+
+#[test]
+fn damage_is_reported_with_its_byte_offset_and_reading_goes_on() {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "fixtures/damaged.mf4"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    for needle in [
+        "damaged.mf4:1: 16 bytes at byte offset",
+        "are no MDF block; skipped",
+        "damaged.mf4:5: record id 9 is not declared by its data group",
+        "damaged.mf4:6: DataLength 12 is more than the 8 data bytes stored",
+        "damaged.mf4:13: record cut off by the end of its data (10 bytes)",
+    ] {
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+    }
+    // The EMCY after the damage (node 5, in the second DT block) is read.
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains(r#""node":5"#), "{text}");
+    // Reading a truncated file at every length never fails or panics.
+    let bytes = std::fs::read("fixtures/canedge73.mf4").unwrap();
+    for cut in (0..bytes.len()).step_by(97) {
+        let r = TraceReader::new(&bytes[..cut]);
+        for record in r {
+            if record.is_err() {
+                break;
+            }
+        }
+    }
+}
