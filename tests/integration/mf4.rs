@@ -266,3 +266,41 @@ fn damage_is_reported_with_its_byte_offset_and_reading_goes_on() {
         }
     }
 }
+
+/// A file of many DZ blocks listed after them (python-can's writer through
+/// asammdf): the blocks are spooled and inflated ahead on a second thread
+/// while the one before is decoded. Every record arrives once, in file
+/// order, on any thread count.
+#[test]
+fn many_spooled_dz_blocks_read_in_order_and_whole() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("dz.mf4");
+    let mut file = std::fs::File::create(&path).expect("create");
+    // About 5 blocks of 4 MiB of records.
+    let (records, emcy, _) =
+        support::tracegen::write_mf4_dz(&mut file, 18 << 20, 20, 7).expect("write");
+    drop(file);
+    let path = path.to_str().expect("utf-8");
+    let (out, err, code) = run(&["--format", "ndjson", "-j", "2", path], b"");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.is_empty(),
+        "no diagnostic (a block out of order would turn the clock back): {err}"
+    );
+    let objects: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect();
+    let input = input(&objects);
+    assert_eq!(input["frames"], Value::from(records));
+    assert_eq!(input["emcy"], Value::from(emcy));
+    assert!(emcy > 1000, "{emcy}");
+    let lines: Vec<u64> = objects
+        .iter()
+        .filter(|o| o["type"] == "emcy")
+        .map(|o| o["line"].as_u64().expect("a line"))
+        .collect();
+    assert!(lines.windows(2).all(|w| w[0] < w[1]), "in record order");
+    let (one, _, _) = run(&["--format", "ndjson", "-j", "1", path], b"");
+    assert_eq!(one, out);
+}

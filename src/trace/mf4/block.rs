@@ -435,17 +435,24 @@ impl Dz {
         out: &mut Vec<u8>,
         scratch: &mut Vec<u8>,
     ) -> Result<(), String> {
+        if self.transposed {
+            self.inflate_stored(zipped, scratch)?;
+            untranspose_into(scratch, out, self.columns as usize);
+        } else {
+            self.inflate_stored(zipped, out)?;
+        }
+        Ok(())
+    }
+
+    /// Only the inflating: the bytes as stored, still transposed when the
+    /// block is (then [`Dz::columns`] says how to undo it).
+    pub fn inflate_stored(&self, zipped: &[u8], target: &mut Vec<u8>) -> Result<(), String> {
         if self.original_len > MAX_INFLATED {
             return Err(format!(
                 "DZ block inflates to {} bytes, more than the {MAX_INFLATED} read",
                 self.original_len
             ));
         }
-        let target = if self.transposed {
-            &mut *scratch
-        } else {
-            &mut *out
-        };
         target.clear();
         target.reserve(self.original_len as usize);
         flate2::read::ZlibDecoder::new(zipped)
@@ -459,10 +466,12 @@ impl Dz {
                 self.original_len
             ));
         }
-        if self.transposed {
-            untranspose_into(scratch, out, self.columns as usize);
-        }
         Ok(())
+    }
+
+    /// The record length to untranspose by, for a transposed block.
+    pub fn columns(&self) -> Option<usize> {
+        self.transposed.then_some(self.columns as usize)
     }
 }
 
