@@ -663,7 +663,7 @@ impl AscParser {
             return Err("line ends after the channel number".into());
         };
         if is(what, b"ErrorFrame") {
-            return Ok(Some(error_frame(time, channel)));
+            return Ok(Some(Frame::error(Some(time), channel)));
         }
         let known = is(what, b"Statistic:")
             || is(what, b"OverloadFrame")
@@ -758,7 +758,7 @@ impl AscParser {
         let tx_request = is_tx_request(dir)?;
         let what = toks.next().ok_or("CANFD line ends after the direction")?;
         if is(what, b"ErrorFrame") {
-            return Ok(Some(error_frame(time, channel)));
+            return Ok(Some(Frame::error(Some(time), channel)));
         }
         let (id, extended) = parse_id(what, self.base)?;
         if tx_request {
@@ -1066,18 +1066,6 @@ fn tail_key(s: &[u8]) -> Option<&'static str> {
 /// Classic frame message flags (TE = transceiver error, WU = wake-up).
 fn is_message_flag(t: &[u8]) -> bool {
     matches!(t, b"TE" | b"WU" | b"XX")
-}
-
-fn error_frame(time: Timestamp, channel: &[u8]) -> Frame<'_> {
-    Frame {
-        time: Some(time),
-        channel,
-        id: 0,
-        extended: false,
-        kind: FrameKind::Error,
-        len: 0,
-        data: Payload::new(),
-    }
 }
 
 /// `true` for TxRq (a transmit request, not a frame on the bus).

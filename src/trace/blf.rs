@@ -32,7 +32,7 @@ use std::io::{self, Read};
 
 use time::{Date, Month, PrimitiveDateTime, Time};
 
-use super::{Frame, FrameKind, Parsed, Payload, Reason, Timestamp};
+use super::{Frame, FrameKind, NumberedChannel, Parsed, Payload, Reason, Timestamp};
 
 /// The file's magic bytes.
 pub const MAGIC: &[u8; 4] = b"LOGG";
@@ -146,8 +146,7 @@ pub struct BlfReader<R> {
     eof: bool,
     /// The warning of the last frame returned, until taken.
     warning: Option<Reason>,
-    channel: [u8; 5],
-    channel_len: usize,
+    channel: NumberedChannel,
 }
 
 impl<R: Read> BlfReader<R> {
@@ -201,8 +200,7 @@ impl<R: Read> BlfReader<R> {
             resync: false,
             eof: false,
             warning: None,
-            channel: [0; 5],
-            channel_len: 0,
+            channel: NumberedChannel::default(),
         })
     }
 
@@ -245,16 +243,9 @@ impl<R: Read> BlfReader<R> {
 
     fn frame(&mut self, d: Decoded) -> Frame<'_> {
         self.warning = d.warning;
-        let mut b = itoa::Buffer::new();
-        let text = b.format(d.channel).as_bytes();
-        let n = text.len().min(self.channel.len());
-        if let (Some(dst), Some(src)) = (self.channel.get_mut(..n), text.get(..n)) {
-            dst.copy_from_slice(src);
-        }
-        self.channel_len = n;
         Frame {
             time: Some(d.time),
-            channel: self.channel.get(..self.channel_len).unwrap_or_default(),
+            channel: self.channel.name(u64::from(d.channel)),
             id: d.id,
             extended: d.extended,
             kind: d.kind,

@@ -52,6 +52,7 @@
 
 use super::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
+    show_token as show,
 };
 use super::{hex, is_blank, trim_start};
 
@@ -573,7 +574,7 @@ impl BusmasterParser {
         let channel = channel_of(channel).map_err(fail)?;
         if kind.starts_with(b"ERR") {
             return Ok(Line {
-                frame: error_frame(channel),
+                frame: Frame::error(None, channel),
                 time,
                 decided: None,
             });
@@ -885,29 +886,6 @@ fn parse_byte(text: &[u8], base: Base) -> Result<u8, Reason> {
         };
         format!("'{}' is not {what}", show(text)).into()
     })
-}
-
-fn error_frame(channel: &[u8]) -> Frame<'_> {
-    Frame {
-        time: None,
-        channel,
-        id: 0,
-        extended: false,
-        kind: FrameKind::Error,
-        len: 0,
-        data: Payload::new(),
-    }
-}
-
-fn show(token: &[u8]) -> String {
-    let text = String::from_utf8_lossy(token);
-    let mut out: String = text.chars().take(40).collect();
-    if text.chars().count() > 40 {
-        out.push('…');
-    }
-    out.chars()
-        .map(|c| if c.is_control() { '?' } else { c })
-        .collect()
 }
 
 /// Fuzz target body: any bytes, line by line, must classify without a

@@ -252,6 +252,43 @@ pub struct Frame<'a> {
     pub data: Payload,
 }
 
+impl<'a> Frame<'a> {
+    /// An error frame as the text formats write one: no class bits, no data.
+    pub(crate) fn error(time: Option<Timestamp>, channel: &'a [u8]) -> Frame<'a> {
+        Frame {
+            time,
+            channel,
+            id: 0,
+            extended: false,
+            kind: FrameKind::Error,
+            len: 0,
+            data: Payload::new(),
+        }
+    }
+}
+
+/// A channel a binary format gives as a number (BLF, MF4), kept as the
+/// decimal text a [`Frame`] borrows: no allocation per frame.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct NumberedChannel {
+    text: [u8; 20],
+    len: usize,
+}
+
+impl NumberedChannel {
+    /// Sets the number and gives its text.
+    pub(crate) fn name(&mut self, n: u64) -> &[u8] {
+        let mut b = itoa::Buffer::new();
+        let text = b.format(n).as_bytes();
+        let n = text.len().min(self.text.len());
+        if let (Some(dst), Some(src)) = (self.text.get_mut(..n), text.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+        self.len = n;
+        self.text.get(..n).unwrap_or_default()
+    }
+}
+
 /// Which identifiers the caller wants decoded. Parsers read the id first and
 /// skip decoding time and data for everything else.
 ///
@@ -618,6 +655,20 @@ impl LineParser for BinaryParser {
     fn context(&self) -> Option<u8> {
         Some(0)
     }
+}
+
+/// A token quoted in a reason (TRC, BUSMASTER): at most 40 characters,
+/// invalid UTF-8 replaced and control characters shown as `?`, so a hostile
+/// trace cannot put control sequences on the terminal.
+pub(crate) fn show_token(token: &[u8]) -> String {
+    let text = String::from_utf8_lossy(token);
+    let mut out: String = text.chars().take(40).collect();
+    if text.chars().count() > 40 {
+        out.push('…');
+    }
+    out.chars()
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect()
 }
 
 /// Splits off leading spaces and tabs.

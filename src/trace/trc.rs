@@ -29,6 +29,7 @@
 
 use super::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
+    show_token as show,
 };
 use super::{hex, is_blank, trim_start};
 
@@ -351,7 +352,7 @@ impl TrcParser {
         let time = || self.time(offset);
         if error || data.first() == Some(&&b"ERROR"[..]) {
             // The data of an error row is the error's description.
-            return Ok(Some(error_frame(time()?, channel)));
+            return Ok(Some(Frame::error(Some(time()?), channel)));
         }
         if data == [&b"RTR"[..]] {
             return Ok(Some(remote_frame(time()?, channel, id, extended, interest)));
@@ -382,7 +383,7 @@ impl TrcParser {
             b"ST" | b"EC" | b"EV" => return Ok(None),
             b"ER" => {
                 let channel = channel(c.bus.and_then(at))?;
-                return Ok(Some(error_frame(time()?, channel)));
+                return Ok(Some(Frame::error(Some(time()?), channel)));
             }
             other => return Err(format!("unknown message type '{}'", show(other)).into()),
         };
@@ -500,18 +501,6 @@ fn frame<'a>(
     })
 }
 
-fn error_frame(time: Timestamp, channel: &[u8]) -> Frame<'_> {
-    Frame {
-        time: Some(time),
-        channel,
-        id: 0,
-        extended: false,
-        kind: FrameKind::Error,
-        len: 0,
-        data: Payload::new(),
-    }
-}
-
 /// The bus column as the channel; `1` when the file has none.
 fn channel(bus: Option<&[u8]>) -> Result<&[u8], Reason> {
     match bus {
@@ -582,17 +571,6 @@ fn start_time(value: &[u8]) -> Result<Option<(u128, u8)>, Reason> {
 
 fn is_digits(s: &[u8]) -> bool {
     !s.is_empty() && s.iter().all(u8::is_ascii_digit)
-}
-
-fn show(token: &[u8]) -> String {
-    let text = String::from_utf8_lossy(token);
-    let mut out: String = text.chars().take(40).collect();
-    if text.chars().count() > 40 {
-        out.push('…');
-    }
-    out.chars()
-        .map(|c| if c.is_control() { '?' } else { c })
-        .collect()
 }
 
 /// Fuzz target body: any bytes, line by line, must classify without a

@@ -13,52 +13,10 @@ use std::io::Write;
 use emcy_decode::{Format, FrameKind, Record, TraceReader};
 use serde_json::Value;
 
-use crate::support::{self, PLACE, emcy_decode};
+use crate::support::{self, emcy_decode, input, run, semantic_6};
 
 fn ndjson(args: &[&str]) -> Vec<Value> {
     support::ndjson(args)
-}
-
-fn input(v: &[Value]) -> &Value {
-    v.iter()
-        .find(|o| o["type"] == "input")
-        .expect("input object")
-}
-
-/// Events and nodes without where they were, times with 6 decimals (MF4
-/// times carry 6 or 9 digits, as the master channel counts them).
-fn semantic(objects: &[Value]) -> Vec<Value> {
-    let mut v = support::semantic(objects, &PLACE);
-    v.iter_mut().for_each(normalise_times);
-    v
-}
-
-fn normalise_times(v: &mut Value) {
-    match v {
-        Value::Number(n) => {
-            if let Some(f) = n.as_f64()
-                && n.to_string().contains('.')
-            {
-                *v = Value::String(format!("{f:.6}"));
-            }
-        }
-        Value::Array(a) => a.iter_mut().for_each(normalise_times),
-        Value::Object(o) => o.values_mut().for_each(normalise_times),
-        _ => {}
-    }
-}
-
-fn run(args: &[&str], stdin: &[u8]) -> (String, String, i32) {
-    let out = emcy_decode()
-        .args(args)
-        .write_stdin(stdin.to_vec())
-        .output()
-        .expect("runs");
-    (
-        String::from_utf8(out.stdout).expect("utf-8"),
-        String::from_utf8(out.stderr).expect("utf-8"),
-        out.status.code().unwrap_or(-1),
-    )
 }
 
 fn frames(path: &str) -> Vec<emcy_decode::CanFrame> {
@@ -76,7 +34,7 @@ fn frames(path: &str) -> Vec<emcy_decode::CanFrame> {
 
 #[test]
 fn every_s300_mf4_decodes_like_the_candump_log() {
-    let log = semantic(&ndjson(&["fixtures/s300.log"]));
+    let log = semantic_6(&ndjson(&["fixtures/s300.log"]));
     assert!(log.iter().any(|o| o["type"] == "emcy"));
     for (file, channel) in [
         ("fixtures/s300.mf4", "1"),
@@ -91,7 +49,7 @@ fn every_s300_mf4_decodes_like_the_candump_log() {
                 .map(|o| support::without(o, &["time_in_error"]))
                 .collect()
         };
-        assert_eq!(strip(semantic(&v)), strip(log.clone()), "{file}");
+        assert_eq!(strip(semantic_6(&v)), strip(log.clone()), "{file}");
         let i = input(&v);
         assert_eq!(i["format"], "mf4", "{file}");
         assert_eq!(i["malformed"], 0, "{file}");
@@ -194,7 +152,7 @@ fn times_are_the_start_plus_the_master_channel_exactly() {
 fn gzip_and_stdin_read_as_the_file() {
     for file in ["fixtures/canedge.mf4", "fixtures/sorted-sd.mf4"] {
         let plain = std::fs::read(file).unwrap();
-        let reference = semantic(&ndjson(&[file]));
+        let reference = semantic_6(&ndjson(&[file]));
         let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
         enc.write_all(&plain).unwrap();
         let gz = enc.finish().unwrap();
@@ -205,7 +163,7 @@ fn gzip_and_stdin_read_as_the_file() {
                 .lines()
                 .map(|l| serde_json::from_str(l).unwrap())
                 .collect();
-            assert_eq!(semantic(&v), reference, "{file}");
+            assert_eq!(semantic_6(&v), reference, "{file}");
             assert_eq!(input(&v)["format"], "mf4");
         }
     }

@@ -12,60 +12,16 @@ use std::path::Path;
 use emcy_decode::{Format, Record, TraceReader};
 use serde_json::Value;
 
-use crate::support::{self, PLACE, emcy_decode};
+use crate::support::{self, emcy_decode, input, run, semantic_6};
 
 fn ndjson(args: &[&str]) -> Vec<Value> {
     support::ndjson(args)
-}
-
-fn input(v: &[Value]) -> &Value {
-    v.iter()
-        .find(|o| o["type"] == "input")
-        .expect("input object")
 }
 
 fn events(v: &[Value]) -> Vec<&Value> {
     v.iter()
         .filter(|o| o["type"] == "emcy" || o["type"] == "boot")
         .collect()
-}
-
-/// Events and nodes without where they were (file, line, channel), times
-/// as numbers with 6 decimals (a nanosecond pcap prints 9).
-fn semantic(objects: &[Value]) -> Vec<Value> {
-    let mut v = support::semantic(objects, &PLACE);
-    v.iter_mut().for_each(normalise_times);
-    v
-}
-
-fn normalise_times(v: &mut Value) {
-    match v {
-        Value::Number(n) => {
-            if let Some(f) = n.as_f64()
-                && n.to_string().contains('.')
-            {
-                *v = Value::String(format!("{f:.6}"));
-            }
-        }
-        Value::Array(a) => a.iter_mut().for_each(normalise_times),
-        Value::Object(o) => o.values_mut().for_each(normalise_times),
-        _ => {}
-    }
-}
-
-/// Runs the binary with `args`, `stdin` on its standard input:
-/// (stdout, stderr, exit code).
-fn run(args: &[&str], stdin: &[u8]) -> (String, String, i32) {
-    let out = emcy_decode()
-        .args(args)
-        .write_stdin(stdin.to_vec())
-        .output()
-        .expect("runs");
-    (
-        String::from_utf8(out.stdout).expect("utf-8"),
-        String::from_utf8(out.stderr).expect("utf-8"),
-        out.status.code().unwrap_or(-1),
-    )
 }
 
 fn lines_of(stdout: &str) -> Vec<Value> {
@@ -83,7 +39,7 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
 
 #[test]
 fn every_s300_capture_decodes_like_the_candump_log() {
-    let log = semantic(&ndjson(&["fixtures/s300.log"]));
+    let log = semantic_6(&ndjson(&["fixtures/s300.log"]));
     assert!(log.iter().any(|o| o["type"] == "emcy"));
     for (capture, format) in [
         ("fixtures/s300.pcap", "pcap"),
@@ -99,7 +55,7 @@ fn every_s300_capture_decodes_like_the_candump_log() {
                 .map(|o| support::without(o, &["time_in_error"]))
                 .collect()
         };
-        assert_eq!(strip(semantic(&v)), strip(log.clone()), "{capture}");
+        assert_eq!(strip(semantic_6(&v)), strip(log.clone()), "{capture}");
         let i = input(&v);
         assert_eq!(i["format"], format, "{capture}");
         assert_eq!(i["malformed"], 0, "{capture}");
@@ -178,12 +134,12 @@ fn times_are_exact_nanoseconds_and_binary_fractions() {
 #[test]
 fn gzip_and_stdin_read_as_the_file() {
     let plain = std::fs::read("fixtures/s300.pcapng").unwrap();
-    let reference = semantic(&ndjson(&["fixtures/s300.pcapng"]));
+    let reference = semantic_6(&ndjson(&["fixtures/s300.pcapng"]));
     let dir = tempfile::tempdir().unwrap();
     let gz = dir.path().join("capture.pcapng.gz");
     std::fs::write(&gz, gzip(&plain)).unwrap();
     let v = ndjson(&[gz.to_str().unwrap()]);
-    assert_eq!(semantic(&v), reference);
+    assert_eq!(semantic_6(&v), reference);
     assert_eq!(
         (&input(&v)["gzip"], &input(&v)["format"]),
         (&Value::from(true), &Value::from("pcapng"))
@@ -192,7 +148,7 @@ fn gzip_and_stdin_read_as_the_file() {
         let (out, err, code) = run(&["--format", "ndjson", "-"], &bytes);
         assert_eq!(code, 0, "{err}");
         let v = lines_of(&out);
-        assert_eq!(semantic(&v), reference);
+        assert_eq!(semantic_6(&v), reference);
         assert_eq!(input(&v)["file"], "<stdin>");
     }
 }

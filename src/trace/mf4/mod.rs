@@ -70,7 +70,7 @@ use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
 use super::blf::read_full;
-use super::{Frame, FrameKind, Interest, Parsed, Payload, Reason, Timestamp};
+use super::{Frame, FrameKind, Interest, NumberedChannel, Parsed, Payload, Reason, Timestamp};
 use block::{Block, HEADER, Header, ID_LEN, Id};
 use layout::{Blocks, Channel, Layout, Raw};
 
@@ -318,8 +318,7 @@ pub struct Mf4Reader<R> {
     notes: VecDeque<String>,
     told: std::collections::HashSet<String>,
     finished: bool,
-    channel: [u8; 20],
-    channel_len: usize,
+    channel: NumberedChannel,
     buf: Vec<u8>,
     /// A DZ block's bytes, its inflated data and the transposed bytes:
     /// kept from block to block.
@@ -416,8 +415,7 @@ impl<R: Read> Mf4Reader<R> {
             notes,
             told: Default::default(),
             finished: false,
-            channel: [0; 20],
-            channel_len: 0,
+            channel: NumberedChannel::default(),
             buf: vec![0; CHUNK],
             zbuf: Vec::new(),
             spare: Vec::new(),
@@ -500,16 +498,9 @@ impl<R: Read> Mf4Reader<R> {
     }
 
     fn frame(&mut self, d: Decoded) -> Frame<'_> {
-        let mut b = itoa::Buffer::new();
-        let text = b.format(d.channel).as_bytes();
-        let n = text.len().min(self.channel.len());
-        if let (Some(dst), Some(src)) = (self.channel.get_mut(..n), text.get(..n)) {
-            dst.copy_from_slice(src);
-        }
-        self.channel_len = n;
         Frame {
             time: d.time,
-            channel: self.channel.get(..self.channel_len).unwrap_or_default(),
+            channel: self.channel.name(d.channel),
             id: d.id,
             extended: d.extended,
             kind: d.kind,

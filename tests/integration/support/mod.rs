@@ -130,3 +130,49 @@ pub fn readme_block(name: &str) -> Vec<String> {
         .map(str::to_string)
         .collect()
 }
+
+/// The input object of an ndjson run.
+pub fn input(v: &[Value]) -> &Value {
+    v.iter()
+        .find(|o| o["type"] == "input")
+        .expect("input object")
+}
+
+/// [`semantic`] without the place keys, times as text with 6 decimals:
+/// what a scenario must give whatever the format's time precision (a
+/// nanosecond pcap prints 9 digits, an MF4 master channel 6 or 9).
+pub fn semantic_6(objects: &[Value]) -> Vec<Value> {
+    let mut v = semantic(objects, &PLACE);
+    v.iter_mut().for_each(six_decimals);
+    v
+}
+
+fn six_decimals(v: &mut Value) {
+    match v {
+        Value::Number(n) => {
+            if let Some(f) = n.as_f64()
+                && n.to_string().contains('.')
+            {
+                *v = Value::String(format!("{f:.6}"));
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(six_decimals),
+        Value::Object(o) => o.values_mut().for_each(six_decimals),
+        _ => {}
+    }
+}
+
+/// Runs the binary with `args`, `stdin` on its standard input:
+/// (stdout, stderr, exit code).
+pub fn run(args: &[&str], stdin: &[u8]) -> (String, String, i32) {
+    let out = emcy_decode()
+        .args(args)
+        .write_stdin(stdin.to_vec())
+        .output()
+        .expect("runs");
+    (
+        String::from_utf8(out.stdout).expect("utf-8"),
+        String::from_utf8(out.stderr).expect("utf-8"),
+        out.status.code().unwrap_or(-1),
+    )
+}
