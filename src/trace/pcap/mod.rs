@@ -9,7 +9,9 @@
 //! is skipped and counted. pcap: microsecond and nanosecond files in
 //! either byte order, one channel, named [`CHANNEL`]. pcapng: every
 //! section and interface; a packet's channel is its interface's `if_name`
-//! (the interface's index in its section when it has none), its time the
+//! (the interface's index in its section when it has none; `NAME:INDEX`
+//! with the device's interface index for LINUX_SLL2 on an interface that
+//! captures several devices, `any`), its time the
 //! interface's `if_tsresol` units (powers of ten and of two) plus
 //! `if_tsoffset` seconds, exactly ([`clock`]). Simple packet blocks have
 //! no time; obsolete packet blocks are read like enhanced ones.
@@ -222,6 +224,10 @@ impl<R: Read> Stream<R> {
 struct Interface {
     linktype: u16,
     name: Box<[u8]>,
+    /// It captures several devices: named `any`, or with no name of its
+    /// own (pcap). Its LINUX_SLL2 frames are told apart by the device's
+    /// interface index: channel `NAME:INDEX`.
+    several: bool,
     clock: Clock,
     /// 0: no limit.
     snaplen: u32,
@@ -244,6 +250,9 @@ enum Ts {
 enum Item {
     Frame {
         iface: usize,
+        /// The device's interface index (LINUX_SLL2 on an interface that
+        /// captures several), part of the channel's name.
+        device: Option<u32>,
         time: Option<Timestamp>,
         can: Can,
     },
@@ -292,6 +301,18 @@ struct Decoder {
 }
 
 impl Decoder {
+    /// `NAME:INDEX`: a device seen through an interface that captures
+    /// several (`any`).
+    fn device_channel(&self, iface: usize, device: u32) -> Box<[u8]> {
+        let mut name = self
+            .interfaces
+            .get(iface)
+            .map_or_else(Vec::new, |i| i.name.to_vec());
+        name.push(b':');
+        name.extend_from_slice(itoa::Buffer::new().format(device).as_bytes());
+        name.into()
+    }
+
     fn time(&self, interface: &Interface, ts: Ts) -> Result<Option<Timestamp>, Reason> {
         match ts {
             Ts::None => Ok(None),
@@ -334,7 +355,14 @@ impl Decoder {
         ) {
             Packet::Plain => Item::Plain,
             Packet::Can(can) => match self.time(interface, ts) {
-                Ok(time) => Item::Frame { iface, time, can },
+                Ok(time) => Item::Frame {
+                    iface,
+                    device: (interface.several && interface.linktype == packet::LINUX_SLL2)
+                        .then(|| Order::Big.u32(data, 4))
+                        .flatten(),
+                    time,
+                    can,
+                },
                 Err(why) => Item::Malformed(why),
             },
             Packet::Undecided(bytes) => match self.time(interface, ts) {
@@ -418,9 +446,9 @@ impl Decoder {
                         .and_then(|o| o.as_bytes().ok())
                 };
                 let index = self.interfaces.len();
-                let name: Box<[u8]> = match option(2) {
-                    Some(name) if !name.is_empty() => name.into(),
-                    _ => index.to_string().into_bytes().into(),
+                let (name, several): (Box<[u8]>, bool) = match option(2) {
+                    Some(name) if !name.is_empty() => (name.into(), name == b"any"),
+                    _ => (index.to_string().into_bytes().into(), true),
                 };
                 let resolution = option(9).and_then(|v| v.first().copied()).unwrap_or(6);
                 let offset = option(14)
@@ -439,6 +467,7 @@ impl Decoder {
                 self.interfaces.push(Interface {
                     linktype: (idb.linktype.0 & 0xFFFF) as u16,
                     name,
+                    several,
                     clock,
                     snaplen: idb.snaplen,
                 });
@@ -665,6 +694,7 @@ impl<R: Read> PcapReader<R> {
                     interfaces: vec![Interface {
                         linktype: linktype as u16,
                         name: CHANNEL.as_bytes().into(),
+                        several: true,
                         clock: Clock::default(),
                         snaplen: 0,
                     }],
@@ -836,12 +866,26 @@ impl<R: Read> PcapReader<R> {
     /// The packet [`PcapReader::advance`] read.
     pub fn take(&mut self) -> Option<Parsed<'_>> {
         let (item, held) = self.ready.take()?;
+        if let Item::Frame {
+            iface,
+            device: Some(device),
+            ..
+        } = &item
+            && !held
+        {
+            self.channel = self.decoder.device_channel(*iface, *device);
+        }
         let channel: &[u8] = match &item {
-            Item::Frame { iface, .. } | Item::Undecided { iface, .. } if !held => self
-                .decoder
-                .interfaces
-                .get(*iface)
-                .map_or(&[][..], |i| &i.name),
+            Item::Frame { device: None, .. } | Item::Undecided { .. } if !held => {
+                let iface = match &item {
+                    Item::Frame { iface, .. } | Item::Undecided { iface, .. } => *iface,
+                    _ => 0,
+                };
+                self.decoder
+                    .interfaces
+                    .get(iface)
+                    .map_or(&[][..], |i| &i.name)
+            }
             _ => &self.channel,
         };
         let frame = |time: Option<Timestamp>, can: Can| Frame {
@@ -884,6 +928,11 @@ impl<R: Read> PcapReader<R> {
     /// Holds an item until the byte order of link type 227 is known.
     fn hold(&mut self, item: Item) {
         let channel: Box<[u8]> = match &item {
+            Item::Frame {
+                iface,
+                device: Some(device),
+                ..
+            } => self.decoder.device_channel(*iface, *device),
             Item::Frame { iface, .. } | Item::Undecided { iface, .. } => self
                 .decoder
                 .interfaces

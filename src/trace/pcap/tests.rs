@@ -297,7 +297,8 @@ fn pcapng_interfaces_are_channels_with_their_own_clocks() {
         let mut f = shb(o);
         f.extend(idb(o, 113, &[(2, b"can0"), (9, &[9])]));
         f.extend(idb(o, 212, &[(2, b"lin0")])); // LIN: not CAN
-        f.extend(idb(o, 276, &[(9, &[0x80 | 10])])); // no name: its index
+        // No name: its index, and the device's (7) for LINUX_SLL2.
+        f.extend(idb(o, 276, &[(9, &[0x80 | 10])]));
         let offset = u64::to_be_bytes(1_700_000_000);
         let offset = match o {
             Order::Big => offset,
@@ -331,7 +332,7 @@ fn pcapng_interfaces_are_channels_with_their_own_clocks() {
             [
                 frame("1700000001.250000001", "can0", 0x81, &EMCY),
                 Got::Skipped,
-                frame("1700000002.0009765625", "2", 0x82, &EMCY),
+                frame("1700000002.0009765625", "2:7", 0x82, &EMCY),
                 frame("1700000002.500000", "vcan 1", 0x83, &EMCY),
                 Got::Skipped,
             ],
@@ -339,6 +340,35 @@ fn pcapng_interfaces_are_channels_with_their_own_clocks() {
         );
         assert!(notes.is_empty(), "{notes:?}");
     }
+}
+
+/// `tcpdump -i any` / `dumpcap -i any` write LINUX_SLL2 on one interface
+/// for every device: the device's interface index tells the buses apart,
+/// so node 1 on two buses is two nodes. A named device keeps its name.
+#[test]
+fn the_devices_of_an_any_capture_are_channels_of_their_own() {
+    let o = Order::Little;
+    let sll2_on = |index: u8, frame: &[u8]| {
+        let mut p = sll2(0x0C, frame);
+        p[7] = index;
+        p
+    };
+    let mut f = shb(o);
+    f.extend(idb(o, 276, &[(2, b"any")]));
+    f.extend(idb(o, 276, &[(2, b"can9")]));
+    f.extend(epb(o, 0, 1, &sll2_on(3, &can(o, 0x81, &EMCY))));
+    f.extend(epb(o, 0, 2, &sll2_on(4, &can(o, 0x81, &EMCY))));
+    f.extend(epb(o, 1, 3, &sll2_on(5, &can(o, 0x81, &EMCY))));
+    let (got, notes) = read(&f);
+    assert_eq!(
+        got,
+        [
+            frame("0.000001", "any:3", 0x81, &EMCY),
+            frame("0.000002", "any:4", 0x81, &EMCY),
+            frame("0.000003", "can9", 0x81, &EMCY),
+        ]
+    );
+    assert!(notes.is_empty(), "{notes:?}");
 }
 
 #[test]
@@ -842,7 +872,13 @@ proptest! {
             }
             want.push(Got::Frame {
                 time: format!("{}.{:06}", ticks / 1_000_000, ticks % 1_000_000),
-                channel: if ng { "bus" } else { "0" }.into(),
+                // SLL2 without an interface name (pcap): several devices.
+                channel: match (ng, linktype) {
+                    (true, _) => "bus",
+                    (false, 276) => "0:7",
+                    (false, _) => "0",
+                }
+                .into(),
                 id,
                 extended: *extended,
                 kind: FrameKind::Data,
