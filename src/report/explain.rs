@@ -109,12 +109,21 @@ pub fn payload_text(profile: &Profile, data: &[u8]) -> Result<String> {
         }
     );
     if let Some(d) = profile.decode_manufacturer(&emcy) {
+        // Values line up with the lines above (column 14) unless a key is
+        // longer: then after it and a blank, never run into it.
+        let width = d
+            .fields
+            .iter()
+            .map(|(key, _)| key.chars().count() + 1)
+            .max()
+            .unwrap_or(0)
+            .max(12);
         for (key, value) in &d.fields {
             let value = match value {
                 FieldValue::Int(n) => n.to_string(),
                 FieldValue::Text(t) => t.clone(),
             };
-            let _ = writeln!(s, "  {key:<12}{value}");
+            let _ = writeln!(s, "  {key:<width$}{value}");
         }
     }
     if warnings.is_empty() {

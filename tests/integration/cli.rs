@@ -588,6 +588,23 @@ fn explain_data() {
         .args(["explain", "--data", "10 43"])
         .assert()
         .code(2);
+    // A profile's field names longer than the column keep a blank after
+    // them (`category_text` ran into its value).
+    emcy_decode()
+        .args([
+            "explain",
+            "--profile",
+            "kollmorgen",
+            "--data",
+            "1043080100000000",
+        ])
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains(
+            "manufacturer  01 00 00 00 00\n  \
+             category      1\n  \
+             category_text cleared only by a reset",
+        ));
 }
 
 #[test]
