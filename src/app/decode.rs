@@ -340,11 +340,25 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
     if input_failed || strict_failed {
         return EXIT_ERROR;
     }
-    let met = fail_on::met(
-        &FailOn::combine(&args.fail_on),
-        &outcome.tally,
-        &outcome.reports,
-    );
+    let fail_on = FailOn::combine(&args.fail_on);
+    if let Some(bound) = fail_on.category_at_most {
+        let nodes = || outcome.reports.iter().flat_map(|r| &r.nodes);
+        if !nodes().any(|n| n.profile.has_categories()) {
+            let mut names: Vec<&str> = nodes().map(|n| n.profile.name()).collect();
+            names.sort_unstable();
+            names.dedup();
+            log.note(&format!(
+                "fail-on: category<={bound} can never be met: no node's profile gives \
+                 error categories{}",
+                if names.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", names.join(", "))
+                }
+            ));
+        }
+    }
+    let met = fail_on::met(&fail_on, &outcome.tally, &outcome.reports);
     for reason in &met {
         log.note(&format!("fail-on: {reason}"));
     }

@@ -349,6 +349,14 @@ impl Profile {
         from_field.or_else(|| self.codes.get(&emcy.code)?.category)
     }
 
+    /// Whether any EMCY can have a category under this profile (a category
+    /// field, or a code row with one): `--fail-on category<=N` means
+    /// nothing for nodes without.
+    pub fn has_categories(&self) -> bool {
+        self.field_with(Role::Category).is_some()
+            || self.codes.values().any(|c| c.category.is_some())
+    }
+
     fn field_with(&self, role: Role) -> Option<&Field> {
         self.fields.iter().find(|f| f.role == Some(role))
     }
@@ -902,6 +910,14 @@ mod tests {
 
     fn profile(name: &str) -> &'static Profile {
         Profile::builtin(name).unwrap_or_else(|| panic!("no built-in {name}"))
+    }
+
+    #[test]
+    fn only_profiles_with_a_category_field_or_rows_have_categories() {
+        assert!(profile("kollmorgen").has_categories());
+        for name in ["cia301", "cia402", "canopennode"] {
+            assert!(!profile(name).has_categories(), "{name}");
+        }
     }
 
     fn warnings(p: &Profile, data: &[u8]) -> Vec<Warning> {

@@ -827,7 +827,17 @@ fn kollmorgen_category_is_decoded_and_fails_category_bounds() {
     emcy_decode()
         .args(["--fail-on", "category<=0", "fixtures/s300.log"])
         .assert()
-        .code(0);
+        .code(0)
+        .stderr(predicate::str::contains("never").not());
+    // A bound no node's profile can meet passes, but not silently.
+    emcy_decode()
+        .args(["--fail-on", "category<=1", "fixtures/festo.log"])
+        .assert()
+        .code(0)
+        .stderr(predicate::str::contains(
+            "fail-on: category<=1 can never be met: no node's profile gives error \
+             categories (festo-cmmp)",
+        ));
 }
 
 #[test]
