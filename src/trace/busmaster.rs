@@ -50,6 +50,7 @@
 //! `s-fd` and `x-fd` (CAN FD, the length a byte count), and `ERR...` (error
 //! frames). Rx and Tx are both frames; the channel is kept as written.
 
+use super::time::{SECS_PER_DAY, unix_midnight};
 use super::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
     show_token as show,
@@ -58,7 +59,6 @@ use super::{hex, is_blank, trim_start};
 
 const STANDARD_MAX: u32 = 0x7FF;
 const EXTENDED_MAX: u32 = 0x1FFF_FFFF;
-const SECS_PER_DAY: u64 = 86_400;
 
 /// CAN FD payload lengths.
 const FD_LEN: [u8; 16] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64];
@@ -803,16 +803,8 @@ fn start_date(text: &[u8]) -> Option<Start> {
     if d.next().is_some() || h > 23 || m > 59 || s > 59 || year < 1970 {
         return None;
     }
-    let month = time::Month::try_from(u8::try_from(month).ok()?).ok()?;
-    let date =
-        time::Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?)
-            .ok()?;
-    let days = date.to_julian_day()
-        - time::Date::from_calendar_date(1970, time::Month::January, 1)
-            .ok()?
-            .to_julian_day();
     Some(Start {
-        midnight: u64::try_from(days).ok()? * SECS_PER_DAY,
+        midnight: unix_midnight(year, month, day)?,
         time_of_day: h * 3600 + m * 60 + s,
     })
 }

@@ -32,11 +32,9 @@
 //! CAN XL frames (`[nnnn]` lengths) are reported as malformed: a [`Frame`]
 //! cannot hold them and dropping them silently would hide data.
 
-use time::{Date, Month, PrimitiveDateTime, Time};
-
 use super::candump_log::{ERROR_FLAG, is_candump_non_frame};
 use super::hex;
-use super::time::MAX_FRACTION_DIGITS;
+use super::time::{MAX_FRACTION_DIGITS, unix_midnight};
 use super::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp, trim_start,
 };
@@ -543,17 +541,12 @@ fn parse_date(text: &[u8]) -> Result<Timestamp, Reason> {
     if d.next().is_some() || t.next().is_some() {
         return Err(SHAPE.into());
     }
-    let date = calendar_date(year, month, day)
+    let midnight = unix_midnight(year, month, day)
         .ok_or_else(|| format!("invalid date {year:04}-{month:02}-{day:02} (or before 1970)"))?;
-    let time_of_day = clock_time(hour, minute, second)
-        .ok_or_else(|| format!("invalid time of day {hour:02}:{minute:02}:{second:02}"))?;
-    // From 1970 on, so never negative.
-    let secs = u64::try_from(
-        PrimitiveDateTime::new(date, time_of_day)
-            .assume_utc()
-            .unix_timestamp(),
-    )
-    .unwrap_or_default();
+    if hour > 23 || minute > 59 || second > 59 {
+        return Err(format!("invalid time of day {hour:02}:{minute:02}:{second:02}").into());
+    }
+    let secs = midnight + hour * 3600 + minute * 60 + second;
     let (frac_value, digits) = match frac {
         None => (0, 0),
         Some([]) => return Err("timestamp ends with a dot".into()),
@@ -566,23 +559,6 @@ fn parse_date(text: &[u8]) -> Result<Timestamp, Reason> {
         ),
     };
     Ok(Timestamp::from_parts(secs, frac_value, digits))
-}
-
-/// A civil (proleptic Gregorian) date from 1970 on; `None` for impossible
-/// dates (month 0 or 13, February 29th of a common year, ...) and dates
-/// before 1970.
-fn calendar_date(year: u64, month: u64, day: u64) -> Option<Date> {
-    if year < 1970 {
-        return None;
-    }
-    let month = Month::try_from(u8::try_from(month).ok()?).ok()?;
-    Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?).ok()
-}
-
-/// A time of day; `None` for an hour past 23 or a minute or second past 59.
-fn clock_time(hour: u64, minute: u64, second: u64) -> Option<Time> {
-    let field = |v: u64| u8::try_from(v).ok();
-    Time::from_hms(field(hour)?, field(minute)?, field(second)?).ok()
 }
 
 #[cfg(test)]

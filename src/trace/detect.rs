@@ -19,7 +19,7 @@ use super::blf::{self, read_full};
 use super::deltas::{self, DeltaClock};
 use super::mf4;
 use super::pcap;
-use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan};
+use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan, Timestamp};
 
 /// The input with the bytes [`sniff_binary`] read put back in front.
 pub type Sniffed<R> = io::Chain<io::Cursor<Vec<u8>>, R>;
@@ -184,25 +184,24 @@ impl Detector {
     /// for the detected format (a frame it returns is never foreign).
     #[inline]
     pub fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
-        let candump = is_candump(self.format());
         let scan = match self.primary.and_then(|i| self.parsers.get_mut(i)) {
             Some(p) => p.scan(line, interest),
             None => Scan::Parse,
         };
-        let Some(clock) = self.deltas.as_mut().filter(|_| candump) else {
+        if self.deltas.is_none() {
             return scan;
-        };
+        }
         match scan {
             // Not decoded, but its delta moves the clock all the same.
             Scan::Plain => {
-                if let Some(delta) = deltas::leading_time(line) {
-                    clock.next(delta);
-                }
+                self.sum(self.format(), line, None);
                 Scan::Plain
             }
-            Scan::Timed(delta) => Scan::Timed(clock.next(delta)),
+            Scan::Timed(delta) => {
+                Scan::Timed(self.sum(self.format(), line, Some(delta)).unwrap_or(delta))
+            }
             Scan::Frame(mut frame) => {
-                frame.time = frame.time.map(|delta| clock.next(delta));
+                frame.time = self.sum(self.format(), line, frame.time).or(frame.time);
                 Scan::Frame(frame)
             }
             Scan::Parse => Scan::Parse,
@@ -212,22 +211,31 @@ impl Detector {
     #[inline]
     pub fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         let mut parsed = self.parse_line(line, interest);
-        let candump = is_candump(self.foreign.or(self.format()));
-        if let Some(clock) = &mut self.deltas
+        if self.deltas.is_some()
             && let Parsed::Frame(frame) = &mut parsed
-            && candump
         {
-            // A frame nobody wants has no time decoded; its delta counts.
-            match frame.time {
-                Some(delta) => frame.time = Some(clock.next(delta)),
-                None => {
-                    if let Some(delta) = deltas::leading_time(line) {
-                        clock.next(delta);
-                    }
-                }
+            let format = self.foreign.or(self.format());
+            // A frame nobody wants has no time decoded: it only moves the clock.
+            let summed = self.sum(format, line, frame.time);
+            if frame.time.is_some() {
+                frame.time = summed.or(frame.time);
             }
         }
         parsed
+    }
+
+    /// Moves the `-td` clock by a candump frame's delta (`time` when its
+    /// parser read it, else read from the line) and returns the sum;
+    /// `None` for other formats' frames and frames without a time.
+    fn sum(
+        &mut self,
+        format: Option<Format>,
+        line: &[u8],
+        time: Option<Timestamp>,
+    ) -> Option<Timestamp> {
+        let clock = self.deltas.as_mut().filter(|_| is_candump(format))?;
+        let delta = time.or_else(|| deltas::leading_time(line))?;
+        Some(clock.next(delta))
     }
 
     fn parse_line<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {

@@ -8,6 +8,26 @@
 
 use std::fmt;
 
+/// Seconds in a day.
+pub const SECS_PER_DAY: u64 = 86_400;
+
+/// Seconds from the Unix epoch to the UTC midnight that starts a civil
+/// (proleptic Gregorian) date; `None` for impossible dates (month 0 or 13,
+/// February 29th of a common year, ...) and dates before 1970. For traces
+/// that write dates (candump `-tA`, BUSMASTER session starts).
+pub(crate) fn unix_midnight(year: u64, month: u64, day: u64) -> Option<u64> {
+    if year < 1970 {
+        return None;
+    }
+    let month = ::time::Month::try_from(u8::try_from(month).ok()?).ok()?;
+    let date =
+        ::time::Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?)
+            .ok()?;
+    // Julian day 2440588 is 1970-01-01.
+    let days = date.to_julian_day() - 2_440_588;
+    u64::try_from(days).ok()?.checked_mul(SECS_PER_DAY)
+}
+
 /// Most fraction digits a timestamp may carry (attosecond resolution).
 pub const MAX_FRACTION_DIGITS: usize = 18;
 
@@ -367,6 +387,18 @@ impl fmt::Display for Span {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unix_midnights_of_real_dates_only() {
+        assert_eq!(unix_midnight(1970, 1, 1), Some(0));
+        assert_eq!(unix_midnight(2023, 11, 14), Some(1_699_920_000));
+        assert_eq!(unix_midnight(2024, 2, 29), Some(1_709_164_800));
+        assert_eq!(unix_midnight(2023, 2, 29), None);
+        assert_eq!(unix_midnight(1969, 12, 31), None);
+        assert_eq!(unix_midnight(2023, 13, 1), None);
+        assert_eq!(unix_midnight(2023, 0, 1), None);
+        assert_eq!(unix_midnight(u64::MAX, 1, 1), None);
+    }
 
     fn ts(s: &str) -> Timestamp {
         Timestamp::parse(s.as_bytes()).unwrap()
