@@ -5,7 +5,6 @@
 //! holds a file's events); big ones are read in order with block
 //! parallelism instead.
 
-use crate::canopen::NodeId;
 use std::collections::BTreeMap;
 use std::io;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -15,6 +14,7 @@ use std::thread::Scope;
 use super::event::{BootEvent, Diagnostic, EmcyEvent, InputReport};
 use super::sink::Sink;
 use super::{Analysis, DiagnosticLog, Options, OutputError};
+use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::profile::Decoded;

@@ -1,7 +1,6 @@
 //! The consumer: turns classified lines into timelines, events and counts,
 //! in line order, and hands events to the sink.
 
-use crate::canopen::NodeId;
 use std::borrow::Borrow;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -18,6 +17,7 @@ use super::parallel::SharedInterest;
 use super::sink::Sink;
 use super::{Analysis, Options, OutputError};
 use crate::cache::{Cache, profile_code_key};
+use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{self, Emcy, Warning};
 use crate::canopen::profile::Profile;

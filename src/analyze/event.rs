@@ -3,10 +3,10 @@
 //! these through [`Sink`](super::Sink); the JSON key names derived from
 //! them are a public contract (README).
 
-use crate::canopen::NodeId;
 use std::borrow::Cow;
 use std::sync::Arc;
 
+use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::profile::{Decoded, Profile};

@@ -25,9 +25,9 @@ pub(crate) mod sink;
 #[cfg(test)]
 mod tests;
 
-use crate::canopen::NodeId;
 use std::io::{self, Read, Write};
 
+use crate::canopen::NodeId;
 use crate::canopen::profile_choice::ProfileChoice;
 use crate::timeline::history::{DEFAULT_SPILL_AT, ErrorHistory};
 use crate::trace::Format;

@@ -1,7 +1,6 @@
 //! Command-line definitions. Flag names, JSON keys and exit codes are the
 //! contract users script against: change them only with a major version.
 
-use crate::canopen::NodeId;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
@@ -9,6 +8,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::analyze::fail_on::FailOn;
 use crate::analyze::{EmcyId, Options};
+use crate::canopen::NodeId;
 use crate::canopen::profile_choice::{self, ProfileRequest};
 use crate::report::timefmt::TimeStyle;
 use crate::trace::deltas::TimeMode;

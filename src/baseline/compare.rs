@@ -1,12 +1,12 @@
 //! Comparing a new record of traces with the baseline: one finding per
 //! difference, each a regression, an improvement or a change.
 
-use crate::canopen::NodeId;
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::Serialize;
 
 use super::{Baseline, Code, ErrorEntry, NodeEntry, TraceEntry};
+use crate::canopen::NodeId;
 use crate::canopen::codes;
 
 /// Differences the user accepts (`--allow`, `--allow-node`).

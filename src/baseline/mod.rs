@@ -11,7 +11,6 @@ pub(crate) mod compare;
 pub(crate) mod key;
 pub(crate) mod text;
 
-use crate::canopen::NodeId;
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -22,6 +21,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::value::RawValue;
 
 use crate::analyze::InputReport;
+use crate::canopen::NodeId;
 
 /// The `baseline_version` this build writes and reads.
 pub const VERSION: u32 = 1;

@@ -2,9 +2,9 @@
 //! only the frame itself. Checks that need the node's history (a reset while
 //! error-free) live in the timeline.
 
-use super::NodeId;
 use std::fmt;
 
+use super::NodeId;
 use super::codes::{self, Class, CodeInfo};
 use super::register::{self, Register};
 use crate::trace::FrameKind;

@@ -3,9 +3,9 @@
 //! the node's identity as the trace shows it (SDO uploads of 0x1000 and
 //! 0x1018 sub 1), or the default, in that order.
 
-use super::NodeId;
 use std::path::PathBuf;
 
+use super::NodeId;
 use super::profile::{self, Profile};
 use super::sdo::{self, Object};
 

@@ -8,13 +8,13 @@
 //! draws all of them; `--format table` or `ndjson` list every event).
 
 use super::table::codes_list;
-use crate::canopen::NodeId;
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
 use super::chart::{self, Clock, Collector, Panel, esc};
 use super::svg::{doc_title, document};
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
+use crate::canopen::NodeId;
 use crate::trace::Timestamp;
 
 /// Events listed per input.

@@ -2,7 +2,6 @@
 //! with fixed columns, so a trace with a million events prints without holding
 //! them), then the node states and error timeline; at the end the input counts.
 
-use crate::canopen::NodeId;
 use std::borrow::Cow;
 use std::io::{self, Write};
 
@@ -11,6 +10,7 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
+use crate::canopen::NodeId;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::text::printable;
 use crate::timeline::Interval;

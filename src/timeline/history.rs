@@ -8,7 +8,6 @@
 //! anonymous temporary file as one sorted run. Reports read the runs back with
 //! a k-way merge, node by node, so no renderer ever holds the whole history.
 
-use crate::canopen::NodeId;
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 use std::collections::binary_heap::PeekMut;
@@ -17,6 +16,7 @@ use std::io::{self, Write};
 use std::sync::Arc;
 
 use super::{At, ClearedBy, Interval};
+use crate::canopen::NodeId;
 use crate::canopen::register::Register;
 use crate::trace::Timestamp;
 

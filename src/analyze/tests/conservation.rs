@@ -20,12 +20,12 @@
 //! bases) to be malformed, so the oracle never counts a line as garbage that
 //! a reader could take for a frame.
 
-use crate::canopen::NodeId;
 use std::io::{self, Read, Write};
 
 use super::frames::*;
 use crate::analyze::Sink as Renderer;
 use crate::analyze::{DiagnosticLog, Options, analyze};
+use crate::canopen::NodeId;
 use crate::report::ndjson::Ndjson;
 use crate::trace::input::sniff_gzip;
 use crate::trace::{Format, FrameKind, HexBytes, Interest, LineParser, Parsed};

@@ -2,9 +2,9 @@
 //! the axis while the input is read, and coalesced as they come so memory
 //! stays bounded by the chart's pixels, not by the trace.
 
-use crate::canopen::NodeId;
 use std::collections::BTreeMap;
 
+use crate::canopen::NodeId;
 use crate::timeline::At;
 use crate::trace::Timestamp;
 

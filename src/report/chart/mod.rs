@@ -34,10 +34,10 @@ mod marks;
 mod style;
 mod text;
 
-use crate::canopen::NodeId;
 use std::io;
 
 use crate::analyze::{BootEvent, EmcyEvent, InputReport, NodeReport};
+use crate::canopen::NodeId;
 use crate::trace::Format;
 
 use axis::Axis;
