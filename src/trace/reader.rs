@@ -90,8 +90,10 @@ pub enum Record {
 
 /// Reads a trace into [`Record`]s, one per line, in order. The format is
 /// detected from the content (candump log or screen output, Vector ASC,
-/// PEAK TRC, Vector BLF, pcap, pcapng, MF4), or forced; gzip is decompressed, known by its
-/// magic bytes. Lines longer than 64 KiB are malformed, never buffered.
+/// PEAK TRC, BUSMASTER, Vector BLF, pcap, pcapng, MF4), or forced; gzip is
+/// decompressed, known by its magic bytes. Lines longer than 64 KiB are
+/// malformed, never buffered. The first 16 lines of a text trace are read
+/// ahead to tell candump `-td` deltas (see [`TraceReader::with_timestamps`]).
 ///
 /// An I/O error ends the iteration after it is returned.
 pub struct TraceReader<'a> {
