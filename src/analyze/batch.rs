@@ -44,7 +44,7 @@ struct OwnedEmcy {
     time: Option<Timestamp>,
     channel: String,
     node: NodeId,
-    cob_id: u32,
+    cob_id: Option<u32>,
     data: Vec<u8>,
     emcy: Emcy,
     info: CodeInfo,

@@ -26,6 +26,7 @@ use crate::canopen::sdo;
 use crate::timeline::history::{ErrorHistory, History};
 use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::deltas::{self, TimeMode};
+use crate::trace::ethercat::{CoeMessage, CoeService, Retries};
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
@@ -254,6 +255,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     warnings: Vec<Warning>,
     active: Vec<u16>,
     sdo: sdo::Tracker,
+    /// CoE messages seen last, per station: a repeat is a retry.
+    coe_retries: Retries,
     profiles: NodeProfiles<'r>,
     /// The last timeline step, handed back for its vectors.
     step_buffers: Step,
@@ -322,6 +325,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             warnings: Vec::new(),
             active: Vec::new(),
             sdo: sdo::Tracker::default(),
+            coe_retries: Retries::default(),
             profiles: NodeProfiles::new(&opts.profiles),
             step_buffers: Step::default(),
             codes: Cache::default(),
@@ -442,6 +446,155 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         {
             *w = (self.interest_gen, self.interest.clone());
         }
+    }
+
+    /// An EMCY of `node` (on CAN id `cob_id`; `None` for a CoE emergency):
+    /// its timeline step, counts and event.
+    fn emcy(
+        &mut self,
+        at: At,
+        channel_bytes: &[u8],
+        node: NodeId,
+        cob_id: Option<u32>,
+        data: &[u8],
+    ) -> Result<(), OutputError> {
+        let emcy = match Emcy::decode(data) {
+            Ok(e) => e,
+            Err(short) => {
+                self.counts.emcy_invalid += 1;
+                self.diags
+                    .report(self.log, true, at.line, format!("node {node}: {short}"));
+                return Ok(());
+            }
+        };
+        self.counts.emcy += 1;
+        self.check_clock(at);
+        let chosen = self.profiles.get(node);
+        let profile = chosen.profile;
+        let (key, slot) = profile_code_key(profile, emcy.code);
+        let looked_up;
+        let entry = match self
+            .codes
+            .get(key, slot, || CodeEntry::of(profile, emcy.code))
+        {
+            Some(entry) => entry,
+            None => {
+                looked_up = CodeEntry::of(profile, emcy.code);
+                &looked_up
+            }
+        };
+        let info = &entry.info;
+        self.warnings.clear();
+        emcy.frame_warnings(info, &mut self.warnings);
+        profile.frame_warnings(&emcy, &mut self.warnings);
+        let NodeSlot {
+            channel,
+            channel_id,
+            timeline,
+            history,
+        } = self.nodes.get(channel_bytes, node);
+        let step = timeline.apply(
+            &emcy,
+            at,
+            profile.status_bit(&emcy),
+            &mut self.warnings,
+            std::mem::take(&mut self.step_buffers),
+        );
+        for iv in &step.closed {
+            history.push(channel_id, node, iv.clone());
+        }
+        if !self.opts.selects(channel, node) {
+            self.step_buffers = step;
+            return Ok(());
+        }
+        if !emcy.is_reset() {
+            self.errors_raised += 1;
+            if let Some(c) = profile.category(&emcy) {
+                self.worst_category = Some(self.worst_category.map_or(c, |w| w.min(c)));
+            }
+        }
+        if !self.warnings.is_empty() {
+            self.frames_with_warnings += 1;
+        }
+        // The first few: an event's size must not grow with the node's
+        // active errors (a trace can leave thousands active).
+        self.active.clear();
+        self.active
+            .extend(timeline.active_codes().take(EVENT_ACTIVE_MAX));
+        let decoded = profile.decode_manufacturer(&emcy);
+        let event = EmcyEvent {
+            file: self.file,
+            line: at.line,
+            time: at.time,
+            channel,
+            node,
+            cob_id,
+            data,
+            emcy: &emcy,
+            info,
+            description: &entry.description,
+            transition: step.transition,
+            state: step.state,
+            active: &self.active,
+            active_total: timeline.active().len(),
+            cleared: &step.cleared,
+            warnings: &self.warnings,
+            profile: chosen,
+            decoded: decoded.as_ref(),
+        };
+        self.sink.emcy(&event).map_err(OutputError)?;
+        self.step_buffers = step;
+        Ok(())
+    }
+
+    /// A CoE message of an EtherCAT frame (a skipped line, counted by the
+    /// caller) at line `idx` of the block: an emergency is an EMCY of the
+    /// station, an SDO transfer may say which profile it has.
+    pub(super) fn coe(
+        &mut self,
+        idx: u64,
+        time: Option<Timestamp>,
+        channel: &[u8],
+        m: &CoeMessage,
+    ) -> Result<(), OutputError> {
+        self.decide();
+        if self.coe_retries.is_retry(channel, m) {
+            self.counts.mailbox_retries += 1;
+            return Ok(());
+        }
+        if let Some(t) = time {
+            self.time(t);
+        }
+        let at = At {
+            time,
+            line: self.line_no(idx),
+        };
+        match m.service {
+            CoeService::Emergency => self.emcy(at, channel, m.station, None, m.data()),
+            CoeService::SdoRequest | CoeService::SdoResponse => {
+                let request = m.service == CoeService::SdoRequest;
+                if let Some(access) = sdo::parse_transfer(request, m.station, m.data())
+                    && let Some((node, object, value)) = self.sdo.feed(access)
+                {
+                    // Identity and device type only: an EMCY COB-ID means
+                    // nothing on EtherCAT.
+                    self.profiles.object_value(node, object, value);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// EtherCAT seen in the input: frames, mailbox messages, empty polls.
+    pub(super) fn ethercat(&mut self, frames: u64, mailbox_messages: u64, empty_polls: u64) {
+        self.counts.ethercat_frames = frames;
+        self.counts.mailbox_messages = mailbox_messages;
+        self.counts.mailbox_empty_polls = empty_polls;
+    }
+
+    /// Skipped lines the reader only counted.
+    pub(super) fn skipped_lines(&mut self, n: u64) {
+        self.counts.skipped += n;
     }
 
     /// A frame was read: the format is known, held diagnostics go out.
@@ -567,92 +720,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         };
         let data = frame.data.as_slice();
         if let Some(node) = self.emcy_node(frame.id, frame.extended) {
-            let emcy = match Emcy::decode(data) {
-                Ok(e) => e,
-                Err(short) => {
-                    self.counts.emcy_invalid += 1;
-                    self.diags
-                        .report(self.log, true, line_no, format!("node {node}: {short}"));
-                    return Ok(());
-                }
-            };
-            self.counts.emcy += 1;
-            self.check_clock(at);
-            let chosen = self.profiles.get(node);
-            let profile = chosen.profile;
-            let (key, slot) = profile_code_key(profile, emcy.code);
-            let looked_up;
-            let entry = match self
-                .codes
-                .get(key, slot, || CodeEntry::of(profile, emcy.code))
-            {
-                Some(entry) => entry,
-                None => {
-                    looked_up = CodeEntry::of(profile, emcy.code);
-                    &looked_up
-                }
-            };
-            let info = &entry.info;
-            self.warnings.clear();
-            emcy.frame_warnings(info, &mut self.warnings);
-            profile.frame_warnings(&emcy, &mut self.warnings);
-            let NodeSlot {
-                channel,
-                channel_id,
-                timeline,
-                history,
-            } = self.nodes.get(frame.channel, node);
-            let step = timeline.apply(
-                &emcy,
-                at,
-                profile.status_bit(&emcy),
-                &mut self.warnings,
-                std::mem::take(&mut self.step_buffers),
-            );
-            for iv in &step.closed {
-                history.push(channel_id, node, iv.clone());
-            }
-            if !self.opts.selects(channel, node) {
-                self.step_buffers = step;
-                return Ok(());
-            }
-            if !emcy.is_reset() {
-                self.errors_raised += 1;
-                if let Some(c) = profile.category(&emcy) {
-                    self.worst_category = Some(self.worst_category.map_or(c, |w| w.min(c)));
-                }
-            }
-            if !self.warnings.is_empty() {
-                self.frames_with_warnings += 1;
-            }
-            // The first few: an event's size must not grow with the node's
-            // active errors (a trace can leave thousands active).
-            self.active.clear();
-            self.active
-                .extend(timeline.active_codes().take(EVENT_ACTIVE_MAX));
-            let decoded = profile.decode_manufacturer(&emcy);
-            let event = EmcyEvent {
-                file: self.file,
-                line: line_no,
-                time: frame.time,
-                channel,
-                node,
-                cob_id: frame.id,
-                data,
-                emcy: &emcy,
-                info,
-                description: &entry.description,
-                transition: step.transition,
-                state: step.state,
-                active: &self.active,
-                active_total: timeline.active().len(),
-                cleared: &step.cleared,
-                warnings: &self.warnings,
-                profile: chosen,
-                decoded: decoded.as_ref(),
-            };
-            self.sink.emcy(&event).map_err(OutputError)?;
-            self.step_buffers = step;
+            self.emcy(at, frame.channel, node, Some(frame.id), data)?;
         } else if frame.extended {
             return Ok(());
         } else if let Some(access) = sdo::parse(frame.id, data) {

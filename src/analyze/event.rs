@@ -28,7 +28,8 @@ pub struct EmcyEvent<'a> {
     pub time: Option<Timestamp>,
     pub channel: &'a str,
     pub node: NodeId,
-    pub cob_id: u32,
+    /// The CAN id it came on; `None` for a CoE emergency (EtherCAT).
+    pub cob_id: Option<u32>,
     pub data: &'a [u8],
     pub emcy: &'a Emcy,
     pub info: &'a CodeInfo,
@@ -153,6 +154,13 @@ pub struct Counts {
     pub emcy_invalid: u64,
     /// Frames read in another format than the one detected (mixed files).
     pub other_format: u64,
+    /// EtherCAT in a capture: frames (skipped lines: they are not CAN
+    /// frames), the mailbox messages in them, the CoE messages that were
+    /// retries of the one before, reads of an empty mailbox.
+    pub ethercat_frames: u64,
+    pub mailbox_messages: u64,
+    pub mailbox_retries: u64,
+    pub mailbox_empty_polls: u64,
 }
 
 /// Everything known about one input after reading it.

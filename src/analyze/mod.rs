@@ -341,10 +341,27 @@ fn read_pcap<R: Read, E: Write>(
         Ok(r) => r,
         Err(e) => return Ok(read_error(&e)),
     };
+    let result = read_packets(&mut reader, consumer);
+    let e = reader.ethercat_counts();
+    consumer.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
+    result
+}
+
+fn read_packets<R: Read, E: Write>(
+    reader: &mut pcap::PcapReader<R>,
+    consumer: &mut Consumer<'_, '_, E>,
+) -> Result<Option<String>, OutputError> {
     loop {
         let more = reader.advance(Some(consumer.interest()));
         while let Some(note) = reader.take_note() {
             consumer.log.note(&format!("{}: {note}", consumer.file));
+        }
+        // EtherCAT frames without a mailbox message: skipped lines.
+        let quiet = reader.take_quiet();
+        if quiet > 0 {
+            consumer.decide();
+            consumer.skipped_lines(quiet);
+            consumer.lines(quiet);
         }
         // Frames before the packet read that are only counted (ids nobody
         // wants) or timed (the content filter rejects their data).
@@ -364,11 +381,28 @@ fn read_pcap<R: Read, E: Write>(
             Ok(false) => return Ok(None),
             Err(e) => return Ok(read_error(&e)),
         }
-        match reader.take() {
-            Some(Parsed::Frame(f)) => deliver(consumer, 0, &f, None)?,
-            Some(Parsed::Skipped) => consumer.skipped(),
-            Some(Parsed::Malformed(reason)) => consumer.malformed(0, reason),
+        let taken = match reader.take() {
+            Some(Parsed::Frame(f)) => {
+                deliver(consumer, 0, &f, None)?;
+                None
+            }
+            Some(Parsed::Skipped) => Some(None),
+            Some(Parsed::Malformed(reason)) => Some(Some(reason)),
             None => continue,
+        };
+        if let Some(why) = taken {
+            // An EtherCAT frame's CoE messages, all on this line, even
+            // those before damage that makes the line malformed.
+            if let Some((packet, channel)) = reader.take_ethercat() {
+                consumer.decide();
+                for m in &packet.messages {
+                    consumer.coe(0, packet.time, channel, m)?;
+                }
+            }
+            match why {
+                None => consumer.skipped(),
+                Some(why) => consumer.malformed(0, why),
+            }
         }
         consumer.lines(1);
     }

@@ -95,7 +95,8 @@ pub struct DecodeArgs {
     #[arg(long, value_enum, value_name = "MODE")]
     pub timestamps: Option<TimestampsArg>,
 
-    /// Report only these nodes (repeatable or comma-separated; decimal or 0x hex)
+    /// Report only these nodes (repeatable or comma-separated; decimal or 0x hex; EtherCAT
+    /// slaves by station address)
     #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
     pub node: Vec<NodeId>,
 
@@ -535,7 +536,7 @@ fn parse_profile_arg(s: &str) -> Result<ProfileRequest, String> {
 fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
     let err = || format!("'{s}' is not COBID=NODE (e.g. 0x1A5=5 or 18FF0105x=5)");
     let (cob, node) = s.split_once('=').ok_or_else(err)?;
-    let node = parse_node(node)?;
+    let node = parse_can_node(node)?;
     let cob = cob.trim();
     let digits = cob
         .strip_prefix("0x")
@@ -553,16 +554,33 @@ fn parse_emcy_id(s: &str) -> Result<EmcyId, String> {
     Ok(EmcyId { id, extended, node })
 }
 
-/// A CANopen node id, 1..=127, decimal or 0x hex.
+/// A node: a CANopen node id, 1..=127, or an EtherCAT slave's station
+/// address, up to 65535; decimal or 0x hex.
 fn parse_node(s: &str) -> Result<NodeId, String> {
+    match number(s) {
+        Some(n @ 1..) => Ok(n),
+        _ => Err(format!(
+            "'{s}' is not a node (a CANopen node id 1-127 or an EtherCAT station address up \
+             to 65535, decimal or 0x hex)"
+        )),
+    }
+}
+
+/// A CANopen node id, 1..=127 (the node an EMCY id belongs to).
+fn parse_can_node(s: &str) -> Result<NodeId, String> {
+    match number(s) {
+        Some(n @ 1..=127) => Ok(n),
+        _ => Err(format!(
+            "'{s}' is not a CANopen node id (1-127, decimal or 0x hex)"
+        )),
+    }
+}
+
+fn number(s: &str) -> Option<NodeId> {
     let t = s.trim();
-    let value = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-        Some(hex) => NodeId::from_str_radix(hex, 16),
-        None => t.parse::<NodeId>(),
-    };
-    match value {
-        Ok(n @ 1..=127) => Ok(n),
-        _ => Err(format!("'{s}' is not a node id (1-127, decimal or 0x hex)")),
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(hex) => NodeId::from_str_radix(hex, 16).ok(),
+        None => t.parse::<NodeId>().ok(),
     }
 }
 
@@ -745,8 +763,14 @@ mod tests {
     fn node_ids() {
         assert_eq!(parse_node("5"), Ok(5));
         assert_eq!(parse_node("0x7F"), Ok(127));
+        // EtherCAT station addresses.
+        assert_eq!(parse_node("1001"), Ok(1001));
+        assert_eq!(parse_node("0xFFFF"), Ok(65535));
         assert!(parse_node("0").is_err());
-        assert!(parse_node("128").is_err());
+        assert!(parse_node("65536").is_err());
         assert!(parse_node("x").is_err());
+        assert_eq!(parse_can_node("127"), Ok(127));
+        assert!(parse_can_node("128").is_err());
+        assert!(parse_can_node("0").is_err());
     }
 }

@@ -3,6 +3,7 @@
 //! the node's identity as the trace shows it (SDO uploads of 0x1000 and
 //! 0x1018 sub 1), or the default, in that order.
 
+use std::collections::HashMap;
 use std::path::PathBuf;
 
 use super::NodeId;
@@ -70,9 +71,9 @@ struct Identity {
 pub struct NodeProfiles<'c> {
     choice: &'c ProfileChoice,
     default: &'static Profile,
-    identity: Vec<Identity>,
+    identity: HashMap<NodeId, Identity>,
     /// The profile the identity selects, with the reason, per node id.
-    from_trace: Vec<Option<(&'static Profile, String)>>,
+    from_trace: HashMap<NodeId, (&'static Profile, String)>,
 }
 
 impl<'c> NodeProfiles<'c> {
@@ -80,8 +81,8 @@ impl<'c> NodeProfiles<'c> {
         NodeProfiles {
             choice,
             default: default_profile(),
-            identity: vec![Identity::default(); 128],
-            from_trace: vec![None; 128],
+            identity: HashMap::new(),
+            from_trace: HashMap::new(),
         }
     }
 
@@ -102,7 +103,10 @@ impl<'c> NodeProfiles<'c> {
                 source: ProfileSource::File,
             };
         }
-        if let Some(Some((p, _))) = self.from_trace.get(usize::from(node)) {
+        // Most traces show no identity: no hashing per EMCY then.
+        if !self.from_trace.is_empty()
+            && let Some((p, _)) = self.from_trace.get(&node)
+        {
             return Chosen {
                 profile: p,
                 source: ProfileSource::Trace,
@@ -120,27 +124,29 @@ impl<'c> NodeProfiles<'c> {
         if self.get(node).source != ProfileSource::Trace {
             return None;
         }
-        self.from_trace
-            .get(usize::from(node))?
-            .as_ref()
-            .map(|(_, r)| r.as_str())
+        self.from_trace.get(&node).map(|(_, r)| r.as_str())
     }
 
     /// A value the node holds (SDO upload or confirmed download): device
     /// type and vendor id choose its profile.
     pub fn object_value(&mut self, node: NodeId, object: Object, value: u32) {
-        let Some(id) = self.identity.get_mut(usize::from(node)) else {
+        if !matches!(
+            (object.index, object.sub),
+            (sdo::DEVICE_TYPE, 0) | (sdo::IDENTITY, 1)
+        ) {
             return;
+        }
+        // Only nodes whose identity the trace shows get an entry: a map,
+        // as node ids go up to 65535 (EtherCAT station addresses).
+        let id = self.identity.entry(node).or_default();
+        match object.index {
+            sdo::DEVICE_TYPE => id.device_type = Some(value),
+            _ => id.vendor_id = Some(value),
+        }
+        match profile::for_identity(id.device_type, id.vendor_id) {
+            Some(chosen) => self.from_trace.insert(node, chosen),
+            None => self.from_trace.remove(&node),
         };
-        match (object.index, object.sub) {
-            (sdo::DEVICE_TYPE, 0) => id.device_type = Some(value),
-            (sdo::IDENTITY, 1) => id.vendor_id = Some(value),
-            _ => return,
-        }
-        let chosen = profile::for_identity(id.device_type, id.vendor_id);
-        if let Some(slot) = self.from_trace.get_mut(usize::from(node)) {
-            *slot = chosen;
-        }
     }
 }
 

@@ -93,7 +93,12 @@ pub fn parse(id: u32, data: &[u8]) -> Option<Sdo> {
     } else {
         return None;
     };
-    let node = node as NodeId;
+    parse_transfer(request, node as NodeId, data)
+}
+
+/// Reads the 8 bytes of an SDO `request` (client to server) or response of
+/// `node`, however they were carried (a CAN frame, a CoE mailbox message).
+pub fn parse_transfer(request: bool, node: NodeId, data: &[u8]) -> Option<Sdo> {
     // Every SDO frame is 8 bytes; a shorter one is not trusted.
     let &[cmd, lo, hi, sub, b4, b5, b6, b7] = data else {
         return None;

@@ -752,7 +752,7 @@ pub fn decode_timeline(data: &[u8]) {
                     time,
                     channel: CHANNELS[m.channel as usize],
                     node: m.node,
-                    cob_id: emcy::EMCY_BASE + u32::from(m.node),
+                    cob_id: Some(emcy::EMCY_BASE + u32::from(m.node)),
                     data: &payload,
                     emcy: &e,
                     info: &info,

@@ -392,7 +392,11 @@ impl JsonWriter {
         self.channel(out, ev.channel);
         push_u64(out, u64::from(ev.node));
         key!(self, out, "cob_id");
-        push_u64(out, u64::from(ev.cob_id));
+        match ev.cob_id {
+            Some(id) => push_u64(out, u64::from(id)),
+            // A CoE emergency came on no CAN id.
+            None => out.extend_from_slice(b"null"),
+        }
         key!(self, out, "data");
         push_hex(out, ev.data);
         self.payload(out, ev);
@@ -589,6 +593,10 @@ impl JsonWriter {
             boot,
             emcy_invalid,
             other_format,
+            ethercat_frames,
+            mailbox_messages,
+            mailbox_retries,
+            mailbox_empty_polls,
         } = input.counts;
         o.u64("lines", lines);
         o.u64("frames", frames);
@@ -598,6 +606,14 @@ impl JsonWriter {
         o.u64("boot", boot);
         o.u64("emcy_invalid", emcy_invalid);
         o.u64("other_format", other_format);
+        // Only for captures with EtherCAT: CAN inputs' objects stay as
+        // they were.
+        if ethercat_frames > 0 {
+            o.u64("ethercat_frames", ethercat_frames);
+            o.u64("mailbox_messages", mailbox_messages);
+            o.u64("mailbox_retries", mailbox_retries);
+            o.u64("mailbox_empty_polls", mailbox_empty_polls);
+        }
         self.time(o.key("first_time"), input.first_time);
         self.time(o.key("last_time"), input.last_time);
         // Only where times were summed: the times are not as written.

@@ -111,10 +111,28 @@ impl<W: Write> TableReport<W> {
         let rate = input
             .emcy_rate()
             .map_or_else(String::new, |r| format!(" ({r:.2}/s)"));
+        // An EtherCAT capture's frames are EtherCAT's, its EMCYs came by mailbox.
+        let frames = match c.ethercat_frames {
+            0 => format!("{} frames", c.frames),
+            n => format!(
+                "{n} EtherCAT frames ({} mailbox messages, {} {}, {} empty polls){}",
+                c.mailbox_messages,
+                c.mailbox_retries,
+                if c.mailbox_retries == 1 {
+                    "retry"
+                } else {
+                    "retries"
+                },
+                c.mailbox_empty_polls,
+                match c.frames {
+                    0 => String::new(),
+                    n => format!(", {n} CAN frames"),
+                }
+            ),
+        };
         writeln!(
             self.out,
-            "bus: {} frames, {} EMCY{rate}{span}, {} of {} nodes with errors, {} malformed",
-            c.frames,
+            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors, {} malformed",
             c.emcy,
             input.nodes_with_errors(),
             input.nodes.len(),

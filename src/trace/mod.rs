@@ -15,6 +15,7 @@ pub mod candump_log;
 pub mod candump_screen;
 pub mod deltas;
 pub mod detect;
+pub mod ethercat;
 pub mod follow;
 pub mod hex;
 pub mod input;

@@ -29,6 +29,8 @@ fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
         "canopennode" => &["--profile", "20=canopennode"],
         "ax2000" => &["--profile", "beckhoff-ax2000"],
         "acme-servo" => &["--profile-file", "fixtures/profiles/acme-servo.toml"],
+        // 1001 reads its vendor id over CoE; 1002 is named by station address.
+        "stoeber-ecat" => &["--profile", "1002=stoeber"],
         _ => &[],
     }
 }

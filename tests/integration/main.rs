@@ -20,6 +20,7 @@ mod busmaster;
 mod chart;
 mod cli;
 mod differential;
+mod ethercat;
 mod follow;
 mod fuzz_corpus;
 mod golden;

@@ -54,6 +54,7 @@ use pcap_parser::traits::{PcapNGPacketBlock, PcapReaderIterator};
 use pcap_parser::{Block, LegacyPcapReader, PcapBlockOwned, PcapError, PcapNGReader};
 
 use super::blf::read_full;
+use super::ethercat::{self, CoeMessage};
 use super::{Format, Frame, Interest, Parsed, Reason, Timestamp};
 use clock::Clock;
 use packet::{CAN_SOCKETCAN, Can, Order, Packet, Shape};
@@ -258,6 +259,12 @@ enum Item {
     },
     /// A valid frame the caller's interest does not want: counted only.
     Plain,
+    /// An EtherCAT frame: not a CAN frame (a skipped line, or a malformed
+    /// one when its walk failed), but maybe CoE messages.
+    Ethercat {
+        iface: usize,
+        packet: Box<EthercatPacket>,
+    },
     /// A link type 227 packet read before the byte order is known.
     Undecided {
         iface: usize,
@@ -267,6 +274,41 @@ enum Item {
     },
     Skipped,
     Malformed(Reason),
+}
+
+/// What an EtherCAT frame held: its counts, the CoE messages the caller
+/// reads, and why its walk stopped early, if it did.
+#[derive(Debug, Default)]
+pub struct EthercatPacket {
+    pub time: Option<Timestamp>,
+    pub walked: ethercat::Walked,
+    pub messages: Vec<CoeMessage>,
+    pub error: Option<Reason>,
+}
+
+/// EtherCAT seen in an input so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EthercatCounts {
+    pub frames: u64,
+    pub mailbox_messages: u64,
+    pub empty_polls: u64,
+}
+
+impl EthercatCounts {
+    fn add(&mut self, w: ethercat::Walked) {
+        self.frames += 1;
+        self.mailbox_messages += u64::from(w.mailboxes);
+        self.empty_polls += u64::from(w.empty_polls);
+    }
+}
+
+/// What the hot loop made of a packet it counts.
+#[derive(Clone, Copy)]
+enum Hot {
+    /// A CAN frame only counted, and timed if it has a [`RawTime`].
+    Plain(Option<RawTime>),
+    /// An EtherCAT frame without mailbox messages: a skipped line.
+    Ethercat(ethercat::Walked),
 }
 
 /// What a block is to the caller.
@@ -374,14 +416,24 @@ impl Decoder {
                 },
                 Err(why) => Item::Malformed(why),
             },
-            Packet::NotCan => Item::Skipped,
+            Packet::NotCan => match ethercat::locate(interface.linktype, data) {
+                Some(frame) => match self.time(interface, ts) {
+                    Ok(time) => Item::Ethercat {
+                        iface,
+                        packet: Box::new(walk_ethercat(frame, time)),
+                    },
+                    Err(why) => Item::Malformed(why),
+                },
+                None => Item::Skipped,
+            },
             Packet::Malformed(why) => Item::Malformed(why),
         }
     }
 
     /// What the hot loop makes of a packet (see [`packet::quick`]): a
     /// plain frame, a frame only timed (with its time, to be read when
-    /// needed: it cannot fail), or `None` for the general path.
+    /// needed: it cannot fail), an EtherCAT frame with no mailbox message,
+    /// or `None` for the general path.
     #[inline]
     fn quick(
         &self,
@@ -390,7 +442,7 @@ impl Decoder {
         data: &[u8],
         reported: u32,
         interest: &Interest,
-    ) -> Option<Option<RawTime>> {
+    ) -> Option<Hot> {
         let i = self.interfaces.get(iface)?;
         match packet::quick(
             i.linktype,
@@ -400,20 +452,29 @@ impl Decoder {
             self.socketcan,
             interest,
         ) {
-            packet::Quick::Plain => Some(None),
+            packet::Quick::Plain => Some(Hot::Plain(None)),
             packet::Quick::Timed => {
                 let sure = match ts {
                     Ts::Legacy { .. } => true,
                     Ts::Units(_) => i.clock.infallible(),
                     Ts::None => false,
                 };
-                sure.then_some(Some(RawTime {
+                sure.then_some(Hot::Plain(Some(RawTime {
                     clock: i.clock,
                     ts,
                     nanos: self.nanos,
-                }))
+                })))
             }
-            packet::Quick::Full => None,
+            packet::Quick::Full => {
+                // Process data and empty polls, nearly every packet of an
+                // EtherCAT capture, are counted here; a mailbox message
+                // (or damage) takes the general path.
+                let frame = ethercat::locate(i.linktype, data)?;
+                match ethercat::walk(frame, |_| {}) {
+                    Ok(w) if w.mailboxes == 0 => Some(Hot::Ethercat(w)),
+                    _ => None,
+                }
+            }
         }
     }
 
@@ -655,6 +716,13 @@ pub struct PcapReader<R: Read> {
     plain: u64,
     /// Of those, the frames only timed, with the first and last time.
     timed: Timed,
+    /// EtherCAT frames only counted since the caller last asked (skipped
+    /// lines), and all EtherCAT seen.
+    quiet: u64,
+    ethercat: EthercatCounts,
+    /// The EtherCAT frame [`PcapReader::take`] returned, for
+    /// [`PcapReader::take_ethercat`].
+    taken_ethercat: Option<Box<EthercatPacket>>,
     /// The input ended (or failed: the error, returned after the held items).
     ended: bool,
     failed: Option<io::Error>,
@@ -783,6 +851,9 @@ impl<R: Read> PcapReader<R> {
             channel: Box::default(),
             plain: 0,
             timed: Timed::default(),
+            quiet: 0,
+            ethercat: EthercatCounts::default(),
+            taken_ethercat: None,
             ended: false,
             failed: None,
         }
@@ -863,9 +934,45 @@ impl<R: Read> PcapReader<R> {
         (std::mem::take(&mut self.plain), times)
     }
 
+    /// EtherCAT frames [`PcapReader::advance`] only counted (they carried
+    /// no mailbox message): skipped lines before the packet it read. The
+    /// count starts again from 0.
+    pub fn take_quiet(&mut self) -> u64 {
+        std::mem::take(&mut self.quiet)
+    }
+
+    /// The EtherCAT frame [`PcapReader::take`] just returned as skipped
+    /// (or malformed), with its CoE messages and the channel they came on.
+    pub fn take_ethercat(&mut self) -> Option<(Box<EthercatPacket>, &[u8])> {
+        let packet = self.taken_ethercat.take()?;
+        Some((packet, &self.channel))
+    }
+
+    /// EtherCAT seen so far: frames, mailbox messages, empty polls.
+    pub fn ethercat_counts(&self) -> EthercatCounts {
+        self.ethercat
+    }
+
     /// The packet [`PcapReader::advance`] read.
     pub fn take(&mut self) -> Option<Parsed<'_>> {
+        self.taken_ethercat = None;
         let (item, held) = self.ready.take()?;
+        if let Item::Ethercat { iface, packet } = item {
+            self.ethercat.add(packet.walked);
+            if !held {
+                self.channel = self
+                    .decoder
+                    .interfaces
+                    .get(iface)
+                    .map_or_else(Box::default, |i| i.name.clone());
+            }
+            let parsed = match &packet.error {
+                Some(why) => Parsed::Malformed(why.clone()),
+                None => Parsed::Skipped,
+            };
+            self.taken_ethercat = Some(packet);
+            return Some(parsed);
+        }
         if let Item::Frame {
             iface,
             device: Some(device),
@@ -912,7 +1019,7 @@ impl<R: Read> PcapReader<R> {
                     Packet::NotCan | Packet::Plain | Packet::Undecided(_) => Parsed::Skipped,
                 }
             }
-            Item::Skipped | Item::Plain => Parsed::Skipped,
+            Item::Skipped | Item::Plain | Item::Ethercat { .. } => Parsed::Skipped,
             Item::Malformed(why) => Parsed::Malformed(why),
         })
     }
@@ -933,7 +1040,9 @@ impl<R: Read> PcapReader<R> {
                 device: Some(device),
                 ..
             } => self.decoder.device_channel(*iface, *device),
-            Item::Frame { iface, .. } | Item::Undecided { iface, .. } => self
+            Item::Frame { iface, .. }
+            | Item::Undecided { iface, .. }
+            | Item::Ethercat { iface, .. } => self
                 .decoder
                 .interfaces
                 .get(*iface)
@@ -990,7 +1099,7 @@ impl<R: Read> PcapReader<R> {
     fn read_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Item>> {
         loop {
             self.hot(interest);
-            if self.plain >= PLAIN_RUN {
+            if self.plain + self.quiet >= PLAIN_RUN {
                 return Ok(Some(Item::Plain));
             }
             let item = match self.stream {
@@ -1038,7 +1147,7 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 let units = u64::from(field(12)) << 32 | u64::from(field(16));
-                let Some(timed) = self.decoder.quick(
+                let Some(hot) = self.decoder.quick(
                     field(8) as usize,
                     Ts::Units(units),
                     packet,
@@ -1048,7 +1157,13 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 reader.consume_noshift(len);
-                if !count_plain(&mut self.plain, &mut self.timed, timed) {
+                if !count_hot(
+                    &mut self.plain,
+                    &mut self.timed,
+                    &mut self.quiet,
+                    &mut self.ethercat,
+                    hot,
+                ) {
                     return;
                 }
             },
@@ -1072,11 +1187,17 @@ impl<R: Read> PcapReader<R> {
                     secs: b.ts_sec,
                     frac: b.ts_usec,
                 };
-                let Some(timed) = self.decoder.quick(0, ts, b.data, b.origlen, interest) else {
+                let Some(hot) = self.decoder.quick(0, ts, b.data, b.origlen, interest) else {
                     return;
                 };
                 reader.consume_noshift(len);
-                if !count_plain(&mut self.plain, &mut self.timed, timed) {
+                if !count_hot(
+                    &mut self.plain,
+                    &mut self.timed,
+                    &mut self.quiet,
+                    &mut self.ethercat,
+                    hot,
+                ) {
                     return;
                 }
             },
@@ -1331,22 +1452,64 @@ impl Timed {
     }
 }
 
-/// One plain packet of the hot loop counted (and timed, if it is a frame
-/// whose time the report wants); false once the run is long enough to
-/// hand back to the caller.
+/// One packet of the hot loop counted: a plain frame (timed, if it is one
+/// whose time the report wants) or a quiet EtherCAT frame; false once the
+/// run is long enough to hand back to the caller.
 #[inline]
-fn count_plain(plain: &mut u64, timed: &mut Timed, time: Option<RawTime>) -> bool {
-    *plain += 1;
-    if let Some(t) = time {
-        timed.count(t);
+fn count_hot(
+    plain: &mut u64,
+    timed: &mut Timed,
+    quiet: &mut u64,
+    ethercat: &mut EthercatCounts,
+    hot: Hot,
+) -> bool {
+    match hot {
+        Hot::Plain(time) => {
+            *plain += 1;
+            if let Some(t) = time {
+                timed.count(t);
+            }
+        }
+        Hot::Ethercat(walked) => {
+            *quiet += 1;
+            ethercat.add(walked);
+        }
     }
-    *plain < PLAIN_RUN
+    *plain + *quiet < PLAIN_RUN
+}
+
+/// An EtherCAT frame's walk: its CoE messages kept, the others counted.
+fn walk_ethercat(frame: &[u8], time: Option<Timestamp>) -> EthercatPacket {
+    let mut messages = Vec::new();
+    let walked = ethercat::walk(frame, |m| messages.extend(CoeMessage::of(&m)));
+    match walked {
+        Ok(walked) => EthercatPacket {
+            time,
+            walked,
+            messages,
+            error: None,
+        },
+        Err(why) => EthercatPacket {
+            time,
+            // What was walked before the damage still counts.
+            walked: ethercat::Walked {
+                mailboxes: messages.len() as u32,
+                ..ethercat::Walked::default()
+            },
+            messages,
+            error: Some(why),
+        },
+    }
 }
 
 fn held_size(item: &Item, channel: &[u8]) -> usize {
     let bytes = match item {
         Item::Undecided { bytes, .. } => bytes.len(),
         Item::Malformed(why) => why.len(),
+        Item::Ethercat { packet, .. } => {
+            std::mem::size_of::<CoeMessage>() * packet.messages.len()
+                + packet.error.as_ref().map_or(0, |w| w.len())
+        }
         _ => 0,
     };
     64 + channel.len() + bytes
