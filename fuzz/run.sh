@@ -16,7 +16,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-all=(candump_log candump_screen asc trc busmaster blf pcap mf4 detect decode_timeline)
+all=(candump_log candump_screen asc trc busmaster blf pcap ethercat mf4 detect decode_timeline)
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 
 # The fixtures each target starts from (by the format it forces).
@@ -31,7 +31,9 @@ fixtures_of() {
         pcap) ls fixtures/*.pcap fixtures/*.pcapng ;;
         mf4) ls fixtures/*.mf4 ;;
         detect) ls fixtures/*.log fixtures/*.txt fixtures/*.asc fixtures/*.trc fixtures/*.blf fixtures/*.pcap fixtures/*.pcapng fixtures/*.mf4 fixtures/*.gz ;;
-        decode_timeline) ;;
+        # Seeds of its own shape (a framing byte, an EtherCAT frame) in
+        # fuzz/corpus/ethercat, written by scripts/make_ethercat_fixtures.py.
+        ethercat | decode_timeline) ;;
         *) echo "unknown target $1 (known: ${all[*]})" >&2; return 1 ;;
     esac
 }

@@ -43,6 +43,7 @@ then refresh the golden outputs:
   UPDATE_GOLDEN=1 cargo test --test integration -- golden:: chart::
 """
 
+import hashlib
 import os
 import struct
 import sys
@@ -177,6 +178,33 @@ def main():
     write("stoeber-ecat.pcapng", ng)
     records = [(START + ms // 1000, (ms % 1000) * 1000, data) for ms, data in pkts]
     write("stoeber-ecat.pcap", pcap(order, False, LINKTYPE_ETHERNET, records))
+    fuzz_seeds(pkts)
+
+
+def fuzz_seeds(pkts):
+    """Seeds of the `ethercat` fuzz target (a framing byte, then an
+    EtherCAT frame; framing 5 takes the whole packet): each distinct
+    EtherCAT frame of the fixture, framed in turn every way."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = os.path.join(root, "fuzz", "corpus", "ethercat")
+    os.makedirs(out, exist_ok=True)
+    seen = set()
+    for i, (_, data) in enumerate(pkts):
+        at = 12
+        while data[at:at + 2] == b"\x81\x00":
+            at += 4
+        if data[at:at + 2] != b"\x88\xa4":
+            continue
+        frame = data[at + 2:]
+        if frame in seen:
+            continue
+        seen.add(frame)
+        mode = len(seen) % 6
+        seed = bytes([mode]) + (data if mode == 5 else frame)
+        name = hashlib.sha1(seed).hexdigest()
+        with open(os.path.join(out, name), "wb") as f:
+            f.write(seed)
+    print(f"fuzz/corpus/ethercat: {len(seen)} seeds")
 
 
 if __name__ == "__main__":

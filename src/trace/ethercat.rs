@@ -366,6 +366,35 @@ pub fn command_name(cmd: u8) -> &'static str {
     NAMES.get(usize::from(cmd)).copied().unwrap_or("command")
 }
 
+/// Fuzz target body: any bytes as an EtherCAT frame walk without a panic,
+/// every message inside the frame and counted, CoE messages read from them
+/// at most [`COE_BYTES`] long.
+#[cfg(feature = "fuzzing")]
+pub(crate) fn fuzz_walk(frame: &[u8]) {
+    let range = frame.as_ptr_range();
+    let mut seen = 0u32;
+    let mut retries = Retries::default();
+    let walked = walk(frame, |m| {
+        seen += 1;
+        let body = m.body.as_ptr_range();
+        assert!(m.body.is_empty() || (range.start <= body.start && body.end <= range.end));
+        assert!(m.counter < 8 && m.kind < 16);
+        if let Some(c) = CoeMessage::of(&m) {
+            assert!(c.data().len() <= COE_BYTES);
+            assert_eq!(Some(c.station), m.station);
+            // A message is never a retry of itself the first time.
+            let first = retries.is_retry(b"f", &c);
+            let again = retries.is_retry(b"f", &c);
+            assert!(!first || c.counter != 0);
+            assert_eq!(again, c.counter != 0);
+        }
+    });
+    if let Ok(w) = walked {
+        assert_eq!(w.mailboxes, seen);
+        assert!(w.mailboxes + w.empty_polls <= w.datagrams);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -286,6 +286,14 @@ pub struct EthercatPacket {
     pub error: Option<Reason>,
 }
 
+impl EthercatPacket {
+    /// No mailbox message and no damage: only counted where the caller
+    /// has an interest (the hot loop's EtherCAT frames).
+    fn quiet(&self) -> bool {
+        self.walked.mailboxes == 0 && self.error.is_none()
+    }
+}
+
 /// EtherCAT seen in an input so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EthercatCounts {
@@ -1108,6 +1116,11 @@ impl<R: Read> PcapReader<R> {
             };
             match item {
                 Some(Item::Plain) => self.plain += 1,
+                // As the hot loop counts them.
+                Some(Item::Ethercat { packet, .. }) if interest.is_some() && packet.quiet() => {
+                    self.quiet += 1;
+                    self.ethercat.add(packet.walked);
+                }
                 other => return Ok(other),
             }
         }
@@ -1515,6 +1528,42 @@ fn held_size(item: &Item, channel: &[u8]) -> usize {
     64 + channel.len() + bytes
 }
 
+/// A pcapng capture of `packet`, `copies` times, on one interface of
+/// `linktype` (nanosecond times): what the `ethercat` fuzz target reads.
+#[cfg(feature = "fuzzing")]
+pub(crate) fn capture_of(linktype: u16, packet: &[u8], copies: u32) -> Vec<u8> {
+    fn block(out: &mut Vec<u8>, kind: u32, body: &[u8]) {
+        let padded = body.len().next_multiple_of(4);
+        let len = (12 + padded) as u32;
+        out.extend_from_slice(&kind.to_le_bytes());
+        out.extend_from_slice(&len.to_le_bytes());
+        out.extend_from_slice(body);
+        out.resize(out.len() + padded - body.len(), 0);
+        out.extend_from_slice(&len.to_le_bytes());
+    }
+    let mut out = Vec::new();
+    let mut shb = BOM.to_le_bytes().to_vec();
+    shb.extend_from_slice(&[1, 0, 0, 0]);
+    shb.extend_from_slice(&(-1i64).to_le_bytes());
+    block(&mut out, 0x0A0D_0D0A, &shb);
+    let mut idb = u32::from(linktype).to_le_bytes().to_vec();
+    idb.extend_from_slice(&0u32.to_le_bytes());
+    // if_tsresol 9: nanoseconds.
+    idb.extend_from_slice(&[9, 0, 1, 0, 9, 0, 0, 0, 0, 0, 0, 0]);
+    block(&mut out, 1, &idb);
+    for i in 0..copies {
+        let units = 1_700_000_000_000_000_000u64 + u64::from(i) * 1_000_000;
+        let mut epb = 0u32.to_le_bytes().to_vec();
+        epb.extend_from_slice(&((units >> 32) as u32).to_le_bytes());
+        epb.extend_from_slice(&(units as u32).to_le_bytes());
+        epb.extend_from_slice(&(packet.len() as u32).to_le_bytes());
+        epb.extend_from_slice(&(packet.len() as u32).to_le_bytes());
+        epb.extend_from_slice(packet);
+        block(&mut out, EPB, &epb);
+    }
+    out
+}
+
 /// Fuzz target body: any bytes must read to the end without a panic or an
 /// endless loop, every frame well-formed, the buffers bounded.
 #[cfg(feature = "fuzzing")]
@@ -1562,37 +1611,63 @@ pub(crate) fn fuzz_pcap(data: &[u8]) {
         _ => true,
     };
     let shown = |p: &Parsed<'_>| format!("{p:?}");
+    // An EtherCAT frame's messages are part of what a packet shows; one
+    // without any (and undamaged) is only counted under an interest.
+    let ethercat = |r: &mut PcapReader<&[u8]>| {
+        r.take_ethercat()
+            .map(|(e, channel)| (e.quiet(), format!("{e:?} on {channel:?}")))
+    };
     let mut full = PcapReader::new(data).expect("read once");
     let mut expected = Vec::new();
     let mut plain = 0u64;
     while let Ok(Some(p)) = full.next_packet() {
-        if wanted(&p) {
-            expected.push((plain, shown(&p)));
-            plain = 0;
-        } else {
-            plain += 1;
+        let (want, text) = (wanted(&p), shown(&p));
+        match ethercat(&mut full) {
+            Some((true, _)) => plain += 1,
+            Some((false, e)) => {
+                expected.push((plain, format!("{text} {e}")));
+                plain = 0;
+            }
+            None if want => {
+                expected.push((plain, text));
+                plain = 0;
+            }
+            None => plain += 1,
         }
     }
     let mut fast = PcapReader::new(data).expect("read once");
     let mut got = Vec::new();
     let mut counted = 0u64;
     while let Ok(more) = fast.advance(Some(&interest)) {
-        counted += fast.take_counted().0;
+        counted += fast.take_counted().0 + fast.take_quiet();
         if !more {
             break;
         }
         // Held packets (link type 227 before its byte order is known)
-        // come out whole: the caller's own check makes them plain.
+        // come out whole: the caller's own check makes them plain (and
+        // the quiet EtherCAT frames among them).
         if let Some(p) = fast.take() {
-            if wanted(&p) {
-                got.push((counted, shown(&p)));
-                counted = 0;
-            } else {
-                counted += 1;
+            let (want, text) = (wanted(&p), shown(&p));
+            match ethercat(&mut fast) {
+                Some((true, _)) => counted += 1,
+                Some((false, e)) => {
+                    got.push((counted, format!("{text} {e}")));
+                    counted = 0;
+                }
+                None if want => {
+                    got.push((counted, text));
+                    counted = 0;
+                }
+                None => counted += 1,
             }
         }
     }
-    counted += fast.take_counted().0;
+    counted += fast.take_counted().0 + fast.take_quiet();
+    assert_eq!(
+        fast.ethercat_counts(),
+        full.ethercat_counts(),
+        "the same EtherCAT counts with and without the interest"
+    );
     assert_eq!(
         got, expected,
         "the same packets with and without the interest"
