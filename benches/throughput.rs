@@ -7,8 +7,8 @@
 //! (default 256); best of `BENCH_RUNS` (default 3). Words after `--` pick
 //! the cases whose name contains one of them (`cargo bench --bench
 //! throughput -- pcapng`): `candump log`, `candump -td`, `Vector ASC`,
-//! `30% EMCY`, `gzip`, `pcapng`, `BUSMASTER`, `MF4` (both MF4 cases),
-//! `MF4 DZ`.
+//! `30% EMCY`, `gzip`, `pcapng` (both pcapng cases), `EtherCAT`,
+//! `BUSMASTER`, `MF4` (both MF4 cases), `MF4 DZ`.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use tracegen::{TraceFormat, write_mf4_dz, write_trace};
+use tracegen::{TraceFormat, write_ethercat, write_mf4_dz, write_trace};
 
 fn env_u64(name: &str, default: u64) -> u64 {
     std::env::var(name)
@@ -151,6 +151,7 @@ fn main() {
     let busmaster = dir.join(format!("busmaster-{mb}MB.log"));
     let mf4 = dir.join(format!("canedge-{mb}MB.mf4"));
     let mf4_dz = dir.join(format!("dz-{mb}MB.mf4"));
+    let ethercat = dir.join(format!("ethercat-{mb}MB.pcapng"));
     let files = [
         ("candump log", &log, TraceFormat::CandumpLog, 2),
         (
@@ -177,6 +178,17 @@ fn main() {
     }
     if chosen("gzip") {
         ensure(&gz, TraceFormat::CandumpLog, gz_mb, 2, true);
+    }
+    let ethercat_label = "pcapng, EtherCAT 32 x 1 kHz";
+    if chosen(ethercat_label) && !ethercat.exists() {
+        eprintln!("generating {} ...", ethercat.display());
+        let tmp = ethercat.with_extension("tmp");
+        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp).expect("create"));
+        // An emergency in 2 of 1000 cycles: as many as the CAN traces' EMCYs.
+        write_ethercat(&mut w, mb * 1024 * 1024, 2, 42).expect("write");
+        w.flush().expect("flush");
+        drop(w);
+        std::fs::rename(&tmp, &ethercat).expect("rename");
     }
     if chosen("MF4 DZ") && !mf4_dz.exists() {
         eprintln!("generating {} ...", mf4_dz.display());
@@ -210,7 +222,11 @@ fn main() {
         );
     };
 
-    for (label, file, _, _) in files {
+    let measured = files
+        .iter()
+        .map(|(label, file, _, _)| (*label, *file))
+        .chain([(ethercat_label, &ethercat)]);
+    for (label, file) in measured {
         if !chosen(label) {
             continue;
         }

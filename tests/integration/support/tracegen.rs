@@ -478,3 +478,109 @@ pub fn write_mf4_dz<W: Write + io::Seek>(
     out.seek(io::SeekFrom::End(0))?;
     Ok((records, emcy, raw))
 }
+
+/// Slaves of [`write_ethercat`]'s segment (station addresses 1001..).
+pub const ETHERCAT_SLAVES: u16 = 32;
+
+/// Writes about `bytes` bytes of an EtherCAT capture as a master's port
+/// sees it: pcapng, one Ethernet interface `eth0`, a frame every
+/// millisecond (1 kHz) with the process data of [`ETHERCAT_SLAVES`] slaves
+/// (one LRW of 8 bytes each) and a poll of one slave's mailbox, in turn;
+/// in `emcy_per_mille` of the cycles the polled slave answers with a CoE
+/// emergency (raise and reset in turn per slave), else the poll is empty.
+/// Returns (packets, emergencies).
+pub fn write_ethercat<W: Write>(
+    out: &mut W,
+    bytes: u64,
+    emcy_per_mille: u64,
+    seed: u64,
+) -> io::Result<(u64, u64)> {
+    let mut rng = Rng::new(seed);
+    let mut h = Vec::new();
+    let mut block = |kind: u32, body: &[u8]| {
+        let len = 12 + body.len() as u32;
+        h.extend(kind.to_le_bytes());
+        h.extend(len.to_le_bytes());
+        h.extend(body);
+        h.extend(len.to_le_bytes());
+    };
+    let mut shb = 0x1A2B_3C4Du32.to_le_bytes().to_vec();
+    shb.extend(1u16.to_le_bytes());
+    shb.extend(0u16.to_le_bytes());
+    shb.extend((-1i64).to_le_bytes());
+    block(0x0A0D_0D0A, &shb);
+    let mut idb = 1u16.to_le_bytes().to_vec(); // LINKTYPE_ETHERNET
+    idb.extend([0, 0]);
+    idb.extend(262_144u32.to_le_bytes());
+    idb.extend(2u16.to_le_bytes()); // if_name
+    idb.extend(4u16.to_le_bytes());
+    idb.extend(b"eth0");
+    idb.extend([0; 4]);
+    block(1, &idb);
+    out.write_all(&h)?;
+    let mut written = h.len() as u64;
+    let (mut packets, mut emcy) = (0u64, 0u64);
+    let mut raised = [false; ETHERCAT_SLAVES as usize];
+    let mut counter = [1u8; ETHERCAT_SLAVES as usize];
+    let mut frame = Vec::with_capacity(512);
+    let mut packet = Vec::with_capacity(512);
+    let mailbox = 48usize;
+    while written < bytes {
+        let cycle = packets;
+        let slave = (cycle % u64::from(ETHERCAT_SLAVES)) as usize;
+        // The EtherCAT frame: LRW (more follows), then FPRD of the mailbox.
+        frame.clear();
+        frame.extend([12u8, 0, 0, 0, 0, 0]);
+        frame.extend((256u16 | 0x8000).to_le_bytes());
+        frame.extend([0, 0]);
+        frame.extend(rng.bytes(256));
+        frame.extend((3 * ETHERCAT_SLAVES).to_le_bytes());
+        frame.extend([4u8, 0]);
+        frame.extend((1001 + slave as u16).to_le_bytes());
+        frame.extend(0x1080u16.to_le_bytes());
+        frame.extend((mailbox as u16).to_le_bytes());
+        frame.extend([0, 0]);
+        let mut mbx = vec![0u8; mailbox];
+        let answered = rng.below(1000) < emcy_per_mille;
+        if answered {
+            emcy += 1;
+            let emcy_bytes: [u8; 8] = if raised[slave] {
+                [0, 0, 0, 0x1E, 0, 0, 0, 0]
+            } else {
+                [0x10, 0x43, 0x01, 0x29, 0, 0, 0, 0]
+            };
+            raised[slave] = !raised[slave];
+            let c = counter[slave];
+            counter[slave] = c % 7 + 1;
+            mbx[..6].copy_from_slice(&[10, 0, 0, 0, 0, 3 | c << 4]);
+            mbx[6..8].copy_from_slice(&0x1000u16.to_le_bytes());
+            mbx[8..16].copy_from_slice(&emcy_bytes);
+        }
+        frame.extend(&mbx);
+        frame.extend(u16::from(answered).to_le_bytes());
+        packet.clear();
+        packet.extend([0xFF; 6]);
+        packet.extend([2, 0, 0, 0, 0, 1]);
+        packet.extend(0x88A4u16.to_be_bytes());
+        packet.extend((frame.len() as u16 | 0x1000).to_le_bytes());
+        packet.extend(&frame);
+        let units = 1_700_000_000_000_000 + cycle * 1000;
+        let padded = packet.len().next_multiple_of(4);
+        let len = 32 + padded as u32;
+        let mut epb = Vec::with_capacity(len as usize);
+        epb.extend(6u32.to_le_bytes());
+        epb.extend(len.to_le_bytes());
+        epb.extend(0u32.to_le_bytes());
+        epb.extend(((units >> 32) as u32).to_le_bytes());
+        epb.extend((units as u32).to_le_bytes());
+        epb.extend((packet.len() as u32).to_le_bytes());
+        epb.extend((packet.len() as u32).to_le_bytes());
+        epb.extend(&packet);
+        epb.resize(epb.len() + padded - packet.len(), 0);
+        epb.extend(len.to_le_bytes());
+        out.write_all(&epb)?;
+        written += epb.len() as u64;
+        packets += 1;
+    }
+    Ok((packets, emcy))
+}
