@@ -204,3 +204,51 @@ fn tshark_sees_the_same_emergencies_in_the_same_packets() {
     theirs.sort();
     assert_eq!(ours, theirs);
 }
+
+/// The capture's first `packets` packets: its blocks up to there (section
+/// and interface headers, then one enhanced packet block per packet).
+fn first_packets(packets: usize) -> Vec<u8> {
+    let bytes = std::fs::read(PCAPNG).unwrap();
+    let mut at = 0;
+    let mut seen = 0;
+    while at < bytes.len() {
+        let kind = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+        let len = u32::from_le_bytes(bytes[at + 4..at + 8].try_into().unwrap()) as usize;
+        if kind == 6 {
+            if seen == packets {
+                break;
+            }
+            seen += 1;
+        }
+        at += len;
+    }
+    bytes[..at].to_vec()
+}
+
+#[test]
+fn check_reports_a_slave_whose_fault_is_no_longer_acknowledged() {
+    // Baseline keys are paths relative to where check runs: one directory.
+    let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("stoeber-ecat.pcapng");
+    std::fs::copy(PCAPNG, &trace).unwrap();
+    let run = |args: &[&str]| {
+        let out = emcy_decode()
+            .current_dir(dir.path())
+            .args(args)
+            .output()
+            .unwrap();
+        let text = String::from_utf8(out.stdout).unwrap() + &String::from_utf8(out.stderr).unwrap();
+        (out.status.code(), text)
+    };
+    let trace_arg = "stoeber-ecat.pcapng";
+    assert_eq!(run(&["baseline", trace_arg, "-o", "b.json"]).0, Some(0));
+    assert_eq!(
+        run(&["check", "--baseline", "b.json", trace_arg]).0,
+        Some(0)
+    );
+    // The same trace without the acknowledgments (packet 63 on).
+    std::fs::write(&trace, first_packets(62)).unwrap();
+    let (code, text) = run(&["check", "--baseline", "b.json", trace_arg]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("1001") && text.contains("0x4310"), "{text}");
+}
