@@ -37,8 +37,12 @@ pub const LINKTYPE_ETHERNET: u16 = 1;
 pub const ETHERTYPE: u16 = 0x88A4;
 const UDP_PORT: u16 = 0x88A4;
 const ETHERTYPE_IPV4: u16 = 0x0800;
-/// 802.1Q, 802.1ad and the older QinQ tag protocol ids.
-const VLAN_TPIDS: [u16; 3] = [0x8100, 0x88A8, 0x9100];
+/// Whether an EtherType is a VLAN tag's protocol id: 802.1Q, 802.1ad or
+/// the older QinQ one.
+#[inline]
+fn is_vlan(ethertype: u16) -> bool {
+    matches!(ethertype, 0x8100 | 0x88A8 | 0x9100)
+}
 /// VLAN tags read in front of the EtherType (QinQ has two).
 pub const MAX_TAGS: usize = 4;
 const IPPROTO_UDP: u8 = 17;
@@ -76,13 +80,14 @@ pub const COE_BYTES: usize = 8;
 
 /// Where the EtherCAT frame (its 2-byte header first) is in a packet of
 /// `linktype`; `None` when the packet carries no EtherCAT.
+#[inline]
 pub fn locate(linktype: u16, packet: &[u8]) -> Option<&[u8]> {
     let (ethertype, payload) = match linktype {
         LINKTYPE_ETHERNET => {
             let mut at = 12;
             let mut ethertype = be16(packet, at)?;
             for _ in 0..MAX_TAGS {
-                if !VLAN_TPIDS.contains(&ethertype) {
+                if !is_vlan(ethertype) {
                     break;
                 }
                 at += 4;
@@ -95,7 +100,7 @@ pub fn locate(linktype: u16, packet: &[u8]) -> Option<&[u8]> {
         _ => return None,
     };
     // A cooked header keeps a VLAN tag in front of the EtherType.
-    let (ethertype, payload) = match VLAN_TPIDS.contains(&ethertype) {
+    let (ethertype, payload) = match is_vlan(ethertype) {
         true => (be16(payload, 2)?, payload.get(4..)?),
         false => (ethertype, payload),
     };
