@@ -67,8 +67,8 @@ pub enum Command {
     },
     /// Print the man page (roff) to stdout
     Man,
-    /// List the built-in vendor profiles, one line each
-    Profiles,
+    /// List the built-in vendor profiles, one line each; --toml NAME prints one as a file
+    Profiles(ProfilesArgs),
     /// Record what traces contain (errors per node, line counts) for `check`
     Baseline(BaselineArgs),
     /// Compare traces with a baseline: exit 1 on a regression
@@ -203,6 +203,14 @@ pub enum OutputFormat {
     Svg,
     /// One self-contained HTML page: the timeline chart and the events table
     Html,
+}
+
+#[derive(Args, Debug)]
+pub struct ProfilesArgs {
+    /// Print this built-in profile as the TOML file it is made from: a starting point for a
+    /// user profile (--profile-file) of a drive the built-ins do not know
+    #[arg(long, value_name = "NAME")]
+    pub toml: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -45,7 +45,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Explain(args)) => explain::run(&args),
         Some(Command::Completions { shell }) => man::completions(shell),
         Some(Command::Man) => man::man_page(),
-        Some(Command::Profiles) => profiles::run(),
+        Some(Command::Profiles(args)) => profiles::run(&args),
         Some(Command::Baseline(args)) => baseline::baseline(&args),
         Some(Command::Check(args)) => baseline::check(&args),
         None => decode::run(&cli.decode),

@@ -1,14 +1,28 @@
-//! `emcy-decode profiles`: the built-in vendor profiles, one line each.
+//! `emcy-decode profiles`: the built-in vendor profiles, one line each, or
+//! one of them as its TOML file (`--toml NAME`).
 
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 
+use super::cli::ProfilesArgs;
 use super::write_stdout;
 use crate::canopen::profile::{self, Profile};
 
-/// Lists the built-ins, the default marked.
-pub(super) fn run() -> Result<ExitCode> {
+/// Lists the built-ins, the default marked; or prints one's TOML.
+pub(super) fn run(args: &ProfilesArgs) -> Result<ExitCode> {
+    if let Some(name) = &args.toml {
+        let Some(text) = Profile::builtin_toml(name) else {
+            let known: Vec<&str> = Profile::builtins().iter().map(Profile::name).collect();
+            bail!("unknown profile '{name}' (known: {})", known.join(", "));
+        };
+        return write_stdout(&format!(
+            "# The built-in profile \"{name}\" as emcy-decode ships it (emcy-decode profiles \
+             --toml {name}).\n# Edit it and load it with --profile-file FILE: a user profile \
+             named like a built-in replaces it;\n# rename it (name = \"...\") to keep both. \
+             The format is in the README, \"Vendor profiles\".\n\n{text}"
+        ));
+    }
     let mut text = String::new();
     let width = Profile::builtins()
         .iter()

@@ -206,6 +206,13 @@ impl Profile {
         builtins().iter().find(|p| p.name == name)
     }
 
+    /// The TOML file a built-in profile is made from, as shipped (with its
+    /// comments and sources): a starting point for a user profile.
+    pub fn builtin_toml(name: &str) -> Option<&'static str> {
+        let i = builtins().iter().position(|p| p.name == name)?;
+        BUILTIN_FILES.get(i).map(|(_, text)| *text)
+    }
+
     /// Reads and parses a user profile file (TOML, see the README); errors
     /// name the path and line.
     pub fn load(path: &Path) -> Result<Profile, ProfileError> {

@@ -997,3 +997,52 @@ fn quiet_is_quiet_whatever_the_thread_count() {
     assert!(!one.contains(".log:2:"), "no diagnostics with -q: {one}");
     assert_eq!(stderr("2"), one);
 }
+
+/// `profiles --toml NAME` prints a file that loads as a user profile and
+/// reads every fixture's EMCYs exactly as the built-in does.
+#[test]
+fn profiles_toml_prints_a_user_profile_that_decodes_like_the_builtin() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = String::from_utf8(emcy_decode().arg("profiles").output().unwrap().stdout).unwrap();
+    let names: Vec<&str> = names
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert_eq!(names.len(), 7, "{names:?}");
+    for name in names {
+        let out = emcy_decode()
+            .args(["profiles", "--toml", name])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let file = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&file, &out.stdout).unwrap();
+        for trace in [
+            "fixtures/stoeber.log",
+            "fixtures/s300.log",
+            "fixtures/festo.log",
+        ] {
+            let decode = |args: &[&std::ffi::OsStr]| -> Vec<serde_json::Value> {
+                crate::support::ndjson(args.iter().chain([std::ffi::OsStr::new(trace)].iter()))
+                    .into_iter()
+                    .filter(|o| o["type"] == "emcy")
+                    .map(|mut o| {
+                        o.as_object_mut().unwrap().remove("profile_source");
+                        o
+                    })
+                    .collect()
+            };
+            let builtin = decode(&["--profile".as_ref(), name.as_ref()]);
+            let user = decode(&["--profile-file".as_ref(), file.as_os_str()]);
+            assert!(!builtin.is_empty());
+            assert_eq!(user, builtin, "{name} on {trace}");
+        }
+    }
+    emcy_decode()
+        .args(["profiles", "--toml", "nope"])
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains(
+            "unknown profile 'nope' (known: cia301",
+        ));
+}
