@@ -1,6 +1,7 @@
 //! CANopen: EMCY decoding, code tables, error register bits, SDO, vendor
 //! profiles and which profile decodes which node. Uses trace types at most.
 
+pub mod cia402;
 pub mod codes;
 pub mod emcy;
 pub mod profile;
