@@ -4,6 +4,7 @@
 pub mod cia402;
 pub mod codes;
 pub mod emcy;
+pub mod pdo;
 pub mod profile;
 pub mod profile_choice;
 pub mod register;
