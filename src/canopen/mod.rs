@@ -3,6 +3,7 @@
 
 pub mod cia402;
 pub mod codes;
+pub mod dcf;
 pub mod emcy;
 pub mod pdo;
 pub mod profile;

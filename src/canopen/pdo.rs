@@ -89,9 +89,20 @@ impl PdoId {
     }
 
     /// Whether an object index is a PDO communication or mapping parameter
-    /// (0x1400-0x1BFF): the SDO writes the [`Learner`] wants.
+    /// (0x1400-0x1BFF): a cheap first test for SDO frames worth assembling.
     pub fn is_pdo_parameter(index: u16) -> bool {
         (0x1400..=0x1BFF).contains(&index)
+    }
+
+    /// Whether an object decides a PDO's layout: a communication
+    /// parameter's COB-ID (sub 1) or a mapping parameter's count or entry
+    /// (sub 0-64). The [`Learner`] ignores every other object.
+    pub fn shapes_mapping(object: Object) -> bool {
+        match PdoId::of_index(1, object.index) {
+            Some((_, true)) => object.sub <= MAX_ENTRIES,
+            Some((_, false)) => object.sub == 1,
+            None => false,
+        }
     }
 
     /// The COB-ID of the predefined connection set (CiA 301 §7.3.5) for
@@ -431,11 +442,8 @@ impl Learner {
     /// writes to anything but a PDO parameter.
     pub fn confirmed(&mut self, node: NodeId, object: Object, value: u32) -> Option<PdoId> {
         let (pdo, is_mapping) = PdoId::of_index(node, object.index)?;
-        if !is_mapping && object.sub != 1 {
-            // Transmission type, inhibit time, event timer: not the layout.
-            return None;
-        }
-        if is_mapping && object.sub > MAX_ENTRIES {
+        // Transmission type, inhibit time, event timer: not the layout.
+        if !PdoId::shapes_mapping(object) {
             return None;
         }
         if !self.configs.contains_key(&pdo) && self.configs.len() >= MAX_LEARNT_PDOS {
@@ -835,6 +843,11 @@ mod tests {
         assert_eq!(PdoId { node: 0, ..t(1) }.default_cob_id(), None);
         assert_eq!(PdoId { node: 128, ..t(1) }.default_cob_id(), None);
         assert!(PdoId::is_pdo_parameter(0x1A00));
+        let shapes = |index, sub| PdoId::shapes_mapping(Object { index, sub });
+        assert!(shapes(0x1800, 1) && shapes(0x15FF, 1));
+        assert!(!shapes(0x1800, 2) && !shapes(0x1400, 0) && !shapes(0x1800, 5));
+        assert!(shapes(0x1A00, 0) && shapes(0x1BFF, 64) && shapes(0x1600, 1));
+        assert!(!shapes(0x1A00, 65) && !shapes(0x1C00, 1) && !shapes(0x1018, 1));
         assert!(!PdoId::is_pdo_parameter(0x1018));
         for (cob, owner) in [
             (0x181, Some((1, Direction::Tpdo))),
