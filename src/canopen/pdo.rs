@@ -241,6 +241,153 @@ impl Mapping {
     }
 }
 
+/// Where the CiA 402 objects sit in one PDO, worked out once per mapping:
+/// reading a PDO is then a few shifts, no lookup and no allocation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Cia402Fields {
+    pub statusword: Option<Field>,
+    pub controlword: Option<Field>,
+    pub error_code: Option<Field>,
+}
+
+/// The CiA 402 words one PDO carried (a word mapped with fewer than 16
+/// bits is read as its bits; more are cut to 16).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Cia402Values {
+    pub statusword: Option<u16>,
+    pub controlword: Option<u16>,
+    pub error_code: Option<u16>,
+}
+
+impl Cia402Fields {
+    /// Where a mapping puts the objects; `None` when it maps none of them
+    /// (the PDO is not worth parsing).
+    pub fn of(mapping: &Mapping) -> Option<Cia402Fields> {
+        let fields = Cia402Fields {
+            statusword: mapping.field(object(cia402::STATUSWORD)),
+            controlword: mapping.field(object(cia402::CONTROLWORD)),
+            error_code: mapping.field(object(cia402::ERROR_CODE)),
+        };
+        (fields != Cia402Fields::default()).then_some(fields)
+    }
+
+    /// The words a PDO's bytes hold; a word the PDO is too short for is
+    /// `None`.
+    pub fn read(&self, data: &[u8]) -> Cia402Values {
+        let word = |f: Option<Field>| f.and_then(|f| f.read(data)).map(|v| v as u16);
+        Cia402Values {
+            statusword: word(self.statusword),
+            controlword: word(self.controlword),
+            error_code: word(self.error_code),
+        }
+    }
+}
+
+impl Source {
+    /// Precedence: the first source that maps a COB-ID wins (the trace's
+    /// own configuration, then the DCF, the option, the assumption).
+    fn rank(self) -> usize {
+        match self {
+            Source::Sdo => 0,
+            Source::Dcf => 1,
+            Source::Option => 2,
+            Source::Assumed => 3,
+        }
+    }
+}
+
+/// The mappings of one COB-ID, one per source, and the fields of the one
+/// in force.
+#[derive(Clone, Debug, Default)]
+struct Slots {
+    by_source: [Option<Mapping>; 4],
+    fields: Option<Cia402Fields>,
+}
+
+impl Slots {
+    fn best(&self) -> Option<&Mapping> {
+        self.by_source.iter().flatten().next()
+    }
+
+    fn refresh(&mut self) {
+        self.fields = self.best().and_then(Cia402Fields::of);
+    }
+}
+
+/// The mappings in force, by COB-ID: what the pipeline asks for every PDO
+/// ([`MappingTable::fields`]) and what the report lists.
+#[derive(Clone, Debug, Default)]
+pub struct MappingTable {
+    by_cob: BTreeMap<CobId, Slots>,
+    /// Where each learnt PDO's mapping is filed, to move it when the trace
+    /// gives the PDO another COB-ID or switches it off.
+    learnt_at: BTreeMap<PdoId, CobId>,
+}
+
+impl MappingTable {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Files a declared, given or assumed mapping (a second one of the same
+    /// source and COB-ID replaces the first). Learnt ones go through
+    /// [`MappingTable::learnt`].
+    pub fn insert(&mut self, mapping: Mapping) {
+        let slots = self.by_cob.entry(mapping.cob_id).or_default();
+        let rank = mapping.source.rank();
+        if let Some(slot) = slots.by_source.get_mut(rank) {
+            *slot = Some(mapping);
+        }
+        slots.refresh();
+    }
+
+    /// Files what the [`Learner`] now says of `pdo` (`None`: no mapping in
+    /// force, the PDO switched off or mid-configuration).
+    pub fn learnt(&mut self, pdo: PdoId, mapping: Option<Mapping>) {
+        if let Some(old) = self.learnt_at.remove(&pdo)
+            && let Some(slots) = self.by_cob.get_mut(&old)
+        {
+            slots.by_source[0] = None;
+            slots.refresh();
+            if slots.best().is_none() {
+                self.by_cob.remove(&old);
+            }
+        }
+        if let Some(m) = mapping {
+            self.learnt_at.insert(pdo, m.cob_id);
+            self.insert(Mapping {
+                source: Source::Sdo,
+                ..m
+            });
+        }
+    }
+
+    /// Where the CiA 402 words sit in PDOs on `cob_id`, if the mapping in
+    /// force there maps any: the per-frame call.
+    pub fn fields(&self, cob_id: CobId) -> Option<&Cia402Fields> {
+        self.by_cob.get(&cob_id)?.fields.as_ref()
+    }
+
+    /// The mapping in force on `cob_id`.
+    pub fn mapping(&self, cob_id: CobId) -> Option<&Mapping> {
+        self.by_cob.get(&cob_id)?.best()
+    }
+
+    /// The mappings in force, by COB-ID.
+    pub fn in_force(&self) -> impl Iterator<Item = &Mapping> + '_ {
+        self.by_cob.values().filter_map(Slots::best)
+    }
+
+    /// The COB-IDs whose PDOs carry a CiA 402 word: the only PDO ids worth
+    /// reading.
+    pub fn decoded_ids(&self) -> impl Iterator<Item = CobId> + '_ {
+        self.by_cob
+            .iter()
+            .filter(|(_, s)| s.fields.is_some())
+            .map(|(&id, _)| id)
+    }
+}
+
 /// An object at sub-index 0.
 fn object(index: u16) -> Object {
     Object { index, sub: 0 }
@@ -1171,6 +1318,132 @@ mod tests {
             [Source::Sdo, Source::Dcf, Source::Option, Source::Assumed].map(Source::slug),
             ["sdo", "dcf", "option", "assumed"]
         );
+    }
+
+    fn std_id(id: u32) -> CobId {
+        CobId {
+            id,
+            extended: false,
+        }
+    }
+
+    #[test]
+    fn cia402_fields_of_a_mapping() {
+        let m = parse_spec("0x185=0x6061:8,0x6041,0x603F")
+            .expect("valid")
+            .remove(0);
+        let f = Cia402Fields::of(&m).expect("maps the statusword");
+        assert_eq!(f.statusword, Some(field(8, 16)));
+        assert_eq!(f.error_code, Some(field(24, 16)));
+        assert_eq!(f.controlword, None);
+        let v = f.read(&[0x01, 0x37, 0x06, 0x10, 0x23]);
+        assert_eq!(
+            v,
+            Cia402Values {
+                statusword: Some(0x0637),
+                controlword: None,
+                error_code: Some(0x2310),
+            }
+        );
+        // Too short for the error code: the statusword is still read.
+        assert_eq!(f.read(&[0x01, 0x37, 0x06]).error_code, None);
+        assert_eq!(f.read(&[0x01, 0x37, 0x06]).statusword, Some(0x0637));
+        let other = parse_spec("0x185=0x6064:32").expect("valid").remove(0);
+        assert_eq!(Cia402Fields::of(&other), None);
+        assert!(!other.maps_decoded());
+    }
+
+    #[test]
+    fn the_first_source_wins_per_cob_id() {
+        let mut t = MappingTable::new();
+        let [assumed, _] = assumed_cia402(5).expect("node 5");
+        t.insert(assumed);
+        assert_eq!(
+            t.mapping(std_id(0x185)).map(|m| m.source),
+            Some(Source::Assumed)
+        );
+        let option = parse_spec("0x185=0x6061:8,0x6041")
+            .expect("valid")
+            .remove(0);
+        t.insert(option);
+        assert_eq!(
+            t.mapping(std_id(0x185)).map(|m| m.source),
+            Some(Source::Option)
+        );
+        assert_eq!(
+            t.fields(std_id(0x185)).and_then(|f| f.statusword),
+            Some(field(8, 16))
+        );
+        // The trace's own configuration beats both.
+        let mut l = Learner::new();
+        for (sub, value) in [(0u8, 0u32), (1, 0x6041_0010), (2, 0x603F_0010), (0, 2)] {
+            l.confirmed(5, Object { index: 0x1A00, sub }, value);
+        }
+        let tpdo1 = l
+            .confirmed(
+                5,
+                Object {
+                    index: 0x1800,
+                    sub: 1,
+                },
+                0x185,
+            )
+            .expect("tpdo1");
+        t.learnt(tpdo1, l.mapping(tpdo1));
+        assert_eq!(
+            t.mapping(std_id(0x185)).map(|m| m.source),
+            Some(Source::Sdo)
+        );
+        assert_eq!(
+            t.fields(std_id(0x185)).and_then(|f| f.statusword),
+            Some(field(0, 16))
+        );
+        // The trace moves TPDO1 to 0x285: the option is in force on 0x185
+        // again, the learnt mapping on 0x285.
+        l.confirmed(
+            5,
+            Object {
+                index: 0x1800,
+                sub: 1,
+            },
+            0x285,
+        );
+        t.learnt(tpdo1, l.mapping(tpdo1));
+        assert_eq!(
+            t.mapping(std_id(0x185)).map(|m| m.source),
+            Some(Source::Option)
+        );
+        assert_eq!(
+            t.mapping(std_id(0x285)).map(|m| m.source),
+            Some(Source::Sdo)
+        );
+        // Switched off: nothing learnt is left.
+        l.confirmed(
+            5,
+            Object {
+                index: 0x1800,
+                sub: 1,
+            },
+            0x8000_0285,
+        );
+        t.learnt(tpdo1, l.mapping(tpdo1));
+        assert_eq!(t.mapping(std_id(0x285)), None);
+        let ids: Vec<u32> = t.decoded_ids().map(|c| c.id).collect();
+        assert_eq!(ids, [0x185]);
+        assert_eq!(t.in_force().count(), 1);
+    }
+
+    #[test]
+    fn a_table_lists_only_ids_that_carry_a_word() {
+        let mut t = MappingTable::new();
+        for m in parse_spec("0x181=0x6064:32,0x182=0x6041").expect("valid") {
+            t.insert(m);
+        }
+        let ids: Vec<u32> = t.decoded_ids().map(|c| c.id).collect();
+        assert_eq!(ids, [0x182]);
+        assert_eq!(t.fields(std_id(0x181)), None);
+        assert!(t.mapping(std_id(0x181)).is_some());
+        assert_eq!(t.in_force().count(), 2);
     }
 
     impl Object {

@@ -99,6 +99,8 @@ pub struct Fault {
     /// The EMCY code that came with the fault, when the caller attached one
     /// ([`Axis::attach_emcy`]): the pipeline knows which EMCY that is.
     pub emcy_code: Option<u16>,
+    /// The first nonzero error code (0x603F) the drive reported in it.
+    pub error_code: Option<u16>,
 }
 
 impl Fault {
@@ -207,6 +209,7 @@ impl Axis {
                     end: None,
                     cleared_by: None,
                     emcy_code: None,
+                    error_code: None,
                 });
             }
         } else if to != AxisState::Unknown {
@@ -262,6 +265,18 @@ impl Axis {
                 true
             }
             _ => false,
+        }
+    }
+
+    /// Feeds the error code object (0x603F) where a PDO maps it or an SDO
+    /// reads it: the first nonzero code in a fault is the fault's. Feed a
+    /// PDO's statusword before its error code, so a fault entered in that
+    /// PDO gets it.
+    pub fn error_code(&mut self, code: u16) {
+        if let Some(f) = &mut self.open_fault
+            && code != 0
+        {
+            f.error_code.get_or_insert(code);
         }
     }
 
@@ -415,6 +430,9 @@ mod tests {
         assert!(entered.opened_fault());
         assert_eq!(entered.to, st(State::FaultReactionActive));
         assert!(a.attach_emcy(0x2310));
+        a.error_code(0x0000);
+        a.error_code(0x2310);
+        a.error_code(0x7500);
         assert!(!a.attach_emcy(0x1000), "the first code stays");
         let fault = a.statusword(at(13), 0x0618, PDO).expect("fault");
         assert!(!fault.opened_fault(), "the same fault goes on");
@@ -435,6 +453,7 @@ mod tests {
         assert_eq!(closed.end, Some(at(17)));
         assert_eq!(closed.cleared_by, Some(at(16)));
         assert_eq!(closed.emcy_code, Some(0x2310));
+        assert_eq!(closed.error_code, Some(0x2310), "the first nonzero");
         assert_eq!(closed.duration().map(secs), Some(5.0));
         assert_eq!(a.open_fault(), None);
         assert!(!a.attach_emcy(0x2310), "no fault open");
@@ -443,8 +462,14 @@ mod tests {
     #[test]
     fn a_fault_left_without_a_reset_has_no_clearer() {
         let mut a = Axis::new();
+        a.error_code(0x3210);
         a.statusword(at(1), 0x0008, PDO);
         assert!(a.open_fault().is_some(), "first word a fault");
+        assert_eq!(
+            a.open_fault().and_then(|f| f.error_code),
+            None,
+            "a code from before the fault is not its"
+        );
         // A reset before the fault does not count for a later one.
         let out = a.statusword(at(2), 0x0000, PDO).expect("reboot");
         let f = out.closed_fault.expect("closed");
