@@ -480,10 +480,14 @@ pub fn parse_spec(spec: &str) -> Result<Vec<Mapping>, String> {
                 if raw > 0x1FFF_FFFF {
                     return Err(format!("COB-ID {cob} is above 29 bits"));
                 }
+                // An id above 11 bits can only be a 29-bit one.
                 let cob_id = CobId {
                     id: raw,
                     extended: raw > 0x7FF,
                 };
+                if out.iter().any(|m| m.cob_id == cob_id) {
+                    return Err(format!("COB-ID {cob} is given twice"));
+                }
                 let owner = predefined_owner(cob_id);
                 out.push(Mapping {
                     node: owner.map(|(n, _)| n),
@@ -728,6 +732,25 @@ impl Default for Downloads {
 impl Downloads {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Whether a frame can matter to PDO configuration: an SDO frame
+    /// naming a PDO parameter, or any SDO frame of a node with a download
+    /// in progress (segments name no object). A cheap test, so the pipeline
+    /// feeds only these.
+    pub fn wants(&self, id: u32, data: &[u8]) -> bool {
+        let node = if (REQUEST_BASE + 1..=REQUEST_BASE + 127).contains(&id) {
+            id - REQUEST_BASE
+        } else if (RESPONSE_BASE + 1..=RESPONSE_BASE + 127).contains(&id) {
+            id - RESPONSE_BASE
+        } else {
+            return false;
+        };
+        let busy = self
+            .transfers
+            .get(node as usize)
+            .is_some_and(|t| !matches!(t, Transfer::Idle));
+        busy || matches!(data, [_, lo, hi, ..] if PdoId::is_pdo_parameter(u16::from_le_bytes([*lo, *hi])))
     }
 
     /// Feeds one frame on an SDO id (others change nothing); the download
@@ -1176,6 +1199,20 @@ mod tests {
     }
 
     #[test]
+    fn wants_pdo_parameters_and_transfers_in_progress() {
+        let mut d = Downloads::new();
+        assert!(d.wants(0x605, &[0x23, 0x00, 0x1A, 0x01]));
+        assert!(d.wants(0x585, &[0x60, 0x00, 0x14, 0x01]));
+        assert!(!d.wants(0x605, &[0x23, 0x18, 0x10, 0x01]), "identity");
+        assert!(!d.wants(0x185, &[0x23, 0x00, 0x1A, 0x01]), "not SDO");
+        assert!(!d.wants(0x605, &[0x00]), "a segment, nothing going");
+        d.feed(0x605, &[0x21, 0x00, 0x18, 0x01, 4, 0, 0, 0]);
+        assert!(d.wants(0x605, &[0x00]), "a segment of a transfer");
+        assert!(d.wants(0x585, &[0x20]));
+        assert!(!d.wants(0x606, &[0x00]), "another node");
+    }
+
+    #[test]
     fn segmented_download_of_a_small_value() {
         let mut d = Downloads::new();
         // Initiate, size 4 indicated (0x21).
@@ -1268,7 +1305,7 @@ mod tests {
         assert_eq!(m[0].direction, Some(Direction::Tpdo));
         assert_eq!(m[0].source, Source::Option);
         assert_eq!(m[0].objects, [Mapped::of_entry(0x6041_0010)]);
-        let m = parse_spec("0x181=6041,0x6061:8,0x2000.3:32, 0x201=0x6040 ,385=0x603F:16")
+        let m = parse_spec("0x181=6041,0x6061:8,0x2000.3:32, 0x201=0x6040 ,386=0x603F:16")
             .expect("valid");
         let entries: Vec<Vec<u32>> = m
             .iter()
@@ -1282,7 +1319,7 @@ mod tests {
                 vec![0x603F_0010],
             ]
         );
-        assert_eq!(m[2].cob_id.id, 385);
+        assert_eq!(m[2].cob_id.id, 386);
         let ext = parse_spec("0x18FF0001=0x6041").expect("29-bit");
         assert!(ext[0].cob_id.extended);
         assert_eq!(ext[0].node, None);
@@ -1301,6 +1338,7 @@ mod tests {
         assert!(err("0x181=0x6041.300").contains("not a sub-index"));
         assert!(err("0x40000000=0x6041").contains("above 29 bits"));
         assert!(err("0x181=0x6041:32,0x6061:32,0x6062:8").contains("72 bits"));
+        assert!(err("0x181=0x6041,385=0x6040").contains("given twice"));
     }
 
     #[test]
