@@ -38,11 +38,11 @@ pub const MAX_PROBLEMS: usize = 100;
 /// What a DCF says about its node.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Dcf {
-    /// [DeviceInfo] VendorNumber, else 0x1018 sub 1.
+    /// `[DeviceInfo]` VendorNumber, else 0x1018 sub 1.
     pub vendor_id: Option<u32>,
-    /// [DeviceInfo] ProductNumber, else 0x1018 sub 2.
+    /// `[DeviceInfo]` ProductNumber, else 0x1018 sub 2.
     pub product_code: Option<u32>,
-    /// [DeviceComissioning] NodeID (CiA 306 spells it so), for a check
+    /// `[DeviceComissioning]` NodeID (CiA 306 spells it so), for a check
     /// against the node the user named.
     pub node_id: Option<u32>,
     /// The valid PDO mappings it declares, source [`Source::Dcf`].

@@ -7,6 +7,11 @@
 //! [`Downloads`] assembles, expedited and segmented), a DCF declares one
 //! (`canopen::dcf`), the user gives one (`--pdo`, [`parse_spec`]), or the
 //! user asks for the CiA 402 predefined one ([`assumed_cia402`]).
+//!
+//! The pipeline's part, per frame: SDO frames that [`Downloads::wants`] go
+//! to [`Downloads::feed`], a confirmed write to [`Learner::confirmed`], the
+//! PDO it changed to [`MappingTable::learnt`]; a frame whose id
+//! [`MappingTable::fields`] knows is read with [`Cia402Fields::read`].
 
 // The pipeline (issue 19) calls this next; until then nothing does. Remove
 // when it is wired, so dead code shows again.
@@ -665,7 +670,8 @@ pub struct Confirmed {
     pub node: NodeId,
     pub object: Object,
     pub value: u32,
-    /// Bytes written (0 when a segmented download did not say).
+    /// Bytes written: as the expedited frame said (4 when it did not), or
+    /// as many as the segments carried.
     pub len: u32,
 }
 
