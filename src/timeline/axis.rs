@@ -123,13 +123,9 @@ pub struct Change {
     pub via: Via,
     /// The fault this change ended, handed over to the caller to keep.
     pub closed_fault: Option<Fault>,
-}
-
-impl Change {
-    /// Whether this change entered a fault (the axis now has an open one).
-    pub fn opened_fault(&self) -> bool {
-        self.to.is_fault() && !self.from.is_some_and(AxisState::is_fault)
-    }
+    /// Whether it began a fault (not one going on through an unknown
+    /// pattern): the fault is then [`Axis::open_fault`].
+    pub opened_fault: bool,
 }
 
 /// A controlword that gave a command.
@@ -201,8 +197,10 @@ impl Axis {
         self.state = Some(to);
         self.visited |= 1 << to.slot();
         let mut closed_fault = None;
+        let mut opened_fault = false;
         if to.is_fault() {
             if self.open_fault.is_none() {
+                opened_fault = true;
                 self.faults += 1;
                 self.open_fault = Some(Fault {
                     start: at,
@@ -227,6 +225,7 @@ impl Axis {
             statusword,
             via,
             closed_fault,
+            opened_fault,
         })
     }
 
@@ -427,7 +426,7 @@ mod tests {
         a.statusword(at(10), 0x0637, PDO);
         a.controlword(at(10), 0x000F);
         let entered = a.statusword(at(12), 0x061F, PDO).expect("fault reaction");
-        assert!(entered.opened_fault());
+        assert!(entered.opened_fault);
         assert_eq!(entered.to, st(State::FaultReactionActive));
         assert!(a.attach_emcy(0x2310));
         a.error_code(0x0000);
@@ -435,7 +434,7 @@ mod tests {
         a.error_code(0x7500);
         assert!(!a.attach_emcy(0x1000), "the first code stays");
         let fault = a.statusword(at(13), 0x0618, PDO).expect("fault");
-        assert!(!fault.opened_fault(), "the same fault goes on");
+        assert!(!fault.opened_fault, "the same fault goes on");
         assert_eq!(fault.closed_fault, None);
         assert_eq!(a.fault_count(), 1);
         // A reset that does not take, then one that does.
@@ -489,7 +488,8 @@ mod tests {
         assert_eq!(odd.closed_fault, None);
         assert!(a.open_fault().is_some());
         // Back into fault from unknown: the same fault.
-        a.statusword(at(3), 0x0008, PDO);
+        let back = a.statusword(at(3), 0x0008, PDO).expect("fault again");
+        assert!(!back.opened_fault);
         assert_eq!(a.fault_count(), 1);
         let out = a.statusword(at(4), 0x0040, PDO).expect("cleared");
         assert_eq!(out.closed_fault.map(|f| f.start), Some(at(1)));
