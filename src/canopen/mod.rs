@@ -1,8 +1,11 @@
 //! CANopen: EMCY decoding, code tables, error register bits, SDO, vendor
 //! profiles and which profile decodes which node. Uses trace types at most.
 
+pub mod cia402;
 pub mod codes;
+pub mod dcf;
 pub mod emcy;
+pub mod pdo;
 pub mod profile;
 pub mod profile_choice;
 pub mod register;

@@ -15,6 +15,7 @@
 //!
 //! [`history`] keeps the closed intervals of every node of an input.
 
+pub mod axis;
 pub mod history;
 
 use crate::canopen::codes;
