@@ -252,6 +252,7 @@ fn main() {
         let mut cases = vec![
             ("ndjson", vec!["--format", "ndjson", &f]),
             ("table", vec!["--format", "table", &f]),
+            ("csv", vec!["--format", "csv", &f]),
         ];
         // Binary traces are read on one thread whatever -j says.
         if !label.starts_with("pcapng") && !label.starts_with("MF4") {

@@ -199,6 +199,8 @@ pub enum OutputFormat {
     Json,
     /// One JSON object per line: events, then nodes, then inputs
     Ndjson,
+    /// One CSV row per event (--view summary: per node) under a header row
+    Csv,
     /// The error timeline as an SVG image: a lane per node, errors as bars
     Svg,
     /// One self-contained HTML page: the timeline chart and the events table

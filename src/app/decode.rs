@@ -15,6 +15,7 @@ use crate::analyze::fail_on::{self, FailOn, Tally};
 use crate::analyze::{
     self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Sink, WithoutEvents, batch,
 };
+use crate::report::csv::Csv;
 use crate::report::html::HtmlReport;
 use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
@@ -65,6 +66,7 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
             Ndjson::new(out, live).threads(report_threads),
         )),
         OutputFormat::Ndjson => Box::new(Ndjson::new(out, live).threads(report_threads)),
+        OutputFormat::Csv => Box::new(Csv::new(out, summary, live)),
         OutputFormat::Svg => Box::new(SvgReport::new(out)),
         OutputFormat::Html => Box::new(HtmlReport::new(out)),
     };

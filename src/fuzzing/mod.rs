@@ -232,7 +232,11 @@ pub fn detect(data: &[u8]) {
         .filter(|v| v["type"] == "emcy" || v["type"] == "boot")
         .cloned()
         .collect();
-    assert_eq!(doc["events"], Value::Array(events), "json events = ndjson");
+    assert_eq!(
+        doc["events"],
+        Value::Array(events.clone()),
+        "json events = ndjson"
+    );
     assert_eq!(doc["nodes"], Value::Array(of_type("node")), "json nodes");
     assert_eq!(doc["inputs"], Value::Array(of_type("input")), "json inputs");
     let diags = doc["diagnostics"].as_array().expect("diagnostics array");
@@ -240,6 +244,24 @@ pub fn detect(data: &[u8]) {
 
     let table = run(data, gzip, &small, Output::Table);
     no_control_characters("table", &table.out);
+
+    // CSV: a header and one row of every column per event, the same
+    // events in the same order as the ndjson.
+    let csv_run = run(data, gzip, &small, Output::Csv);
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(csv_run.out.as_slice());
+    let rows: Vec<csv::StringRecord> = reader
+        .records()
+        .map(|r| r.expect("the CSV output parses"))
+        .collect();
+    assert_eq!(rows.len(), 1 + events.len(), "a row per event");
+    for (row, ev) in rows.iter().skip(1).zip(&events) {
+        assert_eq!(row.len(), crate::report::csv::EVENT_COLUMNS.len());
+        assert_eq!(row.get(0), ev["type"].as_str());
+        assert_eq!(row.get(2), Some(ev["line"].to_string().as_str()));
+        assert_eq!(row.get(6), Some(ev["node"].to_string().as_str()));
+    }
 }
 
 /// How [`run`] renders.
@@ -248,6 +270,7 @@ enum Output {
     Ndjson,
     Json,
     Table,
+    Csv,
 }
 
 /// One input through `analyze` and a renderer, captured.
@@ -313,6 +336,7 @@ fn run(data: &[u8], gzip: bool, opts: &Options, output: Output) -> Run {
         Output::Ndjson => Box::new(Ndjson::new(&mut out, false).threads(opts.threads)),
         Output::Json => Box::new(JsonDocument::new(&mut out)),
         Output::Table => Box::new(TableReport::new(&mut out, false, false)),
+        Output::Csv => Box::new(crate::report::csv::Csv::new(&mut out, false, false)),
     };
     let mut log = DiagnosticLog::new(&mut err);
     let analysis = analyze::analyze("fuzz", reader, gzip, opts, renderer.as_mut(), &mut log)

@@ -114,7 +114,7 @@ fn hex16(v: u64) -> [u8; 16] {
 }
 
 /// `{"category":1,"category_text":"..."}` or `null`.
-fn push_decoded(out: &mut Vec<u8>, decoded: Option<&Decoded>) {
+pub(crate) fn push_decoded(out: &mut Vec<u8>, decoded: Option<&Decoded>) {
     let Some(d) = decoded else {
         out.extend_from_slice(b"null");
         return;

@@ -5,6 +5,7 @@
 //! [`Sink`]: crate::analyze::Sink
 
 pub(crate) mod chart;
+pub(crate) mod csv;
 pub(crate) mod explain;
 pub(crate) mod html;
 pub(crate) mod json;

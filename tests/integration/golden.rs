@@ -10,11 +10,12 @@ use crate::support::{self, PLACE, TIMES, emcy_decode, semantic};
 use serde_json::Value;
 
 /// Golden file suffix and the flags that produce it.
-const OUTPUTS: [(&str, &[&str]); 4] = [
+const OUTPUTS: [(&str, &[&str]); 5] = [
     ("table", &["--format", "table"]),
     ("ndjson", &["--format", "ndjson"]),
     ("json", &["--format", "json"]),
     ("summary", &["--view", "summary"]),
+    ("csv", &["--format", "csv"]),
 ];
 
 /// Flags a scenario needs: the profile its trace cannot choose itself

@@ -19,6 +19,7 @@ mod blf;
 mod busmaster;
 mod chart;
 mod cli;
+mod csv;
 mod differential;
 mod ethercat;
 mod follow;

@@ -1,0 +1,398 @@
+//! `--format csv`: one row per event, or with `--view summary` one row per
+//! node, under a header row, for spreadsheets and data tools. The columns
+//! are a contract ([`EVENT_COLUMNS`], [`NODE_COLUMNS`], README); written
+//! with the `csv` crate (RFC 4180: a field with a comma, a quote or a line
+//! break is quoted). A cell with several values separates them with
+//! spaces (`0x4310 0x3120`, `0x4310:2 0x3120:1` for counts); the profile's
+//! fields are the JSON object the JSON formats give them (their texts can
+//! hold any separator).
+
+use std::io::{self, Write};
+
+use super::jsonw::push_decoded;
+use super::timefmt::{TimeFormat, TimeStyle};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
+use crate::cache::{Cache, profile_key, slot};
+use crate::canopen::register::Register;
+use crate::trace::Timestamp;
+
+/// The columns of an event row, in order.
+pub const EVENT_COLUMNS: [&str; 21] = [
+    "type",
+    "file",
+    "line",
+    "time",
+    "time_text",
+    "channel",
+    "node",
+    "cob_id",
+    "code",
+    "class",
+    "description",
+    "register",
+    "register_bits",
+    "data",
+    "manufacturer",
+    "profile",
+    "profile_fields",
+    "transition",
+    "state",
+    "cleared",
+    "warnings",
+];
+
+/// The columns of a node row (`--view summary`), in order.
+pub const NODE_COLUMNS: [&str; 16] = [
+    "file",
+    "channel",
+    "node",
+    "state",
+    "active",
+    "emcy_count",
+    "errors_seen",
+    "time_in_error",
+    "longest_error_code",
+    "longest_error_duration",
+    "first_emcy",
+    "first_emcy_text",
+    "last_emcy",
+    "last_emcy_text",
+    "profile",
+    "profile_source",
+];
+
+pub struct Csv<W: Write> {
+    out: W,
+    summary: bool,
+    /// Flush after every row (a live stream).
+    live: bool,
+    header: bool,
+    /// ISO-8601 UTC for Unix times, else the seconds as written: the
+    /// `_text` columns (exact, unlike a spreadsheet's reading of a number).
+    times: TimeFormat,
+    text: String,
+    /// The row being built.
+    row: Vec<u8>,
+    /// `,file,` of the last event's file, and `,channel,` of its channel,
+    /// encoded once.
+    file: (String, Vec<u8>),
+    channel: (String, Vec<u8>),
+    /// `code,...,profile_fields` per payload and profile, encoded once: a
+    /// trace repeats a few payloads millions of times.
+    payloads: Cache<PayloadKey, Vec<u8>, 64>,
+    json: Vec<u8>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct PayloadKey {
+    bytes: [u8; 8],
+    len: u8,
+    profile: usize,
+}
+
+const HEX: &[u8; 16] = b"0123456789ABCDEF";
+
+fn push_code(out: &mut Vec<u8>, code: u16) {
+    out.extend_from_slice(b"0x");
+    for shift in [12, 8, 4, 0] {
+        out.push(HEX[usize::from(code >> shift & 0xF)]);
+    }
+}
+
+fn push_codes(out: &mut Vec<u8>, codes: impl IntoIterator<Item = u16>) {
+    for (i, code) in codes.into_iter().enumerate() {
+        if i > 0 {
+            out.push(b' ');
+        }
+        push_code(out, code);
+    }
+}
+
+fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
+    for b in bytes {
+        out.push(HEX[usize::from(b >> 4)]);
+        out.push(HEX[usize::from(b & 0xF)]);
+    }
+}
+
+fn push_u64(out: &mut Vec<u8>, v: u64) {
+    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+impl<W: Write> Csv<W> {
+    /// Event rows; with `summary`, node rows instead; `live` flushes
+    /// every row.
+    pub fn new(out: W, summary: bool, live: bool) -> Self {
+        Csv {
+            out,
+            summary,
+            live,
+            header: false,
+            times: TimeFormat::new(TimeStyle::Auto),
+            text: String::new(),
+            row: Vec::with_capacity(512),
+            file: (String::new(), Vec::new()),
+            channel: (String::new(), Vec::new()),
+            payloads: Cache::default(),
+            json: Vec::new(),
+        }
+    }
+
+    /// `fields` as the crate writes a record, without its line end. The
+    /// crate quotes every field that may need it (texts, names); rows are
+    /// assembled from its output and from numbers, codes and slugs, which
+    /// never need quoting. Only on a cache miss (a new file, channel or
+    /// payload) and for the few node rows.
+    fn encode<I, F>(fields: I) -> Vec<u8>
+    where
+        I: IntoIterator<Item = F>,
+        F: AsRef<[u8]>,
+    {
+        let mut encoder = csv::WriterBuilder::new()
+            .buffer_capacity(512)
+            .from_writer(Vec::new());
+        // Writing into a Vec cannot fail.
+        let _ = encoder.write_record(fields);
+        let mut bytes = encoder.into_inner().unwrap_or_default();
+        bytes.pop();
+        bytes
+    }
+
+    fn header(&mut self) -> io::Result<()> {
+        if !self.header {
+            self.header = true;
+            let columns: &[&str] = if self.summary {
+                &NODE_COLUMNS
+            } else {
+                &EVENT_COLUMNS
+            };
+            let mut line = Self::encode(columns);
+            line.push(b'\n');
+            self.out.write_all(&line)?;
+        }
+        Ok(())
+    }
+
+    /// `type,file,line,time,time_text,channel,node,` of an event.
+    fn head(
+        &mut self,
+        kind: &str,
+        file: &str,
+        line: u64,
+        time: Option<Timestamp>,
+        channel: &str,
+        node: u16,
+    ) {
+        if self.file.0 != file || self.file.1.is_empty() {
+            self.file = (file.to_string(), Self::encode([file]));
+        }
+        if self.channel.0 != channel || self.channel.1.is_empty() {
+            self.channel = (channel.to_string(), Self::encode([channel]));
+        }
+        let row = &mut self.row;
+        row.clear();
+        row.extend_from_slice(kind.as_bytes());
+        row.push(b',');
+        row.extend_from_slice(&self.file.1);
+        row.push(b',');
+        push_u64(row, line);
+        row.push(b',');
+        if let Some(t) = time {
+            // Digits, a point, a zone letter: never quoted.
+            t.push_decimal(row);
+            row.push(b',');
+            self.text.clear();
+            self.times.push(&mut self.text, t);
+            row.extend_from_slice(self.text.as_bytes());
+        } else {
+            row.push(b',');
+        }
+        row.push(b',');
+        row.extend_from_slice(&self.channel.1);
+        row.push(b',');
+        push_u64(row, u64::from(node));
+        row.push(b',');
+    }
+
+    fn end_row(&mut self) -> io::Result<()> {
+        self.row.push(b'\n');
+        self.out.write_all(&self.row)?;
+        if self.live {
+            self.out.flush()?;
+        }
+        Ok(())
+    }
+
+    /// `code,class,description,register,register_bits,data,manufacturer,
+    /// profile,profile_fields` of an EMCY, from the cache.
+    fn payload(&mut self, ev: &EmcyEvent<'_>) {
+        let profile = ev.profile.profile;
+        let len = ev.data.len().min(8);
+        let mut key = PayloadKey {
+            bytes: [0; 8],
+            len: len as u8,
+            profile: profile_key(profile),
+        };
+        key.bytes[..len].copy_from_slice(&ev.data[..len]);
+        let at =
+            slot(u64::from_le_bytes(key.bytes) ^ u64::from(key.len) ^ (key.profile as u64) << 8);
+        let json = &mut self.json;
+        match self.payloads.get(key, at, || payload_fragment(ev, json)) {
+            Some(fragment) => self.row.extend_from_slice(fragment),
+            None => {
+                let fragment = payload_fragment(ev, &mut self.json);
+                self.row.extend_from_slice(&fragment);
+            }
+        }
+    }
+
+    fn node(&mut self, input: &InputReport, n: &NodeReport) -> io::Result<()> {
+        let mut active = Vec::new();
+        push_codes(&mut active, n.active.iter().copied());
+        let mut seen = Vec::new();
+        for (i, (&code, count)) in n.stats.raised.iter().enumerate() {
+            if i > 0 {
+                seen.push(b' ');
+            }
+            push_code(&mut seen, code);
+            seen.push(b':');
+            push_u64(&mut seen, *count);
+        }
+        let span = |s: Option<crate::trace::Span>| {
+            let mut v = Vec::new();
+            if let Some(s) = s {
+                s.push_decimal(&mut v);
+            }
+            v
+        };
+        let (longest_code, longest) = match n.stats.longest {
+            Some((code, d)) => {
+                let mut c = Vec::new();
+                push_code(&mut c, code);
+                (c, span(Some(d)))
+            }
+            None => (Vec::new(), Vec::new()),
+        };
+        let time = |t: Option<Timestamp>| {
+            let (mut number, mut text) = (Vec::new(), String::new());
+            if let Some(t) = t {
+                t.push_decimal(&mut number);
+                self.times.push(&mut text, t);
+            }
+            (number, text.into_bytes())
+        };
+        let (first, first_text) = time(n.stats.first_emcy.and_then(|a| a.time));
+        let (last, last_text) = time(n.stats.last_emcy.and_then(|a| a.time));
+        let node = itoa::Buffer::new().format(n.node).to_string();
+        let count = itoa::Buffer::new().format(n.emcy_count).to_string();
+        let mut line = Self::encode([
+            input.file.as_bytes(),
+            n.channel.as_bytes(),
+            node.as_bytes(),
+            n.state.slug().as_bytes(),
+            &active,
+            count.as_bytes(),
+            &seen,
+            &span(n.time_in_error(input.last_time)),
+            &longest_code,
+            &longest,
+            &first,
+            &first_text,
+            &last,
+            &last_text,
+            n.profile.name().as_bytes(),
+            n.profile_source.slug().as_bytes(),
+        ]);
+        line.push(b'\n');
+        self.out.write_all(&line)
+    }
+}
+
+/// The payload columns of an EMCY, encoded (see [`Csv::payload`]).
+fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
+    let mut code = Vec::new();
+    push_code(&mut code, ev.emcy.code);
+    let mut bits = Vec::new();
+    for (i, name) in Register(ev.emcy.register.0).names().enumerate() {
+        if i > 0 {
+            bits.push(b' ');
+        }
+        bits.extend_from_slice(name.as_bytes());
+    }
+    let (mut data, mut manufacturer) = (Vec::new(), Vec::new());
+    push_hex(&mut data, ev.data);
+    push_hex(&mut manufacturer, ev.emcy.manufacturer());
+    json.clear();
+    if ev.decoded.is_some() {
+        push_decoded(json, ev.decoded);
+    }
+    let register = itoa::Buffer::new().format(ev.emcy.register.0).to_string();
+    Csv::<io::Sink>::encode([
+        &code[..],
+        ev.info.class.slug().as_bytes(),
+        ev.description.as_bytes(),
+        register.as_bytes(),
+        &bits,
+        &data,
+        &manufacturer,
+        ev.profile.profile.name().as_bytes(),
+        json,
+    ])
+}
+
+impl<W: Write> Sink for Csv<W> {
+    fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
+        if self.summary {
+            return Ok(());
+        }
+        self.header()?;
+        self.head("emcy", ev.file, ev.line, ev.time, ev.channel, ev.node);
+        if let Some(id) = ev.cob_id {
+            push_u64(&mut self.row, u64::from(id));
+        }
+        self.row.push(b',');
+        self.payload(ev);
+        let row = &mut self.row;
+        row.push(b',');
+        if let Some(t) = ev.transition {
+            push_u64(row, u64::from(t));
+        }
+        row.push(b',');
+        row.extend_from_slice(ev.state.slug().as_bytes());
+        row.push(b',');
+        push_codes(row, ev.cleared.iter().copied());
+        row.push(b',');
+        for (i, w) in ev.warnings.iter().enumerate() {
+            if i > 0 {
+                row.push(b' ');
+            }
+            row.extend_from_slice(w.tag().as_bytes());
+        }
+        self.end_row()
+    }
+
+    fn boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
+        if self.summary {
+            return Ok(());
+        }
+        self.header()?;
+        self.head("boot", ev.file, ev.line, ev.time, ev.channel, ev.node);
+        // cob_id .. state: nothing for a boot-up.
+        self.row.extend_from_slice(&[b','; 12]);
+        push_codes(&mut self.row, ev.cleared.iter().copied());
+        self.row.push(b',');
+        self.end_row()
+    }
+
+    fn finish(&mut self, inputs: &[InputReport], _: &[Diagnostic]) -> io::Result<()> {
+        self.header()?;
+        if self.summary {
+            for input in inputs {
+                for n in &input.nodes {
+                    self.node(input, n)?;
+                }
+            }
+        }
+        self.out.flush()
+    }
+}

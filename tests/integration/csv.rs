@@ -1,0 +1,143 @@
+//! `--format csv` through the binary: every fixture's rows say what its
+//! NDJSON says, column by column, with the header the README documents;
+//! `--view summary` gives one row per node.
+
+use serde_json::Value;
+
+use crate::support::golden::fixtures;
+use crate::support::{self, emcy_decode};
+
+const EVENT_HEADER: &str = "type,file,line,time,time_text,channel,node,cob_id,code,class,\
+description,register,register_bits,data,manufacturer,profile,profile_fields,transition,state,\
+cleared,warnings";
+const NODE_HEADER: &str = "file,channel,node,state,active,emcy_count,errors_seen,time_in_error,\
+longest_error_code,longest_error_duration,first_emcy,first_emcy_text,last_emcy,last_emcy_text,\
+profile,profile_source";
+
+/// The rows of a CSV run (header first), parsed by the csv crate.
+fn rows(args: &[&std::ffi::OsStr]) -> Vec<csv::StringRecord> {
+    let out = emcy_decode()
+        .args(["--format", "csv"])
+        .args(args)
+        .output()
+        .unwrap();
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(out.stdout.as_slice());
+    reader.records().map(|r| r.expect("valid CSV")).collect()
+}
+
+fn codes(v: &Value) -> String {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap().to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A JSON number's text as the binary wrote it (`serde_json` keeps it with
+/// `arbitrary_precision` off only as f64: compare the raw line instead).
+fn raw_time(line: &str) -> String {
+    let at = line.find("\"time\":").unwrap() + 7;
+    line[at..].split(',').next().unwrap().to_string()
+}
+
+#[test]
+fn every_fixtures_event_rows_say_what_its_ndjson_says() {
+    for fixture in fixtures() {
+        let f = fixture.as_os_str();
+        let rows = rows(&[f]);
+        assert_eq!(rows[0].iter().collect::<Vec<_>>().join(","), EVENT_HEADER);
+        let out = emcy_decode()
+            .args(["--format", "ndjson"])
+            .arg(f)
+            .output()
+            .unwrap();
+        let text = String::from_utf8(out.stdout).unwrap();
+        let events: Vec<(&str, Value)> = text
+            .lines()
+            .map(|l| (l, serde_json::from_str::<Value>(l).unwrap()))
+            .filter(|(_, v)| v["type"] == "emcy" || v["type"] == "boot")
+            .collect();
+        assert_eq!(rows.len() - 1, events.len(), "{fixture:?}");
+        for (row, (line, ev)) in rows[1..].iter().zip(&events) {
+            assert_eq!(row.len(), 21, "{fixture:?}: {row:?}");
+            let cell = |name: &str| {
+                let i = EVENT_HEADER.split(',').position(|c| c == name).unwrap();
+                row.get(i).unwrap().to_string()
+            };
+            assert_eq!(cell("type"), ev["type"].as_str().unwrap());
+            assert_eq!(cell("line"), ev["line"].to_string());
+            let time = raw_time(line);
+            assert_eq!(cell("time"), if time == "null" { "" } else { &time });
+            assert_eq!(cell("node"), ev["node"].to_string());
+            assert_eq!(cell("cleared"), codes(&ev["cleared"]));
+            if ev["type"] == "emcy" {
+                assert_eq!(cell("code"), ev["code"].as_str().unwrap());
+                assert_eq!(cell("data"), ev["data"].as_str().unwrap());
+                assert_eq!(cell("description"), ev["description"].as_str().unwrap());
+                assert_eq!(cell("state"), ev["state"].as_str().unwrap());
+                let decoded = cell("profile_fields");
+                if ev["manufacturer_decoded"].is_null() {
+                    assert_eq!(decoded, "");
+                } else {
+                    let parsed: Value = serde_json::from_str(&decoded).unwrap();
+                    assert_eq!(parsed, ev["manufacturer_decoded"]);
+                }
+                match ev["cob_id"].as_u64() {
+                    Some(id) => assert_eq!(cell("cob_id"), id.to_string()),
+                    None => assert_eq!(cell("cob_id"), ""),
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn time_text_is_iso_utc_for_unix_times_and_the_seconds_otherwise() {
+    let log = rows(&["fixtures/s300.log".as_ref()]);
+    assert_eq!(&log[2][3], "1700000001.250000");
+    assert_eq!(&log[2][4], "2023-11-14T22:13:21.250000Z");
+    // ASC times are seconds since the measurement started.
+    let asc = rows(&["fixtures/festo.asc".as_ref()]);
+    assert_eq!(&asc[1][3], "0.000000");
+    assert_eq!(&asc[1][3], &asc[1][4]);
+}
+
+#[test]
+fn summary_is_one_row_per_node_object() {
+    let rows = rows(&[
+        "--view".as_ref(),
+        "summary".as_ref(),
+        "fixtures/s300.log".as_ref(),
+        "fixtures/stoeber-ecat.pcapng".as_ref(),
+    ]);
+    assert_eq!(rows[0].iter().collect::<Vec<_>>().join(","), NODE_HEADER);
+    let nodes: Vec<Value> = support::ndjson(["fixtures/s300.log", "fixtures/stoeber-ecat.pcapng"])
+        .into_iter()
+        .filter(|o| o["type"] == "node")
+        .collect();
+    assert_eq!(rows.len() - 1, nodes.len());
+    for (row, n) in rows[1..].iter().zip(&nodes) {
+        assert_eq!(row.len(), 16);
+        assert_eq!(&row[1], n["channel"].as_str().unwrap());
+        assert_eq!(row[2], n["node"].to_string());
+        assert_eq!(&row[3], n["state"].as_str().unwrap());
+        assert_eq!(row[5], n["emcy_count"].to_string());
+        let seen: Vec<String> = n["errors_seen"]
+            .as_object()
+            .unwrap()
+            .iter()
+            .map(|(c, k)| format!("{c}:{k}"))
+            .collect();
+        assert_eq!(&row[6], seen.join(" "));
+        assert_eq!(&row[14], n["profile"].as_str().unwrap());
+    }
+}
+
+#[test]
+fn a_trace_without_events_still_has_the_header() {
+    let rows = rows(&["fixtures/no-frame.asc".as_ref()]);
+    assert_eq!(rows.len(), 1);
+}
