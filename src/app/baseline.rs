@@ -385,6 +385,17 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     let out = match args.format {
         CheckFormat::Text => diff.text(),
         CheckFormat::Json => diff.json()?,
+        CheckFormat::Junit => {
+            // Every trace given or recorded: one test case each.
+            let traces: std::collections::BTreeSet<&str> = old
+                .traces
+                .keys()
+                .chain(new.traces.keys())
+                .map(String::as_str)
+                .collect();
+            diff.junit(traces)
+        }
+        CheckFormat::Github => diff.github(),
     };
     write_stdout(&out)?;
     if args.update {

@@ -416,6 +416,10 @@ pub enum CheckFormat {
     Text,
     /// One JSON document: findings and summary
     Json,
+    /// JUnit XML: a test case per trace, a failure per regression (GitLab, Jenkins, GitHub)
+    Junit,
+    /// GitHub Actions annotations: an ::error line per regression, then the summary
+    Github,
 }
 
 /// `-j` above this is a mistake, not a machine: a usage error.

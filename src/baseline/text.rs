@@ -57,3 +57,158 @@ impl Diff {
         Ok(text)
     }
 }
+
+/// `&`, `<`, `>`, `"` and `'` as XML entities; characters XML 1.0 cannot
+/// hold (controls other than tab and line feed) as U+FFFD.
+fn xml(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            '\t' | '\n' => out.push(c),
+            c if c.is_control() || matches!(c, '\u{FFFE}' | '\u{FFFF}') => out.push('\u{FFFD}'),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// A GitHub Actions workflow command's message: `%`, CR and LF escaped.
+fn github_data(text: &str) -> String {
+    text.replace('%', "%25")
+        .replace('\r', "%0D")
+        .replace('\n', "%0A")
+}
+
+/// ... and a property value: also `:` and `,`.
+fn github_property(text: &str) -> String {
+    github_data(text).replace(':', "%3A").replace(',', "%2C")
+}
+
+impl Diff {
+    /// A finding's line without its severity: `FILE[ CHANNEL node N]: MESSAGE`.
+    fn place_and_message(f: &super::compare::Finding) -> String {
+        let mut out = printable(&f.file).into_owned();
+        if let (Some(channel), Some(node)) = (&f.channel, f.node) {
+            out.push_str(&format!(" {} node {node}", printable(channel)));
+        }
+        out.push_str(": ");
+        out.push_str(&printable(&f.message));
+        out
+    }
+
+    /// JUnit XML as GitLab, Jenkins and GitHub test reporters read it: one
+    /// test suite for the run, one test case per trace (`traces`: every
+    /// trace given or in the baseline), a `<failure>` per regression with
+    /// its line of text; a trace whose regressions were all allowed passes,
+    /// its allowed regressions, improvements and changes in `<system-out>`.
+    pub fn junit<'t>(&self, traces: impl IntoIterator<Item = &'t str>) -> String {
+        let mut cases = String::new();
+        let (mut tests, mut failures) = (0u64, 0u64);
+        for trace in traces {
+            tests += 1;
+            let mine: Vec<_> = self.findings.iter().filter(|f| f.file == trace).collect();
+            let failed: Vec<_> = mine
+                .iter()
+                .filter(|f| f.severity == Severity::Regression && !f.allowed)
+                .collect();
+            if !failed.is_empty() {
+                failures += 1;
+            }
+            cases.push_str(&format!(
+                "    <testcase classname=\"emcy-decode.check\" name=\"{}\">\n",
+                xml(&printable(trace))
+            ));
+            for f in &failed {
+                let line = format!("regression: {}", Self::place_and_message(f));
+                let kind = serde_json::to_value(f.kind)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default();
+                cases.push_str(&format!(
+                    "      <failure message=\"{}\" type=\"{kind}\">{}</failure>\n",
+                    xml(&line),
+                    xml(&line)
+                ));
+            }
+            let notes: Vec<String> = mine
+                .iter()
+                .filter(|f| f.severity != Severity::Regression || f.allowed)
+                .map(|f| {
+                    let severity = match (f.severity, f.allowed) {
+                        (Severity::Regression, _) => "allowed",
+                        (Severity::Improvement, _) => "improvement",
+                        (Severity::Change, _) => "change",
+                    };
+                    format!("{severity}: {}", Self::place_and_message(f))
+                })
+                .collect();
+            if !notes.is_empty() {
+                cases.push_str(&format!(
+                    "      <system-out>{}</system-out>\n",
+                    xml(&notes.join("\n"))
+                ));
+            }
+            cases.push_str("    </testcase>\n");
+        }
+        format!(
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
+             <testsuites name=\"emcy-decode check\" tests=\"{tests}\" failures=\"{failures}\">\n  \
+             <testsuite name=\"emcy-decode check\" tests=\"{tests}\" failures=\"{failures}\" \
+             errors=\"0\" skipped=\"0\">\n{cases}  </testsuite>\n</testsuites>\n"
+        )
+    }
+
+    /// GitHub Actions workflow commands: `::error` per regression (on its
+    /// trace file), `::notice` per allowed regression, then the summary
+    /// line as plain text.
+    pub fn github(&self) -> String {
+        let mut out = String::new();
+        for f in &self.findings {
+            let level = match (f.severity, f.allowed) {
+                (Severity::Regression, false) => "error",
+                (Severity::Regression, true) => "notice",
+                _ => continue,
+            };
+            let title = if f.allowed {
+                "emcy-decode check: allowed regression"
+            } else {
+                "emcy-decode check: regression"
+            };
+            out.push_str(&format!(
+                "::{level} file={},title={}::{}\n",
+                github_property(&printable(&f.file)),
+                github_property(title),
+                github_data(&Self::place_and_message(f))
+            ));
+        }
+        let text = self.text();
+        if let Some(summary) = text.lines().last() {
+            out.push_str(summary);
+            out.push('\n');
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xml_escapes_markup_and_replaces_what_xml_cannot_hold() {
+        assert_eq!(xml("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
+        assert_eq!(xml("tab\tline\nbell\u{7}"), "tab\tline\nbell\u{FFFD}");
+        assert!(roxmltree::Document::parse(&format!("<a>{}</a>", xml("\u{0}\u{1B}x"))).is_ok());
+    }
+
+    #[test]
+    fn github_commands_escape_their_separators() {
+        assert_eq!(github_data("50% a\r\nb"), "50%25 a%0D%0Ab");
+        assert_eq!(github_property("a:b,c%"), "a%3Ab%2Cc%25");
+    }
+}

@@ -1056,3 +1056,107 @@ fn check_update_with_a_baseline_file_named_dash_rewrites_that_file() {
     let updated = fs::read(dir.path().join("-")).expect("read");
     assert_eq!(updated, expected_baseline(&dir));
 }
+
+// ---- JUnit and GitHub reports ------------------------------------------------------
+
+/// Two traces in the baseline; then `rig.log` gains a new error and
+/// `other.log` loses its errors (improvements); `args` added to check.
+fn two_traces_checked(format: &str, args: &[&str]) -> (Option<i32>, String) {
+    let dir = workspace("rig.log");
+    fs::copy(fixture("rig.log"), dir.path().join("traces/other.log")).unwrap();
+    cmd_in(&dir)
+        .args([
+            "baseline",
+            "traces/rig.log",
+            "traces/other.log",
+            "-o",
+            "baseline.json",
+        ])
+        .assert()
+        .code(0);
+    put(&dir, "new-error.log");
+    fs::copy(fixture("improved.log"), dir.path().join("traces/other.log")).unwrap();
+    let out = cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "-f", format])
+        .args(["traces/rig.log", "traces/other.log"])
+        .args(args)
+        .output()
+        .unwrap();
+    (out.status.code(), String::from_utf8(out.stdout).unwrap())
+}
+
+#[test]
+fn junit_has_a_test_case_per_trace_and_a_failure_per_regression() {
+    let (code, xml) = two_traces_checked("junit", &[]);
+    assert_eq!(code, Some(1));
+    let doc = roxmltree::Document::parse(&xml).expect("well-formed XML");
+    let root = doc.root_element();
+    assert_eq!(root.tag_name().name(), "testsuites");
+    let suites: Vec<_> = root.children().filter(|n| n.is_element()).collect();
+    assert_eq!(suites.len(), 1);
+    let suite = suites[0];
+    assert_eq!(suite.tag_name().name(), "testsuite");
+    assert_eq!(suite.attribute("tests"), Some("2"));
+    assert_eq!(suite.attribute("failures"), Some("1"));
+    let cases: Vec<_> = suite
+        .children()
+        .filter(|n| n.has_tag_name("testcase"))
+        .collect();
+    let names: Vec<_> = cases.iter().map(|c| c.attribute("name").unwrap()).collect();
+    assert_eq!(names, ["traces/other.log", "traces/rig.log"]);
+    // other.log improved: passes, its improvements noted.
+    assert!(cases[0].children().all(|n| !n.has_tag_name("failure")));
+    let out = cases[0]
+        .children()
+        .find(|n| n.has_tag_name("system-out"))
+        .and_then(|n| n.text())
+        .unwrap();
+    assert!(out.starts_with("improvement: traces/other.log"), "{out}");
+    // rig.log: one failure, the regression's line of text.
+    let failures: Vec<_> = cases[1]
+        .children()
+        .filter(|n| n.has_tag_name("failure"))
+        .collect();
+    assert_eq!(failures.len(), 1);
+    assert_eq!(failures[0].attribute("type"), Some("new_error"));
+    assert_eq!(
+        failures[0].attribute("message"),
+        Some(
+            "regression: traces/rig.log can0 node 1: new error 0x2310 (1x): \
+             Current · output side · continuous over current"
+        )
+    );
+}
+
+#[test]
+fn junit_shows_an_allowed_regression_as_a_passed_case_with_a_note() {
+    let (code, xml) = two_traces_checked("junit", &["--allow", "0x2310"]);
+    assert_eq!(code, Some(0));
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    assert!(doc.descendants().all(|n| !n.has_tag_name("failure")));
+    let rig = doc
+        .descendants()
+        .find(|n| n.attribute("name") == Some("traces/rig.log"))
+        .unwrap();
+    let note = rig
+        .children()
+        .find(|n| n.has_tag_name("system-out"))
+        .unwrap();
+    assert!(
+        note.text()
+            .unwrap()
+            .starts_with("allowed: traces/rig.log can0 node 1: new error 0x2310")
+    );
+}
+
+#[test]
+fn github_annotates_each_regression_on_its_trace() {
+    let (code, text) = two_traces_checked("github", &[]);
+    assert_eq!(code, Some(1));
+    assert_eq!(
+        text,
+        "::error file=traces/rig.log,title=emcy-decode check%3A regression::traces/rig.log can0 \
+         node 1: new error 0x2310 (1x): Current · output side · continuous over current\n\
+         check: 1 regression, 2 improvements, 0 changes; 1 of 2 traces matched\n"
+    );
+}
