@@ -23,7 +23,7 @@ use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use crate::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
 use crate::baseline::Baseline;
 use crate::baseline::compare::{Allow, compare};
-use crate::baseline::key::trace_key;
+use crate::baseline::key::trace_key_under;
 use crate::trace::input::{self, ReadMode, Source};
 
 /// Reads every trace through the decode pipeline. `Ok(Err(status))` when a
@@ -36,9 +36,10 @@ fn read_traces(
     unwritten: &str,
 ) -> Result<Result<Vec<(String, InputReport)>, ExitCode>> {
     let cwd = std::env::current_dir().ok();
+    let root = args.root.as_deref();
     let mut keys: BTreeMap<String, &Path> = BTreeMap::new();
     for arg in &args.traces {
-        let key = trace_key(arg, cwd.as_deref());
+        let key = trace_key_under(arg, cwd.as_deref(), root);
         if let Some(first) = keys.insert(key.clone(), arg) {
             bail!(
                 "{} and {} would both be recorded as '{key}'; give each trace once",
@@ -79,7 +80,7 @@ fn read_traces(
             return Ok(Err(ExitCode::from(stop.status)));
         }
         failed |= analysis.report.error.is_some();
-        reports.push((trace_key(arg, cwd.as_deref()), analysis.report));
+        reports.push((trace_key_under(arg, cwd.as_deref(), root), analysis.report));
     }
     Ok(if failed {
         Err(ExitCode::from(EXIT_ERROR))
@@ -342,8 +343,9 @@ pub(super) fn baseline(args: &BaselineArgs) -> Result<ExitCode> {
         Ok(reports) => reports,
         Err(status) => return Ok(status),
     };
-    let text = Baseline::from_reports(&reports).to_json()?;
-    write_file(out, &text)?;
+    let mut record = Baseline::from_reports(&reports);
+    record.options = args.read.recorded()?;
+    write_file(out, &record.to_json()?)?;
     Ok(ExitCode::from(EXIT_OK))
 }
 
@@ -372,11 +374,33 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     } else {
         "nothing compared"
     };
+    let options = args.read.recorded()?;
+    // Traces decoded with other options decode to other things: comparing
+    // them would report the options as regressions.
+    if options != old.options && !args.update {
+        bail!(
+            "{name} was made with {}, this check reads with {}: give the same decoding \
+             options (or --update to record these)",
+            old.options,
+            options
+        );
+    }
     let reports = match read_traces(&args.read, unwritten)? {
         Ok(reports) => reports,
         Err(status) => return Ok(status),
     };
-    let new = Baseline::from_reports(&reports);
+    let mut new = Baseline::from_reports(&reports);
+    new.options = options;
+    // Only the traces given: the others are neither compared nor dropped.
+    let mut old = old;
+    let mut kept = BTreeMap::new();
+    if args.only_given {
+        let (given, other) = std::mem::take(&mut old.traces)
+            .into_iter()
+            .partition(|(key, _)| new.traces.contains_key(key));
+        old.traces = given;
+        kept = other;
+    }
     let allow = Allow {
         codes: args.allow.iter().copied().collect(),
         nodes: args.allow_node.iter().copied().collect(),
@@ -398,7 +422,20 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
         CheckFormat::Github => diff.github(),
     };
     write_stdout(&out)?;
+    // No key in common: most likely keys relative to another directory.
+    if let (Some(recorded), Some(given)) = (old.traces.keys().next(), new.traces.keys().next())
+        && !new.traces.keys().any(|k| old.traces.contains_key(k))
+    {
+        eprintln!(
+            "check: no trace matched the baseline: it records traces by their path relative \
+             to where it was made ('{}'), this run gave '{}'; run check from that directory or \
+             give both the same --root DIR",
+            crate::text::printable(recorded),
+            crate::text::printable(given)
+        );
+    }
     if args.update {
+        new.traces.extend(kept);
         write_file(&path, &new.to_json()?)?;
         eprintln!("check: wrote {name}");
         return Ok(ExitCode::from(EXIT_OK));

@@ -8,7 +8,9 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::analyze::fail_on::FailOn;
 use crate::analyze::{EmcyId, Options};
+use crate::baseline::ReadOptions;
 use crate::canopen::NodeId;
+use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{self, ProfileRequest};
 use crate::report::timefmt::TimeStyle;
 use crate::trace::deltas::TimeMode;
@@ -351,6 +353,11 @@ pub struct TraceArgs {
     /// A user profile (TOML), as for decoding
     #[arg(long, value_name = "FILE.toml")]
     pub profile_file: Vec<PathBuf>,
+
+    /// Record and look up traces by their path relative to DIR, not to the current directory
+    /// (the same keys wherever baseline and check run)
+    #[arg(long, value_name = "DIR")]
+    pub root: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -408,6 +415,11 @@ pub struct CheckArgs {
     /// Rewrite the baseline from these traces after printing the differences; exit 0
     #[arg(long)]
     pub update: bool,
+
+    /// Compare only the traces given: the baseline's other traces are not "not given"
+    /// regressions (with --update, only the given traces' records are replaced)
+    #[arg(long)]
+    pub only_given: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -469,6 +481,42 @@ impl DecodeArgs {
 }
 
 impl TraceArgs {
+    /// The decoding options as a baseline records them, normalized (the
+    /// `--profile-file` profiles by name: paths differ between machines).
+    pub(super) fn recorded(&self) -> Result<ReadOptions> {
+        let mut profile_file = Vec::new();
+        for f in &self.profile_file {
+            profile_file.push(Profile::load(f)?.name().to_string());
+        }
+        Ok(ReadOptions {
+            input_format: self
+                .input_format
+                .and_then(|f| f.to_possible_value())
+                .map(|v| v.get_name().to_string()),
+            timestamps: self
+                .timestamps
+                .and_then(|t| t.to_possible_value())
+                .map(|v| v.get_name().to_string()),
+            emcy_id: self
+                .emcy_id
+                .iter()
+                .map(|e| {
+                    let digits = if e.extended { 8 } else { 3 };
+                    format!("0x{:0digits$X}={}", e.id, e.node)
+                })
+                .collect(),
+            profile: self
+                .profile
+                .iter()
+                .map(|p| match p.node {
+                    Some(n) => format!("{n}={}", p.name),
+                    None => p.name.clone(),
+                })
+                .collect(),
+            profile_file,
+        })
+    }
+
     /// The library's options for these flags, as `decode` would make them.
     pub(super) fn options(&self) -> Result<Options> {
         Ok(Options {

@@ -402,6 +402,7 @@ mod tests {
             .insert("can0".to_string(), nodes.iter().cloned().collect());
         Baseline {
             baseline_version: VERSION,
+            options: Default::default(),
             traces: [("t.log".to_string(), trace)].into_iter().collect(),
         }
     }

@@ -34,6 +34,26 @@ pub fn trace_key(arg: &Path, cwd: Option<&Path>) -> String {
     parts.join("/")
 }
 
+/// [`trace_key`] relative to `root` (`--root DIR`) instead of the current
+/// directory: the same key whichever directory `check` runs in. A trace
+/// outside `root` keeps its key relative to the current directory.
+pub fn trace_key_under(arg: &Path, cwd: Option<&Path>, root: Option<&Path>) -> String {
+    let (Some(root), Some(cwd)) = (root, cwd) else {
+        return trace_key(arg, cwd);
+    };
+    if arg.as_os_str() == "-" {
+        return trace_key(arg, Some(cwd));
+    }
+    let absolute = |p: &Path| match p.is_absolute() {
+        true => p.to_path_buf(),
+        false => cwd.join(p),
+    };
+    match inside(&absolute(arg), &absolute(root)) {
+        Some(rel) => trace_key(&rel, None),
+        None => trace_key(arg, Some(cwd)),
+    }
+}
+
 /// `path` relative to `dir` when it is inside it, comparing as written and
 /// then with symbolic links resolved (a shell's `$PWD` may differ from the
 /// resolved current directory).
@@ -49,6 +69,20 @@ fn inside(path: &Path, dir: &Path) -> Option<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn keys_under_a_root_are_relative_to_it_wherever_the_cwd_is() {
+        let under = |arg: &str, cwd: &str, root: &str| {
+            trace_key_under(Path::new(arg), Some(Path::new(cwd)), Some(Path::new(root)))
+        };
+        assert_eq!(under("traces/a.log", "/p", "/p"), "traces/a.log");
+        assert_eq!(under("a.log", "/p/traces", "/p"), "traces/a.log");
+        assert_eq!(under("../traces/a.log", "/p/ci", ".."), "traces/a.log");
+        assert_eq!(under("/p/traces/a.log", "/elsewhere", "/p"), "traces/a.log");
+        // Outside the root: as without one.
+        assert_eq!(under("b.log", "/q", "/p"), "b.log");
+        assert_eq!(under("-", "/q", "/p"), "<stdin>");
+    }
 
     #[test]
     fn keys_are_relative_and_normalized() {

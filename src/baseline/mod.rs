@@ -32,8 +32,61 @@ pub const VERSION: u32 = 1;
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Baseline {
     pub baseline_version: u32,
+    /// The decoding options the traces were read with (absent: none), so
+    /// a check with other ones is refused, not compared.
+    #[serde(default, skip_serializing_if = "ReadOptions::is_none")]
+    pub options: ReadOptions,
     /// By trace key (see [`trace_key`]).
     pub traces: BTreeMap<String, TraceEntry>,
+}
+
+/// The options that change what a trace decodes to, as the command line
+/// gave them (normalized): `--input-format`, `--timestamps`, `--emcy-id`,
+/// `--profile`, and the names of `--profile-file` profiles.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ReadOptions {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_format: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timestamps: Option<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub emcy_id: Vec<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub profile: Vec<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub profile_file: Vec<String>,
+}
+
+impl ReadOptions {
+    pub fn is_none(&self) -> bool {
+        *self == ReadOptions::default()
+    }
+}
+
+impl std::fmt::Display for ReadOptions {
+    /// As flags: `--input-format asc --profile 1=kollmorgen`, or `no
+    /// decoding options`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.is_none() {
+            return f.write_str("no decoding options");
+        }
+        let mut flags: Vec<String> = Vec::new();
+        if let Some(v) = &self.input_format {
+            flags.push(format!("--input-format {v}"));
+        }
+        if let Some(v) = &self.timestamps {
+            flags.push(format!("--timestamps {v}"));
+        }
+        flags.extend(self.emcy_id.iter().map(|v| format!("--emcy-id {v}")));
+        flags.extend(self.profile.iter().map(|v| format!("--profile {v}")));
+        flags.extend(
+            self.profile_file
+                .iter()
+                .map(|v| format!("--profile-file (profile {v})")),
+        );
+        f.write_str(&flags.join(" "))
+    }
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -148,6 +201,7 @@ impl Baseline {
             .collect();
         Baseline {
             baseline_version: VERSION,
+            options: ReadOptions::default(),
             traces,
         }
     }
@@ -253,6 +307,7 @@ mod tests {
             Baseline::from_json(r#"{"baseline_version": 1, "traces": {}}"#).ok(),
             Some(Baseline {
                 baseline_version: 1,
+                options: ReadOptions::default(),
                 traces: BTreeMap::new()
             })
         );

@@ -1160,3 +1160,98 @@ fn github_annotates_each_regression_on_its_trace() {
          check: 1 regression, 2 improvements, 0 changes; 1 of 2 traces matched\n"
     );
 }
+
+// ---- decoding options, --root, --only-given -----------------------------------------
+
+#[test]
+fn a_baseline_records_its_decoding_options_and_check_refuses_others() {
+    let dir = workspace("rig.log");
+    cmd_in(&dir)
+        .args([
+            "baseline",
+            "traces/rig.log",
+            "--profile",
+            "1=kollmorgen",
+            "-o",
+            "baseline.json",
+        ])
+        .assert()
+        .code(0);
+    let text = fs::read_to_string(dir.path().join("baseline.json")).unwrap();
+    let v: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        v["options"],
+        serde_json::json!({"profile": ["1=kollmorgen"]})
+    );
+    check(&dir, &["--profile", "1=kollmorgen"]).code(0);
+    check(&dir, &[]).code(2).stdout("").stderr(
+        "error: baseline.json was made with --profile 1=kollmorgen, this check reads with no \
+         decoding options: give the same decoding options (or --update to record these)\n",
+    );
+    // --update records the options it read with.
+    check(&dir, &["--update"]).code(0);
+    let v: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("baseline.json")).unwrap())
+            .unwrap();
+    assert!(v.get("options").is_none(), "{v}");
+    check(&dir, &[]).code(0);
+}
+
+#[test]
+fn root_gives_the_same_keys_from_another_directory() {
+    let dir = checked_against_rig("rig.log");
+    fs::create_dir(dir.path().join("ci")).unwrap();
+    let from_ci = |args: &[&str]| {
+        let out = emcy_decode()
+            .current_dir(dir.path().join("ci"))
+            .args([
+                "check",
+                "--baseline",
+                "../baseline.json",
+                "../traces/rig.log",
+            ])
+            .args(args)
+            .output()
+            .unwrap();
+        (out.status.code(), String::from_utf8(out.stderr).unwrap())
+    };
+    let (code, stderr) = from_ci(&[]);
+    assert_eq!(code, Some(1));
+    assert!(
+        stderr.contains(
+            "check: no trace matched the baseline: it records traces by their path relative to \
+             where it was made ('traces/rig.log'), this run gave '../traces/rig.log'"
+        ),
+        "{stderr}"
+    );
+    assert_eq!(from_ci(&["--root", ".."]), (Some(0), String::new()));
+}
+
+#[test]
+fn only_given_checks_a_subset_and_updates_only_it() {
+    let dir = workspace("rig.log");
+    fs::copy(fixture("rig.log"), dir.path().join("traces/other.log")).unwrap();
+    cmd_in(&dir)
+        .args([
+            "baseline",
+            "traces/rig.log",
+            "traces/other.log",
+            "-o",
+            "baseline.json",
+        ])
+        .assert()
+        .code(0);
+    // Without it the other trace is a regression: not given.
+    check(&dir, &[]).code(1);
+    check(&dir, &["--only-given"])
+        .code(0)
+        .stdout("check: 0 regressions, 0 improvements, 0 changes; 1 of 1 trace matched\n");
+    put(&dir, "new-error.log");
+    check(&dir, &["--only-given", "--update"]).code(0);
+    let v: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("baseline.json")).unwrap())
+            .unwrap();
+    let traces = v["traces"].as_object().unwrap();
+    assert_eq!(traces.len(), 2, "the other trace's record is kept");
+    assert!(traces["traces/rig.log"]["nodes"]["can0"]["1"]["errors"]["0x2310"].is_object());
+}
