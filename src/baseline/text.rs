@@ -2,8 +2,18 @@
 
 use anyhow::Result;
 
-use super::compare::{Diff, Severity};
+use super::compare::{Diff, Finding, Severity};
 use crate::text::printable;
+
+/// The word a finding's line starts with.
+fn severity_word(f: &Finding) -> &'static str {
+    match (f.severity, f.allowed) {
+        (Severity::Regression, true) => "allowed",
+        (Severity::Regression, false) => "regression",
+        (Severity::Improvement, _) => "improvement",
+        (Severity::Change, _) => "change",
+    }
+}
 
 fn plural(n: u64, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
@@ -15,13 +25,7 @@ impl Diff {
     pub fn text(&self) -> String {
         let mut out = String::new();
         for f in &self.findings {
-            let severity = match (f.severity, f.allowed) {
-                (Severity::Regression, true) => "allowed",
-                (Severity::Regression, false) => "regression",
-                (Severity::Improvement, _) => "improvement",
-                (Severity::Change, _) => "change",
-            };
-            out.push_str(severity);
+            out.push_str(severity_word(f));
             out.push_str(": ");
             out.push_str(&printable(&f.file));
             if let (Some(channel), Some(node)) = (&f.channel, f.node) {
@@ -91,7 +95,7 @@ fn github_property(text: &str) -> String {
 
 impl Diff {
     /// A finding's line without its severity: `FILE[ CHANNEL node N]: MESSAGE`.
-    fn place_and_message(f: &super::compare::Finding) -> String {
+    fn place_and_message(f: &Finding) -> String {
         let mut out = printable(&f.file).into_owned();
         if let (Some(channel), Some(node)) = (&f.channel, f.node) {
             out.push_str(&format!(" {} node {node}", printable(channel)));
@@ -138,14 +142,7 @@ impl Diff {
             let notes: Vec<String> = mine
                 .iter()
                 .filter(|f| f.severity != Severity::Regression || f.allowed)
-                .map(|f| {
-                    let severity = match (f.severity, f.allowed) {
-                        (Severity::Regression, _) => "allowed",
-                        (Severity::Improvement, _) => "improvement",
-                        (Severity::Change, _) => "change",
-                    };
-                    format!("{severity}: {}", Self::place_and_message(f))
-                })
+                .map(|f| format!("{}: {}", severity_word(f), Self::place_and_message(f)))
                 .collect();
             if !notes.is_empty() {
                 cases.push_str(&format!(

@@ -1610,30 +1610,34 @@ pub(crate) fn fuzz_pcap(data: &[u8]) {
         Parsed::Frame(f) => f.kind == FrameKind::Data && interest.wants(f.id, f.extended),
         _ => true,
     };
-    let shown = |p: &Parsed<'_>| format!("{p:?}");
-    // An EtherCAT frame's messages are part of what a packet shows; one
-    // without any (and undamaged) is only counted under an interest.
-    let ethercat = |r: &mut PcapReader<&[u8]>| {
-        r.take_ethercat()
-            .map(|(e, channel)| (e.quiet(), format!("{e:?} on {channel:?}")))
+    // What a packet shows (an EtherCAT frame's messages are part of it),
+    // pushed with the count of plain ones before it; plain ones (and quiet
+    // EtherCAT frames, only counted under an interest) only counted.
+    let classify = |r: &mut PcapReader<&[u8]>,
+                    want: bool,
+                    text: String,
+                    seen: &mut Vec<(u64, String)>,
+                    plain: &mut u64| {
+        let ethercat = r
+            .take_ethercat()
+            .map(|(e, channel)| (e.quiet(), format!("{e:?} on {channel:?}")));
+        let shown = match ethercat {
+            Some((true, _)) => None,
+            Some((false, e)) => Some(format!("{text} {e}")),
+            None => want.then_some(text),
+        };
+        match shown {
+            Some(shown) => seen.push((std::mem::take(plain), shown)),
+            None => *plain += 1,
+        }
     };
+    let shown = |p: &Parsed<'_>| format!("{p:?}");
     let mut full = PcapReader::new(data).expect("read once");
     let mut expected = Vec::new();
     let mut plain = 0u64;
     while let Ok(Some(p)) = full.next_packet() {
         let (want, text) = (wanted(&p), shown(&p));
-        match ethercat(&mut full) {
-            Some((true, _)) => plain += 1,
-            Some((false, e)) => {
-                expected.push((plain, format!("{text} {e}")));
-                plain = 0;
-            }
-            None if want => {
-                expected.push((plain, text));
-                plain = 0;
-            }
-            None => plain += 1,
-        }
+        classify(&mut full, want, text, &mut expected, &mut plain);
     }
     let mut fast = PcapReader::new(data).expect("read once");
     let mut got = Vec::new();
@@ -1648,18 +1652,7 @@ pub(crate) fn fuzz_pcap(data: &[u8]) {
         // the quiet EtherCAT frames among them).
         if let Some(p) = fast.take() {
             let (want, text) = (wanted(&p), shown(&p));
-            match ethercat(&mut fast) {
-                Some((true, _)) => counted += 1,
-                Some((false, e)) => {
-                    got.push((counted, format!("{text} {e}")));
-                    counted = 0;
-                }
-                None if want => {
-                    got.push((counted, text));
-                    counted = 0;
-                }
-                None => counted += 1,
-            }
+            classify(&mut fast, want, text, &mut got, &mut counted);
         }
     }
     counted += fast.take_counted().0 + fast.take_quiet();

@@ -241,6 +241,12 @@ fn busmaster_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
 /// A pcapng section header and one LINUX_SLL interface named `can0`
 /// (microseconds: no if_tsresol), little-endian.
 fn pcapng_header() -> Vec<u8> {
+    pcapng_head(113, b"can0")
+}
+
+/// A pcapng section header and one interface of `linktype` named `name`
+/// (4 bytes; microseconds), little-endian.
+fn pcapng_head(linktype: u16, name: &[u8; 4]) -> Vec<u8> {
     let mut h = Vec::new();
     let mut block = |kind: u32, body: &[u8]| {
         let len = 12 + body.len() as u32;
@@ -254,12 +260,12 @@ fn pcapng_header() -> Vec<u8> {
     shb.extend(0u16.to_le_bytes());
     shb.extend((-1i64).to_le_bytes());
     block(0x0A0D_0D0A, &shb);
-    let mut idb = 113u16.to_le_bytes().to_vec();
+    let mut idb = linktype.to_le_bytes().to_vec();
     idb.extend([0, 0]);
     idb.extend(262_144u32.to_le_bytes());
     idb.extend(2u16.to_le_bytes()); // if_name
     idb.extend(4u16.to_le_bytes());
-    idb.extend(b"can0");
+    idb.extend(name);
     idb.extend([0; 4]); // opt_endofopt
     block(1, &idb);
     h
@@ -496,27 +502,7 @@ pub fn write_ethercat<W: Write>(
     seed: u64,
 ) -> io::Result<(u64, u64)> {
     let mut rng = Rng::new(seed);
-    let mut h = Vec::new();
-    let mut block = |kind: u32, body: &[u8]| {
-        let len = 12 + body.len() as u32;
-        h.extend(kind.to_le_bytes());
-        h.extend(len.to_le_bytes());
-        h.extend(body);
-        h.extend(len.to_le_bytes());
-    };
-    let mut shb = 0x1A2B_3C4Du32.to_le_bytes().to_vec();
-    shb.extend(1u16.to_le_bytes());
-    shb.extend(0u16.to_le_bytes());
-    shb.extend((-1i64).to_le_bytes());
-    block(0x0A0D_0D0A, &shb);
-    let mut idb = 1u16.to_le_bytes().to_vec(); // LINKTYPE_ETHERNET
-    idb.extend([0, 0]);
-    idb.extend(262_144u32.to_le_bytes());
-    idb.extend(2u16.to_le_bytes()); // if_name
-    idb.extend(4u16.to_le_bytes());
-    idb.extend(b"eth0");
-    idb.extend([0; 4]);
-    block(1, &idb);
+    let h = pcapng_head(1, b"eth0"); // LINKTYPE_ETHERNET
     out.write_all(&h)?;
     let mut written = h.len() as u64;
     let (mut packets, mut emcy) = (0u64, 0u64);
