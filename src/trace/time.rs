@@ -150,6 +150,14 @@ impl Timestamp {
         Timestamp::from_total(total, self.digits.max(delta.digits))
     }
 
+    /// `self + span` for a span that is not negative (a deadline), at the
+    /// finer precision; `None` for a negative span or on overflow.
+    pub fn checked_add_span(self, span: Span) -> Option<Timestamp> {
+        let atto = u128::try_from(span.atto).ok()?;
+        let total = self.total().checked_add(atto)?;
+        Timestamp::from_total(total, self.digits.max(span.digits))
+    }
+
     /// `self - earlier`, negative when the trace's clock went backwards.
     pub fn since(self, earlier: Timestamp) -> Span {
         Span {
@@ -206,6 +214,24 @@ impl Span {
         Some(Span {
             atto: self.atto.checked_add(other.atto)?,
             digits: self.digits.max(other.digits),
+        })
+    }
+
+    /// `ms` milliseconds (an object dictionary time), written with three
+    /// fraction digits.
+    pub fn from_millis(ms: u64) -> Span {
+        Span {
+            atto: i128::from(ms) * (ATTO_PER_SEC / 1000) as i128,
+            digits: 3,
+        }
+    }
+
+    /// `self * num / den` (a margin on a timeout, a multiple of a period),
+    /// same precision; `None` for `den == 0` or on overflow.
+    pub fn scaled(self, num: i128, den: i128) -> Option<Span> {
+        Some(Span {
+            atto: self.atto.checked_mul(num)?.checked_div(den)?,
+            digits: self.digits,
         })
     }
 
