@@ -1,6 +1,8 @@
 //! The consumer: turns classified lines into timelines, events and counts,
 //! in line order, and hands events to the sink.
 
+mod health;
+
 use std::borrow::Borrow;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -27,6 +29,7 @@ use crate::timeline::history::{ErrorHistory, History};
 use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
+use health::HealthState;
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
 /// interface name in the trace is one, so a hostile trace can name a million:
@@ -204,7 +207,7 @@ impl Nodes {
                 if !reported {
                     continue;
                 }
-                out.push(NodeReport {
+                let mut report = NodeReport {
                     channel: ch.name.to_string(),
                     node,
                     state: end.state,
@@ -215,7 +218,12 @@ impl Nodes {
                     profile_source: ProfileSource::Default,
                     profile_reason: None,
                     descriptions: CodeTexts::default(),
-                });
+                    nmt_state: None,
+                    heartbeat: None,
+                    error_history: None,
+                };
+                health::report_health(&mut report, end.health);
+                out.push(report);
             }
         }
         (out, history.finish([]))
@@ -263,6 +271,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// times on this thread, so the event carries both from here and no
     /// renderer looks a code up again.
     codes: Cache<(usize, u16), CodeEntry, 64>,
+    /// NMT states, heartbeat deadlines, error history read-outs.
+    health: HealthState,
 }
 
 /// A code as a profile reads it.
@@ -325,6 +335,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             profiles: NodeProfiles::new(&opts.profiles),
             step_buffers: Step::default(),
             codes: Cache::default(),
+            health: HealthState::default(),
         }
     }
 
@@ -337,6 +348,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         mut error: Option<String>,
     ) -> Result<Analysis, OutputError> {
         let file = self.file;
+        self.finish_health()?;
         if format.is_none() && self.counts.malformed > 0 && error.is_none() {
             error = Some(
                 "cannot detect the trace format: no line is a candump log, candump screen, \
@@ -366,6 +378,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.profiles.reason(n.node).map(str::to_string);
+            if let Some(h) = &mut n.error_history {
+                for e in &mut h.entries {
+                    e.description = n.profile.describe(e.code);
+                }
+            }
             codes.clear();
             codes.extend(n.stats.raised.keys().copied());
             let same = shared.entry(std::ptr::from_ref(n.profile)).or_default();
@@ -545,6 +562,12 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             self.diags.report(self.log, true, line_no, msg);
         }
         if frame.kind != FrameKind::Data {
+            if frame.kind == FrameKind::Remote
+                && !frame.extended
+                && self.interest.wants(frame.id, false)
+            {
+                self.remote_frame(frame.channel, frame.id);
+            }
             return Ok(());
         }
         // Only wanted ids count: workers may hand over frames the sequential
@@ -554,6 +577,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         }
         if let Some(t) = frame.time {
             self.time(t);
+            if self.health.passed(t) {
+                self.deadlines_passed(t, line_no)?;
+            }
         }
         if self
             .interest
@@ -656,9 +682,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         } else if frame.extended {
             return Ok(());
         } else if let Some(access) = sdo::parse(frame.id, data) {
-            if let Some((node, object, value)) = self.sdo.feed(access) {
-                self.object_value(node, object, value);
-            }
+            self.sdo_access(frame.channel, at, access)?;
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             self.counts.boot += 1;
             self.check_clock(at);
@@ -684,6 +708,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 };
                 self.sink.boot(&event).map_err(OutputError)?;
             }
+            self.boot_health(frame.channel, node, at)?;
+        } else {
+            self.nmt_frame(frame.channel, frame.id, data, at)?;
         }
         Ok(())
     }

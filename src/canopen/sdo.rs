@@ -121,7 +121,13 @@ pub fn parse(id: u32, data: &[u8]) -> Option<Sdo> {
     } else {
         return None;
     };
-    let node = node as NodeId;
+    parse_payload(node as NodeId, request, data)
+}
+
+/// Reads the eight bytes of an SDO frame for `node`, sent by the client
+/// (`request`) or the node: for transports that carry SDO without a CAN id
+/// (CANopen over EtherCAT).
+pub fn parse_payload(node: NodeId, request: bool, data: &[u8]) -> Option<Sdo> {
     // Every SDO frame is 8 bytes; a shorter one is not trusted.
     let &[cmd, lo, hi, sub, b4, b5, b6, b7] = data else {
         return None;

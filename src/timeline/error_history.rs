@@ -20,6 +20,9 @@ pub struct HistoryEntry {
     pub sub: u8,
     pub code: u16,
     pub info: u16,
+    /// The trace never saw the node raise the code (set by the caller, who
+    /// knows the node's errors).
+    pub before_trace: bool,
 }
 
 impl HistoryEntry {
@@ -28,6 +31,7 @@ impl HistoryEntry {
             sub,
             code: (value & 0xFFFF) as u16,
             info: (value >> 16) as u16,
+            before_trace: false,
         }
     }
 }
@@ -123,6 +127,11 @@ impl HistoryReader {
         self.flush(done);
     }
 
+    /// Whether a read-out is going on.
+    pub fn is_reading(&self) -> bool {
+        self.pending.is_some()
+    }
+
     /// The read-out going on ends as partial (a new one begins, the input ends).
     pub fn flush(&mut self, done: &mut Vec<ReadOut>) {
         if let Some(p) = self.pending.take() {
@@ -146,7 +155,8 @@ mod tests {
             HistoryEntry {
                 sub: 1,
                 code: 0x4310,
-                info: 0x0012
+                info: 0x0012,
+                before_trace: false,
             }
         );
     }
