@@ -370,10 +370,11 @@ sorted by file, channel, node and code, then a `check:` summary line.
 
 Regressions (exit 1 unless --allow/--allow-node accepts them): a new error
 code, an error still active at the end that the baseline had cleared, a new
-node with errors, more malformed lines or undecodable EMCYs, a trace not in
-the baseline, a baseline trace not given.
+node with errors, more malformed lines or undecodable EMCYs, a node that lost
+its heartbeat where the baseline's did not, a trace not in the baseline, a
+baseline trace not given.
 Improvements (exit 0): an error no longer raised, an error no longer active
-at the end, fewer malformed lines. Changes (exit 0): a known error raised a
+at the end, fewer malformed lines, a node no longer losing its heartbeat. Changes (exit 0): a known error raised a
 different number of times, a node gone, a new node without errors, another
 format.
 
