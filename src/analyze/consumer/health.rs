@@ -530,12 +530,17 @@ impl<E: Write> Consumer<'_, '_, E> {
     }
 
     /// The end of the input: nodes silent past their deadline are lost,
-    /// read-outs going on end as partial.
+    /// read-outs going on end as partial (their events at the last line,
+    /// after every event before; the node keeps the read-out's own line).
     pub(super) fn finish_health(&mut self) -> Result<(), OutputError> {
         let line = self.line_base;
         if let Some(end) = self.last_time {
             self.deadlines_passed(end, line)?;
         }
+        let end = At {
+            time: self.last_time,
+            line,
+        };
         let reading: Vec<(u32, NodeId)> = self
             .nodes
             .channels
@@ -556,6 +561,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                 .history
                 .flush(&mut self.health.read_outs);
             self.read_outs_out(id, node);
+            for (at, _) in &mut self.health.events {
+                *at = end;
+            }
             let Some(slot) = self.nodes.slot_by_id(id, node) else {
                 continue;
             };
