@@ -23,6 +23,7 @@ mod differential;
 mod follow;
 mod fuzz_corpus;
 mod golden;
+mod health;
 mod hostile;
 mod inputs;
 mod live;
