@@ -274,4 +274,36 @@ mod tests {
         );
         assert_eq!(guard_reply(0x83).state, None);
     }
+
+    proptest::proptest! {
+        /// Any frame: a command exactly when id 0 carries two bytes, a
+        /// known command and a node 0-127.
+        #[test]
+        fn command_parse_matches_its_definition(
+            id in 0u32..0x800,
+            data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..9),
+        ) {
+            let expected = id == 0
+                && data.len() == 2
+                && Command::from_byte(data[0]).is_some()
+                && data[1] <= 127;
+            proptest::prop_assert_eq!(parse_command(id, &data).is_some(), expected);
+        }
+
+        /// Any frame: error control exactly for one byte on 0x701-0x77F,
+        /// a heartbeat exactly when the byte names a state.
+        #[test]
+        fn error_control_parse_matches_its_definition(
+            id in 0u32..0x800,
+            data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..9),
+        ) {
+            let got = parse_error_control(id, &data);
+            let ours = (0x701..=0x77F).contains(&id) && data.len() == 1;
+            proptest::prop_assert_eq!(got.is_some(), ours);
+            if let Some(ErrorControl::Heartbeat { node, state }) = got {
+                proptest::prop_assert_eq!(u32::from(node), id - 0x700);
+                proptest::prop_assert_eq!(NmtState::from_byte(data[0]), Some(state));
+            }
+        }
+    }
 }

@@ -278,4 +278,35 @@ mod tests {
         r.cleared(&mut done);
         assert_eq!(done.len(), 1);
     }
+
+    proptest::proptest! {
+        /// Any reads of sub 0 and subs: every read-out lists distinct subs
+        /// in ascending order, within its count; a complete one has exactly
+        /// the count's entries.
+        #[test]
+        fn read_outs_are_consistent(
+            reads in proptest::collection::vec((0u8..8, 0u32..6), 0..40),
+        ) {
+            let mut r = HistoryReader::default();
+            let mut done = Vec::new();
+            for (i, (sub, value)) in reads.iter().enumerate() {
+                if *sub == 0 {
+                    r.count(*value, at(i as u64), &mut done);
+                } else {
+                    r.entry(*sub, *value, at(i as u64), &mut done);
+                }
+            }
+            r.flush(&mut done);
+            for ro in &done {
+                let subs: Vec<u8> = ro.entries.iter().map(|e| e.sub).collect();
+                proptest::prop_assert!(subs.windows(2).all(|w| w[0] < w[1]), "{:?}", subs);
+                if let Some(c) = ro.count {
+                    proptest::prop_assert!(subs.iter().all(|s| *s >= 1 && *s <= c));
+                }
+                if ro.complete {
+                    proptest::prop_assert_eq!(Some(ro.entries.len() as u8), ro.count);
+                }
+            }
+        }
+    }
 }

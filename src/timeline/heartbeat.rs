@@ -98,19 +98,39 @@ pub struct HeartbeatMonitor {
     outages: Vec<Outage>,
     lost_count: u64,
     beats: u64,
+    /// [`HeartbeatMonitor::timeout`] and the deadline it gives, kept up to
+    /// date: asked for on every heartbeat.
+    timeout: Option<(Span, TimeoutSource)>,
+    deadline: Option<Timestamp>,
 }
 
 impl HeartbeatMonitor {
     /// A node monitored with `--heartbeat-timeout` (`None`: not given).
     pub fn new(option: Option<Span>) -> Self {
-        HeartbeatMonitor {
+        let mut m = HeartbeatMonitor {
             option,
             ..Self::default()
-        }
+        };
+        m.refresh();
+        m
     }
 
     /// The timeout in force and where it came from.
     pub fn timeout(&self) -> Option<(Span, TimeoutSource)> {
+        self.timeout
+    }
+
+    /// Recomputes the cached timeout and deadline after what they depend
+    /// on changed.
+    fn refresh(&mut self) {
+        self.timeout = self.compute_timeout();
+        self.deadline = match (self.timeout, self.last.and_then(|l| l.time)) {
+            (Some((timeout, _)), Some(last)) => last.checked_add_span(timeout),
+            _ => None,
+        };
+    }
+
+    fn compute_timeout(&self) -> Option<(Span, TimeoutSource)> {
         if let Some(t) = self.option {
             return Some((t, TimeoutSource::Option));
         }
@@ -138,8 +158,7 @@ impl HeartbeatMonitor {
         if self.lost.is_some() {
             return None;
         }
-        let (timeout, _) = self.timeout()?;
-        self.last?.time?.checked_add_span(timeout)
+        self.deadline
     }
 
     /// Whether the node ever sent a heartbeat or boot-up.
@@ -150,11 +169,13 @@ impl HeartbeatMonitor {
     /// A consumer heartbeat time (ms) for this node; 0 switches it off.
     pub fn set_consumer_ms(&mut self, ms: u16) {
         self.consumer = (ms > 0).then(|| Span::from_millis(u64::from(ms)));
+        self.refresh();
     }
 
     /// The node's producer heartbeat time (ms); 0: it sends none.
     pub fn set_producer_ms(&mut self, ms: u16) {
         self.producer = (ms > 0).then(|| Span::from_millis(u64::from(ms)));
+        self.refresh();
     }
 
     /// The trace's clock reached `now`: the node is lost if its deadline
@@ -185,6 +206,28 @@ impl HeartbeatMonitor {
         self.seen_as(at, false)
     }
 
+    /// A heartbeat at `at` before the deadline, once the period is known:
+    /// the common case, with nothing to report (`false`: not that case,
+    /// nothing changed; use [`HeartbeatMonitor::seen`]).
+    #[inline]
+    pub fn steady(&mut self, at: At) -> bool {
+        let (Some(now), Some(deadline), Some((timeout, _))) =
+            (at.time, self.deadline, self.timeout)
+        else {
+            return false;
+        };
+        if self.lost.is_some() || self.period.is_none() || now > deadline {
+            return false;
+        }
+        let Some(next) = now.checked_add_span(timeout) else {
+            return false;
+        };
+        self.beats += 1;
+        self.last = Some(at);
+        self.deadline = Some(next);
+        true
+    }
+
     /// A boot-up at `at`: a sign of life that restarts the node.
     pub fn boot(&mut self, at: At) -> (Option<Lost>, Option<Back>) {
         self.seen_as(at, true)
@@ -210,11 +253,13 @@ impl HeartbeatMonitor {
         });
         if back.is_none()
             && !boot
+            && self.period.is_none()
             && let Some(last) = self.last.and_then(|l| l.time)
         {
             self.learn(now.since(last));
         }
         self.last = Some(at);
+        self.deadline = self.timeout.and_then(|(t, _)| now.checked_add_span(t));
         (newly, back)
     }
 
@@ -227,6 +272,7 @@ impl HeartbeatMonitor {
             self.samples.sort();
             self.period = self.samples.get(LEARN_FROM / 2).copied();
             self.samples = Vec::new();
+            self.refresh();
         }
     }
 
@@ -429,5 +475,41 @@ mod tests {
         );
         assert!(m.monitored());
         assert_eq!(m.deadline(), None);
+    }
+
+    proptest::proptest! {
+        /// Any heartbeat times with a fixed timeout: one outage per gap
+        /// over it, from the deadline to the next heartbeat, in order and
+        /// disjoint; a node is lost at the end exactly when the end is past
+        /// its deadline.
+        #[test]
+        fn one_outage_per_gap_over_the_timeout(
+            gaps in proptest::collection::vec(1u64..2000, 1..60),
+            timeout in 1u64..1000,
+            tail in 0u64..3000,
+        ) {
+            let mut m = HeartbeatMonitor::new(Some(Span::from_millis(timeout)));
+            let mut now = 0;
+            m.seen(at(now));
+            let mut expected = Vec::new();
+            for g in &gaps {
+                // Another node's frame in the middle of the gap.
+                m.check(t(now + g / 2));
+                if *g > timeout {
+                    expected.push(Outage { start: t(now + timeout), end: Some(t(now + g)) });
+                }
+                now += g;
+                m.seen(at(now));
+            }
+            let end = now + tail;
+            m.check(t(end));
+            if tail > timeout {
+                expected.push(Outage { start: t(now + timeout), end: None });
+            }
+            let kept: Vec<Outage> = expected.iter().copied().take(MAX_OUTAGES).collect();
+            proptest::prop_assert_eq!(m.outages(), kept.as_slice());
+            proptest::prop_assert_eq!(m.lost_count(), expected.len() as u64);
+            proptest::prop_assert_eq!(m.is_lost(), tail > timeout);
+        }
     }
 }

@@ -122,6 +122,13 @@ impl NodeNmt {
         self.change(state, Via::Heartbeat)
     }
 
+    /// Whether a heartbeat saying `state` would change nothing (no command
+    /// waits, no guarding request, the same state).
+    #[inline]
+    pub fn steady(&self, state: NmtState) -> bool {
+        self.state == Some(state) && self.pending.is_none() && !self.guard_asked
+    }
+
     /// A remote request on the node's error control id: the next one-byte
     /// frame there is a guarding reply.
     pub fn guard_request(&mut self) {

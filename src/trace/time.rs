@@ -154,8 +154,27 @@ impl Timestamp {
     /// finer precision; `None` for a negative span or on overflow.
     pub fn checked_add_span(self, span: Span) -> Option<Timestamp> {
         let atto = u128::try_from(span.atto).ok()?;
-        let total = self.total().checked_add(atto)?;
-        Timestamp::from_total(total, self.digits.max(span.digits))
+        // Heartbeat timeouts are under a second: no 128-bit division (this
+        // runs for every heartbeat).
+        let (secs, atto) = if atto < ATTO_PER_SEC {
+            (0, atto as u64)
+        } else {
+            (
+                u64::try_from(atto / ATTO_PER_SEC).ok()?,
+                (atto % ATTO_PER_SEC) as u64,
+            )
+        };
+        let mut secs = self.secs.checked_add(secs)?;
+        let mut atto = self.atto + atto;
+        if u128::from(atto) >= ATTO_PER_SEC {
+            atto -= ATTO_PER_SEC as u64;
+            secs = secs.checked_add(1)?;
+        }
+        Some(Timestamp {
+            secs,
+            atto,
+            digits: self.digits.max(span.digits),
+        })
     }
 
     /// `self - earlier`, negative when the trace's clock went backwards.

@@ -139,8 +139,11 @@ fn pulled_cable_is_an_outage_until_the_boot_up() {
     assert_eq!(lost.len(), 1);
     // Producer time 100 ms read by SDO, with the margin: 150 ms after the
     // last heartbeat.
-    assert_eq!(lost[0]["time"].as_f64(), Some(1700000001.652000));
-    assert_eq!(lost[0]["last_seen"].as_f64(), Some(1700000001.502000));
+    assert_eq!(lost[0]["time"].as_f64(), "1700000001.652000".parse().ok());
+    assert_eq!(
+        lost[0]["last_seen"].as_f64(),
+        "1700000001.502000".parse().ok()
+    );
     assert_eq!(lost[0]["timeout_source"], "producer");
     let back: Vec<&Value> = of_type(&objects, "heartbeat_back")
         .into_iter()
@@ -172,7 +175,7 @@ fn a_node_silent_to_the_end_is_lost_at_its_deadline() {
     assert_eq!(lost.len(), 1);
     // The consumer time node 1 was given for node 3 (0x1016 sub 1, 250 ms).
     assert_eq!(lost[0]["timeout_source"], "consumer");
-    assert_eq!(lost[0]["time"].as_f64(), Some(1700000003.053000));
+    assert_eq!(lost[0]["time"].as_f64(), "1700000003.053000".parse().ok());
     let hb = &node(&objects, 3)["heartbeat"];
     assert_eq!(hb["silent_at_end"], true);
     assert_eq!(hb["outages"][0]["end"], Value::Null);

@@ -18,7 +18,7 @@ use crate::canopen::sdo_abort;
 use crate::timeline::At;
 use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
-use crate::timeline::heartbeat::{Back, Lost};
+use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
 use crate::timeline::nmt::{NmtChange, NmtWarning};
 use crate::trace::{Span, Timestamp};
 
@@ -37,23 +37,25 @@ pub(in crate::analyze) struct HealthState {
 }
 
 impl HealthState {
-    /// A node's deadline moved from `before` to `after`.
-    fn reschedule(
-        &mut self,
-        channel_id: u32,
-        node: NodeId,
-        before: Option<Timestamp>,
-        after: Option<Timestamp>,
-    ) {
-        if before == after {
-            return;
+    /// Keeps a node's deadline in the set. Entries are lazy: a heartbeat
+    /// moves a node's deadline later without touching the set (a remove
+    /// and insert per heartbeat was most of its cost); the entry is
+    /// checked against the node when it comes due and put back at the real
+    /// deadline if the node was heard since. Only a deadline that moved
+    /// earlier (a shorter timeout) is moved at once.
+    fn schedule(&mut self, channel_id: u32, node: NodeId, h: &mut NodeHealth) {
+        let real = h.heartbeat.deadline();
+        match (h.scheduled, real) {
+            (None, Some(r)) => {
+                self.deadlines.insert((r, channel_id, node));
+            }
+            (Some(s), Some(r)) if r < s => {
+                self.deadlines.remove(&(s, channel_id, node));
+                self.deadlines.insert((r, channel_id, node));
+            }
+            _ => return,
         }
-        if let Some(d) = before {
-            self.deadlines.remove(&(d, channel_id, node));
-        }
-        if let Some(d) = after {
-            self.deadlines.insert((d, channel_id, node));
-        }
+        h.scheduled = real;
         self.next = self.deadlines.first().map(|e| e.0);
     }
 
@@ -89,15 +91,8 @@ fn emit(
     Ok(())
 }
 
-fn lost_event(
-    lost: Lost,
-    line: u64,
-    timeout: Option<(Span, crate::timeline::heartbeat::TimeoutSource)>,
-) -> (At, Health) {
-    let (timeout, timeout_source) = timeout.unwrap_or((
-        Span::ZERO,
-        crate::timeline::heartbeat::TimeoutSource::Learnt,
-    ));
+fn lost_event(lost: Lost, line: u64, timeout: Option<(Span, TimeoutSource)>) -> (At, Health) {
+    let (timeout, timeout_source) = timeout.unwrap_or((Span::ZERO, TimeoutSource::Learnt));
     (
         At {
             time: Some(lost.deadline),
@@ -196,9 +191,15 @@ impl<E: Write> Consumer<'_, '_, E> {
                 continue;
             };
             let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+            h.scheduled = None;
             let timeout = h.heartbeat.timeout();
             if let Some(lost) = h.heartbeat.check(now) {
                 self.health.events.push(lost_event(lost, line, timeout));
+            }
+            // Heard from since it was scheduled: due again at its deadline.
+            self.health.schedule(id, node, h);
+            if self.health.events.is_empty() {
+                continue;
             }
             let selected = self.opts.selects(slot.channel, node);
             emit(
@@ -223,14 +224,12 @@ impl<E: Write> Consumer<'_, '_, E> {
     ) -> Result<(), OutputError> {
         let slot = self.nodes.get(raw, node);
         let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
-        let before = h.heartbeat.deadline();
         sign_of_life(h, at, true, &mut self.health.events);
         let change = h
             .nmt
             .heartbeat(NmtState::Initialising, &mut self.health.warnings);
         nmt_event(change, at, &mut self.health.events);
-        let after = h.heartbeat.deadline();
-        self.health.reschedule(slot.channel_id, node, before, after);
+        self.health.schedule(slot.channel_id, node, h);
         let selected = self.opts.selects(slot.channel, node);
         emit(
             self.sink,
@@ -282,9 +281,16 @@ impl<E: Write> Consumer<'_, '_, E> {
         let (ErrorControl::Heartbeat { node, .. } | ErrorControl::Unknown { node, .. }) = ec;
         let slot = self.nodes.get(raw, node);
         let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+        // Nearly every heartbeat: same state, in time. Its deadline moves
+        // on; the schedule catches up lazily.
+        if let ErrorControl::Heartbeat { state, .. } = ec
+            && h.nmt.steady(state)
+            && h.heartbeat.steady(at)
+        {
+            return Ok(());
+        }
         let events = &mut self.health.events;
         let warnings = &mut self.health.warnings;
-        let before = h.heartbeat.deadline();
         let mut undefined = None;
         if h.nmt.guard_asked() {
             let byte = data.first().copied().unwrap_or_default();
@@ -302,8 +308,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                 ErrorControl::Unknown { byte, .. } => undefined = Some(byte),
             }
         }
-        let after = h.heartbeat.deadline();
-        self.health.reschedule(slot.channel_id, node, before, after);
+        self.health.schedule(slot.channel_id, node, h);
         let selected = self.opts.selects(slot.channel, node);
         emit(
             self.sink,
@@ -498,10 +503,8 @@ impl<E: Write> Consumer<'_, '_, E> {
     fn set_timeout(&mut self, raw: &[u8], node: NodeId, set: impl FnOnce(&mut NodeHealth)) {
         let slot = self.nodes.get(raw, node);
         let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
-        let before = h.heartbeat.deadline();
         set(h);
-        let after = h.heartbeat.deadline();
-        self.health.reschedule(slot.channel_id, node, before, after);
+        self.health.schedule(slot.channel_id, node, h);
     }
 
     /// Read-outs finished by the last frame become events and the node's

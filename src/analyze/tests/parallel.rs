@@ -370,7 +370,12 @@ fn nmt_heartbeats_and_error_history_across_blocks() {
     let trace = include_bytes!("../../../fixtures/commissioning.log");
     assert_split_independent("commissioning", trace);
     let (out, err) = run(trace, 2, 64);
-    for t in ["heartbeat_lost", "heartbeat_back", "error_history", "sdo_abort"] {
+    for t in [
+        "heartbeat_lost",
+        "heartbeat_back",
+        "error_history",
+        "sdo_abort",
+    ] {
         assert!(out.contains(&format!("\"type\":\"{t}\"")), "{t}");
     }
     assert!(out.contains("\"via\":\"guarding\""));
