@@ -8,7 +8,8 @@
 //! the cases whose name contains one of them (`cargo bench --bench
 //! throughput -- pcapng`): `candump log`, `candump -td`, `Vector ASC`,
 //! `30% EMCY`, `gzip`, `pcapng` (both pcapng cases), `EtherCAT`,
-//! `BUSMASTER`, `MF4` (both MF4 cases), `MF4 DZ`.
+//! `BUSMASTER`, `MF4` (both MF4 cases), `MF4 DZ`, `heartbeating` (32
+//! nodes' heartbeats every 100 ms).
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -19,7 +20,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use tracegen::{TraceFormat, write_ethercat, write_mf4_dz, write_trace};
+use tracegen::{TraceFormat, write_ethercat, write_heartbeat_trace, write_mf4_dz, write_trace};
+
+/// The heartbeat case's label (and the word that picks it).
+const HEARTBEATS: &str = "candump log, 32 nodes heartbeating";
 
 fn env_u64(name: &str, default: u64) -> u64 {
     std::env::var(name)
@@ -190,6 +194,19 @@ fn main() {
         drop(w);
         std::fs::rename(&tmp, &ethercat).expect("rename");
     }
+    // Issue 24: 32 nodes heartbeating every 100 ms (about a tenth of the
+    // frames), every heartbeat decoded.
+    let heartbeats = dir.join(format!("candump-hb32-{mb}MB.log"));
+    if chosen(HEARTBEATS) && !heartbeats.exists() {
+        eprintln!("generating {} ...", heartbeats.display());
+        let tmp = heartbeats.with_extension("tmp");
+        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp).expect("create"));
+        write_heartbeat_trace(&mut w, TraceFormat::CandumpLog, mb * 1024 * 1024, 2, 42, 32)
+            .expect("write");
+        w.flush().expect("flush");
+        drop(w);
+        std::fs::rename(&tmp, &heartbeats).expect("rename");
+    }
     if chosen("MF4 DZ") && !mf4_dz.exists() {
         eprintln!("generating {} ...", mf4_dz.display());
         let tmp = mf4_dz.with_extension("tmp");
@@ -225,7 +242,7 @@ fn main() {
     let measured = files
         .iter()
         .map(|(label, file, _, _)| (*label, *file))
-        .chain([(ethercat_label, &ethercat)]);
+        .chain([(ethercat_label, &ethercat), (HEARTBEATS, &heartbeats)]);
     for (label, file) in measured {
         if !chosen(label) {
             continue;

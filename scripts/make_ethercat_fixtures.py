@@ -37,6 +37,9 @@ Packet by packet (the Wireshark frame number is the line):
   63  both acknowledgments in one frame: 1001 0x0000 E82 = 0x1E (counter
       3) and 1002 0x0000 (counter 3): two events on one line
   64  the last cyclic frame
+  65-70  1001's error history (object 0x1003) read over CoE SDO: sub 0 = 2
+      entries, sub 1 = 0x4310 (seen in the trace), sub 2 = 0x7305 (raised
+      before the trace began)
 
 Run from the repository root:  python3 scripts/make_ethercat_fixtures.py
 then refresh the golden outputs:
@@ -164,6 +167,14 @@ def packets():
         ]))),
         (101, ethernet(ecat_frame([lrw(), empty_poll(1001), empty_poll(1002)]))),
     ]
+    # 1001's pre-defined error field (1003h) read over CoE: 2 entries, the
+    # newest 0x4310 (seen in the trace), then 0x7305 (raised before it).
+    for i, (sub, value) in enumerate([(0, 2), (1, 0x00294310), (2, 0x00017305)]):
+        counter = 2 + i
+        request = bytes([0x40, 0x03, 0x10, sub, 0, 0, 0, 0])
+        response = bytes([0x43, 0x03, 0x10, sub]) + struct.pack("<I", value)
+        out.append((110 + 2 * i, ethernet(ecat_frame([(FPWR, 1001, SM0, coe(2, counter, request), 1)]))))
+        out.append((111 + 2 * i, ethernet(ecat_frame([(FPRD, 1001, SM1, coe(3, counter + 3, response), 1)]))))
     return out
 
 

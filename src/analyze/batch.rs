@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::thread::Scope;
 
-use super::event::{BootEvent, Diagnostic, EmcyEvent, InputReport};
+use super::event::{BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport};
 use super::sink::Sink;
 use super::{Analysis, DiagnosticLog, Options, OutputError};
 use crate::canopen::NodeId;
@@ -35,7 +35,17 @@ enum Recorded {
         node: NodeId,
         cleared: Vec<u16>,
     },
+    Health(Box<OwnedHealth>),
     End,
+}
+
+struct OwnedHealth {
+    file: String,
+    line: u64,
+    time: Option<Timestamp>,
+    channel: String,
+    node: NodeId,
+    health: Health,
 }
 
 struct OwnedEmcy {
@@ -107,6 +117,18 @@ impl Sink for Recorder {
         Ok(())
     }
 
+    fn health(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
+        self.events.push(Recorded::Health(Box::new(OwnedHealth {
+            file: ev.file.to_string(),
+            line: ev.line,
+            time: ev.time,
+            channel: ev.channel.to_string(),
+            node: ev.node,
+            health: ev.health.clone(),
+        })));
+        Ok(())
+    }
+
     fn end_input(&mut self, _input: &InputReport) -> io::Result<()> {
         self.events.push(Recorded::End);
         Ok(())
@@ -172,6 +194,14 @@ impl FileResult {
                     channel: &channel,
                     node,
                     cleared: &cleared,
+                }),
+                Recorded::Health(h) => sink.health(&HealthEvent {
+                    file: &h.file,
+                    line: h.line,
+                    time: h.time,
+                    channel: &h.channel,
+                    node: h.node,
+                    health: &h.health,
                 }),
                 Recorded::End => match &self.analysis {
                     Some(a) => sink.end_input(&a.report),

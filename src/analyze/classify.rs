@@ -120,7 +120,10 @@ pub(super) fn deliver(
 ) -> Result<(), OutputError> {
     if foreign.is_none() {
         let interest = sink.interest();
-        if frame.kind != FrameKind::Data || !interest.wants(frame.id, frame.extended) {
+        // Remote requests on wanted ids go on too: on 0x700 + node they ask
+        // for a node-guarding reply.
+        let kind_used = matches!(frame.kind, FrameKind::Data | FrameKind::Remote);
+        if !kind_used || !interest.wants(frame.id, frame.extended) {
             sink.plain_frames(1);
             return Ok(());
         }

@@ -1,6 +1,8 @@
 //! The consumer: turns classified lines into timelines, events and counts,
 //! in line order, and hands events to the sink.
 
+mod health;
+
 use std::borrow::Borrow;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -28,6 +30,7 @@ use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::ethercat::{CoeMessage, CoeService, Retries};
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
+use health::HealthState;
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
 /// interface name in the trace is one, so a hostile trace can name a million:
@@ -205,7 +208,7 @@ impl Nodes {
                 if !reported {
                     continue;
                 }
-                out.push(NodeReport {
+                let mut report = NodeReport {
                     channel: ch.name.to_string(),
                     node,
                     state: end.state,
@@ -216,7 +219,12 @@ impl Nodes {
                     profile_source: ProfileSource::Default,
                     profile_reason: None,
                     descriptions: CodeTexts::default(),
-                });
+                    nmt_state: None,
+                    heartbeat: None,
+                    error_history: None,
+                };
+                health::report_health(&mut report, end.health);
+                out.push(report);
             }
         }
         (out, history.finish([]))
@@ -266,6 +274,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// times on this thread, so the event carries both from here and no
     /// renderer looks a code up again.
     codes: Cache<(usize, u16), CodeEntry, 64>,
+    /// NMT states, heartbeat deadlines, error history read-outs.
+    health: HealthState,
 }
 
 /// A code as a profile reads it.
@@ -329,6 +339,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             profiles: NodeProfiles::new(&opts.profiles),
             step_buffers: Step::default(),
             codes: Cache::default(),
+            health: HealthState::default(),
         }
     }
 
@@ -341,6 +352,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         mut error: Option<String>,
     ) -> Result<Analysis, OutputError> {
         let file = self.file;
+        self.finish_health()?;
         if format.is_none() && self.counts.malformed > 0 && error.is_none() {
             error = Some(
                 "cannot detect the trace format: no line is a candump log, candump screen, \
@@ -370,6 +382,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.profiles.reason(n.node).map(str::to_string);
+            if let Some(h) = &mut n.error_history {
+                for e in &mut h.entries {
+                    e.description = n.profile.describe(e.code);
+                }
+            }
             codes.clear();
             codes.extend(n.stats.raised.keys().copied());
             let same = shared.entry(std::ptr::from_ref(n.profile)).or_default();
@@ -572,15 +589,13 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         match m.service {
             CoeService::Emergency => self.emcy(at, channel, m.station, None, m.data()),
             CoeService::SdoRequest | CoeService::SdoResponse => {
+                // The same SDO path as CAN's: identity, aborts, the 1003h
+                // history, heartbeat times.
                 let request = m.service == CoeService::SdoRequest;
-                if let Some(access) = sdo::parse_transfer(request, m.station, m.data())
-                    && let Some((node, object, value)) = self.sdo.feed(access)
-                {
-                    // Identity and device type only: an EMCY COB-ID means
-                    // nothing on EtherCAT.
-                    self.profiles.object_value(node, object, value);
+                match sdo::parse_payload(m.station, request, m.data()) {
+                    Some(access) => self.sdo_access(channel, at, access),
+                    None => Ok(()),
                 }
-                Ok(())
             }
         }
     }
@@ -698,6 +713,12 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             self.diags.report(self.log, true, line_no, msg);
         }
         if frame.kind != FrameKind::Data {
+            if frame.kind == FrameKind::Remote
+                && !frame.extended
+                && self.interest.wants(frame.id, false)
+            {
+                self.remote_frame(frame.channel, frame.id);
+            }
             return Ok(());
         }
         // Only wanted ids count: workers may hand over frames the sequential
@@ -707,6 +728,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         }
         if let Some(t) = frame.time {
             self.time(t);
+            if self.health.passed(t) {
+                self.deadlines_passed(t, line_no)?;
+            }
         }
         if self
             .interest
@@ -724,9 +748,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         } else if frame.extended {
             return Ok(());
         } else if let Some(access) = sdo::parse(frame.id, data) {
-            if let Some((node, object, value)) = self.sdo.feed(access) {
-                self.object_value(node, object, value);
-            }
+            self.sdo_access(frame.channel, at, access)?;
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             self.counts.boot += 1;
             self.check_clock(at);
@@ -752,6 +774,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 };
                 self.sink.boot(&event).map_err(OutputError)?;
             }
+            self.boot_health(frame.channel, node, at)?;
+        } else {
+            self.nmt_frame(frame.channel, frame.id, data, at)?;
         }
         Ok(())
     }

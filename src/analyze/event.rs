@@ -9,9 +9,12 @@ use std::sync::Arc;
 use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
+use crate::canopen::nmt::NmtState;
 use crate::canopen::profile::{Decoded, Profile};
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
+use crate::timeline::heartbeat::{Outage, TimeoutSource};
 use crate::timeline::history::ErrorHistory;
+use crate::timeline::nmt::Via;
 use crate::timeline::{NodeStats, State};
 use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Span, Timestamp};
@@ -62,6 +65,106 @@ pub struct BootEvent<'a> {
     pub cleared: &'a [u16],
 }
 
+/// A node's NMT, heartbeat, SDO abort or error history event (rare next to
+/// EMCYs: each is owned, so recording one is a clone).
+pub struct HealthEvent<'a> {
+    pub file: &'a str,
+    pub line: u64,
+    /// For `heartbeat_lost`, when the deadline passed (the line is where
+    /// the trace showed it had).
+    pub time: Option<Timestamp>,
+    pub channel: &'a str,
+    pub node: NodeId,
+    pub health: &'a Health,
+}
+
+/// What a [`HealthEvent`] says; the JSON `type` is [`Health::slug`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Health {
+    /// The NMT state changed.
+    Nmt { state: NmtState, via: Via },
+    /// The node's heartbeat deadline passed.
+    HeartbeatLost {
+        last_seen: Option<Timestamp>,
+        last_seen_line: u64,
+        timeout: Span,
+        timeout_source: TimeoutSource,
+    },
+    /// A lost node was heard again.
+    HeartbeatBack {
+        /// From its last sign of life before the outage to this one.
+        silent: Span,
+        /// It came back with a boot-up.
+        restarted: bool,
+    },
+    /// An SDO transfer was aborted.
+    SdoAbort {
+        index: u16,
+        subindex: u8,
+        abort_code: u32,
+        text: &'static str,
+        /// The node aborted (else the client).
+        by_server: bool,
+    },
+    /// A read-out of object 0x1003.
+    ErrorHistory(HistoryReport),
+    /// A confirmed write of 0 to 0x1003 sub 0.
+    ErrorHistoryCleared,
+}
+
+impl Health {
+    /// The event's JSON `type` (README, JSON contract).
+    pub fn slug(&self) -> &'static str {
+        match self {
+            Health::Nmt { .. } => "nmt",
+            Health::HeartbeatLost { .. } => "heartbeat_lost",
+            Health::HeartbeatBack { .. } => "heartbeat_back",
+            Health::SdoAbort { .. } => "sdo_abort",
+            Health::ErrorHistory(_) => "error_history",
+            Health::ErrorHistoryCleared => "error_history_cleared",
+        }
+    }
+}
+
+/// A read-out of a node's error history (0x1003), newest first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HistoryReport {
+    pub entries: Vec<HistoryItem>,
+    /// The count sub 0 gave, if read.
+    pub count: Option<u8>,
+    /// Every entry up to the count was read.
+    pub complete: bool,
+    /// The last frame of the read-out.
+    pub time: Option<Timestamp>,
+    pub line: u64,
+}
+
+/// One entry of a read-out.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HistoryItem {
+    pub code: u16,
+    /// The manufacturer-specific high 16 bits.
+    pub info: u16,
+    /// By the node's profile.
+    pub description: String,
+    /// The trace never saw the node raise it: it predates the trace.
+    pub before_trace: bool,
+}
+
+/// A node's heartbeats over the input.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeartbeatReport {
+    /// The typical interval, once learnt.
+    pub period: Option<Span>,
+    /// The timeout in force at the end, and where it came from.
+    pub timeout: Option<(Span, TimeoutSource)>,
+    /// Outages in all.
+    pub lost: u64,
+    /// The first outages (`end: None`: silent to the end).
+    pub outages: Vec<Outage>,
+    pub silent_at_end: bool,
+}
+
 /// A node's state at the end of an input; its errors are in the input's
 /// [`ErrorHistory`] (read with `history.merge().node_errors(..)`).
 #[derive(Clone, Debug)]
@@ -80,6 +183,12 @@ pub struct NodeReport {
     pub profile_reason: Option<String>,
     /// The profile's description of every code the node raised.
     pub descriptions: CodeTexts,
+    /// The NMT state at the end; `None` if the trace never told.
+    pub nmt_state: Option<NmtState>,
+    /// `None` for a node that sent no heartbeat.
+    pub heartbeat: Option<HeartbeatReport>,
+    /// The last read-out of 0x1003.
+    pub error_history: Option<HistoryReport>,
 }
 
 /// Descriptions of a node's codes, made once per input: its error list

@@ -16,6 +16,8 @@ pub struct FailOn {
     pub codes: Vec<u16>,
     /// An error whose profile category is at most this (1 = most severe).
     pub category_at_most: Option<u8>,
+    /// A node lost its heartbeat (an outage, or silent at the end).
+    pub lost: bool,
 }
 
 impl FailOn {
@@ -26,6 +28,7 @@ impl FailOn {
             all.any |= f.any;
             all.active |= f.active;
             all.warning |= f.warning;
+            all.lost |= f.lost;
             all.codes.extend(&f.codes);
             all.category_at_most = match (all.category_at_most, f.category_at_most) {
                 (Some(a), Some(b)) => Some(a.max(b)),
@@ -85,6 +88,18 @@ pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<Stri
             met.push(format!(
                 "warning: {n} EMCY frame{} with warnings",
                 plural(n)
+            ));
+        }
+    }
+    if fail_on.lost {
+        let n = nodes()
+            .filter(|n| n.heartbeat.as_ref().is_some_and(|h| h.lost > 0))
+            .count() as u64;
+        if n > 0 {
+            met.push(format!(
+                "lost: {n} node{} lost {} heartbeat",
+                plural(n),
+                if n == 1 { "its" } else { "their" }
             ));
         }
     }

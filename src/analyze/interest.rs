@@ -4,12 +4,14 @@
 
 use super::Options;
 use crate::canopen::emcy;
+use crate::canopen::nmt;
 use crate::canopen::sdo;
 use crate::trace::{ContentFilter, Frame, Interest};
 
 /// The ids whose frames are decoded; everything else is only counted:
-/// EMCY, NMT error control (boot-up), SDO (identity, moved EMCY ids) and
-/// EMCY ids given on the command line. On the NMT and SDO ids only some
+/// EMCY, NMT commands, NMT error control (boot-up, heartbeats, guarding),
+/// SDO (identity, moved EMCY ids, error history, heartbeat times, aborts)
+/// and EMCY ids given on the command line. On the NMT and SDO ids only some
 /// frames matter ([`content_matters`]); the readers only time the others.
 pub(crate) fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
@@ -18,6 +20,7 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     let responses = sdo::RESPONSE_BASE + 1..=sdo::RESPONSE_BASE + 127;
     let requests = sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127;
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
+    i.add_standard(nmt::COMMAND_ID);
     for ids in [nmt, responses, requests] {
         i.add_standard_range(ids.clone());
         i.filter_content(ids, filter);
@@ -29,14 +32,16 @@ pub(crate) fn interest(opts: &Options) -> Interest {
 }
 
 /// Whether a frame on an NMT error control or SDO id can change more than
-/// the input's first and last time: only boot-ups, and only SDO frames
-/// naming an object the decoder follows. Heartbeats and SDO traffic for
-/// other objects, most frames on those ids, skip all further work.
+/// the input's first and last time: on 0x700 + node every frame of at most
+/// one byte (boot-up, heartbeat, guarding request and reply: each moves a
+/// node's heartbeat deadline or NMT state); on the SDO ids aborts and
+/// frames naming an object the decoder follows. SDO traffic for other
+/// objects, most frames on those ids, skips all further work.
 pub(super) fn content_matters(id: u32, data: &[u8]) -> bool {
     if emcy::is_nmt_error_control(id) {
-        emcy::boot_node(id, data).is_some()
+        data.len() <= 1
     } else if sdo::is_sdo_id(id) {
-        sdo::names_followed_object(id, data)
+        sdo::names_followed_object(id, data) || sdo::is_abort(data)
     } else {
         true
     }

@@ -32,6 +32,7 @@ use crate::canopen::profile_choice::ProfileChoice;
 use crate::timeline::history::{DEFAULT_SPILL_AT, ErrorHistory};
 use crate::trace::Format;
 use crate::trace::Parsed;
+use crate::trace::Span;
 use crate::trace::blf;
 use crate::trace::cancel::Cancel;
 use crate::trace::deltas::{self, TimeMode};
@@ -44,7 +45,10 @@ use crate::trace::pcap;
 use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub(crate) use diagnostics::DiagnosticLog;
-pub(crate) use event::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
+pub(crate) use event::{
+    BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
+    InputReport, NodeReport,
+};
 pub(crate) use sink::{Discard, Sink, WithoutEvents};
 
 /// What the user asked for that shapes reading and selection.
@@ -77,6 +81,8 @@ pub struct Options {
     pub profiles: ProfileChoice,
     /// Ends reading when cancelled (Ctrl-C): what was read is reported.
     pub cancel: Cancel,
+    /// `--heartbeat-timeout`: every node's heartbeat timeout.
+    pub heartbeat_timeout: Option<Span>,
 }
 
 /// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
@@ -103,6 +109,7 @@ impl Default for Options {
             emcy_ids: Vec::new(),
             profiles: ProfileChoice::default(),
             cancel: Cancel::new(),
+            heartbeat_timeout: None,
         }
     }
 }

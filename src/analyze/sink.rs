@@ -4,7 +4,7 @@
 
 use std::io;
 
-use super::event::{BootEvent, Diagnostic, EmcyEvent, InputReport};
+use super::event::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport};
 
 /// Receives events as they are decoded, then the per-input and final
 /// summaries. Output errors (a closed pipe) stop the run.
@@ -14,6 +14,11 @@ pub trait Sink {
     }
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()>;
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()>;
+    /// NMT, heartbeat, SDO abort and error history events; sinks that show
+    /// only EMCYs leave them out.
+    fn health(&mut self, _event: &HealthEvent<'_>) -> io::Result<()> {
+        Ok(())
+    }
     fn end_input(&mut self, _input: &InputReport) -> io::Result<()> {
         Ok(())
     }

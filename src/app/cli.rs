@@ -14,7 +14,7 @@ use crate::canopen::profile::Profile;
 use crate::canopen::profile_choice::{self, ProfileRequest};
 use crate::report::timefmt::TimeStyle;
 use crate::trace::deltas::TimeMode;
-use crate::trace::{Format, hex};
+use crate::trace::{Format, Span, Timestamp, hex};
 
 const EXAMPLES_AND_EXIT_CODES: &str = "\
 Examples:
@@ -111,6 +111,12 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
     pub emcy_id: Vec<EmcyId>,
 
+    /// Heartbeat timeout for every node, in seconds (e.g. 0.5): a node silent for longer
+    /// has lost its heartbeat. Without it, the consumer (0x1016) or producer (0x1017)
+    /// heartbeat time the trace sets by SDO, else 3x the node's typical interval
+    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS")]
+    pub heartbeat_timeout: Option<Span>,
+
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable, a node's
     /// own wins. Without one, the trace's SDO identity answers choose, else cia402.
     /// `emcy-decode profiles` lists them
@@ -124,7 +130,8 @@ pub struct DecodeArgs {
 
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
-    /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), `never`
+    /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), a node
+    /// `lost` its heartbeat, `never`
     #[arg(long, value_parser = parse_fail_on, value_name = "WHEN")]
     pub fail_on: Vec<FailOn>,
 
@@ -346,6 +353,10 @@ pub struct TraceArgs {
     #[arg(long, default_value_t = 20, value_name = "N")]
     pub max_diagnostics: usize,
 
+    /// Heartbeat timeout for every node in seconds, as for decoding
+    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS")]
+    pub heartbeat_timeout: Option<Span>,
+
     /// Vendor profile for every node (NAME) or one node (NODE=NAME), as for decoding
     #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME")]
     pub profile: Vec<ProfileRequest>,
@@ -377,10 +388,11 @@ sorted by file, channel, node and code, then a `check:` summary line.
 
 Regressions (exit 1 unless --allow/--allow-node accepts them): a new error
 code, an error still active at the end that the baseline had cleared, a new
-node with errors, more malformed lines or undecodable EMCYs, a trace not in
-the baseline, a baseline trace not given.
+node with errors, more malformed lines or undecodable EMCYs, a node that lost
+its heartbeat where the baseline's did not, a trace not in the baseline, a
+baseline trace not given.
 Improvements (exit 0): an error no longer raised, an error no longer active
-at the end, fewer malformed lines. Changes (exit 0): a known error raised a
+at the end, fewer malformed lines, a node no longer losing its heartbeat. Changes (exit 0): a known error raised a
 different number of times, a node gone, a new node without errors, another
 format.
 
@@ -475,6 +487,7 @@ impl DecodeArgs {
             max_diagnostics: self.max_diagnostics,
             emcy_ids: self.emcy_id.clone(),
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
+            heartbeat_timeout: self.heartbeat_timeout,
             ..Options::default()
         })
     }
@@ -525,6 +538,7 @@ impl TraceArgs {
             max_diagnostics: self.max_diagnostics,
             emcy_ids: self.emcy_id.clone(),
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
+            heartbeat_timeout: self.heartbeat_timeout,
             ..Options::default()
         })
     }
@@ -557,13 +571,14 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             "any" => f.any = true,
             "active" => f.active = true,
             "warning" | "warnings" => f.warning = true,
+            "lost" => f.lost = true,
             _ if in_codes => {
                 f.codes.push(fail_on_code(item)?);
                 continue;
             }
             _ => {
                 return Err(format!(
-                    "'{item}' is not a condition: never, any, active, warning, \
+                    "'{item}' is not a condition: never, any, active, warning, lost, \
                      code=CODE[,CODE...], category<=N"
                 ));
             }
@@ -571,6 +586,19 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
         in_codes = false;
     }
     Ok(f)
+}
+
+/// `--heartbeat-timeout`: seconds as a decimal (`0.5`, `2`), above zero.
+fn parse_seconds(s: &str) -> Result<Span, String> {
+    let t = Timestamp::parse(s.trim().as_bytes())
+        .map_err(|_| format!("`{s}` is not a number of seconds (e.g. 0.5)"))?;
+    let span = t.since(Timestamp::ZERO);
+    if span == Span::ZERO || t.secs() > 1_000_000_000 {
+        return Err(format!(
+            "`{s}`: a timeout is above 0 and at most 1e9 seconds"
+        ));
+    }
+    Ok(span)
 }
 
 /// An error code in hex, with or without 0x.

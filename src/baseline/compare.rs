@@ -45,6 +45,10 @@ pub enum Kind {
     ErrorGone,
     NowCleared,
     CountChanged,
+    /// The node lost its heartbeat; in the baseline it did not.
+    HeartbeatLostNew,
+    /// The baseline's node lost its heartbeat; now it does not.
+    HeartbeatLostGone,
 }
 
 impl Kind {
@@ -56,10 +60,13 @@ impl Kind {
             | Kind::EmcyInvalidGrew
             | Kind::NewNode
             | Kind::NewError
-            | Kind::NowActive => Severity::Regression,
-            Kind::MalformedFell | Kind::EmcyInvalidFell | Kind::ErrorGone | Kind::NowCleared => {
-                Severity::Improvement
-            }
+            | Kind::NowActive
+            | Kind::HeartbeatLostNew => Severity::Regression,
+            Kind::MalformedFell
+            | Kind::EmcyInvalidFell
+            | Kind::ErrorGone
+            | Kind::NowCleared
+            | Kind::HeartbeatLostGone => Severity::Improvement,
             Kind::FormatChanged
             | Kind::NewNodeWithoutErrors
             | Kind::NodeGone
@@ -290,6 +297,29 @@ fn compare_node(
     old: Option<&NodeEntry>,
     new: Option<&NodeEntry>,
 ) {
+    let lost = |e: Option<&NodeEntry>| e.map_or(0, |e| e.heartbeat_lost);
+    let (was, now) = (lost(old), lost(new));
+    if now > 0 && was == 0 {
+        let msg = format!("lost its heartbeat {now}x, baseline never");
+        c.add(
+            at,
+            Kind::HeartbeatLostNew,
+            None,
+            (Some(now), Some(was)),
+            false,
+            msg,
+        );
+    } else if now == 0 && was > 0 && new.is_some() {
+        let msg = format!("no longer loses its heartbeat (baseline {was}x)");
+        c.add(
+            at,
+            Kind::HeartbeatLostGone,
+            None,
+            (Some(now), Some(was)),
+            false,
+            msg,
+        );
+    }
     match (old, new) {
         (None, Some(n)) if n.errors.is_empty() => {
             let msg = "new node, no errors".to_string();
@@ -392,7 +422,61 @@ mod tests {
                     )
                 })
                 .collect(),
+            heartbeat_lost: 0,
         }
+    }
+
+    fn lost(n: u64) -> NodeEntry {
+        NodeEntry {
+            heartbeat_lost: n,
+            ..node(&[])
+        }
+    }
+
+    #[test]
+    fn lost_heartbeats_where_the_baseline_had_none_regress() {
+        let old = one(&[(1, node(&[])), (2, lost(1)), (3, lost(2))]);
+        let new = one(&[(1, lost(2)), (2, node(&[])), (3, lost(5)), (4, lost(1))]);
+        let diff = compare(&old, &new, &Allow::default());
+        let kinds: Vec<(Option<NodeId>, Kind, Severity, Option<u64>)> = diff
+            .findings
+            .iter()
+            .map(|f| (f.node, f.kind, f.severity, f.count))
+            .collect();
+        use Kind::*;
+        use Severity::*;
+        assert_eq!(
+            kinds,
+            vec![
+                (Some(1), HeartbeatLostNew, Regression, Some(2)),
+                (Some(2), HeartbeatLostGone, Improvement, Some(0)),
+                (Some(4), NewNodeWithoutErrors, Change, None),
+                (Some(4), HeartbeatLostNew, Regression, Some(1)),
+            ]
+        );
+        assert_eq!(diff.summary.regressions, 2);
+        assert_eq!(
+            serde_json::to_value(HeartbeatLostNew).ok(),
+            Some(serde_json::json!("heartbeat_lost_new"))
+        );
+        // --allow-node accepts it.
+        let allow = Allow {
+            nodes: [1, 4].into_iter().collect(),
+            ..Allow::default()
+        };
+        assert_eq!(compare(&old, &new, &allow).summary.regressions, 0);
+    }
+
+    #[test]
+    fn baselines_without_outages_keep_their_bytes() {
+        let b = one(&[(1, node(&[]))]);
+        let text = b.to_json().unwrap_or_default();
+        assert!(!text.contains("heartbeat_lost"), "{text}");
+        assert_eq!(Baseline::from_json(&text).ok(), Some(b));
+        let b = one(&[(1, lost(3))]);
+        let text = b.to_json().unwrap_or_default();
+        assert!(text.contains("\"heartbeat_lost\": 3"), "{text}");
+        assert_eq!(Baseline::from_json(&text).ok(), Some(b));
     }
 
     fn one(nodes: &[(NodeId, NodeEntry)]) -> Baseline {

@@ -117,6 +117,14 @@ pub struct NodeEntry {
     pub emcy: u64,
     /// Every error code raised, by code.
     pub errors: BTreeMap<Code, ErrorEntry>,
+    /// Heartbeat outages (silent at the end included); left out when none,
+    /// so baselines of traces without outages read and write as before.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub heartbeat_lost: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -230,6 +238,7 @@ impl TraceEntry {
             let entry = NodeEntry {
                 emcy: n.emcy_count,
                 errors,
+                heartbeat_lost: n.heartbeat.as_ref().map_or(0, |h| h.lost),
             };
             nodes
                 .entry(n.channel.clone())

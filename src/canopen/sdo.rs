@@ -17,6 +17,13 @@ pub const DEVICE_TYPE: u16 = 0x1000;
 pub const COB_ID_EMCY: u16 = 0x1014;
 /// Object 0x1018: identity (sub 1 = vendor id, sub 2 = product code).
 pub const IDENTITY: u16 = 0x1018;
+/// Object 0x1003: pre-defined error field (sub 0 = count, sub 1 = newest).
+pub const ERROR_HISTORY: u16 = 0x1003;
+/// Object 0x1016: consumer heartbeat times (sub n = producer node in bits
+/// 16-23, time in ms in bits 0-15).
+pub const CONSUMER_HEARTBEAT: u16 = 0x1016;
+/// Object 0x1017: producer heartbeat time (ms).
+pub const PRODUCER_HEARTBEAT: u16 = 0x1017;
 
 /// One SDO frame that matters to value tracking.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,8 +42,15 @@ pub enum Sdo {
     },
     /// Download response: the node accepted the last write to `object`.
     Written { node: NodeId, object: Object },
-    /// Abort (either direction): a pending write to `object` failed.
-    Aborted { node: NodeId, object: Object },
+    /// Abort (either direction): the transfer of `object` failed with
+    /// `code` (a pending write to it with it). `by_server`: the node
+    /// aborted (on 0x580 + node), else the client did.
+    Aborted {
+        node: NodeId,
+        object: Object,
+        code: u32,
+        by_server: bool,
+    },
 }
 
 /// An object dictionary entry.
@@ -53,9 +67,18 @@ const SCS_DOWNLOAD_INITIATE: u8 = 3;
 const CS_ABORT: u8 = 4;
 
 /// The objects whose values the decoder follows: device type and vendor id
-/// choose a node's profile, COB-ID EMCY moves its EMCY id. Frames naming
-/// any other object change nothing (the [`Tracker`] ignores them).
-pub const FOLLOWED: [u16; 3] = [DEVICE_TYPE, COB_ID_EMCY, IDENTITY];
+/// choose a node's profile, COB-ID EMCY moves its EMCY id, the error
+/// history is read out, heartbeat times set the timeouts. Frames naming
+/// any other object change nothing (the [`Tracker`] ignores them) except
+/// aborts, which are reported whatever they name.
+pub const FOLLOWED: [u16; 6] = [
+    DEVICE_TYPE,
+    ERROR_HISTORY,
+    COB_ID_EMCY,
+    CONSUMER_HEARTBEAT,
+    PRODUCER_HEARTBEAT,
+    IDENTITY,
+];
 
 /// Whether `id` is a node's SDO request or response id.
 pub fn is_sdo_id(id: u32) -> bool {
@@ -83,6 +106,11 @@ pub fn names_followed_object(id: u32, data: &[u8]) -> bool {
     is_sdo_id(id) && named_index(data).is_some_and(|i| FOLLOWED.contains(&i))
 }
 
+/// Whether an SDO frame's command byte says abort (any object).
+pub fn is_abort(data: &[u8]) -> bool {
+    data.first().is_some_and(|cmd| cmd >> 5 == CS_ABORT)
+}
+
 /// Reads an SDO frame on a standard id; `None` for anything that is not an
 /// SDO id or not a frame this module tracks.
 pub fn parse(id: u32, data: &[u8]) -> Option<Sdo> {
@@ -93,12 +121,13 @@ pub fn parse(id: u32, data: &[u8]) -> Option<Sdo> {
     } else {
         return None;
     };
-    parse_transfer(request, node as NodeId, data)
+    parse_payload(node as NodeId, request, data)
 }
 
-/// Reads the 8 bytes of an SDO `request` (client to server) or response of
-/// `node`, however they were carried (a CAN frame, a CoE mailbox message).
-pub fn parse_transfer(request: bool, node: NodeId, data: &[u8]) -> Option<Sdo> {
+/// Reads the eight bytes of an SDO frame for `node`, sent by the client
+/// (`request`) or the node, however they were carried (a CAN frame, a CoE
+/// mailbox message of CANopen over EtherCAT).
+pub fn parse_payload(node: NodeId, request: bool, data: &[u8]) -> Option<Sdo> {
     // Every SDO frame is 8 bytes; a shorter one is not trusted.
     let &[cmd, lo, hi, sub, b4, b5, b6, b7] = data else {
         return None;
@@ -109,7 +138,12 @@ pub fn parse_transfer(request: bool, node: NodeId, data: &[u8]) -> Option<Sdo> {
     };
     let cs = cmd >> 5;
     if cs == CS_ABORT {
-        return Some(Sdo::Aborted { node, object });
+        return Some(Sdo::Aborted {
+            node,
+            object,
+            code: u32::from_le_bytes([b4, b5, b6, b7]),
+            by_server: !request,
+        });
     }
     let expedited_value = || {
         // e = 1 (bit 1); with s = 1 (bit 0), n (bits 2-3) bytes are unused.
@@ -300,7 +334,7 @@ mod tests {
     fn confirmation_must_name_the_written_object() {
         let mut t = Tracker::default();
         t.feed(parse(0x605, &[0x23, 0x14, 0x10, 0x00, 0xA5, 0, 0, 0]).unwrap());
-        let other = parse(0x585, &[0x60, 0x17, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
+        let other = parse(0x585, &[0x60, 0x08, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
         assert_eq!(t.feed(other), None);
         let other_node = parse(0x586, &[0x60, 0x14, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
         assert_eq!(t.feed(other_node), None);
@@ -340,7 +374,7 @@ mod tests {
             &[0x43, 0x00, 0x10, 0, 0, 0, 0, 0]
         ));
         assert!(names_followed_object(0x581, &[0x41, 0x18, 0x10, 2]));
-        assert!(!names_followed_object(0x581, &[0x43, 0x17, 0x10, 0]));
+        assert!(!names_followed_object(0x581, &[0x43, 0x08, 0x10, 0]));
         assert!(!names_followed_object(0x581, &[0x43, 0x00]));
         assert!(!names_followed_object(0x081, &[0x43, 0x00, 0x10, 0]));
         assert!(!names_followed_object(0x680, &[0x43, 0x00, 0x10, 0]));
@@ -353,6 +387,80 @@ mod tests {
         assert!(!names_object(0x585, &[0x43, 0x18, 0x10, 1], COB_ID_EMCY));
         assert!(!names_object(0x085, &[0x23, 0x14, 0x10, 0], COB_ID_EMCY));
         assert!(!names_object(0x605, &[0x23, 0x14], COB_ID_EMCY));
+    }
+
+    #[test]
+    fn aborts_carry_the_code_and_side() {
+        assert_eq!(
+            parse(0x585, &[0x80, 0x03, 0x10, 0x09, 0x11, 0x00, 0x09, 0x06]),
+            Some(Sdo::Aborted {
+                node: 5,
+                object: Object {
+                    index: ERROR_HISTORY,
+                    sub: 9
+                },
+                code: 0x0609_0011,
+                by_server: true,
+            })
+        );
+        assert_eq!(
+            parse(0x605, &[0x80, 0x00, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05]),
+            Some(Sdo::Aborted {
+                node: 5,
+                object: Object {
+                    index: 0x2000,
+                    sub: 0
+                },
+                code: 0x0504_0000,
+                by_server: false,
+            })
+        );
+        assert!(is_abort(&[0x80, 0, 0]));
+        assert!(!is_abort(&[0x43, 0, 0]));
+        assert!(!is_abort(&[]));
+    }
+
+    #[test]
+    fn history_and_heartbeat_objects_are_followed() {
+        let mut t = Tracker::default();
+        let count = parse(0x585, &[0x4F, 0x03, 0x10, 0x00, 2, 0, 0, 0]).unwrap();
+        assert_eq!(
+            t.feed(count),
+            Some((
+                5,
+                Object {
+                    index: ERROR_HISTORY,
+                    sub: 0
+                },
+                2
+            ))
+        );
+        t.feed(parse(0x605, &[0x2F, 0x03, 0x10, 0x00, 0, 0, 0, 0]).unwrap());
+        let ok = parse(0x585, &[0x60, 0x03, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
+        assert_eq!(
+            t.feed(ok),
+            Some((
+                5,
+                Object {
+                    index: ERROR_HISTORY,
+                    sub: 0
+                },
+                0
+            ))
+        );
+        let producer = parse(0x585, &[0x4B, 0x17, 0x10, 0x00, 0x64, 0, 0, 0]).unwrap();
+        assert_eq!(
+            t.feed(producer),
+            Some((
+                5,
+                Object {
+                    index: PRODUCER_HEARTBEAT,
+                    sub: 0
+                },
+                100
+            ))
+        );
+        assert!(names_followed_object(0x581, &[0x43, 0x16, 0x10, 1]));
     }
 
     #[test]

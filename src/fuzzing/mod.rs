@@ -229,7 +229,7 @@ pub fn detect(data: &[u8]) {
     };
     let events: Vec<Value> = lines
         .iter()
-        .filter(|v| v["type"] == "emcy" || v["type"] == "boot")
+        .filter(|v| v["type"] != "node" && v["type"] != "input")
         .cloned()
         .collect();
     assert_eq!(
@@ -452,6 +452,22 @@ fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
                 );
                 last_line = line;
                 let _ = codes(&v["cleared"]);
+            }
+            Some(
+                "nmt"
+                | "heartbeat_lost"
+                | "heartbeat_back"
+                | "sdo_abort"
+                | "error_history"
+                | "error_history_cleared",
+            ) => {
+                // Several can share a line with each other and with the
+                // EMCY or boot-up event of that line.
+                let line = v["line"].as_u64().expect("line");
+                assert!(line >= last_line && line <= c.lines, "events in line order");
+                for key in ["file", "time", "channel", "node"] {
+                    assert!(v.get(key).is_some(), "{key} in {v}");
+                }
             }
             Some("node") => {
                 nodes += 1;
@@ -969,6 +985,9 @@ pub fn decode_timeline(data: &[u8]) {
             profile_source: ProfileSource::Flag,
             profile_reason: None,
             descriptions: CodeTexts::new(m.profile, m.timeline.stats().raised.keys().copied()),
+            nmt_state: None,
+            heartbeat: None,
+            error_history: None,
         })
         .collect();
     let report = InputReport {

@@ -9,15 +9,18 @@
 
 use std::io::{self, Write};
 
-use super::jsonw::push_decoded;
+use super::jsonw::{JsonWriter, push_decoded};
+use super::table::health_description;
 use super::timefmt::{TimeFormat, TimeStyle};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
+use crate::analyze::{
+    BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, NodeReport, Sink,
+};
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::register::Register;
 use crate::trace::Timestamp;
 
 /// The columns of an event row, in order.
-pub const EVENT_COLUMNS: [&str; 21] = [
+pub const EVENT_COLUMNS: [&str; 22] = [
     "type",
     "file",
     "line",
@@ -39,6 +42,7 @@ pub const EVENT_COLUMNS: [&str; 21] = [
     "state",
     "cleared",
     "warnings",
+    "details",
 ];
 
 /// The columns of a node row (`--view summary`), in order.
@@ -81,6 +85,8 @@ pub struct Csv<W: Write> {
     /// trace repeats a few payloads millions of times.
     payloads: Cache<PayloadKey, Vec<u8>, 64>,
     json: Vec<u8>,
+    /// Health events' `details`.
+    jsonw: JsonWriter,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -135,6 +141,7 @@ impl<W: Write> Csv<W> {
             channel: (String::new(), Vec::new()),
             payloads: Cache::default(),
             json: Vec::new(),
+            jsonw: JsonWriter::new(),
         }
     }
 
@@ -368,6 +375,7 @@ impl<W: Write> Sink for Csv<W> {
             }
             row.extend_from_slice(w.tag().as_bytes());
         }
+        row.push(b',');
         self.end_row()
     }
 
@@ -380,7 +388,38 @@ impl<W: Write> Sink for Csv<W> {
         // cob_id .. state: nothing for a boot-up.
         self.row.extend_from_slice(&[b','; 12]);
         push_codes(&mut self.row, ev.cleared.iter().copied());
-        self.row.push(b',');
+        self.row.extend_from_slice(b",,");
+        self.end_row()
+    }
+
+    /// NMT, heartbeat, SDO abort and error history events: `description`
+    /// says what happened as the table does, `details` is the event's
+    /// JSON object (its own keys: `state`, `silent`, `abort_code`,
+    /// `entries`...).
+    fn health(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
+        if self.summary {
+            return Ok(());
+        }
+        self.header()?;
+        self.head(
+            ev.health.slug(),
+            ev.file,
+            ev.line,
+            ev.time,
+            ev.channel,
+            ev.node,
+        );
+        let description = health_description(ev.health, &self.times);
+        self.json.clear();
+        self.jsonw.health(&mut self.json, ev);
+        // cob_id .. class empty, description, register .. warnings empty.
+        self.row.extend_from_slice(b",,,");
+        // Two fields the crate may quote; health events are few.
+        let description = Self::encode([description.as_bytes()]);
+        let details = Self::encode([&self.json]);
+        self.row.extend_from_slice(&description);
+        self.row.extend_from_slice(&[b','; 11]);
+        self.row.extend_from_slice(&details);
         self.end_row()
     }
 

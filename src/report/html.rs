@@ -13,7 +13,7 @@ use std::io::{self, Write};
 
 use super::chart::{self, Clock, Collector, Panel, esc};
 use super::svg::{doc_title, document};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 use crate::canopen::NodeId;
 use crate::trace::Timestamp;
 
@@ -201,6 +201,11 @@ impl<W: Write> Sink for HtmlReport<W> {
             cleared: ev.cleared.to_vec(),
             state: ev.state.slug(),
         });
+        Ok(())
+    }
+
+    fn health(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
+        self.collector.health(ev);
         Ok(())
     }
 

@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 
 use super::jsonw::{JsonWriter, Pretty, pretty};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 
 /// `{"events":[...],"nodes":[...],"inputs":[...],"diagnostics":[...]}`,
 /// pretty-printed, events streamed as they come.
@@ -71,6 +71,11 @@ impl<W: Write> Sink for JsonDocument<W> {
 
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()> {
         self.json.boot(&mut self.compact, event);
+        self.event()
+    }
+
+    fn health(&mut self, event: &HealthEvent<'_>) -> io::Result<()> {
+        self.json.health(&mut self.compact, event);
         self.event()
     }
 

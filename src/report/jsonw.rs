@@ -10,7 +10,10 @@ use std::collections::HashMap;
 use std::io;
 use std::sync::Arc;
 
-use crate::analyze::{BootEvent, Counts, Diagnostic, EmcyEvent, InputReport, NodeReport};
+use crate::analyze::{
+    BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
+    InputReport, NodeReport,
+};
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
@@ -165,6 +168,15 @@ impl<'a> Obj<'a> {
 
     fn u64(&mut self, key: &str, value: u64) {
         push_u64(self.key(key), value);
+    }
+
+    fn bool(&mut self, key: &str, value: bool) {
+        self.key(key)
+            .extend_from_slice(if value { b"true" } else { b"false" });
+    }
+
+    fn null(&mut self, key: &str) {
+        self.key(key).extend_from_slice(b"null");
     }
 
     fn end(self) {
@@ -442,6 +454,55 @@ impl JsonWriter {
         o.end();
     }
 
+    /// An NMT, heartbeat, SDO abort or error history event (README, JSON
+    /// contract): rare next to EMCYs, written plainly.
+    pub fn health(&mut self, out: &mut Vec<u8>, ev: &HealthEvent<'_>) {
+        let mut o = Obj::new(out);
+        o.str("type", ev.health.slug());
+        o.str("file", ev.file);
+        o.u64("line", ev.line);
+        self.time(o.key("time"), ev.time);
+        o.str("channel", ev.channel);
+        o.u64("node", u64::from(ev.node));
+        match ev.health {
+            Health::Nmt { state, via } => {
+                o.str("state", state.slug());
+                o.str("via", via.slug());
+            }
+            Health::HeartbeatLost {
+                last_seen,
+                last_seen_line,
+                timeout,
+                timeout_source,
+            } => {
+                self.time(o.key("last_seen"), *last_seen);
+                o.u64("last_seen_line", *last_seen_line);
+                push_span(o.key("timeout"), Some(*timeout));
+                o.str("timeout_source", timeout_source.slug());
+            }
+            Health::HeartbeatBack { silent, restarted } => {
+                push_span(o.key("silent"), Some(*silent));
+                o.bool("restarted", *restarted);
+            }
+            Health::SdoAbort {
+                index,
+                subindex,
+                abort_code,
+                text,
+                by_server,
+            } => {
+                push_code(o.key("index"), *index);
+                o.u64("subindex", u64::from(*subindex));
+                o.str("abort_code", &format!("0x{abort_code:08X}"));
+                o.str("text", text);
+                o.str("by", if *by_server { "server" } else { "client" });
+            }
+            Health::ErrorHistory(h) => history_members(&mut o, h),
+            Health::ErrorHistoryCleared => {}
+        }
+        o.end();
+    }
+
     /// A node object; `errors` in the order they were raised.
     ///
     /// A node that raised millions of errors makes one huge object: `flush`
@@ -518,7 +579,52 @@ impl JsonWriter {
             o.key("last_emcy"),
             node.stats.last_emcy.and_then(|a| a.time),
         );
+        match node.nmt_state {
+            Some(state) => o.str("nmt_state", state.slug()),
+            None => o.null("nmt_state"),
+        }
+        match &node.heartbeat {
+            Some(hb) => self.heartbeat(o.key("heartbeat"), hb),
+            None => o.null("heartbeat"),
+        }
+        match &node.error_history {
+            Some(h) => {
+                let mut ho = Obj::new(o.key("error_history"));
+                history_members(&mut ho, h);
+                self.time(ho.key("time"), h.time);
+                ho.u64("line", h.line);
+                ho.end();
+            }
+            None => o.null("error_history"),
+        }
         o.key("errors").push(b'[');
+    }
+
+    /// A node's `heartbeat` object.
+    fn heartbeat(&mut self, out: &mut Vec<u8>, hb: &HeartbeatReport) {
+        let mut o = Obj::new(out);
+        push_span(o.key("period"), hb.period);
+        push_span(o.key("timeout"), hb.timeout.map(|t| t.0));
+        match hb.timeout {
+            Some((_, source)) => o.str("timeout_source", source.slug()),
+            None => o.null("timeout_source"),
+        }
+        o.u64("lost", hb.lost);
+        let list = o.key("outages");
+        list.push(b'[');
+        for (i, outage) in hb.outages.iter().enumerate() {
+            if i > 0 {
+                list.push(b',');
+            }
+            let mut oo = Obj::new(list);
+            self.time(oo.key("start"), Some(outage.start));
+            self.time(oo.key("end"), outage.end);
+            push_span(oo.key("duration"), outage.duration());
+            oo.end();
+        }
+        list.push(b']');
+        o.bool("silent_at_end", hb.silent_at_end);
+        o.end();
     }
 
     /// Errors of a node object, after `first` or not (a comma before).
@@ -634,6 +740,29 @@ impl JsonWriter {
         o.str("message", &d.message);
         o.end();
     }
+}
+
+/// `"entries":[…],"count":n,"complete":b` of a 0x1003 read-out.
+fn history_members(o: &mut Obj<'_>, h: &HistoryReport) {
+    let list = o.key("entries");
+    list.push(b'[');
+    for (i, e) in h.entries.iter().enumerate() {
+        if i > 0 {
+            list.push(b',');
+        }
+        let mut eo = Obj::new(list);
+        push_code(eo.key("code"), e.code);
+        push_code(eo.key("info"), e.info);
+        eo.str("description", &e.description);
+        eo.bool("before_trace", e.before_trace);
+        eo.end();
+    }
+    list.push(b']');
+    match h.count {
+        Some(c) => o.u64("count", u64::from(c)),
+        None => o.null("count"),
+    }
+    o.bool("complete", h.complete);
 }
 
 /// Re-indents compact JSON exactly as serde_json's pretty printer (two

@@ -5,7 +5,7 @@ use std::io::{self, Write};
 
 use super::jsonw::{JsonTexts, JsonWriter, NODE_END};
 use super::ordered::Ordered;
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 use crate::timeline::Interval;
 
 pub struct Ndjson<W: Write> {
@@ -160,6 +160,11 @@ impl<W: Write> Sink for Ndjson<W> {
 
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()> {
         self.json.boot(&mut self.buf, event);
+        self.line()
+    }
+
+    fn health(&mut self, event: &HealthEvent<'_>) -> io::Result<()> {
+        self.json.health(&mut self.buf, event);
         self.line()
     }
 

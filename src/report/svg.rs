@@ -7,7 +7,7 @@
 use std::io::{self, Write};
 
 use super::chart::{self, Collector, N, Panel};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 
 /// Space between the panels of several inputs.
 pub(crate) const PANEL_GAP: f64 = 24.0;
@@ -90,6 +90,11 @@ impl<W: Write> Sink for SvgReport<W> {
 
     fn emcy(&mut self, event: &EmcyEvent<'_>) -> io::Result<()> {
         self.collector.emcy(event);
+        Ok(())
+    }
+
+    fn health(&mut self, event: &HealthEvent<'_>) -> io::Result<()> {
+        self.collector.health(event);
         Ok(())
     }
 

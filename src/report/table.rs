@@ -9,7 +9,10 @@ use anstyle::{AnsiColor, Style};
 use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, InputReport, NodeReport, Sink};
+use crate::analyze::{
+    BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport, NodeReport,
+    Sink,
+};
 use crate::canopen::NodeId;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::text::printable;
@@ -101,6 +104,36 @@ impl<W: Write> TableReport<W> {
         Ok(())
     }
 
+    /// The nodes' NMT state, heartbeat and error history, for the nodes the
+    /// trace told any of (none: no section). Two passes, widths then rows,
+    /// as for the nodes: no table of a million rows is held.
+    fn write_health(&mut self, input: &InputReport) -> io::Result<()> {
+        let told = |n: &&NodeReport| {
+            n.nmt_state.is_some() || n.heartbeat.is_some() || n.error_history.is_some()
+        };
+        if !input.nodes.iter().any(|n| told(&n)) {
+            return Ok(());
+        }
+        let times = self.times.clone();
+        let mut cells: [String; 6] = Default::default();
+        let mut widths = HEALTH_HEADER.map(str::len);
+        for n in input.nodes.iter().filter(told) {
+            for (w, c) in widths.iter_mut().zip(health_cells(&mut cells, &times, n)) {
+                *w = (*w).max(c);
+            }
+        }
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Node health"))?;
+        write_row(&mut self.out, &HEALTH_HEADER, &widths, &HEALTH_RIGHT)?;
+        let mut line = String::new();
+        for n in input.nodes.iter().filter(told) {
+            let cell_widths = health_cells(&mut cells, &times, n);
+            push_row(&mut line, &cells, &cell_widths, &widths, &HEALTH_RIGHT);
+            self.out.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
     /// The bus-level line: frames, EMCY rate, nodes with errors.
     fn write_bus_line(&mut self, input: &InputReport) -> io::Result<()> {
         let c = &input.counts;
@@ -111,6 +144,17 @@ impl<W: Write> TableReport<W> {
         let rate = input
             .emcy_rate()
             .map_or_else(String::new, |r| format!(" ({r:.2}/s)"));
+        // Said only when it happened: traces without outages read as before.
+        let lost = input
+            .nodes
+            .iter()
+            .filter(|n| n.heartbeat.as_ref().is_some_and(|h| h.lost > 0))
+            .count();
+        let lost = match lost {
+            0 => String::new(),
+            1 => ", 1 node lost its heartbeat".to_string(),
+            n => format!(", {n} nodes lost their heartbeat"),
+        };
         // An EtherCAT capture's frames are EtherCAT's, its EMCYs came by mailbox.
         let frames = match c.ethercat_frames {
             0 => format!("{} frames", c.frames),
@@ -132,7 +176,7 @@ impl<W: Write> TableReport<W> {
         };
         writeln!(
             self.out,
-            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors, {} malformed",
+            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed",
             c.emcy,
             input.nodes_with_errors(),
             input.nodes.len(),
@@ -243,6 +287,123 @@ impl<W: Write> TableReport<W> {
         }
         Ok(())
     }
+}
+
+const HEALTH_HEADER: [&str; 6] = [
+    "CHANNEL",
+    "NODE",
+    "NMT AT END",
+    "HEARTBEAT",
+    "OUTAGES",
+    "ERROR HISTORY (1003h)",
+];
+const HEALTH_RIGHT: [bool; 6] = [false, true, false, false, false, false];
+
+/// Fills the cells of one node health row; returns their display widths.
+fn health_cells(cells: &mut [String; 6], times: &TimeFormat, n: &NodeReport) -> [usize; 6] {
+    let [channel, node, nmt, heartbeat, outages, history] = cells;
+    *channel = printable(&n.channel).into_owned();
+    *node = n.node.to_string();
+    *nmt = n.nmt_state.map_or("-", |s| s.slug()).to_string();
+    *heartbeat = heartbeat_text(n);
+    *outages = outages_text(times, n);
+    *history = n
+        .error_history
+        .as_ref()
+        .map_or_else(|| "-".to_string(), history_cell);
+    let mut widths = [0; 6];
+    for (w, c) in widths.iter_mut().zip(cells.iter()) {
+        *w = display_width(c);
+    }
+    widths
+}
+
+/// `error history complete, 2 entries` (the event line).
+fn history_head(h: &HistoryReport) -> String {
+    let n = h.entries.len();
+    format!(
+        "error history {}, {n} entr{}",
+        if h.complete { "complete" } else { "partial" },
+        if n == 1 { "y" } else { "ies" }
+    )
+}
+
+/// A node's last read-out in one cell: `0x4310*, 0x3120* (complete; * before the trace)`.
+fn history_cell(h: &HistoryReport) -> String {
+    let mut s = String::new();
+    if h.entries.is_empty() {
+        s.push_str("empty");
+    }
+    for (i, e) in h.entries.iter().enumerate() {
+        if i > 0 {
+            s.push_str(", ");
+        }
+        push_code(&mut s, e.code);
+        if e.before_trace {
+            s.push('*');
+        }
+    }
+    s.push_str(if h.complete {
+        " (complete"
+    } else {
+        " (partial"
+    });
+    if h.entries.iter().any(|e| e.before_trace) {
+        s.push_str("; * before the trace");
+    }
+    s.push(')');
+    s
+}
+
+/// `period 0.100 s, timeout 0.300 s (learnt), lost 1x, silent at end`.
+fn heartbeat_text(n: &NodeReport) -> String {
+    let Some(h) = &n.heartbeat else {
+        return "-".to_string();
+    };
+    let mut parts = Vec::new();
+    if let Some(p) = h.period {
+        parts.push(format!("period {p} s"));
+    }
+    match h.timeout {
+        Some((t, source)) => parts.push(format!("timeout {t} s ({})", source.slug())),
+        None => parts.push("no timeout known".to_string()),
+    }
+    parts.push(if h.lost == 0 {
+        "never lost".to_string()
+    } else {
+        format!("lost {}x", h.lost)
+    });
+    if h.silent_at_end {
+        parts.push("silent at end".to_string());
+    }
+    parts.join(", ")
+}
+
+/// The first outages: `start-end (duration s)`, then how many more.
+fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
+    const SHOWN: usize = 3;
+    let Some(h) = &n.heartbeat else {
+        return "-".to_string();
+    };
+    if h.outages.is_empty() {
+        return "-".to_string();
+    }
+    let mut items: Vec<String> = h
+        .outages
+        .iter()
+        .take(SHOWN)
+        .map(|o| match (o.end, o.duration()) {
+            (Some(end), Some(d)) => {
+                format!("{}-{} ({d} s)", times.show(o.start), times.show(end))
+            }
+            _ => format!("{}-end", times.show(o.start)),
+        })
+        .collect();
+    let more = h.lost.saturating_sub(SHOWN as u64);
+    if more > 0 {
+        items.push(format!("+{more} more"));
+    }
+    items.join(", ")
 }
 
 /// The manufacturer bytes as the profile reads them: `key: value; ...`.
@@ -454,10 +615,60 @@ impl<W: Write> Sink for TableReport<W> {
         self.end_event()
     }
 
+    fn health(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
+        self.times.set_origin(ev.time);
+        let l = self.layout_for(ev.time, ev.channel)?;
+        let what = health_description(ev.health, &self.times);
+        let (tag, style) = match ev.health {
+            Health::Nmt { .. } => ("nmt", None),
+            Health::HeartbeatLost { .. } => ("lost", Some(RED)),
+            Health::HeartbeatBack { .. } => ("back", Some(GREEN)),
+            Health::SdoAbort { .. } => ("abort", Some(YELLOW)),
+            Health::ErrorHistory(_) | Health::ErrorHistoryCleared => ("1003h", None),
+        };
+        let indent = Self::description_indent(l) - (l.time + 2 + l.channel + 2 + 6);
+        let tag = format!("{tag:<6}");
+        let tag = match style {
+            Some(style) => self.paint(style, &tag),
+            None => tag,
+        };
+        writeln!(
+            self.out,
+            "{}{tag}{:pad$}{}",
+            self.prefix(l, ev.time, ev.channel, ev.node),
+            "",
+            printable(&what),
+            pad = indent - 6,
+        )?;
+        if let Health::ErrorHistory(h) = ev.health {
+            let indent = Self::description_indent(l) + 2;
+            for e in &h.entries {
+                writeln!(
+                    self.out,
+                    "{:indent$}0x{:04X} (info 0x{:04X}) {}{}",
+                    "",
+                    e.code,
+                    e.info,
+                    printable(&e.description),
+                    if e.before_trace {
+                        " [before the trace]"
+                    } else {
+                        ""
+                    }
+                )?;
+            }
+        }
+        self.end_event()
+    }
+
     fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
         if self.summary_only {
             if !input.nodes.is_empty() {
                 self.write_nodes(input)?;
+                self.write_health(input)?;
             }
             self.write_bus_line(input)?;
             return writeln!(self.out);
@@ -476,6 +687,7 @@ impl<W: Write> Sink for TableReport<W> {
         }
         writeln!(self.out)?;
         self.write_nodes(input)?;
+        self.write_health(input)?;
 
         self.write_timeline(input)?;
         writeln!(self.out)?;
@@ -511,6 +723,44 @@ impl<W: Write> Sink for TableReport<W> {
         writeln!(self.out, "{}", self.paint(BOLD, "Inputs"))?;
         write_table(&mut self.out, &t)?;
         self.out.flush()
+    }
+}
+
+/// A health event's text, as the table's description column and the CSV
+/// `description` column give it.
+pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String {
+    match health {
+        Health::Nmt { state, via } => format!("NMT {} (via {})", state.slug(), via.slug()),
+        Health::HeartbeatLost {
+            last_seen,
+            timeout,
+            timeout_source,
+            ..
+        } => format!(
+            "heartbeat lost: silent since {} (timeout {timeout} s, {})",
+            times.show_opt(*last_seen),
+            timeout_source.slug()
+        ),
+        Health::HeartbeatBack { silent, restarted } => format!(
+            "heartbeat back after {silent} s{}",
+            if *restarted {
+                ", restarted (boot-up)"
+            } else {
+                ""
+            }
+        ),
+        Health::SdoAbort {
+            index,
+            subindex,
+            abort_code,
+            text,
+            by_server,
+        } => format!(
+            "SDO abort 0x{index:04X} sub {subindex} by {}: 0x{abort_code:08X} {text}",
+            if *by_server { "server" } else { "client" }
+        ),
+        Health::ErrorHistory(h) => history_head(h),
+        Health::ErrorHistoryCleared => "error history cleared".to_string(),
     }
 }
 

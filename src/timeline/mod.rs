@@ -16,7 +16,11 @@
 //! [`history`] keeps the closed intervals of every node of an input.
 
 pub mod axis;
+pub mod error_history;
+pub mod health;
+pub mod heartbeat;
 pub mod history;
+pub mod nmt;
 
 use crate::canopen::codes;
 use crate::canopen::emcy::{Emcy, Warning};
@@ -137,6 +141,8 @@ pub struct NodeTimeline {
     /// Allocated when there is something to count: a node that only ever
     /// booted has none. Boxed, so the report takes it without a copy.
     stats: Option<Box<NodeStats>>,
+    /// NMT, heartbeats, error history: allocated for nodes that have any.
+    health: Option<Box<health::NodeHealth>>,
 }
 
 /// From this many active errors on, a node keeps an [`ActiveIndex`]; below
@@ -216,6 +222,7 @@ pub(crate) struct NodeEnd {
     /// Still open, in the order they were raised.
     pub active: Vec<Interval>,
     pub stats: Box<NodeStats>,
+    pub health: Option<Box<health::NodeHealth>>,
 }
 
 impl NodeTimeline {
@@ -289,7 +296,27 @@ impl NodeTimeline {
             emcy_count: self.emcy_count,
             active: self.active,
             stats: self.stats.unwrap_or_default(),
+            health: self.health,
         }
+    }
+
+    /// The node's NMT, heartbeat and error history side, if it has one.
+    pub fn health(&self) -> Option<&health::NodeHealth> {
+        self.health.as_deref()
+    }
+
+    /// The node's NMT, heartbeat and error history side, made on first use
+    /// with `timeout` (`--heartbeat-timeout`).
+    pub fn health_mut(&mut self, timeout: Option<Span>) -> &mut health::NodeHealth {
+        self.health
+            .get_or_insert_with(|| Box::new(health::NodeHealth::new(timeout)))
+    }
+
+    /// Whether the node raised `code` in the trace.
+    pub fn has_raised(&self, code: u16) -> bool {
+        self.stats
+            .as_ref()
+            .is_some_and(|s| s.raised.contains_key(&code))
     }
 
     /// The open intervals, in the order they were raised (`end: None`).

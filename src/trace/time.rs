@@ -150,6 +150,33 @@ impl Timestamp {
         Timestamp::from_total(total, self.digits.max(delta.digits))
     }
 
+    /// `self + span` for a span that is not negative (a deadline), at the
+    /// finer precision; `None` for a negative span or on overflow.
+    pub fn checked_add_span(self, span: Span) -> Option<Timestamp> {
+        let atto = u128::try_from(span.atto).ok()?;
+        // Heartbeat timeouts are under a second: no 128-bit division (this
+        // runs for every heartbeat).
+        let (secs, atto) = if atto < ATTO_PER_SEC {
+            (0, atto as u64)
+        } else {
+            (
+                u64::try_from(atto / ATTO_PER_SEC).ok()?,
+                (atto % ATTO_PER_SEC) as u64,
+            )
+        };
+        let mut secs = self.secs.checked_add(secs)?;
+        let mut atto = self.atto + atto;
+        if u128::from(atto) >= ATTO_PER_SEC {
+            atto -= ATTO_PER_SEC as u64;
+            secs = secs.checked_add(1)?;
+        }
+        Some(Timestamp {
+            secs,
+            atto,
+            digits: self.digits.max(span.digits),
+        })
+    }
+
     /// `self - earlier`, negative when the trace's clock went backwards.
     pub fn since(self, earlier: Timestamp) -> Span {
         Span {
@@ -206,6 +233,24 @@ impl Span {
         Some(Span {
             atto: self.atto.checked_add(other.atto)?,
             digits: self.digits.max(other.digits),
+        })
+    }
+
+    /// `ms` milliseconds (an object dictionary time), written with three
+    /// fraction digits.
+    pub fn from_millis(ms: u64) -> Span {
+        Span {
+            atto: i128::from(ms) * (ATTO_PER_SEC / 1000) as i128,
+            digits: 3,
+        }
+    }
+
+    /// `self * num / den` (a margin on a timeout, a multiple of a period),
+    /// same precision; `None` for `den == 0` or on overflow.
+    pub fn scaled(self, num: i128, den: i128) -> Option<Span> {
+        Some(Span {
+            atto: self.atto.checked_mul(num)?.checked_div(den)?,
+            digits: self.digits,
         })
     }
 

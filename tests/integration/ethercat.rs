@@ -89,13 +89,13 @@ fn the_input_counts_ethercat_frames_mailbox_messages_retries_and_polls() {
         let out = support::ndjson([file]);
         let input = of_type(&out, "input")[0].clone();
         assert_eq!(input["format"], format, "{file}");
-        // 64 packets: an ARP request, 63 EtherCAT frames (one damaged).
-        assert_eq!(input["lines"], 64, "{file}");
+        // 70 packets: an ARP request, 69 EtherCAT frames (one damaged).
+        assert_eq!(input["lines"], 70, "{file}");
         assert_eq!(input["frames"], 0, "{file}");
-        assert_eq!(input["skipped"], 63, "{file}");
+        assert_eq!(input["skipped"], 69, "{file}");
         assert_eq!(input["malformed"], 1, "{file}");
-        assert_eq!(input["ethercat_frames"], 63, "{file}");
-        assert_eq!(input["mailbox_messages"], 11, "{file}");
+        assert_eq!(input["ethercat_frames"], 69, "{file}");
+        assert_eq!(input["mailbox_messages"], 17, "{file}");
         assert_eq!(input["mailbox_retries"], 1, "{file}");
         assert_eq!(input["mailbox_empty_polls"], 105, "{file}");
         assert_eq!(input["emcy"], 4, "{file}");
@@ -117,7 +117,7 @@ fn the_damaged_frame_is_reported_with_its_line_and_reading_goes_on() {
     );
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert!(
-        stdout.contains("bus: 63 EtherCAT frames (11 mailbox messages, 1 retry, 105 empty polls)"),
+        stdout.contains("bus: 69 EtherCAT frames (17 mailbox messages, 1 retry, 105 empty polls)"),
         "{stdout}"
     );
 }
@@ -251,4 +251,45 @@ fn check_reports_a_slave_whose_fault_is_no_longer_acknowledged() {
     let (code, text) = run(&["check", "--baseline", "b.json", trace_arg]);
     assert_eq!(code, Some(1), "{text}");
     assert!(text.contains("1001") && text.contains("0x4310"), "{text}");
+}
+
+#[test]
+fn coe_sdo_aborts_and_the_error_history_are_the_same_events_as_on_can() {
+    let out = support::ndjson([PCAPNG]);
+    let aborts = of_type(&out, "sdo_abort");
+    assert_eq!(aborts.len(), 1);
+    let a = aborts[0];
+    assert_eq!(
+        (a["line"].as_u64(), a["node"].as_u64()),
+        (Some(7), Some(1002))
+    );
+    assert_eq!(a["index"], "0x1003");
+    assert_eq!(a["subindex"], 5);
+    assert_eq!(a["abort_code"], "0x06090011");
+    let history = of_type(&out, "error_history");
+    assert_eq!(history.len(), 1);
+    let h = history[0];
+    assert_eq!(
+        (h["line"].as_u64(), h["node"].as_u64()),
+        (Some(70), Some(1001))
+    );
+    assert_eq!(h["complete"], true);
+    let entries: Vec<(&str, bool)> = h["entries"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e["code"].as_str().unwrap(),
+                e["before_trace"].as_bool().unwrap(),
+            )
+        })
+        .collect();
+    // 0x4310 was raised in the trace; 0x7305 before it began.
+    assert_eq!(entries, [("0x4310", false), ("0x7305", true)]);
+    let node = of_type(&out, "node")
+        .into_iter()
+        .find(|n| n["node"] == 1001)
+        .unwrap();
+    assert_eq!(node["error_history"]["entries"][1]["code"], "0x7305");
 }

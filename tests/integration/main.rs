@@ -25,6 +25,7 @@ mod ethercat;
 mod follow;
 mod fuzz_corpus;
 mod golden;
+mod health;
 mod hostile;
 mod inputs;
 mod live;

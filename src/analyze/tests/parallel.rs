@@ -324,10 +324,11 @@ fn emcy_id_moved_by_sdo_mid_trace() {
     assert_split_independent("moved emcy id", &trace);
 }
 
-/// Heartbeats and SDO traffic for objects the decoder does not follow only
-/// move the input's first and last time (workers collapse them); the SDO
-/// upload of a vendor id still chooses the profile. Here they come first and
-/// last, and in runs across block boundaries (issue 4).
+/// SDO traffic for objects the decoder does not follow only moves the
+/// input's first and last time (workers collapse it); heartbeats are
+/// decoded (issue 24) and the SDO upload of a vendor id still chooses the
+/// profile. Here they come first and last, and in runs across block
+/// boundaries (issue 4).
 #[test]
 fn heartbeats_and_other_sdo_traffic_only_move_the_time_span() {
     let mut t = Vec::new();
@@ -358,4 +359,25 @@ fn heartbeats_and_other_sdo_traffic_only_move_the_time_span() {
         "vendor id 0xB9 read"
     );
     assert!(out.contains("\"type\":\"boot\""));
+}
+
+/// Issue 24's commissioning fixture: heartbeats, guarding requests and
+/// replies, NMT commands, 1003h read-outs, aborts and a read-out the input
+/// ends in, split anywhere: deadlines, guarding and read-outs carry across
+/// blocks, and the events are the same.
+#[test]
+fn nmt_heartbeats_and_error_history_across_blocks() {
+    let trace = include_bytes!("../../../fixtures/commissioning.log");
+    assert_split_independent("commissioning", trace);
+    let (out, err) = run(trace, 2, 64);
+    for t in [
+        "heartbeat_lost",
+        "heartbeat_back",
+        "error_history",
+        "sdo_abort",
+    ] {
+        assert!(out.contains(&format!("\"type\":\"{t}\"")), "{t}");
+    }
+    assert!(out.contains("\"via\":\"guarding\""));
+    assert!(err.contains("toggle bit did not alternate"), "{err}");
 }

@@ -167,6 +167,17 @@ fn write_lane(
             esc(&clip(detail, 28))
         )?,
     }
+    for shade in &lane.shades {
+        writeln!(
+            out,
+            "<rect class=\"{}\" x=\"{}\" y=\"0\" width=\"{}\" height=\"{}\"><title>{}</title></rect>",
+            shade.class,
+            N(shade.x0),
+            N(shade.x1 - shade.x0),
+            N(lane.height),
+            esc(&shade.title)
+        )?;
+    }
     let rows = lane.bars.rows.len().max(1) as f64;
     let top = (lane.height - rows * ROW_H) / 2.0 + (ROW_H - BAR_H) / 2.0;
     for bar in &lane.bars.bars {
@@ -349,6 +360,15 @@ fn write_marks(
 }
 
 /// The legend: classes drawn in this panel, then the marker kinds.
+/// The lane bands the legend explains, in its order.
+const SHADES: [(&str, &str); 5] = [
+    ("n-initialising", "NMT initialising"),
+    ("n-pre_operational", "NMT pre-operational"),
+    ("n-operational", "NMT operational"),
+    ("n-stopped", "NMT stopped"),
+    ("out", "heartbeat lost"),
+];
+
 fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt::Error> {
     let mut classes = [false; LEGEND_ORDER.len()];
     let (mut merged, mut open) = (false, false);
@@ -420,6 +440,21 @@ fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt
             ),
             "merged short errors",
         )?;
+    }
+    for (class, text) in SHADES {
+        if lanes
+            .iter()
+            .any(|l| l.shades.iter().any(|s| s.class == class))
+        {
+            item(
+                out,
+                format!(
+                    "<rect class=\"{class}\" width=\"11\" height=\"{}\"/>",
+                    N(BAR_H)
+                ),
+                text,
+            )?;
+        }
     }
     for (mark, _) in MARKS.iter().zip(marks).filter(|(_, seen)| *seen) {
         let glyph = match mark {

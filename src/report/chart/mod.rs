@@ -34,10 +34,13 @@ mod marks;
 mod style;
 mod text;
 
+use std::collections::BTreeMap;
 use std::io;
 
-use crate::analyze::{BootEvent, EmcyEvent, InputReport, NodeReport};
+use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport, NodeReport};
 use crate::canopen::NodeId;
+use crate::canopen::nmt::NmtState;
+use crate::timeline::At;
 use crate::trace::Format;
 
 use axis::Axis;
@@ -55,15 +58,39 @@ const END_ROOM: f64 = 0.03;
 /// Times from this Unix second on (1973) are wall-clock times.
 const UNIX_FROM: u64 = 100_000_000;
 
+/// NMT state changes a lane keeps for its shading; later ones are not
+/// drawn (a node that flaps that often is one grey band at any zoom).
+const MAX_NMT_CHANGES: usize = 1024;
+
 /// Collects one input at a time and lays it out as a [`Panel`].
 #[derive(Debug, Default)]
 pub(super) struct Collector {
     current: Streamed,
+    /// Per lane, the NMT state changes in trace order.
+    nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
 }
 
 impl Collector {
     pub(super) fn begin_input(&mut self) {
         self.current = Streamed::default();
+        self.nmt.clear();
+    }
+
+    /// NMT state changes shade the lane; outages come from the report.
+    pub(super) fn health(&mut self, ev: &HealthEvent<'_>) {
+        if let Health::Nmt { state, .. } = ev.health {
+            let changes = self
+                .nmt
+                .entry((ev.channel.to_string(), ev.node))
+                .or_default();
+            if changes.len() < MAX_NMT_CHANGES {
+                let at = At {
+                    time: ev.time,
+                    line: ev.line,
+                };
+                changes.push((at, *state));
+            }
+        }
     }
 
     pub(super) fn emcy(&mut self, ev: &EmcyEvent<'_>) {
@@ -93,7 +120,8 @@ impl Collector {
     /// Lays out the input that just ended.
     pub(super) fn end_input(&mut self, input: &InputReport) -> io::Result<Panel> {
         let streamed = std::mem::take(&mut self.current);
-        Panel::build(input, streamed)
+        let nmt = std::mem::take(&mut self.nmt);
+        Panel::build(input, streamed, nmt)
     }
 }
 
@@ -136,7 +164,85 @@ struct Lane<'a> {
     node: &'a NodeReport,
     bars: Bars,
     marks: Option<LaneMarks>,
+    /// NMT states and heartbeat outages, drawn under the bars.
+    shades: Vec<Shade>,
     height: f64,
+}
+
+/// A band across a lane: an NMT state, or a heartbeat outage.
+struct Shade {
+    x0: f64,
+    x1: f64,
+    /// The CSS class (`n-operational`, `out`).
+    class: &'static str,
+    title: String,
+}
+
+/// The CSS class of an NMT state's band.
+fn nmt_class(state: NmtState) -> &'static str {
+    match state {
+        NmtState::Initialising => "n-initialising",
+        NmtState::PreOperational => "n-pre_operational",
+        NmtState::Operational => "n-operational",
+        NmtState::Stopped => "n-stopped",
+    }
+}
+
+/// A lane's bands: each NMT state from its change to the next (the last to
+/// the end of the trace), then each heartbeat outage over them.
+fn shades(clock: &Clock, scale: Scale, node: &NodeReport, nmt: &[(At, NmtState)]) -> Vec<Shade> {
+    let mut out = Vec::new();
+    let end = scale.x(scale.end);
+    for (i, (at, state)) in nmt.iter().enumerate() {
+        let Some(v) = clock.value(at) else { continue };
+        let x1 = nmt
+            .get(i + 1)
+            .and_then(|(next, _)| clock.value(next))
+            .map_or(end, |n| scale.x(n));
+        let x0 = scale.x(v);
+        if x1 > x0 {
+            out.push(Shade {
+                x0,
+                x1,
+                class: nmt_class(*state),
+                title: format!("NMT {} from {}", state.slug(), clock.at(at)),
+            });
+        }
+    }
+    if let Some(hb) = &node.heartbeat {
+        for o in &hb.outages {
+            let at = |t| At {
+                time: Some(t),
+                line: 0,
+            };
+            let Some(v0) = clock.value(&at(o.start)) else {
+                continue;
+            };
+            let x1 = o
+                .end
+                .and_then(|e| clock.value(&at(e)))
+                .map_or(end, |v| scale.x(v));
+            let x0 = scale.x(v0);
+            let title = match (o.end, o.duration()) {
+                (Some(e), Some(d)) => format!(
+                    "heartbeat lost from {} to {} ({d} s)",
+                    clock.at(&at(o.start)),
+                    clock.at(&at(e))
+                ),
+                _ => format!(
+                    "heartbeat lost from {} to the end of the trace",
+                    clock.at(&at(o.start))
+                ),
+            };
+            out.push(Shade {
+                x0,
+                x1: x1.max(x0 + 1.0),
+                class: "out",
+                title,
+            });
+        }
+    }
+    out
 }
 
 /// Maps axis values to x pixels.
@@ -159,7 +265,11 @@ impl Scale {
 }
 
 impl Panel {
-    fn build(input: &InputReport, mut streamed: Streamed) -> io::Result<Panel> {
+    fn build(
+        input: &InputReport,
+        mut streamed: Streamed,
+        mut nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
+    ) -> io::Result<Panel> {
         let timed = streamed.timed.unwrap_or(input.first_time.is_some());
         let origin = input.first_time.or(streamed.origin);
         let wall = matches!(
@@ -249,10 +359,14 @@ impl Panel {
                 .get_mut(node.channel.as_str())
                 .and_then(|n| n.remove(&node.node));
             let rows = bars.rows.len().max(1) as f64;
+            let changes = nmt
+                .remove(&(node.channel.clone(), node.node))
+                .unwrap_or_default();
             lanes.push(Lane {
                 node,
                 bars,
                 marks,
+                shades: shades(&clock, scale, node, &changes),
                 height: (rows * ROW_H + 10.0).max(LANE_MIN_H),
             });
         }

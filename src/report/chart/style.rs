@@ -50,6 +50,11 @@ pub(in crate::report) const STYLE: &str = "\
 .ec .reset rect{fill:#1b7837}
 .ec .partial rect{fill:#5aae61}
 .ec .boot rect{fill:#2c4f9e}
+.ec .n-initialising{fill:#2c4f9e;fill-opacity:.10}
+.ec .n-pre_operational{fill:#e8d21d;fill-opacity:.14}
+.ec .n-operational{fill:#1b7837;fill-opacity:.08}
+.ec .n-stopped{fill:#555;fill-opacity:.18}
+.ec .out{fill:#d62728;fill-opacity:.28}
 .ec .c-current{fill:#e69f00}
 .ec .c-voltage{fill:#0072b2}
 .ec .c-temperature{fill:#d55e00}

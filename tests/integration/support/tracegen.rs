@@ -62,6 +62,35 @@ pub fn write_trace<W: Write>(
     emcy_per_mille: u64,
     seed: u64,
 ) -> io::Result<(u64, u64)> {
+    write_trace_with(out, format, bytes, emcy_per_mille, seed, 0)
+}
+
+/// [`write_trace`] on a bus where nodes 1..=`heartbeat_nodes` send their
+/// heartbeat (operational) every 100 ms, as a commissioned machine does,
+/// instead of the random heartbeats of nodes 1-8 (issue 24's benchmark).
+pub fn write_heartbeat_trace<W: Write>(
+    out: &mut W,
+    format: TraceFormat,
+    bytes: u64,
+    emcy_per_mille: u64,
+    seed: u64,
+    heartbeat_nodes: u32,
+) -> io::Result<(u64, u64)> {
+    write_trace_with(out, format, bytes, emcy_per_mille, seed, heartbeat_nodes)
+}
+
+fn write_trace_with<W: Write>(
+    out: &mut W,
+    format: TraceFormat,
+    bytes: u64,
+    emcy_per_mille: u64,
+    seed: u64,
+    heartbeat_nodes: u32,
+) -> io::Result<(u64, u64)> {
+    // The next heartbeat of every node, staggered by a millisecond.
+    let mut beats: Vec<(u64, u32)> = (1..=heartbeat_nodes)
+        .map(|n| (u64::from(n) * 1000, n))
+        .collect();
     let mut rng = Rng::new(seed);
     let mut written = 0u64;
     let mut lines = 0u64;
@@ -100,7 +129,17 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         micros += 100 + rng.below(400);
         let node = 1 + rng.below(8) as u8;
         let mut data = [0u8; 8];
-        let (id, len) = if rng.below(1000) < emcy_per_mille {
+        // A heartbeat that is due goes first (its own time, in order).
+        let due = beats
+            .iter_mut()
+            .filter(|(at, _)| *at <= micros)
+            .min_by_key(|(at, _)| *at);
+        let (id, len) = if let Some((at, n)) = due {
+            let id = 0x700 + *n;
+            micros = micros.max(*at);
+            *at += 100_000;
+            (id, 1)
+        } else if rng.below(1000) < emcy_per_mille {
             emcy += 1;
             let i = usize::from(node);
             if raised[i] {
@@ -123,7 +162,7 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         } else {
             match rng.below(10) {
                 0 => (0x080, 0),
-                1 => (0x700 + u32::from(node), 1),
+                1 if heartbeat_nodes == 0 => (0x700 + u32::from(node), 1),
                 2 => (0x580 + u32::from(node), 8),
                 3 => (0x600 + u32::from(node), 8),
                 _ => {
@@ -138,6 +177,20 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
             for b in data.iter_mut().take(len) {
                 *b = rng.next() as u8;
             }
+        }
+        if (0x581..=0x67F).contains(&id) {
+            // SDO as a master reading and writing application objects:
+            // real command bytes (random ones made every eighth frame an
+            // abort) and indexes in the profile area, none the decoder
+            // follows.
+            let commands: [u8; 4] = if id >= 0x600 {
+                [0x40, 0x40, 0x2B, 0x23]
+            } else {
+                [0x43, 0x4B, 0x4F, 0x60]
+            };
+            data[0] = commands[rng.below(4) as usize];
+            let index = 0x2000 + rng.below(0x4000) as u16;
+            data[1..3].copy_from_slice(&index.to_le_bytes());
         }
         line.clear();
         match format {

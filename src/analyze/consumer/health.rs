@@ -1,0 +1,625 @@
+//! The consumer's NMT, heartbeat, SDO abort and error history side: what
+//! frames on 0x000, 0x700 + node and the SDO ids do to a node's health, and
+//! the events that says. Kept apart from the EMCY path (the hot one).
+
+use std::collections::BTreeSet;
+use std::io::Write;
+
+use super::{Consumer, NodeSlot, Nodes};
+use crate::analyze::OutputError;
+use crate::analyze::event::{
+    Health, HealthEvent, HeartbeatReport, HistoryItem, HistoryReport, NodeReport,
+};
+use crate::analyze::sink::Sink;
+use crate::canopen::NodeId;
+use crate::canopen::nmt::{self, ErrorControl, NmtState, Target};
+use crate::canopen::sdo::{self, Sdo};
+use crate::canopen::sdo_abort;
+use crate::timeline::At;
+use crate::timeline::error_history::ReadOut;
+use crate::timeline::health::NodeHealth;
+use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
+use crate::timeline::nmt::{NmtChange, NmtWarning};
+use crate::trace::{Span, Timestamp};
+
+/// What the consumer keeps for every node's health.
+#[derive(Default)]
+pub(in crate::analyze) struct HealthState {
+    /// Every monitored node's heartbeat deadline, by (deadline, channel id,
+    /// node): the next one to pass is the first.
+    deadlines: BTreeSet<(Timestamp, u32, NodeId)>,
+    /// The first deadline, cached: every decoded frame compares its time.
+    next: Option<Timestamp>,
+    /// Buffers reused from frame to frame.
+    events: Vec<(At, Health)>,
+    warnings: Vec<NmtWarning>,
+    read_outs: Vec<ReadOut>,
+}
+
+impl HealthState {
+    /// Keeps a node's deadline in the set. Entries are lazy: a heartbeat
+    /// moves a node's deadline later without touching the set (a remove
+    /// and insert per heartbeat was most of its cost); the entry is
+    /// checked against the node when it comes due and put back at the real
+    /// deadline if the node was heard since. Only a deadline that moved
+    /// earlier (a shorter timeout) is moved at once.
+    fn schedule(&mut self, channel_id: u32, node: NodeId, h: &mut NodeHealth) {
+        let real = h.heartbeat.deadline();
+        match (h.scheduled, real) {
+            (None, Some(r)) => {
+                self.deadlines.insert((r, channel_id, node));
+            }
+            (Some(s), Some(r)) if r < s => {
+                self.deadlines.remove(&(s, channel_id, node));
+                self.deadlines.insert((r, channel_id, node));
+            }
+            _ => return,
+        }
+        h.scheduled = real;
+        self.next = self.deadlines.first().map(|e| e.0);
+    }
+
+    /// Whether the trace's clock at `now` passed a deadline.
+    #[inline]
+    pub(super) fn passed(&self, now: Timestamp) -> bool {
+        self.next.is_some_and(|d| now > d)
+    }
+}
+
+/// Hands `events` (emptied) to the sink as the node's events.
+fn emit(
+    sink: &mut dyn Sink,
+    file: &str,
+    channel: &str,
+    node: NodeId,
+    selected: bool,
+    events: &mut Vec<(At, Health)>,
+) -> Result<(), OutputError> {
+    for (at, health) in events.drain(..) {
+        if selected {
+            sink.health(&HealthEvent {
+                file,
+                line: at.line,
+                time: at.time,
+                channel,
+                node,
+                health: &health,
+            })
+            .map_err(OutputError)?;
+        }
+    }
+    Ok(())
+}
+
+fn lost_event(lost: Lost, line: u64, timeout: Option<(Span, TimeoutSource)>) -> (At, Health) {
+    let (timeout, timeout_source) = timeout.unwrap_or((Span::ZERO, TimeoutSource::Learnt));
+    (
+        At {
+            time: Some(lost.deadline),
+            line,
+        },
+        Health::HeartbeatLost {
+            last_seen: lost.last_seen.time,
+            last_seen_line: lost.last_seen.line,
+            timeout,
+            timeout_source,
+        },
+    )
+}
+
+fn back_event(back: Back, at: At) -> (At, Health) {
+    (
+        at,
+        Health::HeartbeatBack {
+            silent: back.silent,
+            restarted: back.restarted,
+        },
+    )
+}
+
+/// A sign of life (heartbeat or boot-up) for a node's monitor: the outage
+/// it ends, found now or before, as events.
+fn sign_of_life(h: &mut NodeHealth, at: At, boot: bool, events: &mut Vec<(At, Health)>) {
+    let timeout = h.heartbeat.timeout();
+    let (newly, back) = if boot {
+        h.heartbeat.boot(at)
+    } else {
+        h.heartbeat.seen(at)
+    };
+    if let Some(lost) = newly {
+        events.push(lost_event(lost, at.line, timeout));
+    }
+    if let Some(back) = back {
+        events.push(back_event(back, at));
+    }
+}
+
+fn nmt_event(change: Option<NmtChange>, at: At, events: &mut Vec<(At, Health)>) {
+    if let Some(c) = change {
+        events.push((
+            at,
+            Health::Nmt {
+                state: c.state,
+                via: c.via,
+            },
+        ));
+    }
+}
+
+impl Nodes {
+    /// The nodes a channel has seen (an NMT command to node 0 is for them).
+    fn nodes_of(&self, raw: &[u8]) -> Vec<NodeId> {
+        self.index
+            .get(raw)
+            .and_then(|&i| self.channels.get(i))
+            .map(|c| c.nodes.iter().map(|(n, _)| *n).collect())
+            .unwrap_or_default()
+    }
+
+    /// A node by its channel's history id (deadlines name channels so).
+    fn slot_by_id(&mut self, id: u32, node: NodeId) -> Option<NodeSlot<'_>> {
+        let Nodes {
+            channels, history, ..
+        } = self;
+        let ch = channels.get_mut(id as usize).filter(|c| c.id == id)?;
+        let i = ch.nodes.binary_search_by_key(&node, |(n, _)| *n).ok()?;
+        let timeline = &mut ch.nodes.get_mut(i)?.1;
+        Some(NodeSlot {
+            channel: &ch.name,
+            channel_id: ch.id,
+            timeline,
+            history,
+        })
+    }
+}
+
+impl<E: Write> Consumer<'_, '_, E> {
+    /// The trace's clock reached `now` (a frame at `line`): every node whose
+    /// deadline passed is lost.
+    pub(super) fn deadlines_passed(
+        &mut self,
+        now: Timestamp,
+        line: u64,
+    ) -> Result<(), OutputError> {
+        while let Some(&(deadline, id, node)) = self.health.deadlines.first() {
+            if now <= deadline {
+                break;
+            }
+            self.health.deadlines.pop_first();
+            self.health.next = self.health.deadlines.first().map(|e| e.0);
+            let Some(slot) = self.nodes.slot_by_id(id, node) else {
+                continue;
+            };
+            let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+            h.scheduled = None;
+            let timeout = h.heartbeat.timeout();
+            if let Some(lost) = h.heartbeat.check(now) {
+                self.health.events.push(lost_event(lost, line, timeout));
+            }
+            // Heard from since it was scheduled: due again at its deadline.
+            self.health.schedule(id, node, h);
+            if self.health.events.is_empty() {
+                continue;
+            }
+            let selected = self.opts.selects(slot.channel, node);
+            emit(
+                self.sink,
+                self.file,
+                slot.channel,
+                node,
+                selected,
+                &mut self.health.events,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// A boot-up: the node's NMT state and heartbeat monitor (its EMCY
+    /// timeline has been told).
+    pub(super) fn boot_health(
+        &mut self,
+        raw: &[u8],
+        node: NodeId,
+        at: At,
+    ) -> Result<(), OutputError> {
+        let slot = self.nodes.get(raw, node);
+        let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+        sign_of_life(h, at, true, &mut self.health.events);
+        let change = h
+            .nmt
+            .heartbeat(NmtState::Initialising, &mut self.health.warnings);
+        nmt_event(change, at, &mut self.health.events);
+        self.health.schedule(slot.channel_id, node, h);
+        let selected = self.opts.selects(slot.channel, node);
+        emit(
+            self.sink,
+            self.file,
+            slot.channel,
+            node,
+            selected,
+            &mut self.health.events,
+        )?;
+        self.nmt_warnings(node, at.line);
+        Ok(())
+    }
+
+    /// NMT warnings as diagnostics at `line`.
+    fn nmt_warnings(&mut self, node: NodeId, line: u64) {
+        for w in std::mem::take(&mut self.health.warnings) {
+            self.diags
+                .report(self.log, true, line, format!("node {node}: {w}"));
+        }
+    }
+
+    /// A remote request on a standard id: on 0x700 + node, node guarding.
+    pub(super) fn remote_frame(&mut self, raw: &[u8], id: u32) {
+        if let Some(node) = nmt::error_control_node(id) {
+            self.nodes
+                .get(raw, node)
+                .timeline
+                .health_mut(self.opts.heartbeat_timeout)
+                .nmt
+                .guard_request();
+        }
+    }
+
+    /// A data frame that is neither EMCY, SDO nor boot-up: a heartbeat or
+    /// guarding reply on 0x700 + node, or an NMT command on 0x000.
+    pub(super) fn nmt_frame(
+        &mut self,
+        raw: &[u8],
+        id: u32,
+        data: &[u8],
+        at: At,
+    ) -> Result<(), OutputError> {
+        if let Some((command, target)) = nmt::parse_command(id, data) {
+            return self.nmt_command(raw, command, target, at);
+        }
+        let Some(ec) = nmt::parse_error_control(id, data) else {
+            return Ok(());
+        };
+        let (ErrorControl::Heartbeat { node, .. } | ErrorControl::Unknown { node, .. }) = ec;
+        let slot = self.nodes.get(raw, node);
+        let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+        // Nearly every heartbeat: same state, in time. Its deadline moves
+        // on; the schedule catches up lazily.
+        if let ErrorControl::Heartbeat { state, .. } = ec
+            && h.nmt.steady(state)
+            && h.heartbeat.steady(at)
+        {
+            return Ok(());
+        }
+        let events = &mut self.health.events;
+        let warnings = &mut self.health.warnings;
+        let mut undefined = None;
+        if h.nmt.guard_asked() {
+            let byte = data.first().copied().unwrap_or_default();
+            let reply = nmt::guard_reply(byte);
+            if reply.state.is_none() {
+                undefined = Some(byte);
+            }
+            nmt_event(h.nmt.guard_reply(reply, warnings), at, events);
+        } else {
+            match ec {
+                ErrorControl::Heartbeat { state, .. } => {
+                    sign_of_life(h, at, false, events);
+                    nmt_event(h.nmt.heartbeat(state, warnings), at, events);
+                }
+                ErrorControl::Unknown { byte, .. } => undefined = Some(byte),
+            }
+        }
+        self.health.schedule(slot.channel_id, node, h);
+        let selected = self.opts.selects(slot.channel, node);
+        emit(
+            self.sink,
+            self.file,
+            slot.channel,
+            node,
+            selected,
+            &mut self.health.events,
+        )?;
+        if let Some(byte) = undefined {
+            self.health.warnings.clear();
+            self.diags.report(
+                self.log,
+                true,
+                at.line,
+                format!("node {node}: NMT error control byte 0x{byte:02X} names no NMT state"),
+            );
+        }
+        self.nmt_warnings(node, at.line);
+        Ok(())
+    }
+
+    /// An NMT command: what the master asked of one node or of every node
+    /// the channel has seen.
+    fn nmt_command(
+        &mut self,
+        raw: &[u8],
+        command: nmt::Command,
+        target: Target,
+        at: At,
+    ) -> Result<(), OutputError> {
+        let nodes: Vec<NodeId> = match target {
+            Target::Node(n) => vec![n],
+            Target::All => self.nodes.nodes_of(raw),
+        };
+        for node in nodes {
+            if node == 0 {
+                continue;
+            }
+            let slot = self.nodes.get(raw, node);
+            let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+            nmt_event(h.nmt.command(command), at, &mut self.health.events);
+            let selected = self.opts.selects(slot.channel, node);
+            emit(
+                self.sink,
+                self.file,
+                slot.channel,
+                node,
+                selected,
+                &mut self.health.events,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// An SDO frame (on a CAN SDO id, or parsed from another transport by
+    /// [`sdo::parse_payload`]) on channel `raw` at `at`: aborts, values of
+    /// the followed objects, the error history, heartbeat times.
+    pub(in crate::analyze) fn sdo_access(
+        &mut self,
+        raw: &[u8],
+        at: At,
+        access: Sdo,
+    ) -> Result<(), OutputError> {
+        let written = matches!(access, Sdo::Written { .. });
+        if let Sdo::Aborted {
+            node,
+            object,
+            code,
+            by_server,
+        } = access
+        {
+            self.sdo_abort(raw, node, object, code, by_server, at)?;
+        }
+        if let Some((node, object, value)) = self.sdo.feed(access) {
+            self.object_value(node, object, value);
+            self.health_object_value(raw, node, object, value, written, at)?;
+        }
+        Ok(())
+    }
+
+    fn sdo_abort(
+        &mut self,
+        raw: &[u8],
+        node: NodeId,
+        object: sdo::Object,
+        code: u32,
+        by_server: bool,
+        at: At,
+    ) -> Result<(), OutputError> {
+        let slot = self.nodes.get(raw, node);
+        self.health.events.push((
+            at,
+            Health::SdoAbort {
+                index: object.index,
+                subindex: object.sub,
+                abort_code: code,
+                text: sdo_abort::describe(code),
+                by_server,
+            },
+        ));
+        if object.index == sdo::ERROR_HISTORY {
+            // The read-out going on will not finish.
+            let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+            h.history.flush(&mut self.health.read_outs);
+        }
+        let id = slot.channel_id;
+        self.read_outs_out(id, node);
+        let slot = self.nodes.get(raw, node);
+        let selected = self.opts.selects(slot.channel, node);
+        emit(
+            self.sink,
+            self.file,
+            slot.channel,
+            node,
+            selected,
+            &mut self.health.events,
+        )
+    }
+
+    /// A value of 0x1003, 0x1016 or 0x1017 a node holds (uploaded, or a
+    /// confirmed write when `written`).
+    fn health_object_value(
+        &mut self,
+        raw: &[u8],
+        node: NodeId,
+        object: sdo::Object,
+        value: u32,
+        written: bool,
+        at: At,
+    ) -> Result<(), OutputError> {
+        match object.index {
+            sdo::ERROR_HISTORY => {
+                let slot = self.nodes.get(raw, node);
+                let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+                let done = &mut self.health.read_outs;
+                match (object.sub, written) {
+                    (0, true) if value == 0 => {
+                        h.history.cleared(done);
+                        self.health.events.push((at, Health::ErrorHistoryCleared));
+                    }
+                    (0, true) => {}
+                    (0, false) => h.history.count(value, at, done),
+                    (sub, false) => h.history.entry(sub, value, at, done),
+                    (_, true) => {}
+                }
+                let cleared = written && object.sub == 0 && value == 0;
+                let id = slot.channel_id;
+                self.read_outs_out(id, node);
+                if cleared {
+                    // Known empty from here.
+                    let slot = self.nodes.get(raw, node);
+                    slot.timeline
+                        .health_mut(self.opts.heartbeat_timeout)
+                        .last_read_out = Some(ReadOut {
+                        entries: Vec::new(),
+                        count: Some(0),
+                        complete: true,
+                        at,
+                    });
+                }
+                let slot = self.nodes.get(raw, node);
+                let selected = self.opts.selects(slot.channel, node);
+                emit(
+                    self.sink,
+                    self.file,
+                    slot.channel,
+                    node,
+                    selected,
+                    &mut self.health.events,
+                )
+            }
+            sdo::CONSUMER_HEARTBEAT if object.sub > 0 => {
+                let producer = ((value >> 16) & 0xFF) as NodeId;
+                if (1..=127).contains(&producer) {
+                    self.set_timeout(raw, producer, |h| {
+                        h.heartbeat.set_consumer_ms((value & 0xFFFF) as u16)
+                    });
+                }
+                Ok(())
+            }
+            sdo::PRODUCER_HEARTBEAT if object.sub == 0 => {
+                self.set_timeout(raw, node, |h| {
+                    h.heartbeat.set_producer_ms((value & 0xFFFF) as u16)
+                });
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    fn set_timeout(&mut self, raw: &[u8], node: NodeId, set: impl FnOnce(&mut NodeHealth)) {
+        let slot = self.nodes.get(raw, node);
+        let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
+        set(h);
+        self.health.schedule(slot.channel_id, node, h);
+    }
+
+    /// Read-outs finished by the last frame become events and the node's
+    /// last read-out: codes the node never raised in the trace are marked
+    /// as older than it.
+    fn read_outs_out(&mut self, channel_id: u32, node: NodeId) {
+        if self.health.read_outs.is_empty() {
+            return;
+        }
+        let profile = self.profiles.get(node).profile;
+        let Some(slot) = self.nodes.slot_by_id(channel_id, node) else {
+            return;
+        };
+        for mut r in self.health.read_outs.drain(..) {
+            for e in &mut r.entries {
+                e.before_trace = !slot.timeline.has_raised(e.code);
+            }
+            let report = history_report(&r, |code| profile.describe(code));
+            self.health
+                .events
+                .push((r.at, Health::ErrorHistory(report)));
+            slot.timeline
+                .health_mut(self.opts.heartbeat_timeout)
+                .last_read_out = Some(r);
+        }
+    }
+
+    /// The end of the input: nodes silent past their deadline are lost,
+    /// read-outs going on end as partial (their events at the last line,
+    /// after every event before; the node keeps the read-out's own line).
+    pub(super) fn finish_health(&mut self) -> Result<(), OutputError> {
+        let line = self.line_base;
+        if let Some(end) = self.last_time {
+            self.deadlines_passed(end, line)?;
+        }
+        let end = At {
+            time: self.last_time,
+            line,
+        };
+        let reading: Vec<(u32, NodeId)> = self
+            .nodes
+            .channels
+            .iter()
+            .flat_map(|ch| {
+                ch.nodes
+                    .iter()
+                    .filter(|(_, tl)| tl.health().is_some_and(|h| h.history.is_reading()))
+                    .map(|(node, _)| (ch.id, *node))
+            })
+            .collect();
+        for (id, node) in reading {
+            let Some(slot) = self.nodes.slot_by_id(id, node) else {
+                continue;
+            };
+            slot.timeline
+                .health_mut(self.opts.heartbeat_timeout)
+                .history
+                .flush(&mut self.health.read_outs);
+            self.read_outs_out(id, node);
+            for (at, _) in &mut self.health.events {
+                *at = end;
+            }
+            let Some(slot) = self.nodes.slot_by_id(id, node) else {
+                continue;
+            };
+            let selected = self.opts.selects(slot.channel, node);
+            emit(
+                self.sink,
+                self.file,
+                slot.channel,
+                node,
+                selected,
+                &mut self.health.events,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// A read-out as reported, each code described by `describe`.
+pub(super) fn history_report(r: &ReadOut, describe: impl Fn(u16) -> String) -> HistoryReport {
+    HistoryReport {
+        entries: r
+            .entries
+            .iter()
+            .map(|e| HistoryItem {
+                code: e.code,
+                info: e.info,
+                description: describe(e.code),
+                before_trace: e.before_trace,
+            })
+            .collect(),
+        count: r.count,
+        complete: r.complete,
+        time: r.at.time,
+        line: r.at.line,
+    }
+}
+
+/// The health half of a node's report (descriptions of its history come
+/// with its profile, later).
+pub(super) fn report_health(report: &mut NodeReport, health: Option<Box<NodeHealth>>) {
+    let Some(h) = health else { return };
+    report.nmt_state = h.nmt.state();
+    if h.heartbeat.monitored() {
+        report.heartbeat = Some(HeartbeatReport {
+            period: h.heartbeat.period(),
+            timeout: h.heartbeat.timeout(),
+            lost: h.heartbeat.lost_count(),
+            outages: h.heartbeat.outages().to_vec(),
+            silent_at_end: h.heartbeat.is_lost(),
+        });
+    }
+    report.error_history = h
+        .last_read_out
+        .as_ref()
+        .map(|r| history_report(r, |_| String::new()));
+}

@@ -1,0 +1,371 @@
+//! Issue 24: a node's whole error state, through the command line, on the
+//! commissioning fixture (fixtures/make_fixtures.py, `commissioning()`):
+//! NMT states, lost heartbeats, the 1003h error history, SDO aborts, and
+//! `--heartbeat-timeout`, `--fail-on lost`, `check`'s `heartbeat_lost_new`.
+
+use std::fs;
+
+use serde_json::{Value, json};
+
+use crate::support::{emcy_decode, ndjson};
+
+const TRACE: &str = "fixtures/commissioning.log";
+
+fn of_type<'a>(objects: &'a [Value], t: &str) -> Vec<&'a Value> {
+    objects.iter().filter(|o| o["type"] == t).collect()
+}
+
+fn node(objects: &[Value], n: u64) -> Value {
+    objects
+        .iter()
+        .find(|o| o["type"] == "node" && o["node"] == n)
+        .cloned()
+        .unwrap_or(Value::Null)
+}
+
+#[test]
+fn every_health_event_has_the_common_keys_and_line_order() {
+    let objects = ndjson([TRACE]);
+    let mut last = 0;
+    let mut types = std::collections::BTreeSet::new();
+    for o in objects
+        .iter()
+        .filter(|o| o["type"] != "node" && o["type"] != "input")
+    {
+        for key in ["file", "line", "time", "channel", "node"] {
+            assert!(o.get(key).is_some(), "{key} missing in {o}");
+        }
+        assert_eq!(o["file"], TRACE);
+        let line = o["line"].as_u64().expect("line");
+        assert!(line >= last, "line order: {o}");
+        last = line;
+        types.insert(o["type"].as_str().unwrap_or_default().to_string());
+    }
+    let expected = [
+        "boot",
+        "emcy",
+        "error_history",
+        "error_history_cleared",
+        "heartbeat_back",
+        "heartbeat_lost",
+        "nmt",
+        "sdo_abort",
+    ];
+    assert_eq!(types.into_iter().collect::<Vec<_>>(), expected);
+}
+
+#[test]
+fn nmt_events_are_state_changes_with_their_source() {
+    let objects = ndjson([TRACE]);
+    let changes = |n: u64| -> Vec<(String, String)> {
+        of_type(&objects, "nmt")
+            .into_iter()
+            .filter(|o| o["node"] == n)
+            .map(|o| {
+                (
+                    o["state"].as_str().unwrap_or_default().to_string(),
+                    o["via"].as_str().unwrap_or_default().to_string(),
+                )
+            })
+            .collect()
+    };
+    let pair = |s: &str, v: &str| (s.to_string(), v.to_string());
+    // Node 1: boot-up, pre-operational, then the start command; its own
+    // heartbeats confirm it (no second event).
+    assert_eq!(
+        changes(1),
+        [
+            pair("initialising", "heartbeat"),
+            pair("pre_operational", "heartbeat"),
+            pair("operational", "command"),
+        ]
+    );
+    // Node 3 ignores the stop: the command says stopped, its heartbeat
+    // says operational.
+    assert_eq!(
+        changes(3)[3..],
+        [pair("stopped", "command"), pair("operational", "heartbeat")]
+    );
+    // Node 2 restarts after the outage and is started again.
+    assert_eq!(
+        changes(2)[3..],
+        [
+            pair("initialising", "heartbeat"),
+            pair("pre_operational", "heartbeat"),
+            pair("operational", "command"),
+        ]
+    );
+    // Node 4 is guarded, not heartbeating.
+    assert_eq!(
+        changes(4),
+        [
+            pair("pre_operational", "guarding"),
+            pair("operational", "command"),
+        ]
+    );
+    let n4 = node(&objects, 4);
+    assert_eq!(n4["nmt_state"], "operational");
+    assert_eq!(n4["heartbeat"], Value::Null);
+}
+
+#[test]
+fn warnings_name_the_ignored_command_and_the_toggle_error() {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", TRACE])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(
+            "commissioning.log:102: node 3: ignored the NMT command stop (it reports operational, not stopped)"
+        ),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(
+            "commissioning.log:84: node 4: node guarding: the toggle bit did not alternate"
+        ),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn pulled_cable_is_an_outage_until_the_boot_up() {
+    let objects = ndjson([TRACE]);
+    let lost: Vec<&Value> = of_type(&objects, "heartbeat_lost")
+        .into_iter()
+        .filter(|o| o["node"] == 2)
+        .collect();
+    assert_eq!(lost.len(), 1);
+    // Producer time 100 ms read by SDO, with the margin: 150 ms after the
+    // last heartbeat.
+    assert_eq!(lost[0]["time"].as_f64(), "1700000001.652000".parse().ok());
+    assert_eq!(
+        lost[0]["last_seen"].as_f64(),
+        "1700000001.502000".parse().ok()
+    );
+    assert_eq!(lost[0]["timeout_source"], "producer");
+    let back: Vec<&Value> = of_type(&objects, "heartbeat_back")
+        .into_iter()
+        .filter(|o| o["node"] == 2)
+        .collect();
+    assert_eq!(back.len(), 1);
+    assert_eq!(back[0]["silent"].as_f64(), Some(0.998000));
+    assert_eq!(back[0]["restarted"], true);
+    let hb = &node(&objects, 2)["heartbeat"];
+    assert_eq!(hb["lost"], 1);
+    assert_eq!(hb["silent_at_end"], false);
+    assert_eq!(hb["period"].as_f64(), Some(0.100000));
+    assert_eq!(
+        hb["outages"],
+        serde_json::from_str::<Value>(
+            r#"[{"start":1700000001.652000,"end":1700000002.500000,"duration":0.848000}]"#
+        )
+        .unwrap_or_default()
+    );
+}
+
+#[test]
+fn a_node_silent_to_the_end_is_lost_at_its_deadline() {
+    let objects = ndjson([TRACE]);
+    let lost: Vec<&Value> = of_type(&objects, "heartbeat_lost")
+        .into_iter()
+        .filter(|o| o["node"] == 3)
+        .collect();
+    assert_eq!(lost.len(), 1);
+    // The consumer time node 1 was given for node 3 (0x1016 sub 1, 250 ms).
+    assert_eq!(lost[0]["timeout_source"], "consumer");
+    assert_eq!(lost[0]["time"].as_f64(), "1700000003.053000".parse().ok());
+    let hb = &node(&objects, 3)["heartbeat"];
+    assert_eq!(hb["silent_at_end"], true);
+    assert_eq!(hb["outages"][0]["end"], Value::Null);
+    // Node 1 never lost its heartbeat: its timeout is learnt.
+    let hb1 = &node(&objects, 1)["heartbeat"];
+    assert_eq!(hb1["lost"], 0);
+    assert_eq!(hb1["timeout_source"], "learnt");
+    assert_eq!(hb1["timeout"].as_f64(), Some(0.300000));
+}
+
+#[test]
+fn heartbeat_timeout_flag_wins_over_the_trace() {
+    let objects = ndjson(["--heartbeat-timeout", "2", TRACE]);
+    // Two seconds: node 2's one-second outage is none; node 3 is silent
+    // for less than two seconds before the trace ends.
+    assert!(of_type(&objects, "heartbeat_lost").is_empty());
+    let hb = &node(&objects, 2)["heartbeat"];
+    assert_eq!(hb["timeout_source"], "option");
+    assert_eq!(hb["timeout"].as_f64(), Some(2.0));
+    emcy_decode()
+        .args(["--heartbeat-timeout", "0", TRACE])
+        .assert()
+        .code(2);
+    emcy_decode()
+        .args(["--heartbeat-timeout", "soon", TRACE])
+        .assert()
+        .code(2);
+}
+
+#[test]
+fn error_history_read_out_clear_and_partial() {
+    let objects = ndjson([TRACE]);
+    let histories = of_type(&objects, "error_history");
+    assert_eq!(histories.len(), 3);
+    let first = histories[0];
+    assert_eq!(first["node"], 1);
+    assert_eq!(first["complete"], true);
+    assert_eq!(first["count"], 3);
+    assert_eq!(
+        first["entries"],
+        json!([
+            {"code": "0x4310", "info": "0x0012",
+             "description": "Temperature · drive · excess temperature drive", "before_trace": true},
+            {"code": "0x3120", "info": "0x0000",
+             "description": "Voltage · mains · mains under-voltage", "before_trace": false},
+            {"code": "0xFF01", "info": "0x0007",
+             "description": first["entries"][2]["description"], "before_trace": true},
+        ])
+    );
+    let cleared = of_type(&objects, "error_history_cleared");
+    assert_eq!(cleared.len(), 1);
+    assert_eq!(cleared[0]["node"], 1);
+    // Read again after the clear: empty and complete.
+    assert_eq!(histories[1]["entries"], json!([]));
+    assert_eq!(histories[1]["complete"], true);
+    // Node 3's read-out stops after sub 1 of 2.
+    assert_eq!(histories[2]["node"], 3);
+    assert_eq!(histories[2]["complete"], false);
+    assert_eq!(histories[2]["count"], 2);
+    // The node objects keep the last read-out, with its own line.
+    let h1 = &node(&objects, 1)["error_history"];
+    assert_eq!(h1["entries"], json!([]));
+    assert_eq!(h1["line"], 64);
+    let h3 = &node(&objects, 3)["error_history"];
+    assert_eq!(h3["complete"], false);
+    assert_eq!(h3["line"], 74);
+    assert_eq!(node(&objects, 2)["error_history"], Value::Null);
+}
+
+#[test]
+fn sdo_abort_on_a_missing_sub_index() {
+    let objects = ndjson([TRACE]);
+    let aborts = of_type(&objects, "sdo_abort");
+    assert_eq!(aborts.len(), 1);
+    let a = aborts[0];
+    assert_eq!(a["node"], 1);
+    assert_eq!(a["index"], "0x1003");
+    assert_eq!(a["subindex"], 4);
+    assert_eq!(a["abort_code"], "0x06090011");
+    assert_eq!(a["text"], "sub-index does not exist");
+    assert_eq!(a["by"], "server");
+}
+
+#[test]
+fn fail_on_lost_fails_only_when_a_heartbeat_was_lost() {
+    emcy_decode()
+        .args(["--fail-on", "lost", TRACE])
+        .assert()
+        .code(1)
+        .stderr(predicates::str::contains(
+            "fail-on: lost: 2 nodes lost their heartbeat",
+        ));
+    emcy_decode()
+        .args(["--fail-on", "lost", "--heartbeat-timeout", "5", TRACE])
+        .assert()
+        .code(0);
+    emcy_decode()
+        .args(["--fail-on", "lost", "fixtures/s300.log"])
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn table_and_summary_show_state_outages_and_history() {
+    for view in ["full", "summary"] {
+        let out = emcy_decode()
+            .args(["--view", view, TRACE])
+            .output()
+            .expect("runs");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains("Node health"), "{view}: {text}");
+        assert!(text.contains("lost 1x, silent at end"), "{view}: {text}");
+        assert!(
+            text.contains("0x8110* (partial; * before the trace)"),
+            "{view}"
+        );
+        assert!(text.contains("2 nodes lost their heartbeat"), "{view}");
+    }
+}
+
+#[test]
+fn chart_shades_nmt_states_and_outages() {
+    let out = emcy_decode()
+        .args(["--format", "svg", TRACE])
+        .output()
+        .expect("runs");
+    let svg = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        svg.matches("<rect class=\"out\" x=").count(),
+        2,
+        "two outages"
+    );
+    assert!(svg.contains("heartbeat lost from"));
+    assert!(svg.contains("<rect class=\"n-operational\""));
+    assert!(svg.contains("<rect class=\"n-stopped\""));
+}
+
+#[test]
+fn check_reports_a_new_heartbeat_loss_as_a_regression() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("rig.log");
+    // The baseline: the trace without the pulled cable and the silence.
+    let healthy: String = fs::read_to_string(TRACE)
+        .expect("fixture")
+        .lines()
+        .filter(|l| !l.contains(" 702#") && !l.contains(" 703#"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    fs::write(&trace, healthy).expect("write");
+    let base = dir.path().join("base.json");
+    emcy_decode()
+        .current_dir(dir.path())
+        .args(["baseline", "-o", "base.json", "rig.log"])
+        .assert()
+        .success();
+    let text = fs::read_to_string(&base).expect("baseline");
+    assert!(!text.contains("heartbeat_lost"), "{text}");
+    fs::copy(TRACE, &trace).expect("copy");
+    let out = emcy_decode()
+        .current_dir(dir.path())
+        .args(["check", "-b", "base.json", "--format", "json", "rig.log"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(1));
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
+    let lost: Vec<&Value> = doc["findings"]
+        .as_array()
+        .map(|f| {
+            f.iter()
+                .filter(|f| f["kind"] == "heartbeat_lost_new")
+                .collect()
+        })
+        .unwrap_or_default();
+    let nodes: Vec<u64> = lost.iter().filter_map(|f| f["node"].as_u64()).collect();
+    assert_eq!(nodes, [2, 3]);
+    assert!(lost.iter().all(|f| f["severity"] == "regression"));
+    // The baseline of this trace records it, and then nothing regresses.
+    emcy_decode()
+        .current_dir(dir.path())
+        .args(["baseline", "-o", "base.json", "rig.log"])
+        .assert()
+        .success();
+    assert!(
+        fs::read_to_string(&base)
+            .expect("baseline")
+            .contains("\"heartbeat_lost\": 1")
+    );
+    emcy_decode()
+        .current_dir(dir.path())
+        .args(["check", "-b", "base.json", "rig.log"])
+        .assert()
+        .success();
+}
