@@ -335,6 +335,43 @@ fn help_documents_exit_codes_and_examples() {
         .stdout(predicate::str::contains("emcy-decode explain 4310"));
 }
 
+#[test]
+fn short_help_is_brief_and_long_help_complete_both_grouped() {
+    let run = |flag: &str| {
+        let out = emcy_decode().arg(flag).output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{flag}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let short = run("-h");
+    let long = run("--help");
+    for heading in [
+        "Input options:",
+        "Decoding options:",
+        "Output options:",
+        "CI options:",
+        "Performance options:",
+    ] {
+        assert!(short.contains(heading), "-h lacks {heading}:\n{short}");
+        assert!(long.contains(heading), "--help lacks {heading}");
+    }
+    // Headings in the order a reader needs them.
+    let at = |h: &str| short.find(h).unwrap();
+    assert!(at("Input options:") < at("Decoding options:"));
+    assert!(at("Decoding options:") < at("Output options:"));
+    assert!(at("Output options:") < at("CI options:"));
+    assert!(at("CI options:") < at("Performance options:"));
+    assert!(
+        !short.contains("Examples:"),
+        "-h repeats the examples:\n{short}"
+    );
+    assert!(short.contains("Exit status: 0"), "-h names the exit codes");
+    assert!(long.contains("Examples:") && long.contains("Formats read"));
+    // -h gives each option its summary, --help the details too.
+    assert!(!short.contains("more than 4 per core"));
+    assert!(long.contains("more than 4 per core"));
+    assert!(short.lines().count() * 2 < long.lines().count());
+}
+
 // ---- inputs ----------------------------------------------------------------------
 
 #[test]
