@@ -71,8 +71,8 @@ pub enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
-    /// Print the man page (roff) to stdout
-    Man,
+    /// Print the man page (roff), a subcommand's page, or write them all with --all DIR
+    Man(ManArgs),
     /// List the built-in vendor profiles, one line each; --toml NAME prints one as a file
     Profiles(ProfilesArgs),
     /// Record what traces contain (errors per node, line counts) for `check`
@@ -136,7 +136,7 @@ pub struct DecodeArgs {
 
     /// A user profile (TOML, see the manual); repeatable
     ///
-    /// A user profile (TOML, see README): used for every node not chosen by --profile,
+    /// A user profile (TOML; `emcy-decode profiles --toml NAME` prints one to start from): used for every node not chosen by --profile,
     /// or only where --profile names it (repeatable)
     #[arg(long, value_name = "FILE.toml", help_heading = DECODING)]
     pub profile_file: Vec<PathBuf>,
@@ -242,6 +242,17 @@ pub struct ProfilesArgs {
     /// user profile (--profile-file) of a drive the built-ins do not know
     #[arg(long, value_name = "NAME")]
     pub toml: Option<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct ManArgs {
+    /// The subcommand whose page to print (e.g. check); none prints the main page
+    #[arg(value_name = "COMMAND", conflicts_with = "all")]
+    pub command: Option<String>,
+
+    /// Write every page (emcy-decode.1, emcy-decode-COMMAND.1) into DIR
+    #[arg(long, value_name = "DIR")]
+    pub all: Option<std::path::PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -372,6 +372,35 @@ fn short_help_is_brief_and_long_help_complete_both_grouped() {
     assert!(short.lines().count() * 2 < long.lines().count());
 }
 
+#[test]
+fn man_all_writes_a_page_per_subcommand_and_man_cmd_prints_one() {
+    let dir = tempfile::tempdir().unwrap();
+    emcy_decode()
+        .args(["man", "--all"])
+        .arg(dir.path())
+        .assert()
+        .code(0);
+    for name in [
+        "emcy-decode",
+        "emcy-decode-explain",
+        "emcy-decode-check",
+        "emcy-decode-baseline",
+    ] {
+        let page = std::fs::read_to_string(dir.path().join(format!("{name}.1"))).unwrap();
+        assert!(page.contains(&format!("\n.TH {name} 1")), "{name}");
+    }
+    emcy_decode()
+        .args(["man", "explain"])
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("\n.TH emcy-decode-explain 1"));
+    emcy_decode().args(["man", "nope"]).assert().code(2);
+    emcy_decode()
+        .args(["man", "--all", "/nonexistent/dir"])
+        .assert()
+        .code(2);
+}
+
 // ---- inputs ----------------------------------------------------------------------
 
 #[test]
