@@ -25,6 +25,8 @@ pub(super) fn completions(shell: clap_complete::Shell) -> Result<ExitCode> {
 pub(super) fn run(args: &ManArgs) -> Result<ExitCode> {
     let root = built();
     if let Some(dir) = &args.all {
+        // As `install -d` would: ~/.local/share/man/man1 may not exist yet.
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         for (name, page) in pages(&root)? {
             let path = dir.join(format!("{name}.1"));
             std::fs::write(&path, page).with_context(|| format!("writing {}", path.display()))?;

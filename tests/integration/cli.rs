@@ -395,8 +395,16 @@ fn man_all_writes_a_page_per_subcommand_and_man_cmd_prints_one() {
         .code(0)
         .stdout(predicate::str::contains("\n.TH emcy-decode-explain 1"));
     emcy_decode().args(["man", "nope"]).assert().code(2);
+    // A directory is created; a path through a file cannot be.
     emcy_decode()
-        .args(["man", "--all", "/nonexistent/dir"])
+        .args(["man", "--all"])
+        .arg(dir.path().join("new/man1"))
+        .assert()
+        .code(0);
+    assert!(dir.path().join("new/man1/emcy-decode-check.1").is_file());
+    emcy_decode()
+        .args(["man", "--all"])
+        .arg(dir.path().join("emcy-decode.1/x"))
         .assert()
         .code(2);
 }

@@ -31,6 +31,7 @@ mod memory;
 mod mf4;
 mod output;
 mod pcap;
+mod readme;
 mod roundtrip;
 mod timestamps;
 mod trc;
