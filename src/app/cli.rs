@@ -191,8 +191,20 @@ pub struct DecodeArgs {
     pub follow: bool,
 
     /// Read directories given as FILE recursively (files in name order)
+    ///
+    /// Read directories given as FILE recursively, their files in name order. Files
+    /// with no known format in their first lines (scripts, profiles, notes) are skipped,
+    /// with one note per directory
     #[arg(long, short = 'r', help_heading = INPUT)]
     pub recursive: bool,
+
+    /// Under -r, read only files matching GLOB; !GLOB excludes (repeatable)
+    ///
+    /// Under -r, read only the files whose path below the directory matches GLOB
+    /// (`*.log`, `bench3/**/*.asc`; `*` also crosses `/`); a GLOB starting with `!`
+    /// excludes. Repeatable: any match selects, any `!` match excludes
+    #[arg(long, value_name = "GLOB", requires = "recursive", help_heading = INPUT)]
+    pub glob: Vec<String>,
 
     /// No progress bar and no per-line diagnostics on stderr (counts stay exact)
     #[arg(long, short = 'q', help_heading = OUTPUT)]
