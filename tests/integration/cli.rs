@@ -409,6 +409,46 @@ fn man_all_writes_a_page_per_subcommand_and_man_cmd_prints_one() {
         .code(2);
 }
 
+#[test]
+fn a_channel_or_node_filter_that_matches_nothing_names_what_the_input_has() {
+    let stderr = |args: &[&str]| {
+        let out = emcy_decode().args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    assert_eq!(
+        stderr(&["--channel", "nope", "fixtures/s300.log"]),
+        "fixtures/s300.log: --channel nope matches no channel; the channels with EMCY or \
+         boot-up frames: can0\n"
+    );
+    assert_eq!(
+        stderr(&["--node", "9,10", "fixtures/festo.asc"]),
+        "fixtures/festo.asc: --node 9,10 matches no node; the nodes that sent EMCY or \
+         boot-up frames: 5\n"
+    );
+    // Each input read side by side says it too.
+    let both = stderr(&["--node", "9", "fixtures/s300.log", "fixtures/festo.asc"]);
+    assert!(
+        both.contains("fixtures/s300.log: --node 9 matches no node"),
+        "{both}"
+    );
+    assert!(
+        both.contains("fixtures/festo.asc: --node 9 matches no node"),
+        "{both}"
+    );
+    // A filter that matches says nothing; nor does one in an input without nodes.
+    assert_eq!(
+        stderr(&["--node", "1", "--channel", "can0", "fixtures/s300.log"]),
+        ""
+    );
+    let quiet = emcy_decode()
+        .args(["--node", "9", "-"])
+        .write_stdin("(1.0) can0 701#05\n")
+        .output()
+        .unwrap();
+    assert_eq!(String::from_utf8(quiet.stderr).unwrap(), "");
+}
+
 // ---- inputs ----------------------------------------------------------------------
 
 #[test]
