@@ -441,6 +441,16 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             };
         }
         drop(shared);
+        if self.counts.dropped > 0 {
+            self.log.note(&format!(
+                "{file}: warning: candump reported {} dropped by the kernel (DROPCOUNT \
+                 lines): EMCYs may be missing",
+                match self.counts.dropped {
+                    1 => "1 frame".to_string(),
+                    n => format!("{n} frames"),
+                }
+            ));
+        }
         if let Some(e) = history.spill_error() {
             self.log.note(&format!(
                 "{file}: could not move the error history to a temporary file ({e}); kept in memory"
@@ -723,6 +733,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn skipped(&mut self) {
         self.counts.skipped += 1;
+    }
+
+    fn dropped(&mut self, n: u64) {
+        self.counts.dropped = self.counts.dropped.saturating_add(n);
     }
 
     fn malformed(&mut self, idx: u64, reason: Reason) {

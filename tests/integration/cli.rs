@@ -449,6 +449,49 @@ fn a_channel_or_node_filter_that_matches_nothing_names_what_the_input_has() {
     assert_eq!(String::from_utf8(quiet.stderr).unwrap(), "");
 }
 
+#[test]
+fn dropcount_lines_are_counted_as_dropped_frames_and_warned_about() {
+    let trace = "(1.0) can0 081#1043090000000000\n\
+                 DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 3)\n\
+                 (2.0) can0 081#0000000000000000\n\
+                 DROPCOUNT: dropped 1 CAN frame on 'can0' socket (total drops 4)\n";
+    for threads in ["1", "2"] {
+        let out = emcy_decode()
+            .args(["-f", "ndjson", "-j", threads, "-"])
+            .write_stdin(trace)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        let input: Value = String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str::<Value>(l).unwrap())
+            .find(|o| o["type"] == "input")
+            .unwrap();
+        assert_eq!(input["dropped"], 4, "-j {threads}: the sum, not the total");
+        assert_eq!(input["skipped"], 2, "the lines stay skipped lines");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(
+            stderr,
+            "<stdin>: warning: candump reported 4 frames dropped by the kernel (DROPCOUNT \
+             lines): EMCYs may be missing\n"
+        );
+    }
+    emcy_decode()
+        .arg("-")
+        .write_stdin(trace)
+        .assert()
+        .stdout(predicate::str::contains(
+            ", 4 frames dropped (DROPCOUNT): EMCYs may be missing\n",
+        ));
+    // Without drops, no key.
+    let out = emcy_decode()
+        .args(["-f", "ndjson", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8(out.stdout).unwrap().contains("dropped"));
+}
+
 // ---- inputs ----------------------------------------------------------------------
 
 #[test]
