@@ -186,6 +186,10 @@ pub struct DecodeArgs {
     #[arg(long, value_enum, default_value_t = TimeArg::Auto, value_name = "STYLE", help_heading = OUTPUT)]
     pub time: TimeArg,
 
+    /// Show table times in this IANA time zone, e.g. Europe/Berlin (implies --time local)
+    #[arg(long, value_name = "ZONE", help_heading = OUTPUT)]
+    pub tz: Option<String>,
+
     /// Keep reading FILE as it grows (like tail -f); Ctrl-C prints the summary
     #[arg(long, requires = "files", help_heading = INPUT)]
     pub follow: bool,
@@ -358,16 +362,33 @@ pub enum TimeArg {
     Relative,
     /// ISO-8601 UTC, every time taken as Unix time
     Iso,
+    /// ISO-8601 in the local time zone (TZ, else /etc/localtime; --tz names
+    /// another), with its offset, daylight saving time followed
+    Local,
 }
 
-impl From<TimeArg> for TimeStyle {
-    fn from(t: TimeArg) -> TimeStyle {
-        match t {
-            TimeArg::Auto => TimeStyle::Auto,
-            TimeArg::Absolute => TimeStyle::Absolute,
-            TimeArg::Relative => TimeStyle::Relative,
-            TimeArg::Iso => TimeStyle::Iso,
-        }
+impl DecodeArgs {
+    /// `--time` and `--tz` as the table's time style: `--tz` alone means
+    /// local times in that zone. An unknown zone is a usage error.
+    pub(super) fn time_style(&self) -> Result<TimeStyle> {
+        let zone = match (&self.tz, self.time) {
+            (Some(name), TimeArg::Auto | TimeArg::Local) => {
+                jiff::tz::TimeZone::get(name).map_err(|e| anyhow::anyhow!("--tz {name}: {e}"))?
+            }
+            (Some(_), _) => bail!(
+                "--tz applies to --time local (or auto), not --time {}",
+                format!("{:?}", self.time).to_lowercase()
+            ),
+            // The TZ variable or /etc/localtime, read once, before any
+            // thread starts; jiff falls back to UTC where neither says.
+            (None, TimeArg::Local) => jiff::tz::TimeZone::system(),
+            (None, TimeArg::Auto) => return Ok(TimeStyle::Auto),
+            (None, TimeArg::Absolute) => return Ok(TimeStyle::Absolute),
+            (None, TimeArg::Relative) => return Ok(TimeStyle::Relative),
+            (None, TimeArg::Iso) => return Ok(TimeStyle::Iso),
+        };
+        // One zone per run: leaked, so the style stays `Copy`.
+        Ok(TimeStyle::Local(Box::leak(Box::new(zone))))
     }
 }
 

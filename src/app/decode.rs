@@ -29,6 +29,8 @@ use crate::trace::input::{self, ReadMode, Source};
 /// of all inputs.
 pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
     let opts = args.options()?;
+    // Before any input is read: an unknown --tz is a usage error.
+    let time_style = args.time_style()?;
     let walk = Walk::new(args.recursive, &args.glob)?;
     let mut log = DiagnosticLog::new(io::stderr());
     log.quiet = args.quiet;
@@ -62,7 +64,7 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
             let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
-            let table = TableReport::new(out, color, live).time_style(args.time.into());
+            let table = TableReport::new(out, color, live).time_style(time_style);
             Box::new(if summary { table.summary_only() } else { table })
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),

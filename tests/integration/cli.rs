@@ -492,6 +492,52 @@ fn dropcount_lines_are_counted_as_dropped_frames_and_warned_about() {
     assert!(!String::from_utf8(out.stdout).unwrap().contains("dropped"));
 }
 
+#[test]
+fn local_times_in_the_tz_zone_or_the_system_one() {
+    let third_line = |args: &[&str], tz: Option<&str>| {
+        let mut cmd = emcy_decode();
+        if let Some(tz) = tz {
+            cmd.env("TZ", tz);
+        }
+        let out = cmd.args(args).arg("fixtures/s300.log").output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        text.lines()
+            .nth(3)
+            .unwrap()
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(
+        third_line(&["--tz", "Europe/Berlin"], None),
+        "2023-11-14T23:13:21.250000+01:00"
+    );
+    assert_eq!(
+        third_line(&["--time", "local"], Some("America/New_York")),
+        "2023-11-14T17:13:21.250000-05:00"
+    );
+    assert_eq!(
+        third_line(
+            &["--time", "local", "--tz", "UTC"],
+            Some("America/New_York")
+        ),
+        "2023-11-14T22:13:21.250000+00:00",
+        "--tz wins over TZ"
+    );
+    emcy_decode()
+        .args(["--tz", "Mars/Olympus", "fixtures/s300.log"])
+        .assert()
+        .code(2)
+        .stdout("")
+        .stderr(predicate::str::contains("--tz Mars/Olympus"));
+    emcy_decode()
+        .args(["--tz", "UTC", "--time", "relative", "fixtures/s300.log"])
+        .assert()
+        .code(2);
+}
+
 // ---- inputs ----------------------------------------------------------------------
 
 #[test]
