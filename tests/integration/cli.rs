@@ -318,7 +318,7 @@ fn errors_outrank_fail_on() {
 fn usage_errors_exit_2() {
     emcy_decode().arg("--format=xml").assert().code(2);
     emcy_decode().args(["--node", "0"]).assert().code(2);
-    emcy_decode().args(["--node", "128"]).assert().code(2);
+    emcy_decode().args(["--node", "65536"]).assert().code(2);
     emcy_decode().arg("--no-such-flag").assert().code(2);
 }
 
