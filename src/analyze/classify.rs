@@ -3,6 +3,7 @@
 //! parallel.
 
 use super::OutputError;
+use crate::trace::candump_log;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{self, Block, RawLine};
 use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp};
@@ -21,6 +22,9 @@ pub(super) trait LineSink {
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
+    /// Frames a skipped line says were lost before they were logged
+    /// (candump `DROPCOUNT`).
+    fn dropped(&mut self, n: u64);
     fn malformed(&mut self, idx: u64, reason: Reason);
     /// A diagnostic about the frame on the same line, which the reader made
     /// good (a contradiction it resolved); the frame follows.
@@ -92,6 +96,9 @@ pub(super) fn classify_block(
                         }
                         Parsed::Skipped => {
                             sink.skipped();
+                            if let Some(n) = candump_log::dropped_frames(text) {
+                                sink.dropped(n);
+                            }
                             if !known && detector.format().is_some() {
                                 sink.format_known();
                             }

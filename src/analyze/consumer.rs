@@ -176,7 +176,7 @@ impl Nodes {
 
     /// Node reports sorted by channel name, then node, and the history with
     /// the still-active intervals added.
-    fn into_reports(self, opts: &Options) -> (Vec<NodeReport>, ErrorHistory) {
+    fn into_reports(self, opts: &Options) -> (Vec<NodeReport>, ErrorHistory, Option<String>) {
         let Nodes {
             mut channels,
             index,
@@ -191,6 +191,9 @@ impl Nodes {
             .flat_map(|ch| ch.nodes.iter().map(|(node, _)| (&ch.name, *node)))
             .filter(|(name, node)| opts.selects(name, *node))
             .count();
+        let unmatched = (selected == 0)
+            .then(|| unmatched_filter(&channels, opts))
+            .flatten();
         let mut out = Vec::with_capacity(selected);
         for ch in channels {
             for (node, tl) in ch.nodes {
@@ -227,8 +230,60 @@ impl Nodes {
                 out.push(report);
             }
         }
-        (out, history.finish([]))
+        (out, history.finish([]), unmatched)
     }
+}
+
+/// How many channel or node names a note lists.
+const NAMES_LISTED: usize = 12;
+
+/// `--channel` / `--node` selected no node of the input: what it has
+/// instead (channels, or the nodes on the channels selected), so a typo is
+/// told from a trace without errors. `None` when there is nothing to name.
+fn unmatched_filter(channels: &[ChannelNodes], opts: &Options) -> Option<String> {
+    let list = |names: Vec<String>| {
+        let more = names.len().saturating_sub(NAMES_LISTED);
+        let mut text = names
+            .into_iter()
+            .take(NAMES_LISTED)
+            .collect::<Vec<_>>()
+            .join(", ");
+        if more > 0 {
+            text.push_str(&format!(" and {more} more"));
+        }
+        text
+    };
+    let on_channel =
+        |name: &str| opts.channels.is_empty() || opts.channels.iter().any(|c| c == name);
+    if channels.is_empty() {
+        return None;
+    }
+    if !channels.iter().any(|ch| on_channel(&ch.name)) {
+        let names = channels.iter().map(|ch| ch.name.to_string()).collect();
+        return Some(format!(
+            "--channel {} matches no channel; the channels with EMCY or boot-up frames: {}",
+            opts.channels.join(","),
+            list(names)
+        ));
+    }
+    let mut nodes: Vec<NodeId> = channels
+        .iter()
+        .filter(|ch| on_channel(&ch.name))
+        .flat_map(|ch| ch.nodes.iter().map(|(n, _)| *n))
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let wanted: Vec<String> = opts.nodes.iter().map(ToString::to_string).collect();
+    let place = if opts.channels.is_empty() {
+        String::new()
+    } else {
+        format!(" on channel {}", opts.channels.join(","))
+    };
+    Some(format!(
+        "--node {} matches no node{place}; the nodes that sent EMCY or boot-up frames: {}",
+        wanted.join(","),
+        list(nodes.iter().map(ToString::to_string).collect())
+    ))
 }
 
 /// Turns classified lines into timelines, events and counts, in line order.
@@ -371,7 +426,10 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             }
         }
         let nodes_taken = std::mem::replace(&mut self.nodes, Nodes::new(1));
-        let (mut nodes, history) = nodes_taken.into_reports(self.opts);
+        let (mut nodes, history, unmatched) = nodes_taken.into_reports(self.opts);
+        if let Some(note) = unmatched {
+            self.log.note(&format!("{file}: {note}"));
+        }
         // Nodes that raised the same codes under the same profile share
         // one set of descriptions (a trace with a million channels has a
         // million nodes, nearly all alike).
@@ -400,6 +458,16 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             };
         }
         drop(shared);
+        if self.counts.dropped > 0 {
+            self.log.note(&format!(
+                "{file}: warning: candump reported {} dropped by the kernel (DROPCOUNT \
+                 lines): EMCYs may be missing",
+                match self.counts.dropped {
+                    1 => "1 frame".to_string(),
+                    n => format!("{n} frames"),
+                }
+            ));
+        }
         if let Some(e) = history.spill_error() {
             self.log.note(&format!(
                 "{file}: could not move the error history to a temporary file ({e}); kept in memory"
@@ -680,6 +748,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn skipped(&mut self) {
         self.counts.skipped += 1;
+    }
+
+    fn dropped(&mut self, n: u64) {
+        self.counts.dropped = self.counts.dropped.saturating_add(n);
     }
 
     fn malformed(&mut self, idx: u64, reason: Reason) {

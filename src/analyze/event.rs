@@ -270,6 +270,9 @@ pub struct Counts {
     pub mailbox_messages: u64,
     pub mailbox_retries: u64,
     pub mailbox_empty_polls: u64,
+    /// Frames lost before they were logged, as the trace says (candump
+    /// `DROPCOUNT` lines): not lines, so outside the line sum.
+    pub dropped: u64,
 }
 
 /// Everything known about one input after reading it.

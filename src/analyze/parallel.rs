@@ -67,6 +67,8 @@ struct BlockResult {
     /// Frames the consumer would ignore (not EMCY/boot candidates), counted only.
     plain_frames: u64,
     skipped: u64,
+    /// Frames DROPCOUNT lines said were lost.
+    dropped: u64,
     /// Malformed lines beyond the diagnostics limit: counted, not reported.
     unreported: u64,
     /// Warnings beyond the diagnostics limit: only counted as not shown.
@@ -110,6 +112,10 @@ impl LineSink for Recorder {
 
     fn skipped(&mut self) {
         self.result.skipped += 1;
+    }
+
+    fn dropped(&mut self, n: u64) {
+        self.result.dropped = self.result.dropped.saturating_add(n);
     }
 
     fn malformed(&mut self, idx: u64, reason: Reason) {
@@ -187,6 +193,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     fn replay(&mut self, r: BlockResult) -> Result<Block, OutputError> {
         self.counts.frames += r.plain_frames;
         self.counts.skipped += r.skipped;
+        self.counts.dropped = self.counts.dropped.saturating_add(r.dropped);
         self.counts.malformed += r.unreported;
         self.diags.suppressed += r.unreported + r.unreported_warnings;
         for record in r.records {
@@ -291,6 +298,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             lines: 0,
                             plain_frames: 0,
                             skipped: 0,
+                            dropped: 0,
                             unreported: 0,
                             unreported_warnings: 0,
                             records: Vec::new(),

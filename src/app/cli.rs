@@ -16,6 +16,11 @@ use crate::report::timefmt::TimeStyle;
 use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Span, Timestamp, hex};
 
+/// What `-h` ends with: the exit codes in one line, and where the rest is.
+const SHORT_AFTER_HELP: &str = "\
+Exit status: 0 success, 1 the --fail-on condition was met, 2 error; 129/130/143 signals.
+`--help` shows every option in full, the formats read and examples.";
+
 const EXAMPLES_AND_EXIT_CODES: &str = "\
 Examples:
   emcy-decode trace.log                         readable report: events, node timelines, counts
@@ -47,7 +52,8 @@ Exit status:
     name = "emcy-decode",
     version,
     about = "Decode CANopen emergency (EMCY) frames in CAN traces and rebuild each node's error timeline",
-    after_help = EXAMPLES_AND_EXIT_CODES,
+    after_help = SHORT_AFTER_HELP,
+    after_long_help = EXAMPLES_AND_EXIT_CODES,
     args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
@@ -67,8 +73,8 @@ pub enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
-    /// Print the man page (roff) to stdout
-    Man,
+    /// Print the man page (roff), a subcommand's page, or write them all with --all DIR
+    Man(ManArgs),
     /// List the built-in vendor profiles, one line each; --toml NAME prints one as a file
     Profiles(ProfilesArgs),
     /// Record what traces contain (errors per node, line counts) for `check`
@@ -77,103 +83,146 @@ pub enum Command {
     Check(CheckArgs),
 }
 
+/// Headings of `--help`, grouped as ripgrep groups its options.
+const INPUT: &str = "Input options";
+const DECODING: &str = "Decoding options";
+const OUTPUT: &str = "Output options";
+const CI: &str = "CI options";
+const PERFORMANCE: &str = "Performance options";
+
 #[derive(Args, Debug)]
 pub struct DecodeArgs {
     /// Trace files to read; `-` or none reads stdin
     #[arg(value_name = "FILE")]
     pub files: Vec<PathBuf>,
 
-    /// Output format
-    #[arg(long, short = 'f', value_enum, default_value_t = OutputFormat::Table)]
-    pub format: OutputFormat,
-
     /// Read inputs as this format instead of detecting it
-    #[arg(long, value_enum, value_name = "FORMAT")]
+    #[arg(long, value_enum, value_name = "FORMAT", help_heading = INPUT)]
     pub input_format: Option<InputFormat>,
 
+    /// What candump times are: as written, or deltas (candump -td)
+    ///
     /// What candump times are: as written (absolute, or zero for -tz), or the delta to the
     /// previous frame (delta, candump -td: summed). Without it, deltas are detected from
     /// the first lines, with a note
-    #[arg(long, value_enum, value_name = "MODE")]
+    #[arg(long, value_enum, value_name = "MODE", help_heading = INPUT)]
     pub timestamps: Option<TimestampsArg>,
 
+    /// Report only these nodes (repeatable or comma-separated)
+    ///
     /// Report only these nodes (repeatable or comma-separated; decimal or 0x hex; EtherCAT
     /// slaves by station address)
-    #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
+    #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N", help_heading = DECODING)]
     pub node: Vec<NodeId>,
 
+    /// Report only this channel (repeatable)
+    ///
     /// Report only this channel (candump interface or ASC channel number; repeatable)
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME", help_heading = DECODING)]
     pub channel: Vec<String>,
 
+    /// A node's EMCY id moved by object 0x1014, e.g. 0x1A5=5 (repeatable)
+    ///
     /// A node's EMCY id moved by object 0x1014: COBID=NODE, hex COB-ID (29-bit when over
     /// 0x7FF, 8 digits or with an x suffix), e.g. 0x1A5=5 (repeatable)
-    #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
+    #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE", help_heading = DECODING)]
     pub emcy_id: Vec<EmcyId>,
 
+    /// Heartbeat timeout for every node, in seconds (e.g. 0.5)
+    ///
     /// Heartbeat timeout for every node, in seconds (e.g. 0.5): a node silent for longer
     /// has lost its heartbeat. Without it, the consumer (0x1016) or producer (0x1017)
     /// heartbeat time the trace sets by SDO, else 3x the node's typical interval
-    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS")]
+    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub heartbeat_timeout: Option<Span>,
 
+    /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable
+    ///
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable, a node's
     /// own wins. Without one, the trace's SDO identity answers choose, else cia402.
     /// `emcy-decode profiles` lists them
-    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME")]
+    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME", help_heading = DECODING)]
     pub profile: Vec<ProfileRequest>,
 
-    /// A user profile (TOML, see README): used for every node not chosen by --profile,
+    /// A user profile (TOML, see the manual); repeatable
+    ///
+    /// A user profile (TOML; `emcy-decode profiles --toml NAME` prints one to start from): used for every node not chosen by --profile,
     /// or only where --profile names it (repeatable)
-    #[arg(long, value_name = "FILE.toml")]
+    #[arg(long, value_name = "FILE.toml", help_heading = DECODING)]
     pub profile_file: Vec<PathBuf>,
 
+    /// Output format
+    #[arg(long, short = 'f', value_enum, default_value_t = OutputFormat::Table, help_heading = OUTPUT)]
+    pub format: OutputFormat,
+
+    /// Exit 1 when a condition is met: any, active, warning, code=..., category<=N
+    ///
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
     /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), a node
     /// `lost` its heartbeat, `never`
-    #[arg(long, value_parser = parse_fail_on, value_name = "WHEN")]
+    #[arg(long, value_parser = parse_fail_on, value_name = "WHEN", help_heading = CI)]
     pub fail_on: Vec<FailOn>,
 
+    /// What to print: every event (full) or a line per node (summary)
+    ///
     /// What to print: every event and the timeline (full), or one line per node
     /// and per bus (summary)
-    #[arg(long, value_enum, default_value_t = View::Full, value_name = "VIEW")]
+    #[arg(long, value_enum, default_value_t = View::Full, value_name = "VIEW", help_heading = OUTPUT)]
     pub view: View,
 
     /// Exit 2 when any line is malformed
-    #[arg(long)]
+    #[arg(long, help_heading = CI)]
     pub strict: bool,
 
     /// Print at most N diagnostics per input (counts stay exact)
-    #[arg(long, default_value_t = 20, value_name = "N")]
+    #[arg(long, default_value_t = 20, value_name = "N", help_heading = OUTPUT)]
     pub max_diagnostics: usize,
 
+    /// Threads for reading large inputs (0 = automatic)
+    ///
     /// Threads for reading large inputs, and for writing the errors listed
     /// in ndjson node objects (0 = automatic: all cores for files over 16 MiB
     /// and gzip input, one for small files and live streams; all cores for
     /// the node objects). At most 1024; more than 4 per core counts as 4 per
     /// core
-    #[arg(long, short = 'j', default_value_t = 0, value_name = "N", value_parser = parse_threads)]
+    #[arg(long, short = 'j', default_value_t = 0, value_name = "N", value_parser = parse_threads, help_heading = PERFORMANCE)]
     pub threads: usize,
 
     /// When to colour the table
-    #[arg(long, value_enum, default_value_t = ColorChoice::Auto, value_name = "WHEN")]
+    #[arg(long, value_enum, default_value_t = ColorChoice::Auto, value_name = "WHEN", help_heading = OUTPUT)]
     pub color: ColorChoice,
 
     /// How the table shows times
-    #[arg(long, value_enum, default_value_t = TimeArg::Auto, value_name = "STYLE")]
+    #[arg(long, value_enum, default_value_t = TimeArg::Auto, value_name = "STYLE", help_heading = OUTPUT)]
     pub time: TimeArg,
 
+    /// Show table times in this IANA time zone, e.g. Europe/Berlin (implies --time local)
+    #[arg(long, value_name = "ZONE", help_heading = OUTPUT)]
+    pub tz: Option<String>,
+
     /// Keep reading FILE as it grows (like tail -f); Ctrl-C prints the summary
-    #[arg(long, requires = "files")]
+    #[arg(long, requires = "files", help_heading = INPUT)]
     pub follow: bool,
 
     /// Read directories given as FILE recursively (files in name order)
-    #[arg(long, short = 'r')]
+    ///
+    /// Read directories given as FILE recursively, their files in name order. Files
+    /// with no known format in their first lines (scripts, profiles, notes) are skipped,
+    /// with one note per directory
+    #[arg(long, short = 'r', help_heading = INPUT)]
     pub recursive: bool,
 
+    /// Under -r, read only files matching GLOB; !GLOB excludes (repeatable)
+    ///
+    /// Under -r, read only the files whose path below the directory matches GLOB
+    /// (`*.log`, `bench3/**/*.asc`; `*` also crosses `/`); a GLOB starting with `!`
+    /// excludes. Repeatable: any match selects, any `!` match excludes
+    #[arg(long, value_name = "GLOB", requires = "recursive", help_heading = INPUT)]
+    pub glob: Vec<String>,
+
     /// No progress bar and no per-line diagnostics on stderr (counts stay exact)
-    #[arg(long, short = 'q')]
+    #[arg(long, short = 'q', help_heading = OUTPUT)]
     pub quiet: bool,
 }
 
@@ -222,6 +271,17 @@ pub struct ProfilesArgs {
     /// user profile (--profile-file) of a drive the built-ins do not know
     #[arg(long, value_name = "NAME")]
     pub toml: Option<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct ManArgs {
+    /// The subcommand whose page to print (e.g. check); none prints the main page
+    #[arg(value_name = "COMMAND", conflicts_with = "all")]
+    pub command: Option<String>,
+
+    /// Write every page (emcy-decode.1, emcy-decode-COMMAND.1) into DIR
+    #[arg(long, value_name = "DIR")]
+    pub all: Option<std::path::PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -315,16 +375,33 @@ pub enum TimeArg {
     Relative,
     /// ISO-8601 UTC, every time taken as Unix time
     Iso,
+    /// ISO-8601 in the local time zone (TZ, else /etc/localtime; --tz names
+    /// another), with its offset, daylight saving time followed
+    Local,
 }
 
-impl From<TimeArg> for TimeStyle {
-    fn from(t: TimeArg) -> TimeStyle {
-        match t {
-            TimeArg::Auto => TimeStyle::Auto,
-            TimeArg::Absolute => TimeStyle::Absolute,
-            TimeArg::Relative => TimeStyle::Relative,
-            TimeArg::Iso => TimeStyle::Iso,
-        }
+impl DecodeArgs {
+    /// `--time` and `--tz` as the table's time style: `--tz` alone means
+    /// local times in that zone. An unknown zone is a usage error.
+    pub(super) fn time_style(&self) -> Result<TimeStyle> {
+        let zone = match (&self.tz, self.time) {
+            (Some(name), TimeArg::Auto | TimeArg::Local) => {
+                jiff::tz::TimeZone::get(name).map_err(|e| anyhow::anyhow!("--tz {name}: {e}"))?
+            }
+            (Some(_), _) => bail!(
+                "--tz applies to --time local (or auto), not --time {}",
+                format!("{:?}", self.time).to_lowercase()
+            ),
+            // The TZ variable or /etc/localtime, read once, before any
+            // thread starts; jiff falls back to UTC where neither says.
+            (None, TimeArg::Local) => jiff::tz::TimeZone::system(),
+            (None, TimeArg::Auto) => return Ok(TimeStyle::Auto),
+            (None, TimeArg::Absolute) => return Ok(TimeStyle::Absolute),
+            (None, TimeArg::Relative) => return Ok(TimeStyle::Relative),
+            (None, TimeArg::Iso) => return Ok(TimeStyle::Iso),
+        };
+        // One zone per run: leaked, so the style stays `Copy`.
+        Ok(TimeStyle::Local(Box::leak(Box::new(zone))))
     }
 }
 
@@ -338,19 +415,19 @@ pub struct TraceArgs {
     pub traces: Vec<PathBuf>,
 
     /// Read traces as this format instead of detecting it
-    #[arg(long, value_enum, value_name = "FORMAT")]
+    #[arg(long, value_enum, value_name = "FORMAT", help_heading = INPUT)]
     pub input_format: Option<InputFormat>,
 
     /// What candump times are (absolute, zero, delta), as for decoding
-    #[arg(long, value_enum, value_name = "MODE")]
+    #[arg(long, value_enum, value_name = "MODE", help_heading = INPUT)]
     pub timestamps: Option<TimestampsArg>,
 
     /// A node's EMCY id moved by object 0x1014: COBID=NODE, e.g. 0x1A5=5 (repeatable)
-    #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE")]
+    #[arg(long, value_parser = parse_emcy_id, value_name = "COBID=NODE", help_heading = DECODING)]
     pub emcy_id: Vec<EmcyId>,
 
     /// Print at most N diagnostics (malformed lines...) per trace on stderr
-    #[arg(long, default_value_t = 20, value_name = "N")]
+    #[arg(long, default_value_t = 20, value_name = "N", help_heading = OUTPUT)]
     pub max_diagnostics: usize,
 
     /// Heartbeat timeout for every node in seconds, as for decoding
@@ -358,11 +435,11 @@ pub struct TraceArgs {
     pub heartbeat_timeout: Option<Span>,
 
     /// Vendor profile for every node (NAME) or one node (NODE=NAME), as for decoding
-    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME")]
+    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME", help_heading = DECODING)]
     pub profile: Vec<ProfileRequest>,
 
     /// A user profile (TOML), as for decoding
-    #[arg(long, value_name = "FILE.toml")]
+    #[arg(long, value_name = "FILE.toml", help_heading = DECODING)]
     pub profile_file: Vec<PathBuf>,
 
     /// Record and look up traces by their path relative to DIR, not to the current directory
@@ -378,7 +455,7 @@ pub struct BaselineArgs {
 
     /// Write the baseline to FILE instead of stdout (a regular file is replaced
     /// atomically; a FIFO or device is written into)
-    #[arg(long, short = 'o', value_name = "FILE")]
+    #[arg(long, short = 'o', value_name = "FILE", help_heading = OUTPUT)]
     pub output: Option<PathBuf>,
 }
 
@@ -403,29 +480,33 @@ Exit status:
   129, 130, 143  stopped by SIGHUP, Ctrl-C or SIGTERM: nothing compared or written";
 
 #[derive(Args, Debug)]
-#[command(after_help = CHECK_HELP)]
+#[command(
+    after_help = "Exit status: 0 no regression, 1 a regression, 2 error. `--help` says what each \
+                  difference is.",
+    after_long_help = CHECK_HELP
+)]
 pub struct CheckArgs {
-    /// The baseline to compare with (written by `emcy-decode baseline`)
-    #[arg(long, short = 'b', value_name = "FILE")]
-    pub baseline: PathBuf,
-
     #[command(flatten)]
     pub read: TraceArgs,
 
     /// Output format of the differences
-    #[arg(long, short = 'f', value_enum, default_value_t = CheckFormat::Text)]
+    #[arg(long, short = 'f', value_enum, default_value_t = CheckFormat::Text, help_heading = OUTPUT)]
     pub format: CheckFormat,
 
+    /// The baseline to compare with (written by `emcy-decode baseline`)
+    #[arg(long, short = 'b', value_name = "FILE", help_heading = CI)]
+    pub baseline: PathBuf,
+
     /// Accept new or newly active errors with this code (repeatable or comma list, hex)
-    #[arg(long, value_delimiter = ',', value_parser = parse_code_arg, value_name = "CODE")]
+    #[arg(long, value_delimiter = ',', value_parser = parse_code_arg, value_name = "CODE", help_heading = CI)]
     pub allow: Vec<u16>,
 
     /// Accept every difference of this node, on any channel (repeatable or comma list)
-    #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N")]
+    #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N", help_heading = CI)]
     pub allow_node: Vec<NodeId>,
 
     /// Rewrite the baseline from these traces after printing the differences; exit 0
-    #[arg(long)]
+    #[arg(long, help_heading = CI)]
     pub update: bool,
 
     /// Compare only the traces given: the baseline's other traces are not "not given"

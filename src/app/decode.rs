@@ -4,10 +4,11 @@
 //! bars, and the exit code from the inputs and `--fail-on`.
 
 use std::io::{self, IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
+use globset::{Glob, GlobSet, GlobSetBuilder};
 
 use super::cli::{ColorChoice, DecodeArgs, OutputFormat, View};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
@@ -21,13 +22,20 @@ use crate::report::json::JsonDocument;
 use crate::report::ndjson::Ndjson;
 use crate::report::svg::SvgReport;
 use crate::report::table::TableReport;
+use crate::trace::cancel::Cancel;
+use crate::trace::detect;
 use crate::trace::input::{self, ReadMode, Source};
 
 /// Reads every input into the chosen renderer; the exit code is the worst
 /// of all inputs.
 pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
     let opts = args.options()?;
-    let inputs = expand_inputs(&args.files, args.recursive);
+    // Before any input is read: an unknown --tz is a usage error.
+    let time_style = args.time_style()?;
+    let walk = Walk::new(args.recursive, &args.glob)?;
+    let mut log = DiagnosticLog::new(io::stderr());
+    log.quiet = args.quiet;
+    let inputs = walk.expand(&args.files, &opts.cancel, &mut log);
     if args.follow && !matches!(inputs.as_slice(), [Input::Source(Source::Path(_))]) {
         anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
     }
@@ -57,7 +65,7 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
             let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
-            let table = TableReport::new(out, color, live).time_style(args.time.into());
+            let table = TableReport::new(out, color, live).time_style(time_style);
             Box::new(if summary { table.summary_only() } else { table })
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
@@ -70,8 +78,6 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Svg => Box::new(SvgReport::new(out)),
         OutputFormat::Html => Box::new(HtmlReport::new(out)),
     };
-    let mut log = DiagnosticLog::new(io::stderr());
-    log.quiet = args.quiet;
     let how = HowToRead {
         threads: args.threads,
         live,
@@ -131,36 +137,140 @@ enum Input {
     },
 }
 
-/// FILE arguments to inputs: `-` is stdin, none is stdin; a directory is
-/// walked with `--recursive` (its files in name order) and otherwise left to
-/// fail as "is a directory" like any unreadable input.
-fn expand_inputs(files: &[PathBuf], recursive: bool) -> Vec<Input> {
-    if files.is_empty() {
-        return vec![Input::Source(Source::Stdin)];
-    }
-    let mut inputs = Vec::new();
-    for f in files {
-        if !(recursive && f.is_dir()) {
-            inputs.push(Input::Source(Source::from_arg(f)));
-            continue;
+/// How FILE arguments become inputs: `-r` and its `--glob` patterns.
+struct Walk {
+    recursive: bool,
+    /// Files under a directory are read when they match one of these (or
+    /// there are none)...
+    include: Option<GlobSet>,
+    /// ...and none of these (`--glob '!*.py'`, as in ripgrep).
+    exclude: Option<GlobSet>,
+}
+
+/// How many skipped files a note names; the count is always exact.
+const SKIPPED_NAMED: usize = 3;
+
+impl Walk {
+    fn new(recursive: bool, globs: &[String]) -> Result<Walk> {
+        let mut include = GlobSetBuilder::new();
+        let mut exclude = GlobSetBuilder::new();
+        let (mut includes, mut excludes) = (0, 0);
+        for pattern in globs {
+            let (set, n, text) = match pattern.strip_prefix('!') {
+                Some(rest) => (&mut exclude, &mut excludes, rest),
+                None => (&mut include, &mut includes, pattern.as_str()),
+            };
+            let glob =
+                Glob::new(text).map_err(|e| anyhow::anyhow!("--glob '{pattern}': {}", e.kind()))?;
+            set.add(glob);
+            *n += 1;
         }
-        for entry in walkdir::WalkDir::new(f).sort_by_file_name() {
-            match entry {
-                Ok(entry) if entry.file_type().is_file() => {
-                    inputs.push(Input::Source(Source::Path(entry.into_path())));
+        let build = |b: GlobSetBuilder, n: usize| -> Result<Option<GlobSet>> {
+            Ok(if n == 0 { None } else { Some(b.build()?) })
+        };
+        Ok(Walk {
+            recursive,
+            include: build(include, includes)?,
+            exclude: build(exclude, excludes)?,
+        })
+    }
+
+    /// `path` (relative to the directory walked) passes the `--glob`s.
+    fn selects(&self, path: &Path) -> bool {
+        self.include.as_ref().is_none_or(|g| g.is_match(path))
+            && !self.exclude.as_ref().is_some_and(|g| g.is_match(path))
+    }
+
+    /// FILE arguments to inputs: `-` is stdin, none is stdin; a directory
+    /// is walked with `--recursive` (its files in name order, those
+    /// `--glob` selects, files that are no trace skipped with one note per
+    /// directory) and otherwise an error that names `-r`.
+    fn expand(
+        &self,
+        files: &[PathBuf],
+        cancel: &Cancel,
+        log: &mut DiagnosticLog<io::Stderr>,
+    ) -> Vec<Input> {
+        if files.is_empty() {
+            return vec![Input::Source(Source::Stdin)];
+        }
+        let mut inputs = Vec::new();
+        for f in files {
+            if !f.is_dir() {
+                inputs.push(Input::Source(Source::from_arg(f)));
+                continue;
+            }
+            if !self.recursive {
+                inputs.push(Input::Unlisted {
+                    name: f.display().to_string(),
+                    error: "is a directory; -r (--recursive) reads the traces in it".into(),
+                });
+                continue;
+            }
+            let mut skipped = Vec::new();
+            for entry in walkdir::WalkDir::new(f).sort_by_file_name() {
+                match entry {
+                    Ok(entry) if entry.file_type().is_file() => {
+                        let relative = entry.path().strip_prefix(f).unwrap_or(entry.path());
+                        if !self.selects(relative) {
+                            continue;
+                        }
+                        let source = Source::Path(entry.into_path());
+                        if is_no_trace(&source, cancel) {
+                            skipped.push(source.display_name());
+                        } else {
+                            inputs.push(Input::Source(source));
+                        }
+                    }
+                    Ok(_) => {}
+                    Err(e) => inputs.push(Input::Unlisted {
+                        name: e.path().unwrap_or(f).display().to_string(),
+                        error: match e.io_error() {
+                            Some(io) => analyze::describe_io(io),
+                            None => e.to_string(),
+                        },
+                    }),
                 }
-                Ok(_) => {}
-                Err(e) => inputs.push(Input::Unlisted {
-                    name: e.path().unwrap_or(f).display().to_string(),
-                    error: match e.io_error() {
-                        Some(io) => analyze::describe_io(io),
-                        None => e.to_string(),
-                    },
-                }),
+            }
+            if let Some(note) = skipped_note(f, &skipped) {
+                log.note(&note);
             }
         }
+        inputs
     }
-    inputs
+}
+
+/// A file under a `-r` directory with no known format in its first lines
+/// (a script, a profile, a README). One that cannot be opened or read is
+/// kept, so its error is reported as for any input.
+fn is_no_trace(source: &Source, cancel: &Cancel) -> bool {
+    input::open(source, ReadMode::Finite, cancel)
+        .and_then(|opened| detect::looks_like_trace(opened.reader))
+        .is_ok_and(|trace| !trace)
+}
+
+/// `DIR: skipped 5 files that are no trace (no known format in their first
+/// lines): a.py, b.toml, c.md, ...`; nothing when none was skipped.
+fn skipped_note(dir: &Path, skipped: &[String]) -> Option<String> {
+    let (first, rest) = (
+        skipped.get(..SKIPPED_NAMED).unwrap_or(skipped),
+        skipped.len(),
+    );
+    if skipped.is_empty() {
+        return None;
+    }
+    let more = if rest > first.len() { ", ..." } else { "" };
+    Some(format!(
+        "{}: skipped {} that {} no trace (no known format in the first lines): {}{more}",
+        dir.display(),
+        if rest == 1 {
+            "1 file".to_string()
+        } else {
+            format!("{rest} files")
+        },
+        if rest == 1 { "is" } else { "are" },
+        first.join(", "),
+    ))
 }
 
 /// What all inputs amounted to, in argument order (inputs that could not

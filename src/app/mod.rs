@@ -44,7 +44,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Some(Command::Explain(args)) => explain::run(&args),
         Some(Command::Completions { shell }) => man::completions(shell),
-        Some(Command::Man) => man::man_page(),
+        Some(Command::Man(args)) => man::run(&args),
         Some(Command::Profiles(args)) => profiles::run(&args),
         Some(Command::Baseline(args)) => baseline::baseline(&args),
         Some(Command::Check(args)) => baseline::check(&args),

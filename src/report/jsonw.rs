@@ -703,6 +703,7 @@ impl JsonWriter {
             mailbox_messages,
             mailbox_retries,
             mailbox_empty_polls,
+            dropped,
         } = input.counts;
         o.u64("lines", lines);
         o.u64("frames", frames);
@@ -719,6 +720,10 @@ impl JsonWriter {
             o.u64("mailbox_messages", mailbox_messages);
             o.u64("mailbox_retries", mailbox_retries);
             o.u64("mailbox_empty_polls", mailbox_empty_polls);
+        }
+        // Only when frames were lost: other inputs' objects stay as they were.
+        if dropped > 0 {
+            o.u64("dropped", dropped);
         }
         self.time(o.key("first_time"), input.first_time);
         self.time(o.key("last_time"), input.last_time);

@@ -174,9 +174,15 @@ impl<W: Write> TableReport<W> {
                 }
             ),
         };
+        // Lost frames may have been EMCYs: said where the counts are read.
+        let dropped = match c.dropped {
+            0 => String::new(),
+            1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),
+            n => format!(", {n} frames dropped (DROPCOUNT): EMCYs may be missing"),
+        };
         writeln!(
             self.out,
-            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed",
+            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed{dropped}",
             c.emcy,
             input.nodes_with_errors(),
             input.nodes.len(),

@@ -2,6 +2,7 @@
 //! ISO-8601 by default, ASC's seconds since measurement start as written.
 
 use std::cell::{Cell, RefCell};
+use std::io::Write;
 
 use time::OffsetDateTime;
 
@@ -19,6 +20,10 @@ pub enum TimeStyle {
     Relative,
     /// ISO-8601 UTC, every time taken as Unix time
     Iso,
+    /// As `Auto`, in this time zone with its offset (`+01:00`), daylight
+    /// saving time followed (`--time local`, `--tz ZONE`). The zone is made
+    /// once per run, hence `'static`: the style stays `Copy`.
+    Local(&'static jiff::tz::TimeZone),
 }
 
 /// Times from 10^9 s (2001-09-09) on are taken for Unix time: no relative
@@ -78,7 +83,12 @@ impl TimeFormat {
         text.clear();
         match self.style {
             TimeStyle::Absolute => t.push_decimal(text),
-            TimeStyle::Auto if t.secs() < UNIX_FROM => t.push_decimal(text),
+            TimeStyle::Auto | TimeStyle::Local(_) if t.secs() < UNIX_FROM => t.push_decimal(text),
+            TimeStyle::Local(zone) => {
+                if !push_zoned(text, t, zone) {
+                    t.push_decimal(text);
+                }
+            }
             TimeStyle::Auto | TimeStyle::Iso => {
                 if !self.push_iso(text, t) {
                     t.push_decimal(text);
@@ -125,6 +135,34 @@ impl TimeFormat {
     }
 }
 
+/// `2023-11-14T23:13:21.250000+01:00`: the wall clock in `zone` at `t`,
+/// with the trace's fraction digits and the zone's offset then (jiff reads
+/// the zone's rules, so a trace across a DST change shows both offsets);
+/// `false` (nothing written) beyond the calendar.
+fn push_zoned(out: &mut Vec<u8>, t: Timestamp, zone: &jiff::tz::TimeZone) -> bool {
+    let (secs, atto, digits) = t.to_raw();
+    let Some(unix) = i64::try_from(secs).ok() else {
+        return false;
+    };
+    let Ok(instant) = jiff::Timestamp::from_second(unix) else {
+        return false;
+    };
+    let offset = zone.to_offset(instant).seconds();
+    let Some(local) = unix
+        .checked_add(i64::from(offset))
+        .and_then(|s| u64::try_from(s).ok())
+        .and_then(calendar_second)
+    else {
+        return false;
+    };
+    out.extend_from_slice(&local);
+    crate::trace::time::push_fraction(out, atto, digits);
+    let sign = if offset < 0 { '-' } else { '+' };
+    let abs = offset.unsigned_abs();
+    let _ = write!(out, "{sign}{:02}:{:02}", abs / 3600, abs / 60 % 60);
+    true
+}
+
 /// `YYYY-MM-DDTHH:MM:SS` of a Unix second; `None` beyond the calendar.
 fn calendar_second(secs: u64) -> Option<[u8; 19]> {
     let d = OffsetDateTime::from_unix_timestamp(i64::try_from(secs).ok()?).ok()?;
@@ -142,6 +180,27 @@ fn calendar_second(secs: u64) -> Option<[u8; 19]> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn local_times_carry_the_zone_offset_of_their_instant() {
+        let berlin: &'static jiff::tz::TimeZone =
+            Box::leak(Box::new(jiff::tz::TimeZone::get("Europe/Berlin").unwrap()));
+        let f = TimeFormat::new(TimeStyle::Local(berlin));
+        // 2023-11-14 is winter time (+01:00); 2023-07-01 summer (+02:00).
+        assert_eq!(
+            f.show(ts("1700000001.250000")),
+            "2023-11-14T23:13:21.250000+01:00"
+        );
+        assert_eq!(f.show(ts("1688169600.5")), "2023-07-01T02:00:00.5+02:00");
+        // Not Unix times (an ASC clock): as written, as for auto.
+        assert_eq!(f.show(ts("12.5")), "12.5");
+        let west: &'static jiff::tz::TimeZone = Box::leak(Box::new(
+            jiff::tz::TimeZone::get("America/St_Johns").unwrap(),
+        ));
+        let f = TimeFormat::new(TimeStyle::Local(west));
+        assert_eq!(f.show(ts("1700000000")), "2023-11-14T18:43:20-03:30");
+    }
+
     use super::*;
 
     fn ts(s: &str) -> Timestamp {

@@ -124,6 +124,18 @@ pub(crate) fn is_candump_non_frame(line: &[u8]) -> bool {
         || t.starts_with(b"DROPCOUNT")
 }
 
+/// The frames a candump `DROPCOUNT:` line says the kernel dropped
+/// (`DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 7)`:
+/// 3, the total being the sum of these); `None` for any other line. Frames
+/// are lost there, and EMCYs may be among them.
+pub fn dropped_frames(line: &[u8]) -> Option<u64> {
+    let rest = trim_start(line).strip_prefix(b"DROPCOUNT")?;
+    let text = std::str::from_utf8(rest).ok()?;
+    let mut words = text.split_whitespace();
+    words.find(|w| *w == "dropped")?;
+    words.next()?.parse().ok()
+}
+
 #[inline]
 fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
     match canonical(line, interest) {
@@ -693,6 +705,22 @@ mod tests {
         ] {
             assert_eq!(parse(line), Parsed::Skipped, "{line:?}");
         }
+    }
+
+    #[test]
+    fn dropcount_lines_say_how_many_frames_were_dropped() {
+        let n = |l: &str| dropped_frames(l.as_bytes());
+        assert_eq!(
+            n("DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 7)"),
+            Some(3)
+        );
+        assert_eq!(
+            n("  DROPCOUNT: dropped 1 CAN frame on 'vcan0' socket (total drops 1)\r"),
+            Some(1)
+        );
+        assert_eq!(n("DROPCOUNT: garbled"), None);
+        assert_eq!(n("(1.0) can0 081#00"), None);
+        assert_eq!(n("# DROPCOUNT: dropped 3"), None);
     }
 
     #[test]

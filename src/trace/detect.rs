@@ -64,6 +64,35 @@ pub fn sniff_binary<R: Read>(mut input: R) -> (Sniffed<R>, io::Result<Option<For
     (io::Cursor::new(prefix).chain(input), format)
 }
 
+/// How much of a file [`looks_like_trace`] reads.
+const TRACE_SNIFF_BYTES: u64 = 64 * 1024;
+const TRACE_SNIFF_LINES: usize = 64;
+
+/// Whether `input` (gzip already decoded) starts like a trace: a binary
+/// format's magic, or a line among its first 64 (or 64 KiB) that a text
+/// format reads as a frame or as a header only it writes. For skipping
+/// files that are no trace (a script, a README) in a directory read with
+/// `-r`; an input named on its own is always read, so its errors show.
+pub fn looks_like_trace<R: Read>(input: R) -> io::Result<bool> {
+    let (rest, binary) = sniff_binary(input);
+    if binary?.is_some() {
+        return Ok(true);
+    }
+    let mut head = Vec::new();
+    rest.take(TRACE_SNIFF_BYTES).read_to_end(&mut head)?;
+    let mut detector = Detector::auto();
+    let interest = Interest::all();
+    for line in head.split(|&b| b == b'\n').take(TRACE_SNIFF_LINES) {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        if matches!(detector.parse(line, &interest), Parsed::Frame(_))
+            || detector.format().is_some()
+        {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
 /// The formats whose times may be `-td` deltas.
 fn is_candump(format: Option<Format>) -> bool {
     matches!(format, Some(Format::CandumpLog | Format::CandumpScreen))
@@ -294,6 +323,28 @@ impl Detector {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn traces_are_told_from_other_files_by_their_first_lines() {
+        let is = |b: &[u8]| looks_like_trace(b).unwrap();
+        assert!(is(b"(1469439874.299654) can0 081#1043090100000000\n"));
+        assert!(is(
+            b"# a comment\r\n  can0  081   [8]  10 43 09 01 00 00 00 00\r\n"
+        ));
+        assert!(is(
+            b"date Wed Nov 15 10:00:00 2023\nbase hex  timestamps absolute\n"
+        ));
+        assert!(is(b"LOGG\0\0\0\0"), "BLF by its magic");
+        assert!(!is(
+            b"#!/usr/bin/env python3\nimport struct\n\nprint('hi')\n"
+        ));
+        assert!(!is(b"name = \"acme\"\n[codes]\n"));
+        assert!(!is(b""));
+        // Only the first lines count: a frame after 64 lines of prose is no trace.
+        let mut late = b"prose\n".repeat(64);
+        late.extend_from_slice(b"(1.0) can0 081#10430901\n");
+        assert!(!is(&late));
+    }
+
     use super::*;
 
     fn kinds(lines: &[&str], detector: &mut Detector) -> Vec<(String, Option<Format>)> {

@@ -335,6 +335,209 @@ fn help_documents_exit_codes_and_examples() {
         .stdout(predicate::str::contains("emcy-decode explain 4310"));
 }
 
+#[test]
+fn short_help_is_brief_and_long_help_complete_both_grouped() {
+    let run = |flag: &str| {
+        let out = emcy_decode().arg(flag).output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{flag}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let short = run("-h");
+    let long = run("--help");
+    for heading in [
+        "Input options:",
+        "Decoding options:",
+        "Output options:",
+        "CI options:",
+        "Performance options:",
+    ] {
+        assert!(short.contains(heading), "-h lacks {heading}:\n{short}");
+        assert!(long.contains(heading), "--help lacks {heading}");
+    }
+    // Headings in the order a reader needs them.
+    let at = |h: &str| short.find(h).unwrap();
+    assert!(at("Input options:") < at("Decoding options:"));
+    assert!(at("Decoding options:") < at("Output options:"));
+    assert!(at("Output options:") < at("CI options:"));
+    assert!(at("CI options:") < at("Performance options:"));
+    assert!(
+        !short.contains("Examples:"),
+        "-h repeats the examples:\n{short}"
+    );
+    assert!(short.contains("Exit status: 0"), "-h names the exit codes");
+    assert!(long.contains("Examples:") && long.contains("Formats read"));
+    // -h gives each option its summary, --help the details too.
+    assert!(!short.contains("more than 4 per core"));
+    assert!(long.contains("more than 4 per core"));
+    assert!(short.lines().count() * 2 < long.lines().count());
+}
+
+#[test]
+fn man_all_writes_a_page_per_subcommand_and_man_cmd_prints_one() {
+    let dir = tempfile::tempdir().unwrap();
+    emcy_decode()
+        .args(["man", "--all"])
+        .arg(dir.path())
+        .assert()
+        .code(0);
+    for name in [
+        "emcy-decode",
+        "emcy-decode-explain",
+        "emcy-decode-check",
+        "emcy-decode-baseline",
+    ] {
+        let page = std::fs::read_to_string(dir.path().join(format!("{name}.1"))).unwrap();
+        assert!(page.contains(&format!("\n.TH {name} 1")), "{name}");
+    }
+    emcy_decode()
+        .args(["man", "explain"])
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("\n.TH emcy-decode-explain 1"));
+    emcy_decode().args(["man", "nope"]).assert().code(2);
+    // A directory is created; a path through a file cannot be.
+    emcy_decode()
+        .args(["man", "--all"])
+        .arg(dir.path().join("new/man1"))
+        .assert()
+        .code(0);
+    assert!(dir.path().join("new/man1/emcy-decode-check.1").is_file());
+    emcy_decode()
+        .args(["man", "--all"])
+        .arg(dir.path().join("emcy-decode.1/x"))
+        .assert()
+        .code(2);
+}
+
+#[test]
+fn a_channel_or_node_filter_that_matches_nothing_names_what_the_input_has() {
+    let stderr = |args: &[&str]| {
+        let out = emcy_decode().args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    assert_eq!(
+        stderr(&["--channel", "nope", "fixtures/s300.log"]),
+        "fixtures/s300.log: --channel nope matches no channel; the channels with EMCY or \
+         boot-up frames: can0\n"
+    );
+    assert_eq!(
+        stderr(&["--node", "9,10", "fixtures/festo.asc"]),
+        "fixtures/festo.asc: --node 9,10 matches no node; the nodes that sent EMCY or \
+         boot-up frames: 5\n"
+    );
+    // Each input read side by side says it too.
+    let both = stderr(&["--node", "9", "fixtures/s300.log", "fixtures/festo.asc"]);
+    assert!(
+        both.contains("fixtures/s300.log: --node 9 matches no node"),
+        "{both}"
+    );
+    assert!(
+        both.contains("fixtures/festo.asc: --node 9 matches no node"),
+        "{both}"
+    );
+    // A filter that matches says nothing; nor does one in an input without nodes.
+    assert_eq!(
+        stderr(&["--node", "1", "--channel", "can0", "fixtures/s300.log"]),
+        ""
+    );
+    let quiet = emcy_decode()
+        .args(["--node", "9", "-"])
+        .write_stdin("(1.0) can0 181#05\n")
+        .output()
+        .unwrap();
+    assert_eq!(String::from_utf8(quiet.stderr).unwrap(), "");
+}
+
+#[test]
+fn dropcount_lines_are_counted_as_dropped_frames_and_warned_about() {
+    let trace = "(1.0) can0 081#1043090000000000\n\
+                 DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 3)\n\
+                 (2.0) can0 081#0000000000000000\n\
+                 DROPCOUNT: dropped 1 CAN frame on 'can0' socket (total drops 4)\n";
+    for threads in ["1", "2"] {
+        let out = emcy_decode()
+            .args(["-f", "ndjson", "-j", threads, "-"])
+            .write_stdin(trace)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        let input: Value = String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str::<Value>(l).unwrap())
+            .find(|o| o["type"] == "input")
+            .unwrap();
+        assert_eq!(input["dropped"], 4, "-j {threads}: the sum, not the total");
+        assert_eq!(input["skipped"], 2, "the lines stay skipped lines");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(
+            stderr,
+            "<stdin>: warning: candump reported 4 frames dropped by the kernel (DROPCOUNT \
+             lines): EMCYs may be missing\n"
+        );
+    }
+    emcy_decode()
+        .arg("-")
+        .write_stdin(trace)
+        .assert()
+        .stdout(predicate::str::contains(
+            ", 4 frames dropped (DROPCOUNT): EMCYs may be missing\n",
+        ));
+    // Without drops, no key.
+    let out = emcy_decode()
+        .args(["-f", "ndjson", "fixtures/s300.log"])
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8(out.stdout).unwrap().contains("dropped"));
+}
+
+#[test]
+fn local_times_in_the_tz_zone_or_the_system_one() {
+    let third_line = |args: &[&str], tz: Option<&str>| {
+        let mut cmd = emcy_decode();
+        if let Some(tz) = tz {
+            cmd.env("TZ", tz);
+        }
+        let out = cmd.args(args).arg("fixtures/s300.log").output().unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        text.lines()
+            .find(|l| l.contains(" 0x4310 "))
+            .unwrap()
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(
+        third_line(&["--tz", "Europe/Berlin"], None),
+        "2023-11-14T23:13:21.250000+01:00"
+    );
+    assert_eq!(
+        third_line(&["--time", "local"], Some("America/New_York")),
+        "2023-11-14T17:13:21.250000-05:00"
+    );
+    assert_eq!(
+        third_line(
+            &["--time", "local", "--tz", "UTC"],
+            Some("America/New_York")
+        ),
+        "2023-11-14T22:13:21.250000+00:00",
+        "--tz wins over TZ"
+    );
+    emcy_decode()
+        .args(["--tz", "Mars/Olympus", "fixtures/s300.log"])
+        .assert()
+        .code(2)
+        .stdout("")
+        .stderr(predicate::str::contains("--tz Mars/Olympus"));
+    emcy_decode()
+        .args(["--tz", "UTC", "--time", "relative", "fixtures/s300.log"])
+        .assert()
+        .code(2);
+}
+
 // ---- inputs ----------------------------------------------------------------------
 
 #[test]

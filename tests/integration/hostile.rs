@@ -948,7 +948,9 @@ fn a_directory_is_an_error_and_other_files_are_still_read() {
         .arg("fixtures")
         .assert()
         .code(2)
-        .stderr(predicates::str::diff("error: fixtures: is a directory\n"));
+        .stderr(predicates::str::diff(
+            "error: fixtures: is a directory; -r (--recursive) reads the traces in it\n",
+        ));
     let out = emcy_decode()
         .args(["--format", "ndjson", "fixtures", "fixtures/stoeber.log"])
         .output()
@@ -956,7 +958,7 @@ fn a_directory_is_an_error_and_other_files_are_still_read() {
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(
         String::from_utf8(out.stderr).unwrap(),
-        "error: fixtures: is a directory\n"
+        "error: fixtures: is a directory; -r (--recursive) reads the traces in it\n"
     );
     let objects = ndjson(&out.stdout);
     assert_eq!(of_type(&objects, "emcy").len(), 2);
@@ -964,7 +966,10 @@ fn a_directory_is_an_error_and_other_files_are_still_read() {
     assert_eq!(inputs.len(), 2, "every argument has an input object");
     assert_eq!(
         (&inputs[0]["file"], &inputs[0]["error"]),
-        (&Value::from("fixtures"), &Value::from("is a directory"))
+        (
+            &Value::from("fixtures"),
+            &Value::from("is a directory; -r (--recursive) reads the traces in it")
+        )
     );
     assert_eq!(inputs[1]["file"], "fixtures/stoeber.log");
     assert_eq!(inputs[1]["error"], Value::Null);

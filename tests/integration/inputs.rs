@@ -143,3 +143,92 @@ fn strict_says_why_it_exits_2() {
             r"(?m)^error: --strict: \d+ malformed lines? and \d+ EMCY frames? too short to decode$",
         ).unwrap());
 }
+
+/// The input objects' file names, relative to `dir`.
+fn names(inputs: &[Value], dir: &Path) -> Vec<String> {
+    inputs
+        .iter()
+        .map(|i| {
+            let file = Path::new(i["file"].as_str().unwrap());
+            file.strip_prefix(dir).unwrap().display().to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn files_under_r_that_are_no_trace_are_skipped_with_one_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.log"), emcy_line(1)).unwrap();
+    // Traces by content whatever their names; the rest whatever theirs.
+    std::fs::write(d.join("bench.py"), emcy_line(2)).unwrap();
+    std::fs::write(d.join("make.py"), "#!/usr/bin/env python3\nimport struct\n").unwrap();
+    std::fs::write(
+        d.join("notes.log"),
+        "Rig 3, second shift: nothing to report\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("empty.log"), "").unwrap();
+    std::fs::create_dir(d.join("profiles")).unwrap();
+    std::fs::write(d.join("profiles/acme.toml"), "name = \"acme\"\n").unwrap();
+    let (code, inputs, events, stderr) = run(&["-r", d.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(events, 2);
+    assert_eq!(names(&inputs, d), ["a.log", "bench.py"]);
+    let notes: Vec<&str> = stderr.lines().filter(|l| l.contains("skipped")).collect();
+    assert_eq!(notes.len(), 1, "{stderr}");
+    let dir_name = d.display().to_string();
+    assert!(
+        notes[0].starts_with(&format!("{dir_name}: skipped 4 files that are no trace")),
+        "{stderr}"
+    );
+    // A few names, not all: the count is what matters.
+    assert!(
+        notes[0].contains("empty.log") && notes[0].ends_with(", ..."),
+        "{stderr}"
+    );
+    assert!(!notes[0].contains("acme.toml"), "{stderr}");
+    // Named on its own, a file is read (and its trouble shown), never skipped.
+    let notes_log = d.join("notes.log");
+    let (code, _, _, stderr) = run(&[notes_log.to_str().unwrap()]);
+    assert_eq!(code, 2, "{stderr}");
+}
+
+#[test]
+fn glob_selects_files_under_r_and_a_bang_excludes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("rig")).unwrap();
+    for (name, t) in [
+        ("a.log", 1),
+        ("b.asc.log", 2),
+        ("rig/c.log", 3),
+        ("rig/d.txt", 4),
+    ] {
+        std::fs::write(d.join(name), emcy_line(t)).unwrap();
+    }
+    let dir_arg = d.to_str().unwrap();
+    let read = |globs: &[&str]| {
+        let mut args = vec!["-r", dir_arg];
+        for g in globs {
+            args.extend(["--glob", g]);
+        }
+        let (code, inputs, _, stderr) = run(&args);
+        assert_eq!(code, 0, "{globs:?}: {stderr}");
+        names(&inputs, d)
+    };
+    assert_eq!(read(&["*.log"]), ["a.log", "b.asc.log", "rig/c.log"]);
+    assert_eq!(read(&["rig/*"]), ["rig/c.log", "rig/d.txt"]);
+    assert_eq!(read(&["*.txt", "a.*"]), ["a.log", "rig/d.txt"]);
+    assert_eq!(read(&["*.log", "!rig/**"]), ["a.log", "b.asc.log"]);
+    assert_eq!(read(&["!*.asc.log"]), ["a.log", "rig/c.log", "rig/d.txt"]);
+    // A pattern that is no glob, or a glob without -r: usage errors.
+    emcy_decode()
+        .args(["-r", dir_arg, "--glob", "["])
+        .assert()
+        .code(2);
+    emcy_decode()
+        .args(["--glob", "*.log", dir_arg])
+        .assert()
+        .code(2);
+}

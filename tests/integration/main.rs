@@ -33,6 +33,7 @@ mod memory;
 mod mf4;
 mod output;
 mod pcap;
+mod readme;
 mod roundtrip;
 mod timestamps;
 mod trc;
