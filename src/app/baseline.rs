@@ -18,7 +18,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, anyhow, bail};
 
 use super::cli::{BaselineArgs, CheckArgs, CheckFormat, TraceArgs};
-use super::decode::auto_threads;
+use super::decode::{Input, Walk, auto_threads};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use crate::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
 use crate::baseline::Baseline;
@@ -37,8 +37,28 @@ fn read_traces(
 ) -> Result<Result<Vec<(String, InputReport)>, ExitCode>> {
     let cwd = std::env::current_dir().ok();
     let root = args.root.as_deref();
+    let opts = args.options()?;
+    let mut log = DiagnosticLog::new(io::stderr());
+    // Directories (-r) become their traces, in name order; a part that
+    // cannot be listed is an unreadable trace.
+    let mut traces: Vec<PathBuf> = Vec::new();
+    let walk = Walk::new(args.recursive, &args.glob)?;
+    let mut unlisted = false;
+    for input in walk.expand(&args.traces, &opts.cancel, &mut log) {
+        match input {
+            Input::Source(Source::Path(p)) => traces.push(p),
+            Input::Source(Source::Stdin) => traces.push(PathBuf::from("-")),
+            Input::Unlisted { name, error } => {
+                log.error(&format!("{name}: {error}; {unwritten}"));
+                unlisted = true;
+            }
+        }
+    }
+    if unlisted {
+        return Ok(Err(ExitCode::from(EXIT_ERROR)));
+    }
     let mut keys: BTreeMap<String, &Path> = BTreeMap::new();
-    for arg in &args.traces {
+    for arg in &traces {
         let key = trace_key_under(arg, cwd.as_deref(), root);
         if let Some(first) = keys.insert(key.clone(), arg) {
             bail!(
@@ -48,12 +68,10 @@ fn read_traces(
             );
         }
     }
-    let opts = args.options()?;
     let caught = signals::catch(&opts.cancel);
-    let mut log = DiagnosticLog::new(io::stderr());
     let mut reports = Vec::new();
     let mut failed = false;
-    for arg in &args.traces {
+    for arg in &traces {
         let source = Source::from_arg(arg);
         // A pipe may be quiet for long: read so that a signal ends the wait.
         let mode = if matches!(source, Source::Stdin) && input::stdin_is_stream() {

@@ -446,6 +446,16 @@ pub struct TraceArgs {
     /// (the same keys wherever baseline and check run)
     #[arg(long, value_name = "DIR")]
     pub root: Option<PathBuf>,
+
+    /// Read directories given as TRACE recursively, as for decoding (files that are no trace
+    /// skipped with a note)
+    #[arg(long, short = 'r')]
+    pub recursive: bool,
+
+    /// Under -r, read only files whose path below the directory matches GLOB (`!GLOB`
+    /// excludes; repeatable), as for decoding
+    #[arg(long, value_name = "GLOB", requires = "recursive")]
+    pub glob: Vec<String>,
 }
 
 #[derive(Args, Debug)]

@@ -126,7 +126,7 @@ fn report_stdout() -> Box<dyn Write> {
 
 /// One input of the run, in argument order.
 #[derive(Debug, PartialEq, Eq)]
-enum Input {
+pub(super) enum Input {
     Source(Source),
     /// A part of a `--recursive` directory that could not be listed (an
     /// unreadable subdirectory, a path too long): reported like a file that
@@ -138,7 +138,7 @@ enum Input {
 }
 
 /// How FILE arguments become inputs: `-r` and its `--glob` patterns.
-struct Walk {
+pub(super) struct Walk {
     recursive: bool,
     /// Files under a directory are read when they match one of these (or
     /// there are none)...
@@ -151,7 +151,7 @@ struct Walk {
 const SKIPPED_NAMED: usize = 3;
 
 impl Walk {
-    fn new(recursive: bool, globs: &[String]) -> Result<Walk> {
+    pub(super) fn new(recursive: bool, globs: &[String]) -> Result<Walk> {
         let mut include = GlobSetBuilder::new();
         let mut exclude = GlobSetBuilder::new();
         let (mut includes, mut excludes) = (0, 0);
@@ -185,7 +185,7 @@ impl Walk {
     /// is walked with `--recursive` (its files in name order, those
     /// `--glob` selects, files that are no trace skipped with one note per
     /// directory) and otherwise an error that names `-r`.
-    fn expand(
+    pub(super) fn expand(
         &self,
         files: &[PathBuf],
         cancel: &Cancel,

@@ -1255,3 +1255,44 @@ fn only_given_checks_a_subset_and_updates_only_it() {
     assert_eq!(traces.len(), 2, "the other trace's record is kept");
     assert!(traces["traces/rig.log"]["nodes"]["can0"]["1"]["errors"]["0x2310"].is_object());
 }
+
+#[test]
+fn baseline_and_check_read_directories_with_r_as_decoding_does() {
+    let dir = workspace("rig.log");
+    fs::create_dir(dir.path().join("traces/more")).unwrap();
+    fs::copy(
+        fixture("improved.log"),
+        dir.path().join("traces/more/other.log"),
+    )
+    .unwrap();
+    fs::write(dir.path().join("traces/notes.md"), "# not a trace\n").unwrap();
+    cmd_in(&dir)
+        .args(["baseline", "-r", "traces", "-o", "baseline.json"])
+        .assert()
+        .code(0)
+        .stderr(predicate::str::contains("skipped 1 file that is no trace"));
+    let v: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("baseline.json")).unwrap())
+            .unwrap();
+    let keys: Vec<&String> = v["traces"].as_object().unwrap().keys().collect();
+    assert_eq!(keys, ["traces/more/other.log", "traces/rig.log"]);
+    cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "-r", "traces"])
+        .assert()
+        .code(0);
+    // --glob picks a subset; with --only-given it is checked alone.
+    cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "-r", "traces"])
+        .args(["--glob", "more/*", "--only-given"])
+        .assert()
+        .code(0)
+        .stdout("check: 0 regressions, 0 improvements, 0 changes; 1 of 1 trace matched\n");
+    // Without -r a directory is refused, nothing compared.
+    cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "traces"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "is a directory; -r (--recursive) reads",
+        ));
+}
