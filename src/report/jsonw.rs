@@ -8,8 +8,10 @@
 
 use std::collections::HashMap;
 use std::io;
+use std::ops::Range;
 use std::sync::Arc;
 
+use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::{
     BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
     InputReport, NodeReport,
@@ -239,6 +241,10 @@ pub struct JsonWriter {
     /// `,"channel":"…","node":` for the last channel seen.
     channel: (String, Vec<u8>),
     seconds: SecondsText,
+    /// `YYYY-MM-DDTHH:MM:SS` of the last Unix seconds `_text`s showed, by
+    /// second modulo 4: consecutive events share one, and the calendar is
+    /// the costly part (an outage event names two times, seconds apart).
+    iso_seconds: [Option<(u64, [u8; 19])>; 4],
 }
 
 /// `,"key":` of a member of the event object, one literal when compact.
@@ -313,6 +319,56 @@ impl JsonWriter {
             newline(out, level + 1);
         }
         out.push(b']');
+    }
+
+    /// A time's `_text` (README, JSON contract), the time's number just
+    /// written at `number` in `out`: a JSON string of ISO-8601 UTC for a
+    /// Unix time, else the number's own digits; `null` for none. Exact
+    /// where a JSON number read as a double is not. The fraction is copied
+    /// from the number, so only the calendar second is computed (once per
+    /// second).
+    fn time_text(&mut self, out: &mut Vec<u8>, number: Range<usize>, t: Option<Timestamp>) {
+        let Some(t) = t else {
+            out.extend_from_slice(b"null");
+            return;
+        };
+        out.push(b'"');
+        let secs = t.secs();
+        let slot = &mut self.iso_seconds[(secs % 4) as usize];
+        let second = match *slot {
+            Some((s, text)) if s == secs => Some(text),
+            _ if secs < UNIX_FROM => None,
+            _ => {
+                let text = calendar_second(secs);
+                *slot = text.map(|text| (secs, text));
+                text
+            }
+        };
+        match second {
+            Some(second) => {
+                out.extend_from_slice(&second);
+                let dot = out
+                    .get(number.clone())
+                    .and_then(|n| n.iter().position(|&b| b == b'.'));
+                if let Some(dot) = dot {
+                    out.extend_from_within(number.start + dot..number.end);
+                }
+                out.push(b'Z');
+            }
+            None => out.extend_from_within(number),
+        }
+        out.push(b'"');
+    }
+
+    /// `"key":<time>,"key_text":"<time>"` in an object.
+    fn time_pair(&mut self, o: &mut Obj<'_>, key: &str, t: Option<Timestamp>) {
+        let buf = o.key(key);
+        let at = buf.len();
+        self.time(buf, t);
+        let number = at..buf.len();
+        let text_key = format!("{key}_text");
+        let buf = o.key(&text_key);
+        self.time_text(buf, number, t);
     }
 
     /// A time, `null` for none; the seconds' text is kept for the next one.
@@ -400,7 +456,11 @@ impl JsonWriter {
         self.emcy_prefix(out, ev.file);
         push_u64(out, ev.line);
         key!(self, out, "time");
+        let at = out.len();
         self.time(out, ev.time);
+        let number = at..out.len();
+        key!(self, out, "time_text");
+        self.time_text(out, number, ev.time);
         self.channel(out, ev.channel);
         push_u64(out, u64::from(ev.node));
         key!(self, out, "cob_id");
@@ -447,7 +507,7 @@ impl JsonWriter {
         o.str("type", "boot");
         o.str("file", ev.file);
         o.u64("line", ev.line);
-        self.time(o.key("time"), ev.time);
+        self.time_pair(&mut o, "time", ev.time);
         o.str("channel", ev.channel);
         o.u64("node", u64::from(ev.node));
         push_codes(o.key("cleared"), ev.cleared);
@@ -461,7 +521,7 @@ impl JsonWriter {
         o.str("type", ev.health.slug());
         o.str("file", ev.file);
         o.u64("line", ev.line);
-        self.time(o.key("time"), ev.time);
+        self.time_pair(&mut o, "time", ev.time);
         o.str("channel", ev.channel);
         o.u64("node", u64::from(ev.node));
         match ev.health {
@@ -475,7 +535,7 @@ impl JsonWriter {
                 timeout,
                 timeout_source,
             } => {
-                self.time(o.key("last_seen"), *last_seen);
+                self.time_pair(&mut o, "last_seen", *last_seen);
                 o.u64("last_seen_line", *last_seen_line);
                 push_span(o.key("timeout"), Some(*timeout));
                 o.str("timeout_source", timeout_source.slug());
@@ -571,12 +631,14 @@ impl JsonWriter {
             }
             None => o.key("longest_error").extend_from_slice(b"null"),
         }
-        self.time(
-            o.key("first_emcy"),
+        self.time_pair(
+            &mut o,
+            "first_emcy",
             node.stats.first_emcy.and_then(|a| a.time),
         );
-        self.time(
-            o.key("last_emcy"),
+        self.time_pair(
+            &mut o,
+            "last_emcy",
             node.stats.last_emcy.and_then(|a| a.time),
         );
         match node.nmt_state {
@@ -591,7 +653,7 @@ impl JsonWriter {
             Some(h) => {
                 let mut ho = Obj::new(o.key("error_history"));
                 history_members(&mut ho, h);
-                self.time(ho.key("time"), h.time);
+                self.time_pair(&mut ho, "time", h.time);
                 ho.u64("line", h.line);
                 ho.end();
             }
@@ -617,8 +679,8 @@ impl JsonWriter {
                 list.push(b',');
             }
             let mut oo = Obj::new(list);
-            self.time(oo.key("start"), Some(outage.start));
-            self.time(oo.key("end"), outage.end);
+            self.time_pair(&mut oo, "start", Some(outage.start));
+            self.time_pair(&mut oo, "end", outage.end);
             push_span(oo.key("duration"), outage.duration());
             oo.end();
         }
@@ -652,9 +714,17 @@ impl JsonWriter {
         out.extend_from_slice(b",\"description\":");
         out.extend_from_slice(texts.get(iv.code));
         out.extend_from_slice(b",\"start\":");
+        let at = out.len();
         self.time(out, iv.start.time);
+        let number = at..out.len();
+        out.extend_from_slice(b",\"start_text\":");
+        self.time_text(out, number, iv.start.time);
         out.extend_from_slice(b",\"end\":");
+        let at = out.len();
         self.time(out, end_time);
+        let number = at..out.len();
+        out.extend_from_slice(b",\"end_text\":");
+        self.time_text(out, number, end_time);
         out.extend_from_slice(b",\"duration\":");
         match (iv.start.time, end_time) {
             (Some(start), Some(end)) => end.push_since(start, out),
@@ -725,8 +795,8 @@ impl JsonWriter {
         if dropped > 0 {
             o.u64("dropped", dropped);
         }
-        self.time(o.key("first_time"), input.first_time);
-        self.time(o.key("last_time"), input.last_time);
+        self.time_pair(&mut o, "first_time", input.first_time);
+        self.time_pair(&mut o, "last_time", input.last_time);
         // Only where times were summed: the times are not as written.
         if let Some(mode) = input.timestamps {
             o.str("timestamps", mode.name());

@@ -28,7 +28,7 @@ pub enum TimeStyle {
 
 /// Times from 10^9 s (2001-09-09) on are taken for Unix time: no relative
 /// trace clock (ASC, candump -td/-tz) runs for 31 years.
-const UNIX_FROM: u64 = 1_000_000_000;
+pub(crate) const UNIX_FROM: u64 = 1_000_000_000;
 
 /// A style and, for `relative`, the origin of the current input.
 #[derive(Clone, Debug, Default)]
@@ -164,7 +164,7 @@ fn push_zoned(out: &mut Vec<u8>, t: Timestamp, zone: &jiff::tz::TimeZone) -> boo
 }
 
 /// `YYYY-MM-DDTHH:MM:SS` of a Unix second; `None` beyond the calendar.
-fn calendar_second(secs: u64) -> Option<[u8; 19]> {
+pub(crate) fn calendar_second(secs: u64) -> Option<[u8; 19]> {
     let d = OffsetDateTime::from_unix_timestamp(i64::try_from(secs).ok()?).ok()?;
     let text = format!(
         "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}",

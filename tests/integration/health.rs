@@ -159,7 +159,7 @@ fn pulled_cable_is_an_outage_until_the_boot_up() {
     assert_eq!(
         hb["outages"],
         serde_json::from_str::<Value>(
-            r#"[{"start":1700000001.652000,"end":1700000002.500000,"duration":0.848000}]"#
+            r#"[{"start":1700000001.652000,"start_text":"2023-11-14T22:13:21.652000Z","end":1700000002.500000,"end_text":"2023-11-14T22:13:22.500000Z","duration":0.848000}]"#
         )
         .unwrap_or_default()
     );

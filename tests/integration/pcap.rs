@@ -118,15 +118,17 @@ fn times_are_exact_nanoseconds_and_binary_fractions() {
     let text = String::from_utf8(out.stdout).unwrap();
     // can0: if_tsresol 9; can1: 2^-10 s; interface 3: if_tsoffset.
     assert!(
-        text.contains(r#""time":1700000001.250000000,"channel":"can0""#),
+        text.contains(r#""time":1700000001.250000000,"time_text":"2023-11-14T22:13:21.250000000Z","channel":"can0""#),
         "{text}"
     );
     assert!(
-        text.contains(r#""time":1700000008.0009765625,"channel":"can1""#),
+        text.contains(r#""time":1700000008.0009765625,"time_text":"2023-11-14T22:13:28.0009765625Z","channel":"can1""#),
         "{text}"
     );
     assert!(
-        text.contains(r#""time":1700000009.500000,"channel":"3""#),
+        text.contains(
+            r#""time":1700000009.500000,"time_text":"2023-11-14T22:13:29.500000Z","channel":"3""#
+        ),
         "{text}"
     );
 }

@@ -351,7 +351,7 @@ fn heartbeats_and_other_sdo_traffic_only_move_the_time_span() {
     assert_split_independent("heartbeats", &t);
     let (out, _) = run(&t, 2, 64);
     assert!(
-        out.contains("\"first_time\":999.250000,\"last_time\":2000.125000"),
+        out.contains("\"first_time\":999.250000,") && out.contains("\"last_time\":2000.125000,"),
         "{out}"
     );
     assert!(

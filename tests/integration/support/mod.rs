@@ -71,7 +71,11 @@ pub fn semantic(objects: &[Value], keys: &[&str]) -> Vec<Value> {
     objects
         .iter()
         .filter(|o| o["type"] != "input")
-        .map(|o| without(o, keys))
+        .map(|o| {
+            let mut v = without(o, keys);
+            without_time_texts(&mut v);
+            v
+        })
         .collect()
 }
 
@@ -79,15 +83,20 @@ pub fn semantic(objects: &[Value], keys: &[&str]) -> Vec<Value> {
 pub const PLACE: [&str; 5] = ["file", "line", "channel", "start_line", "end_line"];
 
 /// What depends on how a format writes times.
-pub const TIMES: [&str; 8] = [
+pub const TIMES: [&str; 13] = [
     "time",
+    "time_text",
     "start",
+    "start_text",
     "end",
+    "end_text",
     "duration",
     "time_in_error",
     "longest_error",
     "first_emcy",
+    "first_emcy_text",
     "last_emcy",
+    "last_emcy_text",
 ];
 
 /// Reads `lines` as one trace, the format detected ([`TraceReader::new`]):
@@ -145,6 +154,33 @@ pub fn semantic_6(objects: &[Value]) -> Vec<Value> {
     let mut v = semantic(objects, &PLACE);
     v.iter_mut().for_each(six_decimals);
     v
+}
+
+/// The `_text` twins of times (README, JSON contract), at any depth: they
+/// say the number's digits, which differ between formats in their count.
+pub const TIME_TEXTS: [&str; 8] = [
+    "time_text",
+    "start_text",
+    "end_text",
+    "first_emcy_text",
+    "last_emcy_text",
+    "last_seen_text",
+    "first_time_text",
+    "last_time_text",
+];
+
+/// `v` without the [`TIME_TEXTS`] keys, at any depth.
+pub fn without_time_texts(v: &mut Value) {
+    match v {
+        Value::Array(a) => a.iter_mut().for_each(without_time_texts),
+        Value::Object(o) => {
+            for k in TIME_TEXTS {
+                o.remove(k);
+            }
+            o.values_mut().for_each(without_time_texts);
+        }
+        _ => {}
+    }
 }
 
 fn six_decimals(v: &mut Value) {
