@@ -617,6 +617,7 @@ impl TraceArgs {
                     None => p.name.clone(),
                 })
                 .collect(),
+            heartbeat_timeout: self.heartbeat_timeout.map(|s| s.to_string()),
             profile_file,
         })
     }

@@ -42,7 +42,8 @@ pub struct Baseline {
 
 /// The options that change what a trace decodes to, as the command line
 /// gave them (normalized): `--input-format`, `--timestamps`, `--emcy-id`,
-/// `--profile`, and the names of `--profile-file` profiles.
+/// `--heartbeat-timeout`, `--profile`, and the names of `--profile-file`
+/// profiles.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ReadOptions {
@@ -52,6 +53,9 @@ pub struct ReadOptions {
     pub timestamps: Option<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub emcy_id: Vec<String>,
+    /// Seconds, as `--heartbeat-timeout` gave them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heartbeat_timeout: Option<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub profile: Vec<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -79,6 +83,9 @@ impl std::fmt::Display for ReadOptions {
             flags.push(format!("--timestamps {v}"));
         }
         flags.extend(self.emcy_id.iter().map(|v| format!("--emcy-id {v}")));
+        if let Some(v) = &self.heartbeat_timeout {
+            flags.push(format!("--heartbeat-timeout {v}"));
+        }
         flags.extend(self.profile.iter().map(|v| format!("--profile {v}")));
         flags.extend(
             self.profile_file

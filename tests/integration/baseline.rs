@@ -1296,3 +1296,23 @@ fn baseline_and_check_read_directories_with_r_as_decoding_does() {
             "is a directory; -r (--recursive) reads",
         ));
 }
+
+#[test]
+fn the_heartbeat_timeout_is_a_recorded_decoding_option() {
+    let dir = workspace("rig.log");
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "--heartbeat-timeout", "0.5"])
+        .args(["-o", "baseline.json"])
+        .assert()
+        .code(0);
+    let v: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("baseline.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["options"]["heartbeat_timeout"], "0.5");
+    check(&dir, &["--heartbeat-timeout", "0.5"]).code(0);
+    check(&dir, &["--heartbeat-timeout", "2"])
+        .code(2)
+        .stderr(predicate::str::contains(
+            "was made with --heartbeat-timeout 0.5, this check reads with --heartbeat-timeout 2",
+        ));
+}
