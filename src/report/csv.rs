@@ -145,26 +145,6 @@ impl<W: Write> Csv<W> {
         }
     }
 
-    /// `fields` as the crate writes a record, without its line end. The
-    /// crate quotes every field that may need it (texts, names); rows are
-    /// assembled from its output and from numbers, codes and slugs, which
-    /// never need quoting. Only on a cache miss (a new file, channel or
-    /// payload) and for the few node rows.
-    fn encode<I, F>(fields: I) -> Vec<u8>
-    where
-        I: IntoIterator<Item = F>,
-        F: AsRef<[u8]>,
-    {
-        let mut encoder = csv::WriterBuilder::new()
-            .buffer_capacity(512)
-            .from_writer(Vec::new());
-        // Writing into a Vec cannot fail.
-        let _ = encoder.write_record(fields);
-        let mut bytes = encoder.into_inner().unwrap_or_default();
-        bytes.pop();
-        bytes
-    }
-
     fn header(&mut self) -> io::Result<()> {
         if !self.header {
             self.header = true;
@@ -173,7 +153,7 @@ impl<W: Write> Csv<W> {
             } else {
                 &EVENT_COLUMNS
             };
-            let mut line = Self::encode(columns);
+            let mut line = encode(columns);
             line.push(b'\n');
             self.out.write_all(&line)?;
         }
@@ -191,10 +171,10 @@ impl<W: Write> Csv<W> {
         node: u16,
     ) {
         if self.file.0 != file || self.file.1.is_empty() {
-            self.file = (file.to_string(), Self::encode([file]));
+            self.file = (file.to_string(), encode([file]));
         }
         if self.channel.0 != channel || self.channel.1.is_empty() {
-            self.channel = (channel.to_string(), Self::encode([channel]));
+            self.channel = (channel.to_string(), encode([channel]));
         }
         let row = &mut self.row;
         row.clear();
@@ -292,7 +272,7 @@ impl<W: Write> Csv<W> {
         let (last, last_text) = time(n.stats.last_emcy.and_then(|a| a.time));
         let node = itoa::Buffer::new().format(n.node).to_string();
         let count = itoa::Buffer::new().format(n.emcy_count).to_string();
-        let mut line = Self::encode([
+        let mut line = encode([
             input.file.as_bytes(),
             n.channel.as_bytes(),
             node.as_bytes(),
@@ -315,6 +295,26 @@ impl<W: Write> Csv<W> {
     }
 }
 
+/// `fields` as the crate writes a record, without its line end. The
+/// crate quotes every field that may need it (texts, names); rows are
+/// assembled from its output and from numbers, codes and slugs, which
+/// never need quoting. Only on a cache miss (a new file, channel or
+/// payload) and for the few node rows.
+fn encode<I, F>(fields: I) -> Vec<u8>
+where
+    I: IntoIterator<Item = F>,
+    F: AsRef<[u8]>,
+{
+    let mut encoder = csv::WriterBuilder::new()
+        .buffer_capacity(512)
+        .from_writer(Vec::new());
+    // Writing into a Vec cannot fail.
+    let _ = encoder.write_record(fields);
+    let mut bytes = encoder.into_inner().unwrap_or_default();
+    bytes.pop();
+    bytes
+}
+
 /// The payload columns of an EMCY, encoded (see [`Csv::payload`]).
 fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
     let mut code = Vec::new();
@@ -334,7 +334,7 @@ fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
         push_decoded(json, ev.decoded);
     }
     let register = itoa::Buffer::new().format(ev.emcy.register.0).to_string();
-    Csv::<io::Sink>::encode([
+    encode([
         &code[..],
         ev.info.class.slug().as_bytes(),
         ev.description.as_bytes(),
@@ -415,8 +415,8 @@ impl<W: Write> Sink for Csv<W> {
         // cob_id .. class empty, description, register .. warnings empty.
         self.row.extend_from_slice(b",,,");
         // Two fields the crate may quote; health events are few.
-        let description = Self::encode([description.as_bytes()]);
-        let details = Self::encode([&self.json]);
+        let description = encode([description.as_bytes()]);
+        let details = encode([&self.json]);
         self.row.extend_from_slice(&description);
         self.row.extend_from_slice(&[b','; 11]);
         self.row.extend_from_slice(&details);

@@ -360,14 +360,13 @@ impl JsonWriter {
         out.push(b'"');
     }
 
-    /// `"key":<time>,"key_text":"<time>"` in an object.
-    fn time_pair(&mut self, o: &mut Obj<'_>, key: &str, t: Option<Timestamp>) {
-        let buf = o.key(key);
+    /// `"key":<time>,"key_text":"<time>"` in an object (`keys`: the two).
+    fn time_pair(&mut self, o: &mut Obj<'_>, keys: [&str; 2], t: Option<Timestamp>) {
+        let buf = o.key(keys[0]);
         let at = buf.len();
         self.time(buf, t);
         let number = at..buf.len();
-        let text_key = format!("{key}_text");
-        let buf = o.key(&text_key);
+        let buf = o.key(keys[1]);
         self.time_text(buf, number, t);
     }
 
@@ -507,7 +506,7 @@ impl JsonWriter {
         o.str("type", "boot");
         o.str("file", ev.file);
         o.u64("line", ev.line);
-        self.time_pair(&mut o, "time", ev.time);
+        self.time_pair(&mut o, ["time", "time_text"], ev.time);
         o.str("channel", ev.channel);
         o.u64("node", u64::from(ev.node));
         push_codes(o.key("cleared"), ev.cleared);
@@ -521,7 +520,7 @@ impl JsonWriter {
         o.str("type", ev.health.slug());
         o.str("file", ev.file);
         o.u64("line", ev.line);
-        self.time_pair(&mut o, "time", ev.time);
+        self.time_pair(&mut o, ["time", "time_text"], ev.time);
         o.str("channel", ev.channel);
         o.u64("node", u64::from(ev.node));
         match ev.health {
@@ -535,7 +534,7 @@ impl JsonWriter {
                 timeout,
                 timeout_source,
             } => {
-                self.time_pair(&mut o, "last_seen", *last_seen);
+                self.time_pair(&mut o, ["last_seen", "last_seen_text"], *last_seen);
                 o.u64("last_seen_line", *last_seen_line);
                 push_span(o.key("timeout"), Some(*timeout));
                 o.str("timeout_source", timeout_source.slug());
@@ -633,12 +632,12 @@ impl JsonWriter {
         }
         self.time_pair(
             &mut o,
-            "first_emcy",
+            ["first_emcy", "first_emcy_text"],
             node.stats.first_emcy.and_then(|a| a.time),
         );
         self.time_pair(
             &mut o,
-            "last_emcy",
+            ["last_emcy", "last_emcy_text"],
             node.stats.last_emcy.and_then(|a| a.time),
         );
         match node.nmt_state {
@@ -653,7 +652,7 @@ impl JsonWriter {
             Some(h) => {
                 let mut ho = Obj::new(o.key("error_history"));
                 history_members(&mut ho, h);
-                self.time_pair(&mut ho, "time", h.time);
+                self.time_pair(&mut ho, ["time", "time_text"], h.time);
                 ho.u64("line", h.line);
                 ho.end();
             }
@@ -679,8 +678,8 @@ impl JsonWriter {
                 list.push(b',');
             }
             let mut oo = Obj::new(list);
-            self.time_pair(&mut oo, "start", Some(outage.start));
-            self.time_pair(&mut oo, "end", outage.end);
+            self.time_pair(&mut oo, ["start", "start_text"], Some(outage.start));
+            self.time_pair(&mut oo, ["end", "end_text"], outage.end);
             push_span(oo.key("duration"), outage.duration());
             oo.end();
         }
@@ -795,8 +794,8 @@ impl JsonWriter {
         if dropped > 0 {
             o.u64("dropped", dropped);
         }
-        self.time_pair(&mut o, "first_time", input.first_time);
-        self.time_pair(&mut o, "last_time", input.last_time);
+        self.time_pair(&mut o, ["first_time", "first_time_text"], input.first_time);
+        self.time_pair(&mut o, ["last_time", "last_time_text"], input.last_time);
         // Only where times were summed: the times are not as written.
         if let Some(mode) = input.timestamps {
             o.str("timestamps", mode.name());

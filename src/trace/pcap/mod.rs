@@ -351,6 +351,14 @@ struct Decoder {
 }
 
 impl Decoder {
+    /// The channel of interface `iface`: its name (empty when no
+    /// interface description declares it).
+    fn interface_name(&self, iface: usize) -> Box<[u8]> {
+        self.interfaces
+            .get(iface)
+            .map_or_else(Box::default, |i| i.name.clone())
+    }
+
     /// `NAME:INDEX`: a device seen through an interface that captures
     /// several (`any`).
     fn device_channel(&self, iface: usize, device: u32) -> Box<[u8]> {
@@ -720,14 +728,8 @@ pub struct PcapReader<R: Read> {
     /// channel is then in `channel`).
     ready: Option<(Item, bool)>,
     channel: Box<[u8]>,
-    /// Frames only counted since the caller last asked (plain and timed).
-    plain: u64,
-    /// Of those, the frames only timed, with the first and last time.
-    timed: Timed,
-    /// EtherCAT frames only counted since the caller last asked (skipped
-    /// lines), and all EtherCAT seen.
-    quiet: u64,
-    ethercat: EthercatCounts,
+    /// Packets only counted since the caller last asked, and all EtherCAT.
+    counted: Counted,
     /// The EtherCAT frame [`PcapReader::take`] returned, for
     /// [`PcapReader::take_ethercat`].
     taken_ethercat: Option<Box<EthercatPacket>>,
@@ -857,10 +859,7 @@ impl<R: Read> PcapReader<R> {
             held_bytes: 0,
             ready: None,
             channel: Box::default(),
-            plain: 0,
-            timed: Timed::default(),
-            quiet: 0,
-            ethercat: EthercatCounts::default(),
+            counted: Counted::default(),
             taken_ethercat: None,
             ended: false,
             failed: None,
@@ -936,17 +935,17 @@ impl<R: Read> PcapReader<R> {
     /// content filter rejects): `(counted, Some((timed, first, last)))`.
     /// The counts start again from 0.
     pub fn take_counted(&mut self) -> (u64, Option<(u64, Timestamp, Timestamp)>) {
-        let timed = std::mem::take(&mut self.timed);
+        let timed = std::mem::take(&mut self.counted.timed);
         let last = timed.last.and_then(RawTime::get);
         let times = timed.first.zip(last).map(|(f, l)| (timed.n, f, l));
-        (std::mem::take(&mut self.plain), times)
+        (std::mem::take(&mut self.counted.plain), times)
     }
 
     /// EtherCAT frames [`PcapReader::advance`] only counted (they carried
     /// no mailbox message): skipped lines before the packet it read. The
     /// count starts again from 0.
     pub fn take_quiet(&mut self) -> u64 {
-        std::mem::take(&mut self.quiet)
+        std::mem::take(&mut self.counted.quiet)
     }
 
     /// The EtherCAT frame [`PcapReader::take`] just returned as skipped
@@ -958,7 +957,7 @@ impl<R: Read> PcapReader<R> {
 
     /// EtherCAT seen so far: frames, mailbox messages, empty polls.
     pub fn ethercat_counts(&self) -> EthercatCounts {
-        self.ethercat
+        self.counted.ethercat
     }
 
     /// The packet [`PcapReader::advance`] read.
@@ -966,13 +965,9 @@ impl<R: Read> PcapReader<R> {
         self.taken_ethercat = None;
         let (item, held) = self.ready.take()?;
         if let Item::Ethercat { iface, packet } = item {
-            self.ethercat.add(packet.walked);
+            self.counted.ethercat.add(packet.walked);
             if !held {
-                self.channel = self
-                    .decoder
-                    .interfaces
-                    .get(iface)
-                    .map_or_else(Box::default, |i| i.name.clone());
+                self.channel = self.decoder.interface_name(iface);
             }
             let parsed = match &packet.error {
                 Some(why) => Parsed::Malformed(why.clone()),
@@ -1050,11 +1045,7 @@ impl<R: Read> PcapReader<R> {
             } => self.decoder.device_channel(*iface, *device),
             Item::Frame { iface, .. }
             | Item::Undecided { iface, .. }
-            | Item::Ethercat { iface, .. } => self
-                .decoder
-                .interfaces
-                .get(*iface)
-                .map_or_else(Box::default, |i| i.name.clone()),
+            | Item::Ethercat { iface, .. } => self.decoder.interface_name(*iface),
             _ => Box::default(),
         };
         if let Item::Undecided { bytes, .. } = &item
@@ -1107,7 +1098,7 @@ impl<R: Read> PcapReader<R> {
     fn read_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Item>> {
         loop {
             self.hot(interest);
-            if self.plain + self.quiet >= PLAIN_RUN {
+            if self.counted.run() >= PLAIN_RUN {
                 return Ok(Some(Item::Plain));
             }
             let item = match self.stream {
@@ -1115,11 +1106,10 @@ impl<R: Read> PcapReader<R> {
                 Stream::Ng(_) => self.read_block(interest)?,
             };
             match item {
-                Some(Item::Plain) => self.plain += 1,
+                Some(Item::Plain) => self.counted.plain += 1,
                 // As the hot loop counts them.
                 Some(Item::Ethercat { packet, .. }) if interest.is_some() && packet.quiet() => {
-                    self.quiet += 1;
-                    self.ethercat.add(packet.walked);
+                    self.counted.add(Hot::Ethercat(packet.walked));
                 }
                 other => return Ok(other),
             }
@@ -1170,13 +1160,7 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 reader.consume_noshift(len);
-                if !count_hot(
-                    &mut self.plain,
-                    &mut self.timed,
-                    &mut self.quiet,
-                    &mut self.ethercat,
-                    hot,
-                ) {
+                if !self.counted.add(hot) {
                     return;
                 }
             },
@@ -1204,13 +1188,7 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 reader.consume_noshift(len);
-                if !count_hot(
-                    &mut self.plain,
-                    &mut self.timed,
-                    &mut self.quiet,
-                    &mut self.ethercat,
-                    hot,
-                ) {
+                if !self.counted.add(hot) {
                     return;
                 }
             },
@@ -1465,30 +1443,42 @@ impl Timed {
     }
 }
 
-/// One packet of the hot loop counted: a plain frame (timed, if it is one
-/// whose time the report wants) or a quiet EtherCAT frame; false once the
-/// run is long enough to hand back to the caller.
-#[inline]
-fn count_hot(
-    plain: &mut u64,
-    timed: &mut Timed,
-    quiet: &mut u64,
-    ethercat: &mut EthercatCounts,
-    hot: Hot,
-) -> bool {
-    match hot {
-        Hot::Plain(time) => {
-            *plain += 1;
-            if let Some(t) = time {
-                timed.count(t);
+/// Packets only counted since the caller last asked: plain frames (and,
+/// of those, the ones only timed) and quiet EtherCAT frames (skipped
+/// lines); and all EtherCAT seen.
+#[derive(Default)]
+struct Counted {
+    plain: u64,
+    timed: Timed,
+    quiet: u64,
+    ethercat: EthercatCounts,
+}
+
+impl Counted {
+    /// One packet of the hot loop counted: a plain frame (timed, if it is
+    /// one whose time the report wants) or a quiet EtherCAT frame; false
+    /// once the run is long enough to hand back to the caller.
+    #[inline]
+    fn add(&mut self, hot: Hot) -> bool {
+        match hot {
+            Hot::Plain(time) => {
+                self.plain += 1;
+                if let Some(t) = time {
+                    self.timed.count(t);
+                }
+            }
+            Hot::Ethercat(walked) => {
+                self.quiet += 1;
+                self.ethercat.add(walked);
             }
         }
-        Hot::Ethercat(walked) => {
-            *quiet += 1;
-            ethercat.add(walked);
-        }
+        self.run() < PLAIN_RUN
     }
-    *plain + *quiet < PLAIN_RUN
+
+    /// Packets counted and not yet asked for.
+    fn run(&self) -> u64 {
+        self.plain + self.quiet
+    }
 }
 
 /// An EtherCAT frame's walk: its CoE messages kept, the others counted.
