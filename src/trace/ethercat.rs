@@ -282,14 +282,25 @@ pub struct Walked {
 /// `each`. An error says where the frame is cut short or inconsistent;
 /// the messages before that point were handed over.
 #[inline]
-pub fn walk<'f>(frame: &'f [u8], mut each: impl FnMut(Mailbox<'f>)) -> Result<Walked, Reason> {
+pub fn walk<'f>(frame: &'f [u8], each: impl FnMut(Mailbox<'f>)) -> Result<Walked, Reason> {
     let mut walked = Walked::default();
+    walk_into(frame, &mut walked, each).map(|()| walked)
+}
+
+/// [`walk`], counting into `walked`: on an error it holds what was walked
+/// before the damage (datagrams, messages, empty polls).
+#[inline]
+pub fn walk_into<'f>(
+    frame: &'f [u8],
+    walked: &mut Walked,
+    mut each: impl FnMut(Mailbox<'f>),
+) -> Result<(), Reason> {
     let Some(header) = le16(frame, 0) else {
         return Err("EtherCAT frame shorter than its 2-byte header".into());
     };
     if (header >> 12) as u8 != TYPE_DATAGRAMS {
         // Network variables, mailbox gateway: EtherCAT, but no datagrams.
-        return Ok(walked);
+        return Ok(());
     }
     // Ethernet pads short frames: the header's length says where the
     // datagrams end.
@@ -337,7 +348,7 @@ pub fn walk<'f>(frame: &'f [u8], mut each: impl FnMut(Mailbox<'f>)) -> Result<Wa
         }
         at = end;
         if len_field & 0x8000 == 0 || at >= frame.len() {
-            return Ok(walked);
+            return Ok(());
         }
     }
 }
@@ -596,6 +607,10 @@ mod tests {
         let why = walked.unwrap_err();
         assert!(why.contains("datagram 2 (FPRD)"), "{why}");
         assert_eq!(seen.len(), 1);
+        // What was walked before the damage is counted.
+        let mut counted = Walked::default();
+        assert!(walk_into(&f, &mut counted, |_| {}).is_err());
+        assert_eq!((counted.datagrams, counted.mailboxes), (1, 1));
         // A mailbox length past the datagram is cut to it.
         let mut long = emcy.clone();
         long[0] = 200;

@@ -1484,24 +1484,17 @@ impl Counted {
 /// An EtherCAT frame's walk: its CoE messages kept, the others counted.
 fn walk_ethercat(frame: &[u8], time: Option<Timestamp>) -> EthercatPacket {
     let mut messages = Vec::new();
-    let walked = ethercat::walk(frame, |m| messages.extend(CoeMessage::of(&m)));
-    match walked {
-        Ok(walked) => EthercatPacket {
-            time,
-            walked,
-            messages,
-            error: None,
-        },
-        Err(why) => EthercatPacket {
-            time,
-            // What was walked before the damage still counts.
-            walked: ethercat::Walked {
-                mailboxes: messages.len() as u32,
-                ..ethercat::Walked::default()
-            },
-            messages,
-            error: Some(why),
-        },
+    let mut walked = ethercat::Walked::default();
+    // What was walked before any damage still counts.
+    let error = ethercat::walk_into(frame, &mut walked, |m| {
+        messages.extend(CoeMessage::of(&m));
+    })
+    .err();
+    EthercatPacket {
+        time,
+        walked,
+        messages,
+        error,
     }
 }
 
