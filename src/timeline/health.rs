@@ -14,9 +14,9 @@ pub struct NodeHealth {
     pub history: HistoryReader,
     /// The last read-out of 0x1003 (an empty one after a clear).
     pub last_read_out: Option<ReadOut>,
-    /// Where the caller's deadline schedule has the node (at most its
-    /// deadline: see the consumer's `HealthState::schedule`).
-    pub scheduled: Option<crate::trace::Timestamp>,
+    /// Where the caller's deadline schedule keeps the node, once it has
+    /// had a deadline.
+    pub schedule_slot: Option<u32>,
 }
 
 impl NodeHealth {

@@ -305,6 +305,13 @@ impl NodeTimeline {
         self.health.as_deref()
     }
 
+    /// The node's NMT, heartbeat and error history side to change, if it
+    /// has one.
+    #[inline]
+    pub fn health_if_any(&mut self) -> Option<&mut health::NodeHealth> {
+        self.health.as_deref_mut()
+    }
+
     /// The node's NMT, heartbeat and error history side, made on first use
     /// with `timeout` (`--heartbeat-timeout`).
     pub fn health_mut(&mut self, timeout: Option<Span>) -> &mut health::NodeHealth {

@@ -369,3 +369,33 @@ fn check_reports_a_new_heartbeat_loss_as_a_regression() {
         .assert()
         .success();
 }
+
+#[test]
+fn nodes_found_lost_at_one_frame_come_in_deadline_order() {
+    // Timeout 0.5 s. Node 3 beats at 0.0 and 0.3 (deadline 0.8), node 4 at
+    // 0.1 (deadline 0.6); the next frame, at 2.0, passes both: node 4 was
+    // lost first. (An earlier schedule kept node 3 at its first deadline,
+    // 0.5, and said node 3 first.)
+    let trace = "(1700000000.000000) can0 703#05\n\
+                 (1700000000.100000) can0 704#05\n\
+                 (1700000000.300000) can0 703#05\n\
+                 (1700000002.000000) can0 705#05\n";
+    let (out, _, code) = crate::support::run(
+        &["--format", "ndjson", "--heartbeat-timeout", "0.5", "-"],
+        trace.as_bytes(),
+    );
+    assert_eq!(code, 0);
+    let lost: Vec<(u64, String)> = out
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+        .filter(|o| o["type"] == "heartbeat_lost")
+        .map(|o| (o["node"].as_u64().unwrap_or(0), o["time_text"].to_string()))
+        .collect();
+    assert_eq!(
+        lost,
+        [
+            (4, "\"2023-11-14T22:13:20.600000Z\"".to_string()),
+            (3, "\"2023-11-14T22:13:20.800000Z\"".to_string()),
+        ]
+    );
+}

@@ -2,9 +2,9 @@
 //! frames on 0x000, 0x700 + node and the SDO ids do to a node's health, and
 //! the events that says. Kept apart from the EMCY path (the hot one).
 
-use std::collections::BTreeSet;
 use std::io::Write;
 
+use super::deadlines::Deadlines;
 use super::{Consumer, NodeSlot, Nodes};
 use crate::analyze::OutputError;
 use crate::analyze::event::{
@@ -20,49 +20,35 @@ use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
 use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
 use crate::timeline::nmt::{NmtChange, NmtWarning};
-use crate::trace::{Span, Timestamp};
+use crate::trace::{Frame, FrameKind, Span, Timestamp};
 
 /// What the consumer keeps for every node's health.
 #[derive(Default)]
 pub(in crate::analyze) struct HealthState {
-    /// Every monitored node's heartbeat deadline, by (deadline, channel id,
-    /// node): the next one to pass is the first.
-    deadlines: BTreeSet<(Timestamp, u32, NodeId)>,
-    /// The first deadline, cached: every decoded frame compares its time.
-    next: Option<Timestamp>,
+    /// When monitored nodes may have passed their heartbeat deadline.
+    deadlines: Deadlines,
     /// Buffers reused from frame to frame.
     events: Vec<(At, Health)>,
     warnings: Vec<NmtWarning>,
     read_outs: Vec<ReadOut>,
+    groups: Vec<u32>,
+    due: Vec<(Timestamp, u32, NodeId)>,
 }
 
 impl HealthState {
-    /// Keeps a node's deadline in the set. Entries are lazy: a heartbeat
-    /// moves a node's deadline later without touching the set (a remove
-    /// and insert per heartbeat was most of its cost); the entry is
-    /// checked against the node when it comes due and put back at the real
-    /// deadline if the node was heard since. Only a deadline that moved
-    /// earlier (a shorter timeout) is moved at once.
+    /// Tells the schedule a node's deadline after anything but a steady
+    /// heartbeat (those only move it later, which the schedule allows).
     fn schedule(&mut self, channel_id: u32, node: NodeId, h: &mut NodeHealth) {
-        let real = h.heartbeat.deadline();
-        match (h.scheduled, real) {
-            (None, Some(r)) => {
-                self.deadlines.insert((r, channel_id, node));
-            }
-            (Some(s), Some(r)) if r < s => {
-                self.deadlines.remove(&(s, channel_id, node));
-                self.deadlines.insert((r, channel_id, node));
-            }
-            _ => return,
+        if let Some(deadline) = h.heartbeat.deadline() {
+            self.deadlines
+                .schedule(&mut h.schedule_slot, (channel_id, node), deadline);
         }
-        h.scheduled = real;
-        self.next = self.deadlines.first().map(|e| e.0);
     }
 
-    /// Whether the trace's clock at `now` passed a deadline.
+    /// Whether the trace's clock at `now` may have passed a deadline.
     #[inline]
     pub(super) fn passed(&self, now: Timestamp) -> bool {
-        self.next.is_some_and(|d| now > d)
+        self.deadlines.passed(now)
     }
 }
 
@@ -162,7 +148,7 @@ impl Nodes {
             channels, history, ..
         } = self;
         let ch = channels.get_mut(id as usize).filter(|c| c.id == id)?;
-        let i = ch.nodes.binary_search_by_key(&node, |(n, _)| *n).ok()?;
+        let i = ch.position(node).ok()?;
         let timeline = &mut ch.nodes.get_mut(i)?.1;
         Some(NodeSlot {
             channel: &ch.name,
@@ -175,29 +161,55 @@ impl Nodes {
 
 impl<E: Write> Consumer<'_, '_, E> {
     /// The trace's clock reached `now` (a frame at `line`): every node whose
-    /// deadline passed is lost.
+    /// deadline passed is lost, in the order of the deadlines.
     pub(super) fn deadlines_passed(
         &mut self,
         now: Timestamp,
         line: u64,
     ) -> Result<(), OutputError> {
-        while let Some(&(deadline, id, node)) = self.health.deadlines.first() {
-            if now <= deadline {
-                break;
+        let mut groups = std::mem::take(&mut self.health.groups);
+        let mut due = std::mem::take(&mut self.health.due);
+        self.health.deadlines.due_groups(now, &mut groups);
+        for g in groups.drain(..) {
+            let mut earliest: Option<Timestamp> = None;
+            for &(id, node) in self.health.deadlines.members(g) {
+                let deadline = self
+                    .nodes
+                    .slot_by_id(id, node)
+                    .and_then(|slot| slot.timeline.health())
+                    .and_then(|h| h.heartbeat.deadline());
+                match deadline {
+                    Some(d) if now > d => due.push((d, id, node)),
+                    Some(d) => earliest = Some(earliest.map_or(d, |e| e.min(d))),
+                    None => {}
+                }
             }
-            self.health.deadlines.pop_first();
-            self.health.next = self.health.deadlines.first().map(|e| e.0);
+            self.health.deadlines.rebound(g, earliest);
+        }
+        due.sort_unstable();
+        let result = self.lose(now, line, &mut due);
+        due.clear();
+        self.health.groups = groups;
+        self.health.due = due;
+        result
+    }
+
+    /// The nodes in `due` passed their deadline at `now`: lost.
+    fn lose(
+        &mut self,
+        now: Timestamp,
+        line: u64,
+        due: &mut Vec<(Timestamp, u32, NodeId)>,
+    ) -> Result<(), OutputError> {
+        for (_, id, node) in due.drain(..) {
             let Some(slot) = self.nodes.slot_by_id(id, node) else {
                 continue;
             };
             let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
-            h.scheduled = None;
             let timeout = h.heartbeat.timeout();
             if let Some(lost) = h.heartbeat.check(now) {
                 self.health.events.push(lost_event(lost, line, timeout));
             }
-            // Heard from since it was scheduled: due again at its deadline.
-            self.health.schedule(id, node, h);
             if self.health.events.is_empty() {
                 continue;
             }
@@ -212,6 +224,51 @@ impl<E: Write> Consumer<'_, '_, E> {
             )?;
         }
         Ok(())
+    }
+
+    /// The common heartbeat (a node still in the state it was, before its
+    /// deadline, nothing awaited of it): its deadline moves on and nothing
+    /// else happens. Checked ahead of the general frame path, which costs
+    /// several times as much (measured in docs/performance.md). `false`:
+    /// not that case, nothing was changed.
+    #[inline]
+    pub(super) fn steady_heartbeat(&mut self, idx: u64, frame: &Frame<'_>) -> bool {
+        let (Some(time), &[byte]) = (frame.time, frame.data.as_slice()) else {
+            return false;
+        };
+        // A boot-up (0x00) is never steady: it restarts the node.
+        let (Some(node), Some(state), FrameKind::Data, false) = (
+            nmt::error_control_node(frame.id),
+            NmtState::from_byte(byte).filter(|&s| s != NmtState::Initialising),
+            frame.kind,
+            frame.extended,
+        ) else {
+            return false;
+        };
+        if !self.decided
+            || self.health.passed(time)
+            || !self.interest.wants(frame.id, false)
+            || (!self.emcy_ids.is_empty() && self.emcy_node(frame.id, false).is_some())
+        {
+            return false;
+        }
+        let at = At {
+            time: Some(time),
+            line: self.line_no(idx),
+        };
+        let Some(h) = self
+            .nodes
+            .known(frame.channel, node)
+            .and_then(|timeline| timeline.health_if_any())
+        else {
+            return false;
+        };
+        if !(h.nmt.steady(state) && h.heartbeat.steady(at)) {
+            return false;
+        }
+        self.counts.frames += 1;
+        self.time(time);
+        true
     }
 
     /// A boot-up: the node's NMT state and heartbeat monitor (its EMCY
