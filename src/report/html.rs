@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 use std::io::{self, Write};
 
 use super::chart::{self, Clock, Collector, Panel, esc};
-use super::svg::{doc_title, document};
+use super::svg::{doc_title, document, style_sheet};
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 use crate::canopen::NodeId;
 use crate::trace::Timestamp;
@@ -243,7 +243,8 @@ impl<W: Write> Sink for HtmlReport<W> {
         s.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
         s.push_str(&format!("<title>{}</title>\n<style>\n", esc(&title)));
         s.push_str(PAGE_STYLE);
-        s.push_str(chart::STYLE);
+        let panels: Vec<&Panel> = self.sections.iter().map(|s| &s.panel).collect();
+        s.push_str(&style_sheet(&panels));
         s.push_str("</style>\n</head>\n<body>\n<h1>EMCY timeline</h1>\n");
         if self.sections.is_empty() {
             s.push_str("<p class=\"note\">No input could be read.</p>\n");

@@ -50,7 +50,7 @@ pub(super) fn document(panels: &[&Panel], title: &str, standalone: bool) -> Stri
     }
     if standalone {
         s.push_str("<style>\n");
-        s.push_str(chart::STYLE);
+        s.push_str(&style_sheet(panels));
         s.push_str("</style>\n");
     }
     // Opaque: viewers with a dark background would hide the black text.
@@ -74,6 +74,15 @@ pub(super) fn document(panels: &[&Panel], title: &str, standalone: bool) -> Stri
     }
     s.push_str("</svg>\n");
     s
+}
+
+/// The chart's style sheet for these panels (the colours their codes use).
+pub(super) fn style_sheet(panels: &[&Panel]) -> String {
+    let shades = panels
+        .iter()
+        .flat_map(|p| p.shades.iter().copied())
+        .collect();
+    chart::style_sheet(&shades)
 }
 
 /// `EMCY timeline: a.log, b.asc`.

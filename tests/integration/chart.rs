@@ -167,6 +167,112 @@ fn markers_show_resets_partial_resets_and_boot_ups() {
     );
 }
 
+/// The bars' `<rect>`s in lanes (not the legend's swatches).
+fn lane_bars<'a, 'i>(doc: &'a roxmltree::Document<'i>) -> Vec<roxmltree::Node<'a, 'i>> {
+    doc.descendants()
+        .filter(|n| n.has_tag_name("rect") && has_class(n, "b"))
+        .filter(|n| n.ancestors().any(|a| has_class(&a, "lane")))
+        .collect()
+}
+
+fn width_of(n: &roxmltree::Node<'_, '_>) -> f64 {
+    n.attribute("width")
+        .expect("width")
+        .parse()
+        .expect("number")
+}
+
+#[test]
+fn wide_bars_carry_their_code_and_the_legend_lists_every_code() {
+    let svg = render("svg", &[Path::new("fixtures/s300.log")]);
+    let doc = parse(&svg);
+    // Each label follows its bar, names the bar's code and fits in it (9 px
+    // digits are about 5 px wide; 0.6 em per character is the estimate).
+    let mut labelled = Vec::new();
+    for bar in lane_bars(&doc) {
+        let code = bar.attribute("data-c").expect("bar names its code");
+        let label = bar
+            .next_sibling_element()
+            .filter(|n| n.has_tag_name("text") && has_class(n, "bl"));
+        match label {
+            Some(l) => {
+                let text = l.text().expect("label text");
+                assert!(code.contains(text), "label {text:?} of a {code} bar");
+                let needed = text.chars().count() as f64 * 9.0 * 0.6 + 4.0;
+                assert!(
+                    width_of(&bar) >= needed,
+                    "{text:?} in {} px",
+                    width_of(&bar)
+                );
+                labelled.push(text.to_string());
+            }
+            None => assert!(
+                width_of(&bar) < 4.0 * 9.0 * 0.6 + 4.0,
+                "a {} px bar of {code} without a label",
+                width_of(&bar)
+            ),
+        }
+    }
+    // s300: three wide errors, 0x5111 open at the end in a 22 px bar.
+    assert_eq!(labelled, ["0x4310", "0x3120", "0x4210"]);
+
+    // The legend: every code the node raised, with its profile's text, in
+    // its class's row; the two temperature codes share the class colour's
+    // hue in two lightnesses.
+    let legend: Vec<String> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("g") && has_class(n, "legend"))
+        .flat_map(|g| g.descendants())
+        .filter(|n| n.has_tag_name("text"))
+        .filter_map(|n| n.text().map(str::to_string))
+        .collect();
+    let events: Vec<Value> = render("ndjson", &[Path::new("fixtures/s300.log")])
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("JSON line"))
+        .filter(|o| o["type"] == "emcy" && o["code"] != "0x0000")
+        .collect();
+    assert_eq!(events.len(), 4);
+    for ev in &events {
+        let entry = format!(
+            "{} {}",
+            ev["code"].as_str().unwrap(),
+            ev["description"].as_str().unwrap()
+        );
+        assert!(legend.contains(&entry), "{entry:?} not in {legend:?}");
+    }
+    let heads: Vec<&str> = legend
+        .iter()
+        .filter(|t| t.ends_with(':'))
+        .map(String::as_str)
+        .collect();
+    assert_eq!(heads, ["voltage:", "temperature:", "hardware:"]);
+    let swatch = |code: &str| {
+        doc.descendants()
+            .filter(|n| n.has_tag_name("g") && n.parent().is_some_and(|p| has_class(&p, "legend")))
+            .find(|g| {
+                g.descendants().any(|t| {
+                    t.has_tag_name("text") && t.text().is_some_and(|x| x.starts_with(code))
+                })
+            })
+            .and_then(|g| g.descendants().find(|r| r.has_tag_name("rect")))
+            .and_then(|r| r.attribute("class"))
+            .unwrap_or_default()
+            .to_string()
+    };
+    assert_eq!(swatch("0x4210"), "b c-temperature");
+    assert_eq!(swatch("0x4310"), "b c-temperature k1");
+    assert!(
+        svg.contains(".ec .c-temperature.k1{fill:#"),
+        "a rule for the shade"
+    );
+    // Bars wear their code's colour.
+    let bar_4310 = lane_bars(&doc)
+        .into_iter()
+        .find(|b| b.attribute("data-c") == Some("0x4310"))
+        .expect("a 0x4310 bar");
+    assert_eq!(bar_4310.attribute("class"), Some("b c-temperature k1"));
+}
+
 /// A candump log in which node 5 raises and clears `n` errors (0.2 ms each,
 /// one every 10 ms) and node 6 has a few long ones.
 fn many_errors_trace(n: u64) -> String {
