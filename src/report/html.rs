@@ -13,12 +13,24 @@ use std::io::{self, Write};
 
 use super::chart::{self, Clock, Collector, Panel, esc};
 use super::svg::{doc_title, document, style_sheet};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
+use super::table::health_description;
+use super::timefmt::TimeFormat;
+use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport, Sink};
 use crate::canopen::NodeId;
+use crate::canopen::profile::{Decoded, FieldValue};
 use crate::trace::Timestamp;
 
 /// Events listed per input.
 pub const TABLE_ROWS: usize = 1000;
+
+/// What a row of the events table is.
+enum Kind {
+    /// An EMCY frame with its error code.
+    Emcy(u16),
+    Boot,
+    /// A node-health event: its JSON `type` (`nmt`, `heartbeat_lost`, ...).
+    Health(&'static str),
+}
 
 /// One row of the events table, kept until the input ends (the time
 /// column's format depends on the whole input's span).
@@ -27,13 +39,70 @@ struct Row {
     line: u64,
     channel: String,
     node: NodeId,
-    /// `None` for an NMT boot-up.
-    code: Option<u16>,
+    kind: Kind,
     register: u8,
     transition: Option<u8>,
     description: String,
+    /// The manufacturer bytes as the profile reads them (the vendor's fault
+    /// code, category), else the bytes themselves when not all zero.
+    manufacturer: String,
+    /// `(tag, text)` of each warning.
+    warnings: Vec<(&'static str, String)>,
     cleared: Vec<u16>,
     state: &'static str,
+}
+
+/// A health event's description: the table's and CSV's words (times in
+/// ISO-8601), and a read-out's entries, which the table lists on lines of
+/// their own.
+fn health_text(health: &Health) -> String {
+    let mut text = health_description(health, &TimeFormat::default());
+    if let Health::ErrorHistory(h) = health {
+        for (i, e) in h.entries.iter().enumerate() {
+            text.push_str(if i == 0 { ": " } else { "; " });
+            let _ = write!(text, "0x{:04X} {}", e.code, e.description);
+            if e.info != 0 {
+                let _ = write!(text, " (info 0x{:04X})", e.info);
+            }
+            if e.before_trace {
+                text.push_str(", before the trace");
+            }
+        }
+    }
+    text
+}
+
+/// The manufacturer cell: `category: 1 (cleared only by a reset); ...`
+/// from the profile's fields (a `_text` field joins its number), else the
+/// raw bytes 3-7.
+fn manufacturer_cell(decoded: Option<&Decoded>, data: &[u8]) -> String {
+    let Some(d) = decoded else {
+        let raw = data.get(3..).unwrap_or_default();
+        if raw.iter().all(|&b| b == 0) {
+            return String::new();
+        }
+        return raw.iter().fold(String::new(), |mut s, b| {
+            let _ = write!(s, "{b:02X}");
+            s
+        });
+    };
+    let mut parts: Vec<String> = Vec::with_capacity(d.fields.len());
+    for (key, value) in &d.fields {
+        let text = match value {
+            FieldValue::Int(n) => n.to_string(),
+            FieldValue::Text(t) => t.clone(),
+        };
+        // `category_text` after `category`: one item, `category: 1 (text)`.
+        if let Some(base) = key.strip_suffix("_text")
+            && let Some(last) = parts.last_mut()
+            && last.starts_with(&format!("{base}: "))
+        {
+            let _ = write!(last, " ({text})");
+            continue;
+        }
+        parts.push(format!("{key}: {text}"));
+    }
+    parts.join("; ")
 }
 
 struct Section {
@@ -83,8 +152,14 @@ table.ev th[data-dir=asc]::after{content:' \\25B2'}
 table.ev th[data-dir=desc]::after{content:' \\25BC'}
 table.ev td{padding:2px 8px;border-bottom:1px solid #eee;white-space:nowrap}
 table.ev td.n{text-align:right;font-variant-numeric:tabular-nums}
+table.ev td.t{white-space:normal;min-width:14em;max-width:36em}
 table.ev tr.boot td{color:#2c4f9e}
 table.ev tr.reset td{color:#1b7837}
+table.ev tr.nmt td,table.ev tr.error_history td,table.ev tr.error_history_cleared td{color:#555}
+table.ev tr.heartbeat_lost td{color:#b2182b;font-weight:600}
+table.ev tr.heartbeat_back td{color:#1b7837}
+table.ev tr.sdo_abort td{color:#a6611a}
+table.ev td.w{color:#a6611a}
 .note{color:#555}
 ";
 
@@ -115,7 +190,7 @@ fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
     s.push_str(&document(&[&sec.panel], "", false));
     s.push_str("</div>\n<h2>Events</h2>\n");
     if sec.events == 0 {
-        s.push_str("<p class=\"note\">No EMCY or boot-up frames.</p>\n</section>\n");
+        s.push_str("<p class=\"note\">No EMCY, boot-up or node-health events.</p>\n</section>\n");
         return Ok(());
     }
     s.push_str("<p><label>Node: <select><option value=\"\">all</option>");
@@ -127,7 +202,7 @@ fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
         s,
         "<table class=\"ev\"><thead><tr><th>{}</th><th>line</th><th>channel</th><th>node</th>\
          <th>event</th><th title=\"transition: 1 first error, 2 one error reset, 3 further error, 4 all reset\">TR</th>\
-         <th>register</th><th>description</th><th>cleared</th><th>state after</th></tr></thead>\n<tbody>\n",
+         <th>register</th><th>description</th><th>manufacturer</th><th>warnings</th><th>cleared</th><th>state after</th></tr></thead>\n<tbody>\n",
         sec.panel.clock.heading()
     )?;
     for r in &sec.rows {
@@ -149,22 +224,24 @@ fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
 }
 
 fn write_row(s: &mut String, clock: &Clock, r: &Row) -> std::fmt::Result {
-    let class = match r.code {
-        None => " class=\"boot\"",
-        Some(0) => " class=\"reset\"",
-        Some(_) => "",
+    let (class, event) = match r.kind {
+        Kind::Boot => (" class=\"boot\"", "boot-up".to_string()),
+        Kind::Emcy(0) => (" class=\"reset\"", "0x0000".to_string()),
+        Kind::Emcy(c) => ("", format!("0x{c:04X}")),
+        Kind::Health(slug) => ("", slug.to_string()),
     };
-    let event = r
-        .code
-        .map_or_else(|| "boot-up".to_string(), |c| format!("0x{c:04X}"));
-    let register = match r.code {
-        None => String::new(),
-        Some(_) => format!("0x{:02X}", r.register),
+    let class = match r.kind {
+        Kind::Health(slug) => format!(" class=\"{slug}\""),
+        _ => class.to_string(),
     };
-    writeln!(
+    let register = match r.kind {
+        Kind::Emcy(_) => format!("0x{:02X}", r.register),
+        _ => String::new(),
+    };
+    write!(
         s,
         "<tr{class} data-lane=\"{}\"><td data-k=\"{}\">{}</td><td class=\"n\">{}</td><td>{}</td><td class=\"n\">{}</td>\
-         <td>{event}</td><td class=\"n\">{}</td><td>{register}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+         <td>{event}</td><td class=\"n\">{}</td><td>{register}</td><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"w\">",
         esc(&chart::lane_key(&r.channel, r.node)),
         r.line,
         esc(&clock.cell(r.time)),
@@ -174,8 +251,20 @@ fn write_row(s: &mut String, clock: &Clock, r: &Row) -> std::fmt::Result {
         r.transition
             .map_or_else(|| "-".to_string(), |t| t.to_string()),
         esc(&r.description),
+        esc(&r.manufacturer),
+    )?;
+    // The tag in the cell, the whole text on hover.
+    for (i, (tag, text)) in r.warnings.iter().enumerate() {
+        if i > 0 {
+            s.push_str(", ");
+        }
+        write!(s, "<span title=\"{}\">{tag}</span>", esc(text))?;
+    }
+    writeln!(
+        s,
+        "</td><td>{}</td><td>{}</td></tr>",
         codes_list(&r.cleared),
-        r.state,
+        r.state
     )
 }
 
@@ -194,10 +283,16 @@ impl<W: Write> Sink for HtmlReport<W> {
             line: ev.line,
             channel: ev.channel.to_string(),
             node: ev.node,
-            code: Some(ev.emcy.code),
+            kind: Kind::Emcy(ev.emcy.code),
             register: ev.emcy.register.0,
             transition: ev.transition,
             description: ev.description.to_string(),
+            manufacturer: manufacturer_cell(ev.decoded, ev.data),
+            warnings: ev
+                .warnings
+                .iter()
+                .map(|w| (w.tag(), w.to_string()))
+                .collect(),
             cleared: ev.cleared.to_vec(),
             state: ev.state.slug(),
         });
@@ -206,6 +301,22 @@ impl<W: Write> Sink for HtmlReport<W> {
 
     fn health(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
         self.collector.health(ev);
+        self.keep(|| Row {
+            time: ev.time,
+            line: ev.line,
+            channel: ev.channel.to_string(),
+            node: ev.node,
+            kind: Kind::Health(ev.health.slug()),
+            register: 0,
+            transition: None,
+            // The same words as the table and CSV (times there in ISO-8601).
+            description: health_text(ev.health),
+            manufacturer: String::new(),
+            warnings: Vec::new(),
+            cleared: Vec::new(),
+            // The column is the error state; an NMT state is in the text.
+            state: "",
+        });
         Ok(())
     }
 
@@ -216,10 +327,12 @@ impl<W: Write> Sink for HtmlReport<W> {
             line: ev.line,
             channel: ev.channel.to_string(),
             node: ev.node,
-            code: None,
+            kind: Kind::Boot,
             register: 0,
             transition: None,
             description: "NMT boot-up: the node restarted".to_string(),
+            manufacturer: String::new(),
+            warnings: Vec::new(),
             cleared: ev.cleared.to_vec(),
             state: "error_free",
         });

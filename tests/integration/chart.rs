@@ -400,6 +400,110 @@ fn html_events_table_filters_by_node() {
     assert!(html.contains("<select>"));
 }
 
+/// The type and the cells of each row of an HTML page's events table.
+fn table_rows(html: &str) -> Vec<(String, Vec<String>)> {
+    let start = html.find("<tbody>").expect("a table");
+    let end = html.find("</tbody>").expect("table ends");
+    let doc = roxmltree::Document::parse(&html[start..end + "</tbody>".len()])
+        .expect("the table body is well-formed");
+    doc.root_element()
+        .children()
+        .filter(|n| n.has_tag_name("tr"))
+        .map(|tr| {
+            let cells = tr
+                .children()
+                .filter(|c| c.has_tag_name("td"))
+                .map(|td| {
+                    td.descendants()
+                        .filter(|t| t.is_text())
+                        .filter_map(|t| t.text())
+                        .collect::<String>()
+                })
+                .collect();
+            (tr.attribute("class").unwrap_or_default().to_string(), cells)
+        })
+        .collect()
+}
+
+#[test]
+fn html_events_table_lists_health_events_warnings_and_manufacturer_fields() {
+    // Every node-health event of the commissioning trace is a row, in
+    // trace order with the EMCYs, named by its JSON type.
+    let fixture = Path::new("fixtures/commissioning.log");
+    let html = render("html", &[fixture]);
+    let rows = table_rows(&html);
+    let health = [
+        "nmt",
+        "heartbeat_lost",
+        "heartbeat_back",
+        "sdo_abort",
+        "error_history",
+        "error_history_cleared",
+    ];
+    let events: Vec<Value> = render("ndjson", &[fixture])
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("JSON line"))
+        .filter(|o| o["line"].is_u64())
+        .collect();
+    for kind in health {
+        let json = events.iter().filter(|e| e["type"] == kind).count();
+        let html_rows: Vec<&Vec<String>> = rows
+            .iter()
+            .filter(|(c, _)| c == kind)
+            .map(|(_, cells)| cells)
+            .collect();
+        assert!(json > 0, "the fixture has no {kind}");
+        assert_eq!(html_rows.len(), json, "{kind} rows");
+        for cells in html_rows {
+            assert_eq!(cells[4], kind, "the event column names the type");
+        }
+    }
+    let lines: Vec<u64> = rows.iter().map(|(_, c)| c[1].parse().unwrap()).collect();
+    assert!(
+        lines.windows(2).all(|w| w[0] <= w[1]),
+        "rows in trace order"
+    );
+    let text_of = |kind: &str| {
+        rows.iter()
+            .find(|(c, _)| c == kind)
+            .map(|(_, cells)| cells[7].clone())
+            .unwrap()
+    };
+    assert!(text_of("sdo_abort").contains("0x06090011 sub-index does not exist"));
+    assert!(text_of("heartbeat_lost").starts_with("heartbeat lost: silent since"));
+    let history = text_of("error_history");
+    assert!(
+        history.contains("3 entries: 0x4310") && history.contains("before the trace"),
+        "{history}"
+    );
+
+    // Kollmorgen: the category from the manufacturer bytes, and the
+    // warning's tag with its text on hover.
+    let html = render("html", &[Path::new("fixtures/s300.log")]);
+    let rows = table_rows(&html);
+    let first = rows
+        .iter()
+        .find(|(_, c)| c[4] == "0x4310")
+        .map(|(_, c)| c)
+        .expect("a 0x4310 row");
+    assert!(
+        first[8].starts_with("category: 1 (cleared only by a reset"),
+        "{first:?}"
+    );
+    assert_eq!(first[9], "no_generic_bit");
+    assert!(html.contains(
+        "<span title=\"no_generic_bit: error register 0x08 has error bits but not bit 0 (generic)\">no_generic_bit</span>"
+    ));
+    // Without a profile that reads them, the bytes themselves.
+    let html = render("html", &[Path::new("fixtures/canopennode.log")]);
+    assert!(
+        table_rows(&html)
+            .iter()
+            .any(|(_, c)| c[4] == "0x8130" && c[8] == "1B05000000"),
+        "raw manufacturer bytes"
+    );
+}
+
 #[test]
 fn trace_text_is_escaped() {
     let dir = tempfile::tempdir().expect("tempdir");
