@@ -18,6 +18,7 @@ use super::timefmt::TimeFormat;
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport, Sink};
 use crate::canopen::NodeId;
 use crate::canopen::profile::{Decoded, FieldValue};
+use crate::timeline::At;
 use crate::trace::Timestamp;
 
 /// Events listed per input.
@@ -161,29 +162,114 @@ table.ev tr.heartbeat_back td{color:#1b7837}
 table.ev tr.sdo_abort td{color:#a6611a}
 table.ev td.w{color:#a6611a}
 .note{color:#555}
+p.zoom{margin:0 0 6px}
+p.zoom button{margin-right:4px;min-width:2em}
 ";
 
-/// Filter by node (select or a click on a lane) and sort by a column
-/// header. Plain DOM, no library; the page works without it too.
-const SCRIPT: &str = "\
-document.querySelectorAll('section.input').forEach(function(sec){
-var sel=sec.querySelector('select'),tb=sec.querySelector('tbody'),shown=sec.querySelector('.shown');
-if(!sel||!tb)return;
-function apply(){var n=0;Array.prototype.forEach.call(tb.rows,function(r){r.hidden=sel.value!==''&&r.getAttribute('data-lane')!==sel.value;if(!r.hidden)n++;});
+/// The page's behaviour, plain DOM and no library (the page works without
+/// it, as the static chart and the whole table):
+/// - the chart fills the window: the time axis is re-laid from the panel's
+///   `data-*` (plot edges, axis values there, axis kind and origin), bars
+///   and markers move, labels appear on bars wide enough, ticks are redrawn
+///   as the Rust side draws them, the legend re-flows;
+/// - wheel zooms around the pointer, drag pans, double-click or the
+///   buttons go back; the events table then lists the rows in the visible
+///   range only (`data-v`: each row's axis value);
+/// - filter by node (select, or a click on a lane) and sort by a column.
+const SCRIPT: &str = r#"document.querySelectorAll('section.input').forEach(function(sec){
+var box=sec.querySelector('.chart'),svg=box.querySelector('svg'),p=svg.querySelector('g.panel'),tb=sec.querySelector('tbody'),sel=sec.querySelector('select'),shown=sec.querySelector('.shown');
+var view=null,all=null,drag=null,moved=false,W=0,X0=0,X1=0,fit=null;
+if(p){
+var d=p.dataset;X0=+d.x0;var B1=+d.x1,lo=+d.lo,hi=+d.hi,ax=d.axis,base=+d.base,oneday=d.oneday==='1';
+all=[lo,hi];view=all.slice();
+function val(x){return lo+(x-X0)/(B1-X0)*(hi-lo);}
+function px(v){return X0+(v-view[0])/(view[1]-view[0])*(X1-X0);}
+// The drawn geometry in axis values, read once.
+var items=[];
+p.querySelectorAll('g.lane rect,g.lane line,g.lane circle,g.lane path,line.end').forEach(function(e){
+var t=e.tagName,g=function(a){return +e.getAttribute(a);};
+if(t==='rect')items.push([e,0,val(g('x')),val(g('x')+g('width'))]);
+else if(t==='line')items.push([e,1,val(g('x1')),val(g('x2'))]);
+else if(t==='circle')items.push([e,2,val(g('cx'))]);
+else{var m=/^M(-?[\d.]+)/.exec(e.getAttribute('d'));if(m)items.push([e,3,val(+m[1]),+m[1]]);}});
+var bars=[].slice.call(p.querySelectorAll('g.lane rect.b')),dark={};
+function isDark(r){var c=r.getAttribute('class');if(!(c in dark)){var m=/(\d+)\D+(\d+)\D+(\d+)/.exec(getComputedStyle(r).fill)||[0,255,255,255];dark[c]=.2126*m[1]+.7152*m[2]+.0722*m[3]<110;}return dark[c];}
+var SVGNS=svg.namespaceURI,axl=p.querySelector('line.axis'),ay=+axl.getAttribute('y1'),ticks=p.querySelector('g.ticks'),cap=p.querySelector('text.cap');
+var WALL=[1e-6,2e-6,5e-6,1e-5,2e-5,5e-5,1e-4,2e-4,5e-4,1e-3,2e-3,5e-3,.01,.02,.05,.1,.2,.5,1,2,5,10,15,30,60,120,300,600,900,1800,3600,7200,10800,21600,43200,86400];
+function nice(r){var m=Math.pow(10,Math.floor(Math.log10(r)));return [1,2,5,10].map(function(k){return k*m;}).filter(function(s){return s>=r*(1-1e-9);})[0];}
+function step(span){var r=span/((X1-X0)/90);if(!(r>0))return 1;if(ax==='lines')return Math.max(1,nice(r));if(ax==='seconds')return nice(r);
+for(var i=0;i<WALL.length;i++)if(WALL[i]>=r)return WALL[i];return 86400*nice(r/86400);}
+function decs(s){var d=0;while(d<9&&Math.abs(s*Math.pow(10,d)-Math.round(s*Math.pow(10,d)))>1e-6)d++;return d;}
+// A tick's label, as the Rust side writes them (axis.rs, tick_label).
+function label(abs,s){var d=decs(s);if(ax==='lines')return abs.toFixed(0);if(ax==='seconds')return abs.toFixed(d);
+var per=Math.pow(10,d),u=Math.round(abs*per),sec=Math.floor(u/per),f=String(u-sec*per),iso=new Date(sec*1000).toISOString();
+while(f.length<d)f='0'+f;var md=iso.slice(5,10),hm=iso.slice(11,16),hms=iso.slice(11,19);
+return s>=86400?md:!oneday?md+' '+hm:s>=60?hm:d===0?hms:hms+'.'+f;}
+function el(t,a,txt){var e=document.createElementNS(SVGNS,t);for(var k in a)e.setAttribute(k,a[k]);if(txt)e.textContent=txt;return e;}
+function clampRect(e,a,b){var x=Math.max(px(a),X0-1),y=Math.min(px(b),X1+8);e.style.display=y<X0-1||x>X1+8?'none':'';e.setAttribute('x',x.toFixed(1));e.setAttribute('width',Math.max(y-x,1).toFixed(1));}
+function layout(){
+W=Math.max(640,box.clientWidth);X1=W-(960-B1);
+svg.setAttribute('width',W);
+p.querySelectorAll('rect.bg').forEach(function(r){r.setAttribute('width',W);});
+axl.setAttribute('x2',X1);cap.setAttribute('x',X1);
+items.forEach(function(it){var e=it[0];
+if(it[1]===0)clampRect(e,it[2],it[3]);
+else{var x=px(it[2]),out=x<X0-1||x>X1+9;e.style.display=out?'none':'';
+if(it[1]===1){e.setAttribute('x1',x.toFixed(1));e.setAttribute('x2',px(it[3]).toFixed(1));}
+else if(it[1]===2)e.setAttribute('cx',x.toFixed(1));
+else e.setAttribute('transform','translate('+(x-it[3]).toFixed(1)+',0)');}});
+// Labels where bars are now wide enough (0.6 em of 9 px a character).
+p.querySelectorAll('text.bl').forEach(function(t){t.remove();});
+bars.forEach(function(r){if(r.style.display==='none')return;var w=+r.getAttribute('width'),c=r.getAttribute('data-c')||'',s=c.slice(2,6);
+var l=[c,s].filter(function(t){return t&&t.length*5.4+4<=w;})[0];if(!l)return;
+r.parentNode.insertBefore(el('text',{'class':isDark(r)?'bl w':'bl',x:(+r.getAttribute('x')+2).toFixed(1),y:(+r.getAttribute('y')+7.5).toFixed(1)},l),r.nextSibling);});
+ticks.textContent='';var s=step(view[1]-view[0]),abs=Math.ceil((base+view[0])/s)*s;
+for(var i=0;i<200&&abs-base<=view[1]+s*1e-6;i++,abs=Math.ceil((base+view[0])/s)*s+i*s){var x=px(abs-base).toFixed(1);
+ticks.appendChild(el('line',{'class':'grid',x1:x,y1:52,x2:x,y2:ay+4}));ticks.appendChild(el('text',{'class':'tick',x:x,y:ay+16},label(abs,s)));}
+// The legend, re-flowed to the width.
+var lx=10,ly=null;p.querySelectorAll('g.legend>g').forEach(function(g){var m=/,([-\d.]+)\)/.exec(g.getAttribute('transform'));if(ly===null)ly=+m[1];
+var w=g.getBBox().width+14;if(lx>10&&(g.classList.contains('r')||lx+w>W-10)){lx=10;ly+=18;}g.setAttribute('transform','translate('+lx.toFixed(1)+','+ly+')');lx+=w;});
+var h=ly===null?+svg.getAttribute('height'):ly+18;svg.setAttribute('height',h);svg.setAttribute('viewBox','0 0 '+W+' '+h);
+var z=view[0]>all[0]||view[1]<all[1];sec.setAttribute('data-view',view[0]+' '+view[1]);
+range.textContent=z?'showing '+when(view[0])+' – '+when(view[1]):'the whole trace';apply();}
+function when(v){if(ax==='lines')return 'line '+Math.round(v);if(ax==='seconds')return v.toFixed(3)+' s';var t=base+v,iso=new Date(Math.floor(t*1000)).toISOString();return (oneday?'':iso.slice(0,10)+' ')+iso.slice(11,23);}
+function zoom(f,c){var a=view[0],b=view[1];if(c===undefined)c=(a+b)/2;var min=(all[1]-all[0])*1e-6;var na=c-(c-a)*f,nb=c+(b-c)*f;if(nb-na<min)return;set(na,nb);}
+function set(a,b){var w=Math.min(b-a,all[1]-all[0]);if(a<all[0]){a=all[0];}if(a+w>all[1])a=all[1]-w;view=[a,a+w];redraw();}
+var pending=false;function redraw(){if(pending)return;pending=true;requestAnimationFrame(function(){pending=false;layout();});}
+function at(ev){var r=svg.getBoundingClientRect();return ev.clientX-r.left;}
+svg.addEventListener('wheel',function(ev){var x=at(ev);if(x<X0||x>X1)return;ev.preventDefault();zoom(Math.exp(ev.deltaY*.002),view[0]+(x-X0)/(X1-X0)*(view[1]-view[0]));});
+svg.addEventListener('mousedown',function(ev){var x=at(ev);if(x<X0||x>X1||ev.button!==0)return;drag=[x,view[0],view[1]];moved=false;ev.preventDefault();});
+window.addEventListener('mousemove',function(ev){if(!drag)return;var dx=at(ev)-drag[0];if(Math.abs(dx)>3)moved=true;if(!moved)return;
+var k=(drag[2]-drag[1])/(X1-X0);set(drag[1]-dx*k,drag[2]-dx*k);});
+window.addEventListener('mouseup',function(){drag=null;});
+svg.addEventListener('dblclick',function(){set(all[0],all[1]);});
+var bar=document.createElement('p');bar.className='zoom';
+[['+','zoom in',function(){zoom(.5);}],['−','zoom out',function(){zoom(2);}],['whole trace','show the whole trace',function(){set(all[0],all[1]);}]].forEach(function(b){
+var e=document.createElement('button');e.textContent=b[0];e.title=b[1];e.addEventListener('click',b[2]);bar.appendChild(e);});
+var range=document.createElement('span');range.className='note';bar.appendChild(range);
+var hint=document.createElement('span');hint.className='note';hint.textContent=' · wheel: zoom, drag: pan, double-click: whole trace';bar.appendChild(hint);
+box.parentNode.insertBefore(bar,box);
+fit=layout;window.addEventListener('resize',redraw);}
+// Rows: the node chosen (or all) within the visible time range.
+function apply(){if(!tb)return;var n=0,z=view&&(view[0]>all[0]||view[1]<all[1]);
+[].forEach.call(tb.rows,function(r){var v=r.getAttribute('data-v'),out=z&&v!==null&&(+v<view[0]||+v>view[1]);
+r.hidden=out||(sel.value!==''&&r.getAttribute('data-lane')!==sel.value);if(!r.hidden)n++;});
 sec.querySelectorAll('g.lane').forEach(function(g){g.style.opacity=sel.value===''||g.getAttribute('data-lane')===sel.value?'':'0.3';});
-shown.textContent=n+' row'+(n===1?'':'s')+' shown';}
-sel.addEventListener('change',apply);
-sec.querySelectorAll('g.lane').forEach(function(g){g.addEventListener('click',function(){var v=g.getAttribute('data-lane');sel.value=sel.value===v?'':v;apply();});});
+var past=z&&tb.parentNode.hasAttribute('data-cut')&&view[1]>lastV;
+shown.textContent=n+' row'+(n===1?'':'s')+' shown'+(z?' (in the visible time range'+(past?'; events after the last row listed are not in this table':'')+')':'');}
+var lastV=-Infinity;if(tb)[].forEach.call(tb.rows,function(r){var v=r.getAttribute('data-v');if(v!==null&&+v>lastV)lastV=+v;});
+if(sel&&tb){sel.addEventListener('change',apply);
+sec.querySelectorAll('g.lane').forEach(function(g){g.addEventListener('click',function(){if(moved){moved=false;return;}var v=g.getAttribute('data-lane');sel.value=sel.value===v?'':v;apply();});});
 var heads=sec.querySelectorAll('th');
 heads.forEach(function(th,i){th.addEventListener('click',function(){
 var up=th.getAttribute('data-dir')!=='asc';heads.forEach(function(h){h.removeAttribute('data-dir');});th.setAttribute('data-dir',up?'asc':'desc');
 function key(r){var c=r.cells[i];return c.hasAttribute('data-k')?c.getAttribute('data-k'):c.textContent;}
-var rows=Array.prototype.slice.call(tb.rows);
+var rows=[].slice.call(tb.rows);
 rows.sort(function(a,b){var x=key(a),y=key(b),nx=parseFloat(x),ny=parseFloat(y),d;
 d=(!isNaN(nx)&&!isNaN(ny)&&String(nx)===x&&String(ny)===y)?nx-ny:x.localeCompare(y);return up?d:-d;});
-rows.forEach(function(r){tb.appendChild(r);});});});
-apply();});
-";
+rows.forEach(function(r){tb.appendChild(r);});});});}
+if(fit)fit();else apply();});
+"#;
 
 fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
     s.push_str("<section class=\"input\">\n<div class=\"chart\">\n");
@@ -198,9 +284,16 @@ fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
         write!(s, "<option value=\"{}\">{}</option>", esc(key), esc(label))?;
     }
     s.push_str("</select></label> <span class=\"shown note\"></span></p>\n");
+    // `data-cut`: the table stops before the input's last event, so the
+    // script can say why a range past it lists nothing.
+    let cut = if sec.events > sec.rows.len() as u64 {
+        " data-cut"
+    } else {
+        ""
+    };
     write!(
         s,
-        "<table class=\"ev\"><thead><tr><th>{}</th><th>line</th><th>channel</th><th>node</th>\
+        "<table class=\"ev\"{cut}><thead><tr><th>{}</th><th>line</th><th>channel</th><th>node</th>\
          <th>event</th><th title=\"transition: 1 first error, 2 one error reset, 3 further error, 4 all reset\">TR</th>\
          <th>register</th><th>description</th><th>manufacturer</th><th>warnings</th><th>cleared</th><th>state after</th></tr></thead>\n<tbody>\n",
         sec.panel.clock.heading()
@@ -238,9 +331,16 @@ fn write_row(s: &mut String, clock: &Clock, r: &Row) -> std::fmt::Result {
         Kind::Emcy(_) => format!("0x{:02X}", r.register),
         _ => String::new(),
     };
+    // The axis value, for the script's visible-range filter.
+    let v = clock
+        .value(&At {
+            time: r.time,
+            line: r.line,
+        })
+        .map_or_else(String::new, |v| format!(" data-v=\"{v}\""));
     write!(
         s,
-        "<tr{class} data-lane=\"{}\"><td data-k=\"{}\">{}</td><td class=\"n\">{}</td><td>{}</td><td class=\"n\">{}</td>\
+        "<tr{class} data-lane=\"{}\"{v}><td data-k=\"{}\">{}</td><td class=\"n\">{}</td><td>{}</td><td class=\"n\">{}</td>\
          <td>{event}</td><td class=\"n\">{}</td><td>{register}</td><td class=\"t\">{}</td><td class=\"t\">{}</td><td class=\"w\">",
         esc(&chart::lane_key(&r.channel, r.node)),
         r.line,

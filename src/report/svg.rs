@@ -67,7 +67,11 @@ pub(super) fn document(panels: &[&Panel], title: &str, standalone: bool) -> Stri
                 w = N(chart::WIDTH)
             ));
         }
-        s.push_str(&format!("<g transform=\"translate(0,{})\">\n", N(y)));
+        s.push_str(&format!(
+            "<g class=\"panel\" transform=\"translate(0,{})\"{}>\n",
+            N(y),
+            p.view
+        ));
         s.push_str(&p.svg);
         s.push_str("</g>\n");
         y += p.height + PANEL_GAP;

@@ -393,7 +393,7 @@ fn html_events_table_filters_by_node() {
             "{lane}"
         );
         assert!(
-            html.contains(&format!("<tr data-lane=\"{lane}\">")),
+            html.contains(&format!("<tr data-lane=\"{lane}\" data-v=")),
             "{lane}"
         );
     }

@@ -461,7 +461,9 @@ fn write_legend(
             x = 10.0;
             y += 18.0;
         }
-        write!(out, "<g transform=\"translate({},{})\">", N(x), N(y))?;
+        // `r`: the HTML page re-flows the legend to its width.
+        let r = if row { " class=\"r\"" } else { "" };
+        write!(out, "<g{r} transform=\"translate({},{})\">", N(x), N(y))?;
         if let Some(t) = title {
             write!(out, "<title>{}</title>", esc(t))?;
         }

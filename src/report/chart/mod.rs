@@ -49,7 +49,7 @@ use bars::Bars;
 use draw::write_panel;
 use legend::CodeKeys;
 use marks::{LaneMarks, Mark, Streamed};
-use style::{LANE_MIN_H, PLOT_W, ROW_H, X0};
+use style::{LANE_MIN_H, PLOT_W, ROW_H, X0, X1};
 
 pub(super) use axis::Clock;
 pub(super) use style::{WIDTH, style_sheet};
@@ -163,6 +163,10 @@ pub(in crate::report) struct Panel {
     /// The `(class, shade)` colours its codes use beyond the class colours
     /// (the document's style sheet has a rule for each).
     pub(super) shades: BTreeSet<(usize, usize)>,
+    /// The attributes of the panel's `<g>` that let the HTML page re-lay
+    /// the time axis (fill the window, zoom, pan): the plot's edges in px,
+    /// the axis values at them, what the axis measures and its origin.
+    pub(super) view: String,
 }
 
 struct Lane<'a> {
@@ -379,6 +383,16 @@ impl Panel {
             return Err(e);
         }
         let keys = CodeKeys::of(&lanes);
+        let view = format!(
+            " data-x0=\"{}\" data-x1=\"{}\" data-lo=\"{}\" data-hi=\"{}\" data-axis=\"{}\" data-base=\"{}\" data-oneday=\"{}\"",
+            N(X0),
+            N(X1),
+            scale.lo,
+            scale.hi,
+            axis.slug(),
+            clock.base(),
+            u8::from(one_day)
+        );
         let mut svg = String::new();
         let height = write_panel(&mut svg, input, &clock, scale, &lanes, &keys, &streamed)
             .map_err(|_| io::Error::other("formatting the chart failed"))?;
@@ -397,6 +411,7 @@ impl Panel {
             clock,
             lanes,
             shades: keys.shades(),
+            view,
         })
     }
 }

@@ -41,7 +41,7 @@ pub(in crate::report) const STYLE: &str = "\
 .ec rect.m{fill-opacity:.55;stroke-dasharray:2 1}
 .ec rect.o{stroke:#000;stroke-width:1;stroke-dasharray:3 2}
 .ec .oe{fill:#000}
-.ec .mk line{stroke-width:1.5}
+.ec .mk line{stroke-width:1;stroke-opacity:.7}
 .ec .reset line{stroke:#1b7837}
 .ec .reset circle{fill:#1b7837}
 .ec .partial line{stroke:#5aae61;stroke-dasharray:2 2}
