@@ -235,7 +235,9 @@ range.textContent=z?'showing '+when(view[0])+' – '+when(view[1]):'the whole tr
 function when(v){if(ax==='lines')return 'line '+Math.round(v);if(ax==='seconds')return v.toFixed(3)+' s';var t=base+v,iso=new Date(Math.floor(t*1000)).toISOString();return (oneday?'':iso.slice(0,10)+' ')+iso.slice(11,23);}
 function zoom(f,c){var a=view[0],b=view[1];if(c===undefined)c=(a+b)/2;var min=(all[1]-all[0])*1e-6;var na=c-(c-a)*f,nb=c+(b-c)*f;if(nb-na<min)return;set(na,nb);}
 function set(a,b){var w=Math.min(b-a,all[1]-all[0]);if(a<all[0]){a=all[0];}if(a+w>all[1])a=all[1]-w;view=[a,a+w];redraw();}
-var pending=false;function redraw(){if(pending)return;pending=true;requestAnimationFrame(function(){pending=false;layout();});}
+// One layout per frame however many wheel events; the timer runs it where
+// no frames are drawn (a background tab, a headless browser).
+var pending=false;function redraw(){if(pending)return;pending=true;var f=function(){if(pending){pending=false;layout();}};requestAnimationFrame(f);setTimeout(f,100);}
 function at(ev){var r=svg.getBoundingClientRect();return ev.clientX-r.left;}
 svg.addEventListener('wheel',function(ev){var x=at(ev);if(x<X0||x>X1)return;ev.preventDefault();zoom(Math.exp(ev.deltaY*.002),view[0]+(x-X0)/(X1-X0)*(view[1]-view[0]));});
 svg.addEventListener('mousedown',function(ev){var x=at(ev);if(x<X0||x>X1||ev.button!==0)return;drag=[x,view[0],view[1]];moved=false;ev.preventDefault();});

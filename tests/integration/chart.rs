@@ -567,10 +567,9 @@ fn output_is_deterministic() {
     assert_eq!(a, b);
 }
 
-/// Renders the HTML of a fixture in headless Chromium when it is installed
-/// (skips with a message when not): the page must load from disk and paint.
-#[test]
-fn chromium_renders_the_html_when_present() {
+/// The Chromium binary, or `None` (with a message) when it is not
+/// installed; under CI (`.ci/run` installs it) a missing Chromium fails.
+fn chromium() -> Option<&'static str> {
     let found = ["chromium", "chromium-browser", "google-chrome"]
         .into_iter()
         .find(|b| {
@@ -579,10 +578,24 @@ fn chromium_renders_the_html_when_present() {
                 .output()
                 .is_ok_and(|o| o.status.success())
         });
-    let Some(_) = found else {
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Chromium is not installed (apt-get install chromium)"
+        );
         eprintln!("skipped: no Chromium (apt-get install -y chromium to run this check)");
+    }
+    found
+}
+
+/// Renders the HTML of a fixture in headless Chromium (skips with a
+/// message when it is not installed): the page must load from disk and
+/// paint.
+#[test]
+fn chromium_renders_the_html_when_present() {
+    if chromium().is_none() {
         return;
-    };
+    }
     let dir = tempfile::tempdir().expect("tempdir");
     let png = dir.path().join("s300.png");
     let out = std::process::Command::new("sh")
@@ -601,4 +614,288 @@ fn chromium_renders_the_html_when_present() {
     let bytes = fs::read(&png).expect("a PNG was written");
     assert!(bytes.starts_with(b"\x89PNG"), "not a PNG");
     assert!(bytes.len() > 10_000, "a blank page? {} bytes", bytes.len());
+}
+
+/// Three nodes over a minute, an error of 2 to 8 s every 10 s each: bars
+/// wide enough for labels at some widths only.
+fn minute_trace() -> String {
+    let mut s = String::new();
+    let t0 = 1_700_000_000u64;
+    let codes = ["1043", "2023", "3031", "1042", "8181"];
+    for node in 1..=3u64 {
+        for k in 0..6u64 {
+            let start = k * 10_000 + node * 700;
+            let end = start + 2_000 + (k * 977 + node * 331) % 6_000;
+            let code = codes[((k + node) % 5) as usize];
+            for (ms, data) in [
+                (start, format!("{code}090000000000")),
+                (end, "0000000000000000".to_string()),
+            ] {
+                let _ = writeln!(
+                    s,
+                    "({}.{:06}) can0 {:03X}#{data}",
+                    t0 + ms / 1000,
+                    (ms % 1000) * 1000,
+                    0x80 + node
+                );
+            }
+        }
+    }
+    // A boot-up at the end, so the trace runs to 60 s.
+    let _ = writeln!(s, "({}.000000) can0 701#00", t0 + 60);
+    let mut lines: Vec<&str> = s.lines().collect();
+    lines.sort();
+    lines.join("\n") + "\n"
+}
+
+/// The page after Chromium ran its script (and `extra`, a script appended
+/// to the body) in a window of `width`×`height`.
+fn browser_dom(browser: &str, html: &str, extra: &str, width: u32, height: u32) -> String {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let page = dir.path().join("page.html");
+    let html = html.replacen("</body>", &format!("<script>{extra}</script>\n</body>"), 1);
+    fs::write(&page, html).expect("write page");
+    let out = std::process::Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            dir.path().join("profile").display()
+        ))
+        .args(["--no-first-run", "--no-default-browser-check"])
+        .arg(format!("--window-size={width},{height}"))
+        // Lets the page's requestAnimationFrame redraws run before the dump.
+        .arg("--virtual-time-budget=5000")
+        .arg("--dump-dom")
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("runs chromium");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8 DOM")
+}
+
+fn num(n: &roxmltree::Node<'_, '_>, attr: &str) -> f64 {
+    n.attribute(attr)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{attr} of {n:?}"))
+}
+
+/// What the laid-out page shows: the chart's width, the plot's right edge,
+/// the labels drawn, every bar's extent, the legend items' right ends.
+struct Laid {
+    width: f64,
+    plot_end: f64,
+    labels: Vec<String>,
+    bars: Vec<(f64, f64)>,
+    legend_right: f64,
+    ticks: Vec<String>,
+}
+
+fn laid_out(dom: &str) -> Laid {
+    let doc = parse(inline_svg(dom));
+    let svg = doc.root_element();
+    let in_lane = |n: &roxmltree::Node<'_, '_>| n.ancestors().any(|a| has_class(&a, "lane"));
+    let shown = |n: &roxmltree::Node<'_, '_>| {
+        !n.attribute("style")
+            .is_some_and(|s| s.contains("display: none"))
+    };
+    Laid {
+        width: num(&svg, "width"),
+        plot_end: doc
+            .descendants()
+            .find(|n| n.has_tag_name("line") && has_class(n, "axis"))
+            .map(|n| num(&n, "x2"))
+            .expect("an axis"),
+        labels: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text") && has_class(n, "bl") && in_lane(n))
+            .filter_map(|n| n.text().map(str::to_string))
+            .collect(),
+        bars: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("rect") && has_class(n, "b") && in_lane(n) && shown(n))
+            .map(|n| (num(&n, "x"), num(&n, "x") + num(&n, "width")))
+            .collect(),
+        legend_right: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("g") && n.parent().is_some_and(|p| has_class(&p, "legend")))
+            .map(|g| {
+                let t = g.attribute("transform").expect("placed");
+                let x: f64 = t["translate(".len()..t.find(',').expect("x,y")]
+                    .parse()
+                    .expect("x");
+                let text = g
+                    .descendants()
+                    .filter(|n| n.is_text())
+                    .filter(|n| n.parent().is_some_and(|p| p.has_tag_name("text")))
+                    .filter_map(|n| n.text())
+                    .collect::<String>();
+                x + text.chars().count() as f64 * 4.0
+            })
+            .fold(0.0, f64::max),
+        ticks: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text") && has_class(n, "tick"))
+            .filter_map(|n| n.text().map(str::to_string))
+            .collect(),
+    }
+}
+
+/// In Chromium at two window sizes, the chart takes the window's width:
+/// the plot ends 28 px from the right, bars stay inside it, labels appear
+/// on the bars the width makes wide enough, the legend re-flows inside.
+#[test]
+fn chromium_lays_the_chart_out_to_the_window() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("minute.log");
+    fs::write(&trace, minute_trace()).expect("write trace");
+    let html = render("html", &[&trace]);
+    let narrow = laid_out(&browser_dom(browser, &html, "", 800, 700));
+    let wide = laid_out(&browser_dom(browser, &html, "", 1700, 700));
+    for (window, laid) in [(800.0, &narrow), (1700.0, &wide)] {
+        // The body's margins are 16 px each side.
+        assert!(
+            (laid.width - (window - 32.0)).abs() <= 1.0,
+            "a {window} px window: chart {} px wide",
+            laid.width
+        );
+        assert_eq!(laid.plot_end, laid.width - 28.0);
+        assert_eq!(laid.bars.len(), 18, "every error a bar");
+        for &(x0, x1) in &laid.bars {
+            assert!(x0 >= 169.0 && x1 <= laid.plot_end + 8.0, "bar {x0}-{x1}");
+        }
+        assert!(
+            laid.legend_right <= laid.width,
+            "legend reaches {} of {}",
+            laid.legend_right,
+            laid.width
+        );
+        assert!(laid.ticks.len() >= 3, "{:?}", laid.ticks);
+    }
+    // Wider bars: more of them carry their code, at least one in full.
+    assert!(
+        wide.labels.len() > narrow.labels.len(),
+        "{:?} vs {:?}",
+        wide.labels,
+        narrow.labels
+    );
+    assert!(
+        wide.labels.iter().any(|l| l.starts_with("0x")),
+        "{:?}",
+        wide.labels
+    );
+    // A wider plot has room for more ticks.
+    assert!(wide.ticks.len() > narrow.ticks.len());
+}
+
+/// Wheel events over the plot (as a user's wheel sends them) narrow the
+/// visible range around the pointer: ticks get finer, the events table
+/// hides rows outside the range and keeps those inside; a double-click
+/// shows the whole trace again.
+#[test]
+fn chromium_zooms_the_time_axis_and_the_table_follows() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("minute.log");
+    fs::write(&trace, minute_trace()).expect("write trace");
+    let html = render("html", &[&trace]);
+    // Four notches of the wheel at a third of the plot's width.
+    let wheel = "var s=document.querySelector('section.input svg'),r=s.getBoundingClientRect(),\
+        x=r.left+170+(r.width-198)/3;\
+        for(var i=0;i<4;i++)s.dispatchEvent(new WheelEvent('wheel',\
+        {deltaY:-240,clientX:x,clientY:r.top+80,bubbles:true,cancelable:true}));";
+    let before = browser_dom(browser, &html, "", 1200, 700);
+    let after = browser_dom(browser, &html, wheel, 1200, 700);
+    let range = |dom: &str| -> (f64, f64) {
+        let at = dom.find("data-view=\"").expect("the page says its range") + 11;
+        let text = &dom[at..at + dom[at..].find('"').unwrap()];
+        let (a, b) = text.split_once(' ').expect("two values");
+        (a.parse().unwrap(), b.parse().unwrap())
+    };
+    let (a0, b0) = range(&before);
+    let (a1, b1) = range(&after);
+    assert_eq!(a0, 0.0);
+    assert!(b0 > 60.0, "the whole minute and the room after it: {b0}");
+    assert!(
+        a1 > a0 && b1 < b0 && (b1 - a1) < (b0 - a0) / 4.0,
+        "zoomed {a1}-{b1} from {a0}-{b0}"
+    );
+    // Around the pointer: a third of the way in stays a third of the way in.
+    let third = a0 + (b0 - a0) / 3.0;
+    assert!(
+        ((third - a1) / (b1 - a1) - 1.0 / 3.0).abs() < 0.02,
+        "{a1}-{b1}"
+    );
+    assert!(after.contains("showing 22:13:"), "the range is shown");
+    let (lb, la) = (laid_out(&before), laid_out(&after));
+    assert_ne!(la.ticks, lb.ticks, "ticks redrawn");
+    // The bars in view are wider now, and each one wide enough carries its
+    // whole label (`0x1043`: 6 characters of 0.6 em at 9 px, and 4 px).
+    let widest = |l: &Laid| l.bars.iter().map(|(a, b)| b - a).fold(0.0, f64::max);
+    assert!(widest(&la) > 2.0 * widest(&lb), "bars widen");
+    let doc = parse(inline_svg(&after));
+    let mut full = 0;
+    for bar in lane_bars(&doc) {
+        let shown = !bar
+            .attribute("style")
+            .is_some_and(|s| s.contains("display: none"));
+        if shown && width_of(&bar) >= 6.0 * 9.0 * 0.6 + 4.0 {
+            let label = bar
+                .next_sibling_element()
+                .filter(|n| has_class(n, "bl"))
+                .and_then(|n| n.text());
+            assert_eq!(
+                label,
+                bar.attribute("data-c"),
+                "a {} px bar",
+                width_of(&bar)
+            );
+            full += 1;
+        }
+    }
+    assert!(full > 0, "no bar in view is wide");
+    // The table: rows inside the range shown, rows outside hidden.
+    let body_at = after.find("<tbody>").expect("a table");
+    let body_end = after.find("</tbody>").expect("table ends") + "</tbody>".len();
+    let body = roxmltree::Document::parse(&after[body_at..body_end]).expect("rows");
+    let (mut inside, mut outside) = (0, 0);
+    for tr in body
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("tr"))
+    {
+        let v = num(&tr, "data-v");
+        let hidden = tr.attribute("hidden").is_some();
+        if v >= a1 && v <= b1 {
+            assert!(!hidden, "row at {v} in {a1}-{b1} hidden");
+            inside += 1;
+        } else {
+            assert!(hidden, "row at {v} outside {a1}-{b1} shown");
+            outside += 1;
+        }
+    }
+    assert!(
+        inside > 0 && outside > 0,
+        "{inside} inside, {outside} outside"
+    );
+    assert!(after.contains(&format!(
+        "{inside} row{} shown (in the visible time range)",
+        if inside == 1 { "" } else { "s" }
+    )));
+    // A double-click goes back to the whole trace, every row shown.
+    let reset = format!(
+        "{wheel}document.querySelector('section.input svg').dispatchEvent(new MouseEvent('dblclick',{{bubbles:true}}));"
+    );
+    let back = browser_dom(browser, &html, &reset, 1200, 700);
+    assert_eq!(range(&back), (a0, b0));
+    assert!(!back.contains("<tr hidden") && !back.contains("hidden=\"\""));
 }
