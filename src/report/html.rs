@@ -179,7 +179,8 @@ p.zoom button{margin-right:4px;min-width:2em}
 const SCRIPT: &str = r#"document.querySelectorAll('section.input').forEach(function(sec){
 var box=sec.querySelector('.chart'),svg=box.querySelector('svg'),p=svg.querySelector('g.panel'),tb=sec.querySelector('tbody'),sel=sec.querySelector('select'),shown=sec.querySelector('.shown');
 var view=null,all=null,drag=null,moved=false,W=0,X0=0,X1=0,fit=null;
-if(p){
+// A panel without lanes has no axis to zoom.
+if(p&&p.querySelector('line.axis')){
 var d=p.dataset;X0=+d.x0;var B1=+d.x1,lo=+d.lo,hi=+d.hi,ax=d.axis,base=+d.base,oneday=d.oneday==='1';
 all=[lo,hi];view=all.slice();
 function val(x){return lo+(x-X0)/(B1-X0)*(hi-lo);}

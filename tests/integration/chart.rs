@@ -670,6 +670,8 @@ fn browser_dom(browser: &str, html: &str, extra: &str, width: u32, height: u32) 
         .arg(format!("--window-size={width},{height}"))
         // Lets the page's requestAnimationFrame redraws run before the dump.
         .arg("--virtual-time-budget=5000")
+        // The page's console on stderr: a script error fails the test.
+        .args(["--enable-logging=stderr", "--v=0"])
         .arg("--dump-dom")
         .arg(format!("file://{}", page.display()))
         .output()
@@ -679,7 +681,46 @@ fn browser_dom(browser: &str, html: &str, extra: &str, width: u32, height: u32) 
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !log.lines().any(|l| l.contains("Uncaught")),
+        "the page's script failed:\n{log}"
+    );
     String::from_utf8(out.stdout).expect("utf-8 DOM")
+}
+
+/// One page of several inputs (one without frames, one without times, an
+/// ASC and a candump log): the script lays out every chart it has and
+/// throws on none.
+#[test]
+fn chromium_runs_the_page_script_on_every_kind_of_input() {
+    let Some(browser) = chromium() else { return };
+    let inputs = [
+        "fixtures/no-frame.asc",
+        "fixtures/canopennode.txt",
+        "fixtures/festo.asc",
+        "fixtures/s300.log",
+    ];
+    let paths: Vec<&Path> = inputs.iter().map(Path::new).collect();
+    let html = render("html", &paths);
+    let dom = browser_dom(browser, &html, "", 1100, 800);
+    let sections: Vec<&str> = dom.split("<section class=\"input\"").skip(1).collect();
+    assert_eq!(sections.len(), 4);
+    // No lanes, no axis to lay out; each of the others laid out and zoomable.
+    assert!(!sections[0].contains("data-view="));
+    for (input, section) in inputs.iter().zip(&sections).skip(1) {
+        assert!(
+            section.contains("data-view=\"0 ") || section.contains("data-view=\"1 "),
+            "{input}"
+        );
+        assert!(section.contains("<p class=\"zoom\">"), "{input}");
+        assert!(
+            section.contains("width=\"1068\""),
+            "{input}: not laid out to the window"
+        );
+    }
+    // The axis without times counts lines.
+    assert!(sections[1].contains("trace line"));
 }
 
 fn num(n: &roxmltree::Node<'_, '_>, attr: &str) -> f64 {
