@@ -476,3 +476,74 @@ impl<W: Write> Sink for HtmlReport<W> {
         self.out.flush()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analyze::HistoryReport;
+    use crate::analyze::event::HistoryItem;
+
+    #[test]
+    fn manufacturer_cell_joins_a_text_to_its_number_else_shows_the_bytes() {
+        let decoded = Decoded {
+            fields: vec![
+                ("category".to_string(), FieldValue::Int(1)),
+                (
+                    "category_text".to_string(),
+                    FieldValue::Text("cleared only by a reset".to_string()),
+                ),
+                ("fault".to_string(), FieldValue::Int(235)),
+                // A text without its number stays an item of its own.
+                ("axis_text".to_string(), FieldValue::Text("A".to_string())),
+            ],
+        };
+        assert_eq!(
+            manufacturer_cell(Some(&decoded), &[0x10, 0x43, 0x08, 1, 0, 0, 0, 0]),
+            "category: 1 (cleared only by a reset); fault: 235; axis_text: A"
+        );
+        let raw = [0x30, 0x81, 0x11, 0x1B, 0x05, 0, 0, 0];
+        assert_eq!(manufacturer_cell(None, &raw), "1B05000000");
+        assert_eq!(
+            manufacturer_cell(None, &[0x30, 0x81, 0x11, 0, 0, 0, 0, 0]),
+            ""
+        );
+        // A short frame has what it has.
+        assert_eq!(manufacturer_cell(None, &[0x30, 0x81]), "");
+    }
+
+    #[test]
+    fn an_error_history_lists_its_entries() {
+        let h = Health::ErrorHistory(HistoryReport {
+            entries: vec![
+                HistoryItem {
+                    code: 0x4310,
+                    info: 0x12,
+                    description: "excess temperature drive".to_string(),
+                    before_trace: true,
+                },
+                HistoryItem {
+                    code: 0x3120,
+                    info: 0,
+                    description: "mains under-voltage".to_string(),
+                    before_trace: false,
+                },
+            ],
+            count: Some(2),
+            complete: true,
+            time: None,
+            line: 7,
+        });
+        let text = health_text(&h);
+        assert!(
+            text.ends_with(
+                ": 0x4310 excess temperature drive (info 0x0012), before the trace; \
+                 0x3120 mains under-voltage"
+            ),
+            "{text}"
+        );
+        assert_eq!(
+            health_text(&Health::ErrorHistoryCleared),
+            "error history cleared"
+        );
+    }
+}
