@@ -203,9 +203,12 @@ for(var i=0;i<WALL.length;i++)if(WALL[i]>=r)return WALL[i];return 86400*nice(r/8
 function decs(s){var d=0;while(d<9&&Math.abs(s*Math.pow(10,d)-Math.round(s*Math.pow(10,d)))>1e-6)d++;return d;}
 // A tick's label, as the Rust side writes them (axis.rs, tick_label).
 function label(abs,s){var d=decs(s);if(ax==='lines')return abs.toFixed(0);if(ax==='seconds')return abs.toFixed(d);
-var per=Math.pow(10,d),u=Math.round(abs*per),sec=Math.floor(u/per),f=String(u-sec*per),iso=new Date(sec*1000).toISOString();
+var per=Math.pow(10,d),u=Math.round(abs*per),sec=Math.floor(u/per),f=String(u-sec*per),iso=utc(sec);if(!iso)return abs.toFixed(d);
 while(f.length<d)f='0'+f;var md=iso.slice(5,10),hm=iso.slice(11,16),hms=iso.slice(11,19);
 return s>=86400?md:!oneday?md+' '+hm:s>=60?hm:d===0?hms:hms+'.'+f;}
+// ISO-8601 of a Unix time, or null past the years a Date holds (a trace's
+// times can be any 64-bit number; the Rust side draws them all).
+function utc(t){var d=new Date(Math.floor(t*1000));return isNaN(d.getTime())?null:d.toISOString();}
 function el(t,a,txt){var e=document.createElementNS(SVGNS,t);for(var k in a)e.setAttribute(k,a[k]);if(txt)e.textContent=txt;return e;}
 function clampRect(e,a,b){var x=Math.max(px(a),X0-1),y=Math.min(px(b),X1+8);e.style.display=y<X0-1||x>X1+8?'none':'';e.setAttribute('x',x.toFixed(1));e.setAttribute('width',Math.max(y-x,1).toFixed(1));}
 function layout(){
@@ -233,7 +236,7 @@ var w=g.getBBox().width+14;if(lx>10&&(g.classList.contains('r')||lx+w>W-10)){lx=
 var h=ly===null?+svg.getAttribute('height'):ly+18;svg.setAttribute('height',h);svg.setAttribute('viewBox','0 0 '+W+' '+h);
 var z=view[0]>all[0]||view[1]<all[1];sec.setAttribute('data-view',view[0]+' '+view[1]);
 range.textContent=z?'showing '+when(view[0])+' – '+when(view[1]):'the whole trace';apply();}
-function when(v){if(ax==='lines')return 'line '+Math.round(v);if(ax==='seconds')return v.toFixed(3)+' s';var t=base+v,iso=new Date(Math.floor(t*1000)).toISOString();return (oneday?'':iso.slice(0,10)+' ')+iso.slice(11,23);}
+function when(v){if(ax==='lines')return 'line '+Math.round(v);if(ax==='seconds')return v.toFixed(3)+' s';var t=base+v,iso=utc(t);if(!iso)return t.toFixed(3)+' s';return (oneday?'':iso.slice(0,10)+' ')+iso.slice(11,23);}
 function zoom(f,c){var a=view[0],b=view[1];if(c===undefined)c=(a+b)/2;var min=(all[1]-all[0])*1e-6;var na=c-(c-a)*f,nb=c+(b-c)*f;if(nb-na<min)return;set(na,nb);}
 function set(a,b){var w=Math.min(b-a,all[1]-all[0]);if(a<all[0]){a=all[0];}if(a+w>all[1])a=all[1]-w;view=[a,a+w];redraw();}
 // One layout per frame however many wheel events; the timer runs it where

@@ -701,14 +701,25 @@ fn chromium_runs_the_page_script_on_every_kind_of_input() {
         "fixtures/festo.asc",
         "fixtures/s300.log",
     ];
-    let paths: Vec<&Path> = inputs.iter().map(Path::new).collect();
+    let mut paths: Vec<&Path> = inputs.iter().map(Path::new).collect();
+    // Times past the years a JavaScript Date holds.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let far = dir.path().join("far.log");
+    fs::write(
+        &far,
+        "(99999999999999.500000) can0 081#1043090000000000\n\
+         (99999999999999.750000) can0 081#0000000000000000\n",
+    )
+    .expect("write trace");
+    paths.push(&far);
     let html = render("html", &paths);
     let dom = browser_dom(browser, &html, "", 1100, 800);
     let sections: Vec<&str> = dom.split("<section class=\"input\"").skip(1).collect();
-    assert_eq!(sections.len(), 4);
+    assert_eq!(sections.len(), 5);
     // No lanes, no axis to lay out; each of the others laid out and zoomable.
     assert!(!sections[0].contains("data-view="));
-    for (input, section) in inputs.iter().zip(&sections).skip(1) {
+    let names = inputs.iter().copied().chain(["far.log"]);
+    for (input, section) in names.zip(&sections).skip(1) {
         assert!(
             section.contains("data-view=\"0 ") || section.contains("data-view=\"1 "),
             "{input}"
