@@ -360,6 +360,10 @@ fn ten_thousand_errors_stay_small_and_merged_bars_say_so() {
         html.contains("The first 1000 of 20005 events are listed; 19005 more not shown."),
         "the table says it is cut"
     );
+    // And tells the page's script, which says so when zoomed past its end.
+    assert!(html.contains("<table class=\"ev\" data-cut>"));
+    let whole = render("html", &[Path::new("fixtures/s300.log")]);
+    assert!(whole.contains("<table class=\"ev\">"));
 }
 
 #[test]
