@@ -50,7 +50,7 @@ pub(super) fn document(panels: &[&Panel], title: &str, standalone: bool) -> Stri
     }
     if standalone {
         s.push_str("<style>\n");
-        s.push_str(chart::STYLE);
+        s.push_str(&style_sheet(panels));
         s.push_str("</style>\n");
     }
     // Opaque: viewers with a dark background would hide the black text.
@@ -67,13 +67,26 @@ pub(super) fn document(panels: &[&Panel], title: &str, standalone: bool) -> Stri
                 w = N(chart::WIDTH)
             ));
         }
-        s.push_str(&format!("<g transform=\"translate(0,{})\">\n", N(y)));
+        s.push_str(&format!(
+            "<g class=\"panel\" transform=\"translate(0,{})\"{}>\n",
+            N(y),
+            p.view
+        ));
         s.push_str(&p.svg);
         s.push_str("</g>\n");
         y += p.height + PANEL_GAP;
     }
     s.push_str("</svg>\n");
     s
+}
+
+/// The chart's style sheet for these panels (the colours their codes use).
+pub(super) fn style_sheet(panels: &[&Panel]) -> String {
+    let shades = panels
+        .iter()
+        .flat_map(|p| p.shades.iter().copied())
+        .collect();
+    chart::style_sheet(&shades)
 }
 
 /// `EMCY timeline: a.log, b.asc`.

@@ -167,6 +167,112 @@ fn markers_show_resets_partial_resets_and_boot_ups() {
     );
 }
 
+/// The bars' `<rect>`s in lanes (not the legend's swatches).
+fn lane_bars<'a, 'i>(doc: &'a roxmltree::Document<'i>) -> Vec<roxmltree::Node<'a, 'i>> {
+    doc.descendants()
+        .filter(|n| n.has_tag_name("rect") && has_class(n, "b"))
+        .filter(|n| n.ancestors().any(|a| has_class(&a, "lane")))
+        .collect()
+}
+
+fn width_of(n: &roxmltree::Node<'_, '_>) -> f64 {
+    n.attribute("width")
+        .expect("width")
+        .parse()
+        .expect("number")
+}
+
+#[test]
+fn wide_bars_carry_their_code_and_the_legend_lists_every_code() {
+    let svg = render("svg", &[Path::new("fixtures/s300.log")]);
+    let doc = parse(&svg);
+    // Each label follows its bar, names the bar's code and fits in it (9 px
+    // digits are about 5 px wide; 0.6 em per character is the estimate).
+    let mut labelled = Vec::new();
+    for bar in lane_bars(&doc) {
+        let code = bar.attribute("data-c").expect("bar names its code");
+        let label = bar
+            .next_sibling_element()
+            .filter(|n| n.has_tag_name("text") && has_class(n, "bl"));
+        match label {
+            Some(l) => {
+                let text = l.text().expect("label text");
+                assert!(code.contains(text), "label {text:?} of a {code} bar");
+                let needed = text.chars().count() as f64 * 9.0 * 0.6 + 4.0;
+                assert!(
+                    width_of(&bar) >= needed,
+                    "{text:?} in {} px",
+                    width_of(&bar)
+                );
+                labelled.push(text.to_string());
+            }
+            None => assert!(
+                width_of(&bar) < 4.0 * 9.0 * 0.6 + 4.0,
+                "a {} px bar of {code} without a label",
+                width_of(&bar)
+            ),
+        }
+    }
+    // s300: three wide errors, 0x5111 open at the end in a 22 px bar.
+    assert_eq!(labelled, ["0x4310", "0x3120", "0x4210"]);
+
+    // The legend: every code the node raised, with its profile's text, in
+    // its class's row; the two temperature codes share the class colour's
+    // hue in two lightnesses.
+    let legend: Vec<String> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("g") && has_class(n, "legend"))
+        .flat_map(|g| g.descendants())
+        .filter(|n| n.has_tag_name("text"))
+        .filter_map(|n| n.text().map(str::to_string))
+        .collect();
+    let events: Vec<Value> = render("ndjson", &[Path::new("fixtures/s300.log")])
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("JSON line"))
+        .filter(|o| o["type"] == "emcy" && o["code"] != "0x0000")
+        .collect();
+    assert_eq!(events.len(), 4);
+    for ev in &events {
+        let entry = format!(
+            "{} {}",
+            ev["code"].as_str().unwrap(),
+            ev["description"].as_str().unwrap()
+        );
+        assert!(legend.contains(&entry), "{entry:?} not in {legend:?}");
+    }
+    let heads: Vec<&str> = legend
+        .iter()
+        .filter(|t| t.ends_with(':'))
+        .map(String::as_str)
+        .collect();
+    assert_eq!(heads, ["voltage:", "temperature:", "hardware:"]);
+    let swatch = |code: &str| {
+        doc.descendants()
+            .filter(|n| n.has_tag_name("g") && n.parent().is_some_and(|p| has_class(&p, "legend")))
+            .find(|g| {
+                g.descendants().any(|t| {
+                    t.has_tag_name("text") && t.text().is_some_and(|x| x.starts_with(code))
+                })
+            })
+            .and_then(|g| g.descendants().find(|r| r.has_tag_name("rect")))
+            .and_then(|r| r.attribute("class"))
+            .unwrap_or_default()
+            .to_string()
+    };
+    assert_eq!(swatch("0x4210"), "b c-temperature");
+    assert_eq!(swatch("0x4310"), "b c-temperature k1");
+    assert!(
+        svg.contains(".ec .c-temperature.k1{fill:#"),
+        "a rule for the shade"
+    );
+    // Bars wear their code's colour.
+    let bar_4310 = lane_bars(&doc)
+        .into_iter()
+        .find(|b| b.attribute("data-c") == Some("0x4310"))
+        .expect("a 0x4310 bar");
+    assert_eq!(bar_4310.attribute("class"), Some("b c-temperature k1"));
+}
+
 /// A candump log in which node 5 raises and clears `n` errors (0.2 ms each,
 /// one every 10 ms) and node 6 has a few long ones.
 fn many_errors_trace(n: u64) -> String {
@@ -254,6 +360,10 @@ fn ten_thousand_errors_stay_small_and_merged_bars_say_so() {
         html.contains("The first 1000 of 20005 events are listed; 19005 more not shown."),
         "the table says it is cut"
     );
+    // And tells the page's script, which says so when zoomed past its end.
+    assert!(html.contains("<table class=\"ev\" data-cut>"));
+    let whole = render("html", &[Path::new("fixtures/s300.log")]);
+    assert!(whole.contains("<table class=\"ev\">"));
 }
 
 #[test]
@@ -287,11 +397,115 @@ fn html_events_table_filters_by_node() {
             "{lane}"
         );
         assert!(
-            html.contains(&format!("<tr data-lane=\"{lane}\">")),
+            html.contains(&format!("<tr data-lane=\"{lane}\" data-v=")),
             "{lane}"
         );
     }
     assert!(html.contains("<select>"));
+}
+
+/// The type and the cells of each row of an HTML page's events table.
+fn table_rows(html: &str) -> Vec<(String, Vec<String>)> {
+    let start = html.find("<tbody>").expect("a table");
+    let end = html.find("</tbody>").expect("table ends");
+    let doc = roxmltree::Document::parse(&html[start..end + "</tbody>".len()])
+        .expect("the table body is well-formed");
+    doc.root_element()
+        .children()
+        .filter(|n| n.has_tag_name("tr"))
+        .map(|tr| {
+            let cells = tr
+                .children()
+                .filter(|c| c.has_tag_name("td"))
+                .map(|td| {
+                    td.descendants()
+                        .filter(|t| t.is_text())
+                        .filter_map(|t| t.text())
+                        .collect::<String>()
+                })
+                .collect();
+            (tr.attribute("class").unwrap_or_default().to_string(), cells)
+        })
+        .collect()
+}
+
+#[test]
+fn html_events_table_lists_health_events_warnings_and_manufacturer_fields() {
+    // Every node-health event of the commissioning trace is a row, in
+    // trace order with the EMCYs, named by its JSON type.
+    let fixture = Path::new("fixtures/commissioning.log");
+    let html = render("html", &[fixture]);
+    let rows = table_rows(&html);
+    let health = [
+        "nmt",
+        "heartbeat_lost",
+        "heartbeat_back",
+        "sdo_abort",
+        "error_history",
+        "error_history_cleared",
+    ];
+    let events: Vec<Value> = render("ndjson", &[fixture])
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("JSON line"))
+        .filter(|o| o["line"].is_u64())
+        .collect();
+    for kind in health {
+        let json = events.iter().filter(|e| e["type"] == kind).count();
+        let html_rows: Vec<&Vec<String>> = rows
+            .iter()
+            .filter(|(c, _)| c == kind)
+            .map(|(_, cells)| cells)
+            .collect();
+        assert!(json > 0, "the fixture has no {kind}");
+        assert_eq!(html_rows.len(), json, "{kind} rows");
+        for cells in html_rows {
+            assert_eq!(cells[4], kind, "the event column names the type");
+        }
+    }
+    let lines: Vec<u64> = rows.iter().map(|(_, c)| c[1].parse().unwrap()).collect();
+    assert!(
+        lines.windows(2).all(|w| w[0] <= w[1]),
+        "rows in trace order"
+    );
+    let text_of = |kind: &str| {
+        rows.iter()
+            .find(|(c, _)| c == kind)
+            .map(|(_, cells)| cells[7].clone())
+            .unwrap()
+    };
+    assert!(text_of("sdo_abort").contains("0x06090011 sub-index does not exist"));
+    assert!(text_of("heartbeat_lost").starts_with("heartbeat lost: silent since"));
+    let history = text_of("error_history");
+    assert!(
+        history.contains("3 entries: 0x4310") && history.contains("before the trace"),
+        "{history}"
+    );
+
+    // Kollmorgen: the category from the manufacturer bytes, and the
+    // warning's tag with its text on hover.
+    let html = render("html", &[Path::new("fixtures/s300.log")]);
+    let rows = table_rows(&html);
+    let first = rows
+        .iter()
+        .find(|(_, c)| c[4] == "0x4310")
+        .map(|(_, c)| c)
+        .expect("a 0x4310 row");
+    assert!(
+        first[8].starts_with("category: 1 (cleared only by a reset"),
+        "{first:?}"
+    );
+    assert_eq!(first[9], "no_generic_bit");
+    assert!(html.contains(
+        "<span title=\"no_generic_bit: error register 0x08 has error bits but not bit 0 (generic)\">no_generic_bit</span>"
+    ));
+    // Without a profile that reads them, the bytes themselves.
+    let html = render("html", &[Path::new("fixtures/canopennode.log")]);
+    assert!(
+        table_rows(&html)
+            .iter()
+            .any(|(_, c)| c[4] == "0x8130" && c[8] == "1B05000000"),
+        "raw manufacturer bytes"
+    );
 }
 
 #[test]
@@ -357,10 +571,9 @@ fn output_is_deterministic() {
     assert_eq!(a, b);
 }
 
-/// Renders the HTML of a fixture in headless Chromium when it is installed
-/// (skips with a message when not): the page must load from disk and paint.
-#[test]
-fn chromium_renders_the_html_when_present() {
+/// The Chromium binary, or `None` (with a message) when it is not
+/// installed; under CI (`.ci/run` installs it) a missing Chromium fails.
+fn chromium() -> Option<&'static str> {
     let found = ["chromium", "chromium-browser", "google-chrome"]
         .into_iter()
         .find(|b| {
@@ -369,10 +582,24 @@ fn chromium_renders_the_html_when_present() {
                 .output()
                 .is_ok_and(|o| o.status.success())
         });
-    let Some(_) = found else {
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Chromium is not installed (apt-get install chromium)"
+        );
         eprintln!("skipped: no Chromium (apt-get install -y chromium to run this check)");
+    }
+    found
+}
+
+/// Renders the HTML of a fixture in headless Chromium (skips with a
+/// message when it is not installed): the page must load from disk and
+/// paint.
+#[test]
+fn chromium_renders_the_html_when_present() {
+    if chromium().is_none() {
         return;
-    };
+    }
     let dir = tempfile::tempdir().expect("tempdir");
     let png = dir.path().join("s300.png");
     let out = std::process::Command::new("sh")
@@ -391,4 +618,340 @@ fn chromium_renders_the_html_when_present() {
     let bytes = fs::read(&png).expect("a PNG was written");
     assert!(bytes.starts_with(b"\x89PNG"), "not a PNG");
     assert!(bytes.len() > 10_000, "a blank page? {} bytes", bytes.len());
+}
+
+/// Three nodes over a minute, an error of 2 to 8 s every 10 s each: bars
+/// wide enough for labels at some widths only.
+fn minute_trace() -> String {
+    let mut s = String::new();
+    let t0 = 1_700_000_000u64;
+    let codes = ["1043", "2023", "3031", "1042", "8181"];
+    for node in 1..=3u64 {
+        for k in 0..6u64 {
+            let start = k * 10_000 + node * 700;
+            let end = start + 2_000 + (k * 977 + node * 331) % 6_000;
+            let code = codes[((k + node) % 5) as usize];
+            for (ms, data) in [
+                (start, format!("{code}090000000000")),
+                (end, "0000000000000000".to_string()),
+            ] {
+                let _ = writeln!(
+                    s,
+                    "({}.{:06}) can0 {:03X}#{data}",
+                    t0 + ms / 1000,
+                    (ms % 1000) * 1000,
+                    0x80 + node
+                );
+            }
+        }
+    }
+    // A boot-up at the end, so the trace runs to 60 s.
+    let _ = writeln!(s, "({}.000000) can0 701#00", t0 + 60);
+    let mut lines: Vec<&str> = s.lines().collect();
+    lines.sort();
+    lines.join("\n") + "\n"
+}
+
+/// The page after Chromium ran its script (and `extra`, a script appended
+/// to the body) in a window of `width`×`height`.
+fn browser_dom(browser: &str, html: &str, extra: &str, width: u32, height: u32) -> String {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let page = dir.path().join("page.html");
+    let html = html.replacen("</body>", &format!("<script>{extra}</script>\n</body>"), 1);
+    fs::write(&page, html).expect("write page");
+    let out = std::process::Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            dir.path().join("profile").display()
+        ))
+        .args(["--no-first-run", "--no-default-browser-check"])
+        .arg(format!("--window-size={width},{height}"))
+        // Lets the page's requestAnimationFrame redraws run before the dump.
+        .arg("--virtual-time-budget=5000")
+        // The page's console on stderr: a script error fails the test.
+        .args(["--enable-logging=stderr", "--v=0"])
+        .arg("--dump-dom")
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("runs chromium");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !log.lines().any(|l| l.contains("Uncaught")),
+        "the page's script failed:\n{log}"
+    );
+    String::from_utf8(out.stdout).expect("utf-8 DOM")
+}
+
+/// One page of several inputs (one without frames, one without times, an
+/// ASC and a candump log): the script lays out every chart it has and
+/// throws on none.
+#[test]
+fn chromium_runs_the_page_script_on_every_kind_of_input() {
+    let Some(browser) = chromium() else { return };
+    let inputs = [
+        "fixtures/no-frame.asc",
+        "fixtures/canopennode.txt",
+        "fixtures/festo.asc",
+        "fixtures/s300.log",
+    ];
+    let mut paths: Vec<&Path> = inputs.iter().map(Path::new).collect();
+    // Times past the years a JavaScript Date holds.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let far = dir.path().join("far.log");
+    fs::write(
+        &far,
+        "(99999999999999.500000) can0 081#1043090000000000\n\
+         (99999999999999.750000) can0 081#0000000000000000\n",
+    )
+    .expect("write trace");
+    paths.push(&far);
+    let html = render("html", &paths);
+    let dom = browser_dom(browser, &html, "", 1100, 800);
+    let sections: Vec<&str> = dom.split("<section class=\"input\"").skip(1).collect();
+    assert_eq!(sections.len(), 5);
+    // No lanes, no axis to lay out; each of the others laid out and zoomable.
+    assert!(!sections[0].contains("data-view="));
+    let names = inputs.iter().copied().chain(["far.log"]);
+    for (input, section) in names.zip(&sections).skip(1) {
+        assert!(
+            section.contains("data-view=\"0 ") || section.contains("data-view=\"1 "),
+            "{input}"
+        );
+        assert!(section.contains("<p class=\"zoom\">"), "{input}");
+        assert!(
+            section.contains("width=\"1068\""),
+            "{input}: not laid out to the window"
+        );
+    }
+    // The axis without times counts lines.
+    assert!(sections[1].contains("trace line"));
+}
+
+fn num(n: &roxmltree::Node<'_, '_>, attr: &str) -> f64 {
+    n.attribute(attr)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{attr} of {n:?}"))
+}
+
+/// What the laid-out page shows: the chart's width, the plot's right edge,
+/// the labels drawn, every bar's extent, the legend items' right ends.
+struct Laid {
+    width: f64,
+    plot_end: f64,
+    labels: Vec<String>,
+    bars: Vec<(f64, f64)>,
+    legend_right: f64,
+    ticks: Vec<String>,
+}
+
+fn laid_out(dom: &str) -> Laid {
+    let doc = parse(inline_svg(dom));
+    let svg = doc.root_element();
+    let in_lane = |n: &roxmltree::Node<'_, '_>| n.ancestors().any(|a| has_class(&a, "lane"));
+    let shown = |n: &roxmltree::Node<'_, '_>| {
+        !n.attribute("style")
+            .is_some_and(|s| s.contains("display: none"))
+    };
+    Laid {
+        width: num(&svg, "width"),
+        plot_end: doc
+            .descendants()
+            .find(|n| n.has_tag_name("line") && has_class(n, "axis"))
+            .map(|n| num(&n, "x2"))
+            .expect("an axis"),
+        labels: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text") && has_class(n, "bl") && in_lane(n))
+            .filter_map(|n| n.text().map(str::to_string))
+            .collect(),
+        bars: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("rect") && has_class(n, "b") && in_lane(n) && shown(n))
+            .map(|n| (num(&n, "x"), num(&n, "x") + num(&n, "width")))
+            .collect(),
+        legend_right: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("g") && n.parent().is_some_and(|p| has_class(&p, "legend")))
+            .map(|g| {
+                let t = g.attribute("transform").expect("placed");
+                let x: f64 = t["translate(".len()..t.find(',').expect("x,y")]
+                    .parse()
+                    .expect("x");
+                let text = g
+                    .descendants()
+                    .filter(|n| n.is_text())
+                    .filter(|n| n.parent().is_some_and(|p| p.has_tag_name("text")))
+                    .filter_map(|n| n.text())
+                    .collect::<String>();
+                x + text.chars().count() as f64 * 4.0
+            })
+            .fold(0.0, f64::max),
+        ticks: doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text") && has_class(n, "tick"))
+            .filter_map(|n| n.text().map(str::to_string))
+            .collect(),
+    }
+}
+
+/// In Chromium at two window sizes, the chart takes the window's width:
+/// the plot ends 28 px from the right, bars stay inside it, labels appear
+/// on the bars the width makes wide enough, the legend re-flows inside.
+#[test]
+fn chromium_lays_the_chart_out_to_the_window() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("minute.log");
+    fs::write(&trace, minute_trace()).expect("write trace");
+    let html = render("html", &[&trace]);
+    let narrow = laid_out(&browser_dom(browser, &html, "", 800, 700));
+    let wide = laid_out(&browser_dom(browser, &html, "", 1700, 700));
+    for (window, laid) in [(800.0, &narrow), (1700.0, &wide)] {
+        // The body's margins are 16 px each side.
+        assert!(
+            (laid.width - (window - 32.0)).abs() <= 1.0,
+            "a {window} px window: chart {} px wide",
+            laid.width
+        );
+        assert_eq!(laid.plot_end, laid.width - 28.0);
+        assert_eq!(laid.bars.len(), 18, "every error a bar");
+        for &(x0, x1) in &laid.bars {
+            assert!(x0 >= 169.0 && x1 <= laid.plot_end + 8.0, "bar {x0}-{x1}");
+        }
+        assert!(
+            laid.legend_right <= laid.width,
+            "legend reaches {} of {}",
+            laid.legend_right,
+            laid.width
+        );
+        assert!(laid.ticks.len() >= 3, "{:?}", laid.ticks);
+    }
+    // Wider bars: more of them carry their code, at least one in full.
+    assert!(
+        wide.labels.len() > narrow.labels.len(),
+        "{:?} vs {:?}",
+        wide.labels,
+        narrow.labels
+    );
+    assert!(
+        wide.labels.iter().any(|l| l.starts_with("0x")),
+        "{:?}",
+        wide.labels
+    );
+    // A wider plot has room for more ticks.
+    assert!(wide.ticks.len() > narrow.ticks.len());
+}
+
+/// Wheel events over the plot (as a user's wheel sends them) narrow the
+/// visible range around the pointer: ticks get finer, the events table
+/// hides rows outside the range and keeps those inside; a double-click
+/// shows the whole trace again.
+#[test]
+fn chromium_zooms_the_time_axis_and_the_table_follows() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("minute.log");
+    fs::write(&trace, minute_trace()).expect("write trace");
+    let html = render("html", &[&trace]);
+    // Four notches of the wheel at a third of the plot's width.
+    let wheel = "var s=document.querySelector('section.input svg'),r=s.getBoundingClientRect(),\
+        x=r.left+170+(r.width-198)/3;\
+        for(var i=0;i<4;i++)s.dispatchEvent(new WheelEvent('wheel',\
+        {deltaY:-240,clientX:x,clientY:r.top+80,bubbles:true,cancelable:true}));";
+    let before = browser_dom(browser, &html, "", 1200, 700);
+    let after = browser_dom(browser, &html, wheel, 1200, 700);
+    let range = |dom: &str| -> (f64, f64) {
+        let at = dom.find("data-view=\"").expect("the page says its range") + 11;
+        let text = &dom[at..at + dom[at..].find('"').unwrap()];
+        let (a, b) = text.split_once(' ').expect("two values");
+        (a.parse().unwrap(), b.parse().unwrap())
+    };
+    let (a0, b0) = range(&before);
+    let (a1, b1) = range(&after);
+    assert_eq!(a0, 0.0);
+    assert!(b0 > 60.0, "the whole minute and the room after it: {b0}");
+    assert!(
+        a1 > a0 && b1 < b0 && (b1 - a1) < (b0 - a0) / 4.0,
+        "zoomed {a1}-{b1} from {a0}-{b0}"
+    );
+    // Around the pointer: a third of the way in stays a third of the way in.
+    let third = a0 + (b0 - a0) / 3.0;
+    assert!(
+        ((third - a1) / (b1 - a1) - 1.0 / 3.0).abs() < 0.02,
+        "{a1}-{b1}"
+    );
+    assert!(after.contains("showing 22:13:"), "the range is shown");
+    let (lb, la) = (laid_out(&before), laid_out(&after));
+    assert_ne!(la.ticks, lb.ticks, "ticks redrawn");
+    // The bars in view are wider now, and each one wide enough carries its
+    // whole label (`0x1043`: 6 characters of 0.6 em at 9 px, and 4 px).
+    let widest = |l: &Laid| l.bars.iter().map(|(a, b)| b - a).fold(0.0, f64::max);
+    assert!(widest(&la) > 2.0 * widest(&lb), "bars widen");
+    let doc = parse(inline_svg(&after));
+    let mut full = 0;
+    for bar in lane_bars(&doc) {
+        let shown = !bar
+            .attribute("style")
+            .is_some_and(|s| s.contains("display: none"));
+        if shown && width_of(&bar) >= 6.0 * 9.0 * 0.6 + 4.0 {
+            let label = bar
+                .next_sibling_element()
+                .filter(|n| has_class(n, "bl"))
+                .and_then(|n| n.text());
+            assert_eq!(
+                label,
+                bar.attribute("data-c"),
+                "a {} px bar",
+                width_of(&bar)
+            );
+            full += 1;
+        }
+    }
+    assert!(full > 0, "no bar in view is wide");
+    // The table: rows inside the range shown, rows outside hidden.
+    let body_at = after.find("<tbody>").expect("a table");
+    let body_end = after.find("</tbody>").expect("table ends") + "</tbody>".len();
+    let body = roxmltree::Document::parse(&after[body_at..body_end]).expect("rows");
+    let (mut inside, mut outside) = (0, 0);
+    for tr in body
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("tr"))
+    {
+        let v = num(&tr, "data-v");
+        let hidden = tr.attribute("hidden").is_some();
+        if v >= a1 && v <= b1 {
+            assert!(!hidden, "row at {v} in {a1}-{b1} hidden");
+            inside += 1;
+        } else {
+            assert!(hidden, "row at {v} outside {a1}-{b1} shown");
+            outside += 1;
+        }
+    }
+    assert!(
+        inside > 0 && outside > 0,
+        "{inside} inside, {outside} outside"
+    );
+    assert!(after.contains(&format!(
+        "{inside} row{} shown (in the visible time range)",
+        if inside == 1 { "" } else { "s" }
+    )));
+    // A double-click goes back to the whole trace, every row shown.
+    let reset = format!(
+        "{wheel}document.querySelector('section.input svg').dispatchEvent(new MouseEvent('dblclick',{{bubbles:true}}));"
+    );
+    let back = browser_dom(browser, &html, &reset, 1200, 700);
+    assert_eq!(range(&back), (a0, b0));
+    assert!(!back.contains("<tr hidden") && !back.contains("hidden=\"\""));
 }

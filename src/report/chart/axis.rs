@@ -34,9 +34,29 @@ pub(in crate::report) struct Clock {
     pub(super) one_day: bool,
 }
 
+impl Axis {
+    /// How the HTML page's script names it (`data-axis`).
+    pub(super) fn slug(self) -> &'static str {
+        match self {
+            Axis::Wall => "wall",
+            Axis::Seconds => "seconds",
+            Axis::Lines => "lines",
+        }
+    }
+}
+
 impl Clock {
+    /// The absolute value of axis value 0: ticks fall on round absolute
+    /// values (whole seconds of the clock).
+    pub(super) fn base(&self) -> f64 {
+        match self.axis {
+            Axis::Lines => 0.0,
+            _ => self.origin.map_or(0.0, Timestamp::as_f64),
+        }
+    }
+
     /// Axis value of a position: seconds after the origin, or the line.
-    pub(super) fn value(&self, at: &At) -> Option<f64> {
+    pub(in crate::report) fn value(&self, at: &At) -> Option<f64> {
         match self.axis {
             Axis::Lines => Some(at.line as f64),
             Axis::Wall | Axis::Seconds => Some(at.time?.since(self.origin?).as_f64()),
@@ -225,13 +245,10 @@ pub(super) fn write_axis(
 ) -> fmt::Result {
     let span = scale.hi - scale.lo;
     let step = tick_step(clock.axis, span);
-    // Ticks fall on round absolute values (whole seconds of the clock).
-    let base = match clock.axis {
-        Axis::Lines => 0.0,
-        _ => clock.origin.map_or(0.0, Timestamp::as_f64),
-    };
+    let base = clock.base();
     let first = ((base + scale.lo) / step).ceil() * step;
-    out.push_str("<g>\n");
+    // Classed so the HTML page's script can redraw the ticks it zooms.
+    out.push_str("<g class=\"ax\">\n");
     writeln!(
         out,
         "<line class=\"axis\" x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/>",
@@ -240,6 +257,7 @@ pub(super) fn write_axis(
         N(X1),
         N(axis_y)
     )?;
+    out.push_str("<g class=\"ticks\">\n");
     for i in 0..200 {
         let abs = first + f64::from(i) * step;
         let v = abs - base;
@@ -258,6 +276,7 @@ pub(super) fn write_axis(
             x = N(x),
         )?;
     }
+    out.push_str("</g>\n");
     let x = N(scale.x(scale.end));
     writeln!(
         out,

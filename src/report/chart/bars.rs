@@ -69,15 +69,21 @@ impl Bar {
         }
     }
 
-    /// The class of the most frequent code (the first on a tie).
-    pub(super) fn class(&self) -> Class {
+    /// The most frequent code (the first on a tie): the one the bar is
+    /// coloured and labelled by.
+    pub(super) fn code(&self) -> u16 {
         let mut best: Option<(u16, u64)> = None;
         for &(c, n) in &self.codes {
             if best.is_none_or(|(_, m)| n > m) {
                 best = Some((c, n));
             }
         }
-        codes::lookup(best.map_or(self.first.code, |(c, _)| c)).class
+        best.map_or(self.first.code, |(c, _)| c)
+    }
+
+    /// The class of [`Bar::code`].
+    pub(super) fn class(&self) -> Class {
+        codes::lookup(self.code()).class
     }
 }
 

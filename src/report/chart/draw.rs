@@ -7,16 +7,35 @@ use std::fmt::{self, Write as _};
 
 use super::axis::{Axis, Clock, wall_clock, write_axis};
 use super::bars::{Bar, CLEARED_SLUGS, SMALL_PX};
+use super::legend::{CodeKey, CodeKeys};
 use super::marks::{Clusters, MARKS, Mark, Streamed};
-use super::style::{BAR_H, LANES_TOP, LEGEND_ORDER, ROW_H, WIDTH, X0, class_index};
+use super::style::{BAR_H, CLASS_COLOURS, LANES_TOP, ROW_H, WIDTH, X0};
 use super::text::{N, clip, esc, plural, short_number};
 use super::{Lane, Scale, lane_key, lane_label};
 use crate::analyze::{InputReport, NodeReport};
-use crate::canopen::codes::Class;
+use crate::canopen::codes::{self, Class};
 use crate::timeline::ClearedBy;
 
 /// Markers of one kind closer than this are drawn as one.
 const MARKER_GAP_PX: f64 = 3.0;
+/// Font size of a bar's code label (`text.bl` in the style sheet).
+pub(super) const LABEL_PX: f64 = 9.0;
+/// Width of a character of a label as a fraction of the font size: hex
+/// digits in the usual sans-serif fonts are about 0.55 em, a little more
+/// keeps a label off the bar's end.
+const LABEL_EM: f64 = 0.6;
+/// Codes the legend names; more are counted in one item.
+const LEGEND_CODES: usize = 40;
+/// Characters of a code's description in the legend (its tooltip has all).
+const LEGEND_TEXT: usize = 60;
+/// Estimated width of a legend character (11 px sans-serif, mixed case).
+const LEGEND_CHAR_PX: f64 = 6.1;
+
+/// The width a bar needs to hold `label`, by its character count (no font
+/// metrics here: the estimate errs wide so a label never spills).
+pub(super) fn label_fits(label: &str, width: f64) -> bool {
+    label.chars().count() as f64 * LABEL_PX * LABEL_EM + 4.0 <= width
+}
 
 /// Title line two: the time span, what the chart shows.
 fn subtitle(input: &InputReport, clock: &Clock, lanes: &[Lane<'_>], streamed: &Streamed) -> String {
@@ -81,6 +100,7 @@ pub(super) fn write_panel(
     clock: &Clock,
     scale: Scale,
     lanes: &[Lane<'_>],
+    keys: &CodeKeys,
     streamed: &Streamed,
 ) -> Result<f64, fmt::Error> {
     writeln!(
@@ -127,10 +147,10 @@ pub(super) fn write_panel(
     write_axis(out, clock, scale, axis_y)?;
     let mut y = LANES_TOP;
     for lane in lanes {
-        write_lane(out, clock, scale, lane, y)?;
+        write_lane(out, clock, scale, lane, keys, y)?;
         y += lane.height;
     }
-    let legend_h = write_legend(out, lanes, axis_y + 44.0)?;
+    let legend_h = write_legend(out, lanes, keys, axis_y + 44.0)?;
     Ok(axis_y + 44.0 + legend_h)
 }
 
@@ -139,6 +159,7 @@ fn write_lane(
     clock: &Clock,
     scale: Scale,
     lane: &Lane<'_>,
+    keys: &CodeKeys,
     y: f64,
 ) -> fmt::Result {
     let node = lane.node;
@@ -181,7 +202,7 @@ fn write_lane(
     let rows = lane.bars.rows.len().max(1) as f64;
     let top = (lane.height - rows * ROW_H) / 2.0 + (ROW_H - BAR_H) / 2.0;
     for bar in &lane.bars.bars {
-        write_bar(out, clock, scale, lane, bar, top)?;
+        write_bar(out, clock, scale, lane, keys, bar, top)?;
     }
     if let Some(marks) = &lane.marks {
         for (mark, clusters) in MARKS.iter().zip(&marks.marks) {
@@ -197,26 +218,58 @@ fn write_bar(
     clock: &Clock,
     scale: Scale,
     lane: &Lane<'_>,
+    keys: &CodeKeys,
     bar: &Bar,
     top: f64,
 ) -> fmt::Result {
     let y = top + bar.row as f64 * ROW_H;
     let w = (bar.x1 - bar.x0).max(1.0);
-    let mut class = format!("b c-{}", bar.class().slug());
+    let code = bar.code();
+    let key = keys.codes.get(&code);
+    let mut class = match key {
+        Some(k) => format!("b {}", k.css(bar.class().slug())),
+        None => format!("b c-{}", bar.class().slug()),
+    };
     if bar.count > 1 {
         class.push_str(" m");
     } else if bar.open > 0 {
         class.push_str(" o");
     }
+    // The label the bar would carry when wide enough (the HTML page's
+    // zoom labels bars as they widen): the code, and how many errors a
+    // merged bar holds.
+    let label = if bar.count > 1 {
+        format!("0x{code:04X} ×{}", bar.count)
+    } else {
+        format!("0x{code:04X}")
+    };
     writeln!(
         out,
-        "<rect class=\"{class}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"><title>{}</title></rect>",
+        "<rect class=\"{class}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" data-c=\"{label}\"><title>{}</title></rect>",
         N(bar.x0),
         N(y),
         N(w),
         N(BAR_H),
         esc(&bar_title(clock, scale, lane.node, bar))
     )?;
+    // The whole label, else the bare code, else none.
+    let short = format!("{code:04X}");
+    let text = [label.as_str(), short.as_str()]
+        .into_iter()
+        .find(|l| label_fits(l, w));
+    if let Some(text) = text {
+        let white = if key.is_some_and(CodeKey::dark) {
+            " w"
+        } else {
+            ""
+        };
+        writeln!(
+            out,
+            "<text class=\"bl{white}\" x=\"{}\" y=\"{}\">{text}</text>",
+            N(bar.x0 + 2.0),
+            N(y + BAR_H - 1.5)
+        )?;
+    }
     if bar.open > 0 {
         // The open end: a triangle past the end of the plot area.
         let x = N(bar.x1 + 1.0);
@@ -369,15 +422,16 @@ const SHADES: [(&str, &str); 5] = [
     ("out", "heartbeat lost"),
 ];
 
-fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt::Error> {
-    let mut classes = [false; LEGEND_ORDER.len()];
+fn write_legend(
+    out: &mut String,
+    lanes: &[Lane<'_>],
+    keys: &CodeKeys,
+    y: f64,
+) -> Result<f64, fmt::Error> {
     let (mut merged, mut open) = (false, false);
     let mut marks = [false; 3];
     for lane in lanes {
         for bar in &lane.bars.bars {
-            if let Some(c) = classes.get_mut(class_index(bar.class())) {
-                *c = true;
-            }
             merged |= bar.count > 1;
             open |= bar.open > 0;
         }
@@ -390,55 +444,98 @@ fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt
     let y0 = y;
     let mut x = 10.0;
     let mut y = y;
-    let mut item = |out: &mut String, glyph: String, text: &str| -> fmt::Result {
-        let w = 16.0 + text.chars().count() as f64 * 5.8 + 14.0;
-        if x + w > WIDTH - 10.0 {
+    // An item: a glyph (or none), its text, and the whole text as a
+    // tooltip where the text is cut.
+    // `row`: start a new row (each class does, and the other keys after
+    // the codes).
+    let mut entry = |out: &mut String,
+                     row: bool,
+                     glyph: &str,
+                     text: &str,
+                     class: &str,
+                     title: Option<&str>|
+     -> fmt::Result {
+        let left = if glyph.is_empty() { 0.0 } else { 16.0 };
+        let w = left + text.chars().count() as f64 * LEGEND_CHAR_PX + 14.0;
+        if x > 10.0 && (row || x + w > WIDTH - 10.0) {
             x = 10.0;
             y += 18.0;
         }
+        // `r`: the HTML page re-flows the legend to its width.
+        let r = if row { " class=\"r\"" } else { "" };
+        write!(out, "<g{r} transform=\"translate({},{})\">", N(x), N(y))?;
+        if let Some(t) = title {
+            write!(out, "<title>{}</title>", esc(t))?;
+        }
         writeln!(
             out,
-            "<g transform=\"translate({},{})\">{glyph}<text x=\"16\" y=\"9\">{text}</text></g>",
-            N(x),
-            N(y)
+            "{glyph}<text{class} x=\"{}\" y=\"9\">{}</text></g>",
+            N(left),
+            esc(text)
         )?;
         x += w;
         Ok(())
     };
     out.push_str("<g class=\"legend\">\n");
-    for (class, _) in LEGEND_ORDER.iter().zip(classes).filter(|(_, seen)| *seen) {
-        item(
-            out,
-            format!(
-                "<rect class=\"b c-{}\" width=\"11\" height=\"{}\"/>",
-                class.slug(),
-                N(BAR_H)
-            ),
-            &match class {
+    // By code, grouped by class: the class's name, then each of its codes
+    // in its shade of the class colour.
+    let mut last_class = None;
+    let listed = keys.in_legend_order();
+    for (code, key) in listed.iter().take(LEGEND_CODES) {
+        let class = CLASS_COLOURS
+            .get(key.class)
+            .map_or(codes::lookup(*code).class, |c| c.0);
+        if last_class != Some(key.class) {
+            last_class = Some(key.class);
+            let name = match class {
                 // 0x00xx other than 0x0000: an error, not a reset marker.
                 Class::Reset => "00xx (not a reset)".to_string(),
                 c => c.slug().replace('_', " "),
-            },
-        )?;
+            };
+            entry(out, true, "", &format!("{name}:"), " class=\"lbl\"", None)?;
+        }
+        let whole = key.texts.join(" | ");
+        let text = format!("0x{code:04X} {}", clip(&whole, LEGEND_TEXT));
+        let glyph = format!(
+            "<rect class=\"b {}\" width=\"11\" height=\"{}\"/>",
+            key.css(class.slug()),
+            N(BAR_H)
+        );
+        let title = format!("0x{code:04X} {whole}");
+        entry(out, false, &glyph, &text, "", Some(&title))?;
     }
+    if let Some(more) = listed.len().checked_sub(LEGEND_CODES).filter(|&n| n > 0) {
+        let text = format!("{more} more code{}", plural(more as u64));
+        entry(out, false, "", &text, "", None)?;
+    }
+    // The other keys on a row of their own.
+    let mut row = !listed.is_empty();
     if open {
-        item(
+        let glyph = format!(
+            "<rect class=\"b o c-generic\" width=\"5\" height=\"{}\"/><path class=\"oe\" d=\"M6 -1l6 5.5l-6 5.5z\"/>",
+            N(BAR_H)
+        );
+        entry(
             out,
-            format!(
-                "<rect class=\"b o c-generic\" width=\"5\" height=\"{}\"/><path class=\"oe\" d=\"M6 -1l6 5.5l-6 5.5z\"/>",
-                N(BAR_H)
-            ),
+            std::mem::take(&mut row),
+            &glyph,
             "still active at end",
+            "",
+            None,
         )?;
     }
     if merged {
-        item(
+        let glyph = format!(
+            "<rect class=\"b m c-generic\" width=\"11\" height=\"{}\"/>",
+            N(BAR_H)
+        );
+        entry(
             out,
-            format!(
-                "<rect class=\"b m c-generic\" width=\"11\" height=\"{}\"/>",
-                N(BAR_H)
-            ),
+            std::mem::take(&mut row),
+            &glyph,
             "merged short errors",
+            "",
+            None,
         )?;
     }
     for (class, text) in SHADES {
@@ -446,14 +543,11 @@ fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt
             .iter()
             .any(|l| l.shades.iter().any(|s| s.class == class))
         {
-            item(
-                out,
-                format!(
-                    "<rect class=\"{class}\" width=\"11\" height=\"{}\"/>",
-                    N(BAR_H)
-                ),
-                text,
-            )?;
+            let glyph = format!(
+                "<rect class=\"{class}\" width=\"11\" height=\"{}\"/>",
+                N(BAR_H)
+            );
+            entry(out, std::mem::take(&mut row), &glyph, text, "", None)?;
         }
     }
     for (mark, _) in MARKS.iter().zip(marks).filter(|(_, seen)| *seen) {
@@ -470,11 +564,8 @@ fn write_legend(out: &mut String, lanes: &[Lane<'_>], y: f64) -> Result<f64, fmt
             Mark::Partial => "partial reset",
             Mark::Boot => "boot-up",
         };
-        item(
-            out,
-            format!("<g class=\"mk {}\">{glyph}</g>", mark.css()),
-            text,
-        )?;
+        let glyph = format!("<g class=\"mk {}\">{glyph}</g>", mark.css());
+        entry(out, std::mem::take(&mut row), &glyph, text, "", None)?;
     }
     out.push_str("</g>\n");
     Ok(y - y0 + 18.0)

@@ -30,11 +30,12 @@
 mod axis;
 mod bars;
 mod draw;
+mod legend;
 mod marks;
 mod style;
 mod text;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io;
 
 use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport, NodeReport};
@@ -46,11 +47,12 @@ use crate::trace::Format;
 use axis::Axis;
 use bars::Bars;
 use draw::write_panel;
+use legend::CodeKeys;
 use marks::{LaneMarks, Mark, Streamed};
-use style::{LANE_MIN_H, PLOT_W, ROW_H, X0};
+use style::{LANE_MIN_H, PLOT_W, ROW_H, X0, X1};
 
 pub(super) use axis::Clock;
-pub(super) use style::{STYLE, WIDTH};
+pub(super) use style::{WIDTH, style_sheet};
 pub(super) use text::{N, esc};
 
 /// Room right of the last frame, as a fraction of the span.
@@ -158,6 +160,13 @@ pub(in crate::report) struct Panel {
     pub(super) clock: Clock,
     /// `(key, label)` per lane, for the HTML filter.
     pub(super) lanes: Vec<(String, String)>,
+    /// The `(class, shade)` colours its codes use beyond the class colours
+    /// (the document's style sheet has a rule for each).
+    pub(super) shades: BTreeSet<(usize, usize)>,
+    /// The attributes of the panel's `<g>` that let the HTML page re-lay
+    /// the time axis (fill the window, zoom, pan): the plot's edges in px,
+    /// the axis values at them, what the axis measures and its origin.
+    pub(super) view: String,
 }
 
 struct Lane<'a> {
@@ -373,8 +382,19 @@ impl Panel {
         if let Some(e) = merge.take_error() {
             return Err(e);
         }
+        let keys = CodeKeys::of(&lanes);
+        let view = format!(
+            " data-x0=\"{}\" data-x1=\"{}\" data-lo=\"{}\" data-hi=\"{}\" data-axis=\"{}\" data-base=\"{}\" data-oneday=\"{}\"",
+            N(X0),
+            N(X1),
+            scale.lo,
+            scale.hi,
+            axis.slug(),
+            clock.base(),
+            u8::from(one_day)
+        );
         let mut svg = String::new();
-        let height = write_panel(&mut svg, input, &clock, scale, &lanes, &streamed)
+        let height = write_panel(&mut svg, input, &clock, scale, &lanes, &keys, &streamed)
             .map_err(|_| io::Error::other("formatting the chart failed"))?;
         let lanes = lanes
             .iter()
@@ -390,6 +410,8 @@ impl Panel {
             height,
             clock,
             lanes,
+            shades: keys.shades(),
+            view,
         })
     }
 }
