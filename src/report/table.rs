@@ -3,6 +3,7 @@
 //! them), then the node states and error timeline; at the end the input counts.
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
@@ -13,6 +14,7 @@ use crate::analyze::{
     Sink,
 };
 use crate::canopen::NodeId;
+use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::text::printable;
 use crate::timeline::Interval;
@@ -41,6 +43,9 @@ pub struct TableReport<W: Write> {
     width: Option<usize>,
     /// The date of the last time shown as a time of day (a narrow table).
     date: String,
+    /// How often each node sent each warning about the form of its frames,
+    /// by channel: said in full the first time, counted after.
+    repeats: HashMap<String, HashMap<(NodeId, Warning), u64>>,
 }
 
 /// The event columns, fixed by the first event of an input. At a terminal
@@ -103,6 +108,7 @@ impl<W: Write> TableReport<W> {
             registers: vec![None; 256],
             width: None,
             date: String::new(),
+            repeats: HashMap::new(),
         }
     }
 
@@ -530,6 +536,74 @@ impl<W: Write> TableReport<W> {
         shown
     }
 
+    /// Counts `w` for the node; true when it was said for the node before
+    /// and saying it again adds nothing: the form of a node's frames
+    /// (register bits, byte counts, bytes that should be zero) is the same
+    /// on every frame. What the state machine says of one frame (a reset
+    /// that cleared nothing) is always said.
+    fn repeated(&mut self, channel: &str, node: NodeId, w: &Warning) -> bool {
+        let Some(key) = repeat_key(w) else {
+            return false;
+        };
+        let nodes = match self.repeats.get_mut(channel) {
+            Some(nodes) => nodes,
+            None => self.repeats.entry(channel.to_owned()).or_default(),
+        };
+        let count = nodes.entry((node, key)).or_insert(0);
+        *count += 1;
+        *count > 1
+    }
+
+    /// The warnings said once per node above, with how often each came.
+    fn write_repeats(&mut self) -> io::Result<()> {
+        let mut rows: Vec<(&str, NodeId, &'static str, u64)> = self
+            .repeats
+            .iter()
+            .flat_map(|(channel, nodes)| {
+                nodes
+                    .iter()
+                    .filter(|(_, n)| **n > 1)
+                    .map(move |((node, w), n)| (channel.as_str(), *node, w.tag(), *n))
+            })
+            .collect();
+        if rows.is_empty() {
+            return Ok(());
+        }
+        rows.sort_unstable();
+        let cells: Vec<[String; 4]> = rows
+            .iter()
+            .map(|(channel, node, tag, n)| {
+                [
+                    printable(channel).into_owned(),
+                    node.to_string(),
+                    (*tag).to_string(),
+                    n.to_string(),
+                ]
+            })
+            .collect();
+        let mut widths = REPEATS_HEADER.map(str::len);
+        for row in &cells {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = self.fit(&mut widths, &REPEATS_HEADER, &REPEATS_FIT);
+        writeln!(self.out)?;
+        let title = self.paint(BOLD, "Repeated warnings");
+        self.write_wrapped(&format!("{title} (said once per node above)"), 0)?;
+        write_row(
+            &mut self.out,
+            &REPEATS_HEADER,
+            &widths,
+            &shown,
+            &REPEATS_RIGHT,
+        )?;
+        for row in &cells {
+            write_row(&mut self.out, row, &widths, &shown, &REPEATS_RIGHT)?;
+        }
+        Ok(())
+    }
+
     fn end_event(&mut self) -> io::Result<()> {
         if self.flush_each {
             self.out.flush()?;
@@ -630,6 +704,35 @@ fn heartbeat_text(n: &NodeReport) -> String {
         parts.push("silent at end".to_string());
     }
     parts.join(", ")
+}
+
+const REPEATS_HEADER: [&str; 4] = ["CHANNEL", "NODE", "WARNING", "FRAMES"];
+const REPEATS_RIGHT: [bool; 4] = [false, true, false, true];
+const REPEATS_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(0, CHANNEL_MAX, 7)],
+};
+
+/// What makes a warning a repeat of one said before for the node (`None`:
+/// never one). The register, the bytes, the length may differ from frame
+/// to frame; what the warning says of the node does not.
+fn repeat_key(w: &Warning) -> Option<Warning> {
+    Some(match *w {
+        Warning::ShortFrame { .. } => Warning::ShortFrame { len: 0 },
+        Warning::NoGenericBit { .. } => Warning::NoGenericBit { register: 0 },
+        Warning::ManufacturerBytesNonZero { .. } => {
+            Warning::ManufacturerBytesNonZero { first: 0, last: 0 }
+        }
+        Warning::ReservedBit
+        | Warning::EmptyRegister
+        | Warning::ProfileReservedBit { .. }
+        | Warning::ClassRegisterMismatch { .. }
+        | Warning::OddResetCode { .. }
+        | Warning::UndefinedCode { .. } => *w,
+        Warning::ResetWhileErrorFree
+        | Warning::PartialResetWhileErrorFree
+        | Warning::PartialResetUnattributed { .. } => return None,
+    })
 }
 
 /// The first outages: `start-end (duration s)`, then how many more.
@@ -817,6 +920,7 @@ impl<W: Write> Sink for TableReport<W> {
         self.layout = None;
         self.times.origin = None;
         self.date.clear();
+        self.repeats.clear();
         let mut head = String::from("== ");
         match self.width {
             Some(width) => {
@@ -908,10 +1012,16 @@ impl<W: Write> Sink for TableReport<W> {
         self.out.write_all(line.as_bytes())?;
         self.line = line;
         let indent = l.description_indent();
-        if let Some(decoded) = ev.decoded {
+        // A reset with bytes 3-7 zero, as the manuals say resets are: its
+        // reading (`category: 0`) adds nothing.
+        let plain_reset = ev.emcy.is_reset() && ev.emcy.manufacturer().iter().all(|b| *b == 0);
+        if let Some(decoded) = ev.decoded.filter(|_| !plain_reset) {
             self.write_detail(indent, &decoded_text(decoded), None)?;
         }
         for w in ev.warnings {
+            if self.repeated(ev.channel, ev.node, w) {
+                continue;
+            }
             self.write_detail(indent, &format!("warning: {w}"), Some(YELLOW))?;
         }
         self.end_event()
@@ -995,6 +1105,7 @@ impl<W: Write> Sink for TableReport<W> {
                 )?;
             }
         }
+        self.write_repeats()?;
         if input.nodes.is_empty() {
             self.write_bus_line(input)?;
             return writeln!(self.out);

@@ -35,6 +35,6 @@ mod output;
 mod pcap;
 mod readme;
 mod roundtrip;
-mod table_width;
+mod table;
 mod timestamps;
 mod trc;

@@ -1,5 +1,6 @@
 //! The table at a terminal fits its width (`--width`, as a terminal's width
 //! is given); in a pipe it keeps its full lines whatever `COLUMNS` says.
+//! What repeats on every frame of a node is said once.
 
 use unicode_width::UnicodeWidthStr;
 
@@ -147,4 +148,74 @@ fn a_pipe_keeps_full_lines_whatever_columns_says() {
     assert_eq!(String::from_utf8(with_columns.stdout).unwrap(), full);
     assert_eq!(table(&["--width", "0", "fixtures/s300.log"]), full);
     assert!(full.lines().any(|l| l.width() > 200));
+}
+
+/// A node whose frames all lack the generic bit (no profile says it never
+/// sets it), with a reset that cleared nothing in between: the form of its
+/// frames is said once, what the state machine says of one frame each time.
+#[test]
+fn a_warning_about_a_nodes_frames_is_said_once_per_node_then_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("repeats.log");
+    let mut trace = String::new();
+    for (i, node) in [5, 5, 6, 5, 6, 5].iter().enumerate() {
+        trace.push_str(&format!(
+            "({}.000000) can0 08{node}#1043080000000000\n",
+            i + 1
+        ));
+    }
+    trace.push_str("(9.000000) can0 085#0000000000000000\n");
+    trace.push_str("(10.000000) can0 085#0000000000000000\n");
+    std::fs::write(&path, trace).unwrap();
+    let path = path.to_str().unwrap();
+    let text = table(&[path]);
+    let said: Vec<&str> = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with("warning: no_generic_bit"))
+        .collect();
+    assert_eq!(said.len(), 2, "once for node 5, once for node 6:\n{text}");
+    assert_eq!(
+        text.lines()
+            .filter(|l| l
+                .trim_start()
+                .starts_with("warning: reset_while_error_free"))
+            .count(),
+        1,
+        "{text}"
+    );
+    let repeats: Vec<Vec<&str>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("Repeated warnings"))
+        .skip(2)
+        .take_while(|l| !l.is_empty())
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(
+        repeats,
+        [
+            ["can0", "5", "no_generic_bit", "4"],
+            ["can0", "6", "no_generic_bit", "2"]
+        ]
+    );
+    // The machine outputs keep every warning on its event.
+    let events = crate::support::ndjson([path]);
+    let no_generic = events
+        .iter()
+        .filter(|e| e["type"] == "emcy")
+        .filter(|e| {
+            e["warnings"].as_array().is_some_and(|w| {
+                w.iter()
+                    .any(|w| w.as_str().is_some_and(|w| w.starts_with("no_generic_bit:")))
+            })
+        })
+        .count();
+    assert_eq!(no_generic, 6);
+}
+
+#[test]
+fn a_reset_with_zero_bytes_says_no_category() {
+    let text = table(&["fixtures/s300.log"]);
+    assert!(!text.contains("category: 0"), "{text}");
+    // A reading that says something stays (STÖBER's E82 "no error").
+    assert!(table(&["fixtures/stoeber.log"]).contains("event_text: no error"));
 }
