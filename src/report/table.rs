@@ -168,6 +168,58 @@ impl<W: Write> TableReport<W> {
         Ok(())
     }
 
+    /// The summary's codes: per node, each code it raised, how often, and
+    /// what the node's profile says it is (the nodes' row gives codes
+    /// only). Two passes, widths then rows, as for the nodes.
+    fn write_codes(&mut self, input: &InputReport) -> io::Result<()> {
+        let rows = || {
+            input.nodes.iter().flat_map(|n| {
+                let texts = NodeTexts::of(n);
+                n.stats.raised.iter().map(move |(&code, &count)| {
+                    let (text, width) = texts.get(code);
+                    let cells = [
+                        printable(&n.channel).into_owned(),
+                        n.node.to_string(),
+                        code_text(code),
+                        count.to_string(),
+                        text.to_owned(),
+                    ];
+                    let mut widths = cells.each_ref().map(|c| display_width(c));
+                    widths[4] = width;
+                    (cells, widths)
+                })
+            })
+        };
+        let mut widths = CODES_HEADER.map(str::len);
+        let mut any = false;
+        for (_, cell_widths) in rows() {
+            any = true;
+            for (w, c) in widths.iter_mut().zip(cell_widths) {
+                *w = (*w).max(c);
+            }
+        }
+        if !any {
+            return Ok(());
+        }
+        let shown = self.fit(&mut widths, &CODES_HEADER, &CODES_FIT);
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Errors seen"))?;
+        write_row(&mut self.out, &CODES_HEADER, &widths, &shown, &CODES_RIGHT)?;
+        let mut line = String::new();
+        for (cells, cell_widths) in rows() {
+            push_row(
+                &mut line,
+                &cells,
+                &cell_widths,
+                &widths,
+                &shown,
+                &CODES_RIGHT,
+            );
+            self.out.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
     /// The nodes' NMT state, heartbeat and error history, for the nodes the
     /// trace told any of (none: no section). Two passes, widths then rows,
     /// as for the nodes: no table of a million rows is held.
@@ -706,6 +758,13 @@ fn heartbeat_text(n: &NodeReport) -> String {
     parts.join(", ")
 }
 
+const CODES_HEADER: [&str; 5] = ["CHANNEL", "NODE", "CODE", "TIMES", "DESCRIPTION"];
+const CODES_RIGHT: [bool; 5] = [false, true, false, true, false];
+const CODES_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(4, usize::MAX, 12), (0, CHANNEL_MAX, 7)],
+};
+
 const REPEATS_HEADER: [&str; 4] = ["CHANNEL", "NODE", "WARNING", "FRAMES"];
 const REPEATS_RIGHT: [bool; 4] = [false, true, false, true];
 const REPEATS_FIT: Fit = Fit {
@@ -1089,6 +1148,7 @@ impl<W: Write> Sink for TableReport<W> {
         if self.summary_only {
             if !input.nodes.is_empty() {
                 self.write_nodes(input)?;
+                self.write_codes(input)?;
                 self.write_health(input)?;
             }
             self.write_bus_line(input)?;

@@ -219,3 +219,32 @@ fn a_reset_with_zero_bytes_says_no_category() {
     // A reading that says something stays (STÖBER's E82 "no error").
     assert!(table(&["fixtures/stoeber.log"]).contains("event_text: no error"));
 }
+
+#[test]
+fn the_summary_names_each_code_by_the_nodes_profile() {
+    let text = table(&[
+        "--view",
+        "summary",
+        "fixtures/s300.log",
+        "fixtures/festo.log",
+    ]);
+    let rows: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("can0 ") && l.contains("0x4310"))
+        .filter(|l| !l.contains(" x1"))
+        .collect();
+    // The same code, each node's profile's words for it.
+    assert_eq!(rows.len(), 2, "{text}");
+    assert!(
+        rows[0].ends_with("1  0x4310      1  F06 motor temperature (AKD: F235)"),
+        "{}",
+        rows[0]
+    );
+    assert!(
+        rows[1].ends_with("5  0x4310      1  Temperature · drive · excess temperature drive"),
+        "{}",
+        rows[1]
+    );
+    // No events in the summary.
+    assert!(!text.contains("TIME "));
+}
