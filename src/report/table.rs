@@ -390,18 +390,6 @@ impl<W: Write> TableReport<W> {
         Ok(l)
     }
 
-    fn prefix(
-        &mut self,
-        l: Layout,
-        time: Option<Timestamp>,
-        channel: &str,
-        node: NodeId,
-    ) -> String {
-        let mut s = String::with_capacity(64);
-        self.push_prefix(&mut s, l, time, channel, node);
-        s
-    }
-
     /// `TIME  CHANNEL  NODE  ` padded to the layout, appended to `line`;
     /// before it, for times of day, the date when it changed.
     fn push_prefix(
@@ -503,17 +491,23 @@ impl<W: Write> TableReport<W> {
         style: Option<Style>,
         what: &str,
     ) -> io::Result<()> {
-        let mut line = self.prefix(l, time, channel, node);
-        let tag = format!("{tag:<6}");
+        // The event line's buffer: NMT and heartbeat rows are many too.
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        self.push_prefix(&mut line, l, time, channel, node);
         match style {
-            Some(style) => line.push_str(&self.paint(style, &tag)),
-            None => line.push_str(&tag),
+            Some(style) if self.color => {
+                line.push_str(&self.paint(style, tag));
+            }
+            _ => line.push_str(tag),
         }
         let column = l.description_indent();
-        line.push_str(&blanks(column.saturating_sub(l.code_column() + 6)));
+        line.push_str(&blanks(column.saturating_sub(l.code_column() + tag.len())));
         self.push_description(&mut line, l, what);
         line.push('\n');
-        self.out.write_all(line.as_bytes())
+        let written = self.out.write_all(line.as_bytes());
+        self.line = line;
+        written
     }
 
     /// A line of its own (legend, bus line), wrapped to the width when
@@ -535,19 +529,10 @@ impl<W: Write> TableReport<W> {
     /// The error timeline, in two passes over the history (column widths,
     /// then rows): a trace with millions of errors needs no stored rows.
     fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
-        let mut widths = TIMELINE_HEADER.map(str::len);
-        let mut rows = 0u64;
         let times = self.times.clone();
-        for_each_timeline_row(input, &times, |_, cell_widths| {
-            rows += 1;
-            for (w, c) in widths.iter_mut().zip(cell_widths) {
-                *w = (*w).max(*c);
-            }
-            Ok(())
-        })?;
-        if rows == 0 {
+        let Some(mut widths) = timeline_widths(input, &times)? else {
             return Ok(());
-        }
+        };
         let shown = self.fit(&mut widths, &TIMELINE_HEADER, &TIMELINE_FIT);
         writeln!(self.out)?;
         writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
@@ -1057,6 +1042,12 @@ impl<W: Write> Sink for TableReport<W> {
         let description = printable(ev.description);
         if ev.cleared.is_empty() {
             self.push_description(&mut line, l, &description);
+        } else if l.description.is_none() {
+            // Full lines (a pipe): straight into the line, no text to cut.
+            line.push_str(&description);
+            line.push_str(" (cleared ");
+            push_codes(&mut line, ev.cleared);
+            line.push(')');
         } else {
             let mut text = String::with_capacity(description.len() + 16);
             text.push_str(&description);
@@ -1491,6 +1482,54 @@ fn timeline_cells(
         };
     }
     widths
+}
+
+/// The timeline's column widths (`None`: no rows), measured without
+/// writing the rows: the first of two passes over millions of errors, it
+/// cost as much as writing them.
+fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option<[usize; 8]>> {
+    let mut widths = TIMELINE_HEADER.map(str::len);
+    let mut any = false;
+    let mut merge = input.history.merge();
+    let mut scratch = Vec::with_capacity(32);
+    for n in &input.nodes {
+        let texts = NodeTexts::of(n);
+        let channel = display_width(&printable(&n.channel));
+        let node = itoa::Buffer::new().format(n.node).len();
+        for iv in merge.node_errors(&n.channel, n.node) {
+            any = true;
+            let end_time = iv.end.and_then(|e| e.time);
+            let line_width = |line: u64| 5 + itoa::Buffer::new().format(line).len();
+            let start = match iv.start.time {
+                Some(t) => times.width(t),
+                None => line_width(iv.start.line),
+            };
+            let (end, duration) = match (iv.end, iv.start.time, end_time) {
+                (None, _, _) => ("active".len(), 1),
+                (Some(_), Some(s), Some(e)) => {
+                    scratch.clear();
+                    e.push_since(s, &mut scratch);
+                    (times.width(e), scratch.len())
+                }
+                (Some(e), _, _) => (line_width(e.line), 1),
+            };
+            let cleared_by = iv.cleared_by.map_or(1, |c| c.slug().len());
+            let row = [
+                channel,
+                node,
+                6,
+                texts.get(iv.code).1,
+                start,
+                end,
+                duration,
+                cleared_by,
+            ];
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(c);
+            }
+        }
+    }
+    merge.take_error().map_or(Ok(any.then_some(widths)), Err)
 }
 
 /// Calls `row` for every error of the selected nodes, in report order,
