@@ -403,20 +403,21 @@ impl<W: Write> TableReport<W> {
         let start = line.len();
         let mut row_start = start;
         self.times.push_opt(line, time);
-        if l.time_of_day {
-            if let Some(date) = line.get(start..).and_then(iso_date) {
-                if date != self.date {
-                    self.date.clear();
-                    self.date.push_str(date);
-                    let mut head = String::with_capacity(16);
-                    head.push_str(&self.paint(BOLD, date));
-                    head.push('\n');
-                    line.insert_str(start, &head);
-                    row_start = start + head.len();
-                    line.replace_range(row_start..row_start + DATE_PREFIX, "");
-                } else {
-                    line.replace_range(start..start + DATE_PREFIX, "");
-                }
+        // `iso_date` checked the 11 ASCII bytes the ranges below remove.
+        if l.time_of_day
+            && let Some(date) = line.get(start..).and_then(iso_date)
+        {
+            if date != self.date {
+                self.date.clear();
+                self.date.push_str(date);
+                let mut head = String::with_capacity(16);
+                head.push_str(&self.paint(BOLD, date));
+                head.push('\n');
+                line.insert_str(start, &head);
+                row_start = start + head.len();
+                line.replace_range(row_start..row_start + DATE_PREFIX, "");
+            } else {
+                line.replace_range(start..start + DATE_PREFIX, "");
             }
         }
         pad_to(line, row_start + l.time);
