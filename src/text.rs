@@ -7,11 +7,19 @@ use std::borrow::Cow;
 /// hostile trace must not put terminal control sequences on the screen
 /// (`(1.0) \x1b]0;title\x07 081#...` is a valid candump log line).
 pub fn printable(s: &str) -> Cow<'_, str> {
-    // Most text is clean: a byte scan first (C0 controls and DEL are single
-    // bytes, C1 controls U+0080-U+009F start with 0xC2), the char check
-    // only where one of those bytes occurs.
-    let suspect = s.bytes().any(|b| b < 0x20 || b == 0x7F || b == 0xC2);
-    if !suspect || !s.chars().any(char::is_control) {
+    // Most text is clean: byte scans decide. C0 controls and DEL are single
+    // bytes (a vectorised scan); C1 controls U+0080-U+009F are 0xC2
+    // 0x80-0x9F (memchr to each 0xC2, its next byte checked). Taking every
+    // 0xC2 as suspect sent each description with a `·` (0xC2 0xB7) to a
+    // char-by-char check: 8% of a table run of a trace with 30% EMCY.
+    let b = s.as_bytes();
+    // A fold, not `any`: without the early exit the scan is vectorised.
+    let control = b
+        .iter()
+        .fold(false, |found, &c| found | (c < 0x20) | (c == 0x7F))
+        || memchr::memchr_iter(0xC2, b)
+            .any(|i| b.get(i + 1).is_some_and(|n| (0x80..0xA0).contains(n)));
+    if !control {
         return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len() + 8);
@@ -35,5 +43,9 @@ mod tests {
         assert_eq!(printable("can0"), "can0");
         assert_eq!(printable("a\u{85}b\u{7f}"), "a\\u{85}b\\u{7f}");
         assert_eq!(printable("Stöber · ±15 V"), "Stöber · ±15 V");
+        assert!(matches!(printable("Temperature · drive"), Cow::Borrowed(_)));
+        // U+009F, the last C1 control; U+00A0 is none.
+        assert_eq!(printable("a\u{9f}\u{a0}"), "a\\u{9f}\u{a0}");
+        assert_eq!(printable("\u{c2}"), "\u{c2}");
     }
 }

@@ -201,6 +201,15 @@ pub struct DecodeArgs {
     #[arg(long, value_name = "ZONE", help_heading = OUTPUT)]
     pub tz: Option<String>,
 
+    /// Fit the table to N columns (default: the terminal's width at a terminal, full lines in a pipe; 0: full lines)
+    ///
+    /// Fit the table to N columns: narrower columns give way first (register bit names,
+    /// manufacturer bytes, the date, the transition), then the description is cut and details
+    /// wrap. Default: at a terminal, `COLUMNS` if set, else the terminal's width; in a pipe, full
+    /// lines. 0: full lines. Below 40, 40
+    #[arg(long, value_name = "N", help_heading = OUTPUT)]
+    pub width: Option<usize>,
+
     /// Keep reading FILE as it grows (like tail -f); Ctrl-C prints the summary
     #[arg(long, requires = "files", help_heading = INPUT)]
     pub follow: bool,

@@ -65,7 +65,15 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
             let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
-            let table = TableReport::new(out, color, live).time_style(time_style);
+            let width = table_width(
+                args.width,
+                io::stdout().is_terminal(),
+                std::env::var_os("COLUMNS").as_deref(),
+                || terminal_size::terminal_size().map(|(w, _)| usize::from(w.0)),
+            );
+            let table = TableReport::new(out, color, live)
+                .time_style(time_style)
+                .fit_width(width);
             Box::new(if summary { table.summary_only() } else { table })
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
@@ -481,6 +489,28 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
     }
 }
 
+/// The width to fit the table to: `--width` (0: none), else at a terminal
+/// `COLUMNS` (as shells export it; a resized window updates it), else the
+/// terminal's size; in a pipe none, so scripts get full lines. The size is
+/// asked of the `terminal_size` crate, already built for clap's help.
+fn table_width(
+    flag: Option<usize>,
+    is_terminal: bool,
+    columns: Option<&std::ffi::OsStr>,
+    terminal: impl FnOnce() -> Option<usize>,
+) -> Option<usize> {
+    match flag {
+        Some(0) => None,
+        Some(n) => Some(n),
+        None if !is_terminal => None,
+        None => columns
+            .and_then(|c| c.to_str())
+            .and_then(|c| c.trim().parse::<usize>().ok())
+            .filter(|&c| c > 0)
+            .or_else(terminal),
+    }
+}
+
 /// Whether to colour: `--color always|never`, or auto = a terminal and no
 /// (non-empty) `NO_COLOR`, per no-color.org.
 fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi::OsStr>) -> bool {
@@ -509,6 +539,29 @@ mod tests {
         assert!(wants_progress(true, PROGRESS_MIN_BYTES));
         assert!(!wants_progress(true, PROGRESS_MIN_BYTES - 1));
         assert!(!wants_progress(false, u64::MAX));
+    }
+
+    #[test]
+    fn the_table_fits_a_terminal_only() {
+        let none = || None;
+        let term = || Some(132);
+        // A pipe: full lines, whatever COLUMNS says.
+        assert_eq!(table_width(None, false, Some(OsStr::new("80")), term), None);
+        assert_eq!(
+            table_width(None, true, Some(OsStr::new("80")), term),
+            Some(80)
+        );
+        assert_eq!(table_width(None, true, None, term), Some(132));
+        assert_eq!(
+            table_width(None, true, Some(OsStr::new("wide")), term),
+            Some(132)
+        );
+        assert_eq!(table_width(None, true, Some(OsStr::new("0")), none), None);
+        assert_eq!(table_width(Some(100), false, None, none), Some(100));
+        assert_eq!(
+            table_width(Some(0), true, Some(OsStr::new("80")), term),
+            None
+        );
     }
 
     #[test]

@@ -173,6 +173,12 @@ pub struct Profile {
     bit_names: [Option<String>; 8],
     /// Codes whose low byte falls in this range are manufacturer-specific.
     manufacturer_low_bytes: Option<(u8, u8)>,
+    /// The vendor's drives set register bit 0 (generic) with an error
+    /// (`register_generic_bit`; false: its manual shows them never doing so).
+    generic_bit: bool,
+    /// The register carries the bit of the code's class
+    /// (`register_class_bits`; false: its manual shows codes without it).
+    class_bits: bool,
 }
 
 impl Profile {
@@ -188,6 +194,8 @@ impl Profile {
             reserved_bits: 0,
             bit_names: Default::default(),
             manufacturer_low_bytes: None,
+            generic_bit: true,
+            class_bits: true,
         }
     }
 
@@ -308,7 +316,19 @@ impl Profile {
     /// [`Emcy::frame_warnings`]: bytes that must be zero (one warning naming
     /// the first and last offending byte) and reserved register bits. Bit 6
     /// is left to the CiA 301 check (`reserved_bit`), which always applies.
+    ///
+    /// Where the vendor's manual shows its drives never setting the generic
+    /// bit, or sending codes without their class bit, the CiA 301 warnings
+    /// about it are taken back: what the manual shows as normal is no news
+    /// on every frame.
     pub fn frame_warnings(&self, emcy: &Emcy, out: &mut Vec<Warning>) {
+        if !self.generic_bit || !self.class_bits {
+            out.retain(|w| match w {
+                Warning::NoGenericBit { .. } => self.generic_bit,
+                Warning::ClassRegisterMismatch { .. } => self.class_bits,
+                _ => true,
+            });
+        }
         let nonzero: Vec<u8> = (FIRST_BYTE..)
             .zip(emcy.manufacturer())
             .filter(|(byte, value)| self.zero_bytes & (1 << byte) != 0 && **value != 0)
@@ -461,6 +481,8 @@ struct FileDoc {
     zero_bytes: Option<Vec<Spanned<i64>>>,
     reserved_register_bits: Option<Vec<Spanned<i64>>>,
     manufacturer_low_bytes: Option<Spanned<Vec<i64>>>,
+    register_generic_bit: Option<bool>,
+    register_class_bits: Option<bool>,
     #[serde(default)]
     register_bits: BTreeMap<Spanned<String>, Spanned<String>>,
     #[serde(default, rename = "field")]
@@ -633,6 +655,12 @@ fn parse_with(origin: &str, text: &str, bases: &[Profile]) -> Result<Profile, Pr
 
     if let Some(bits) = &doc.reserved_register_bits {
         profile.reserved_bits = byte_list(&errors, "register bit", bits, 0..=7)?;
+    }
+    if let Some(set) = doc.register_generic_bit {
+        profile.generic_bit = set;
+    }
+    if let Some(set) = doc.register_class_bits {
+        profile.class_bits = set;
     }
 
     for (key, value) in &doc.register_bits {
@@ -925,6 +953,55 @@ mod tests {
         for name in ["cia301", "cia402", "canopennode"] {
             assert!(!profile(name).has_categories(), "{name}");
         }
+    }
+
+    /// The CiA 301 checks, then the profile's, as the consumer runs them.
+    fn all_warnings(p: &Profile, data: &[u8]) -> Vec<&'static str> {
+        let emcy = frame(data);
+        let mut out = Vec::new();
+        emcy.frame_warnings(&p.info(emcy.code), &mut out);
+        p.frame_warnings(&emcy, &mut out);
+        out.iter().map(Warning::tag).collect()
+    }
+
+    #[test]
+    fn profiles_take_back_what_their_manual_shows_as_normal() {
+        // The S300 manual's 10 43 08 01: the temperature bit without bit 0.
+        let s300 = [0x10, 0x43, 0x08, 0x01, 0, 0, 0, 0];
+        assert_eq!(all_warnings(profile("cia402"), &s300), ["no_generic_bit"]);
+        assert!(all_warnings(profile("kollmorgen"), &s300).is_empty());
+        // STÖBER's 0x4310 with register 0x01, E82 = 41.
+        let stoeber = [0x10, 0x43, 0x01, 0x29, 0, 0, 0, 0];
+        assert_eq!(
+            all_warnings(profile("cia402"), &stoeber),
+            ["class_register_mismatch"]
+        );
+        assert!(all_warnings(profile("stoeber"), &stoeber).is_empty());
+        // Each profile keeps the other check.
+        assert_eq!(
+            all_warnings(profile("kollmorgen"), &[0x10, 0x43, 0x04, 0x01, 0, 0, 0, 0]),
+            ["class_register_mismatch"]
+        );
+        assert_eq!(
+            all_warnings(profile("stoeber"), &[0x10, 0x43, 0x08, 0x29, 0, 0, 0, 0]),
+            ["no_generic_bit"]
+        );
+    }
+
+    #[test]
+    fn register_keys_are_inherited_and_can_be_set_back() {
+        let s300 = [0x10, 0x43, 0x08, 0x01, 0, 0, 0, 0];
+        let child = Profile::parse("t", "name = \"x\"\nbase = \"kollmorgen\"\n").unwrap();
+        assert!(all_warnings(&child, &s300).is_empty());
+        let strict = Profile::parse(
+            "t",
+            "name = \"x\"\nbase = \"kollmorgen\"\nregister_generic_bit = true\n",
+        )
+        .unwrap();
+        assert_eq!(all_warnings(&strict, &s300), ["no_generic_bit"]);
+        let lax = Profile::parse("t", "name = \"x\"\nregister_class_bits = false\n").unwrap();
+        assert!(all_warnings(&lax, &[0x10, 0x43, 0x01, 0, 0, 0, 0, 0]).is_empty());
+        assert!(Profile::parse("t", "name = \"x\"\nregister_class_bits = \"no\"\n").is_err());
     }
 
     fn warnings(p: &Profile, data: &[u8]) -> Vec<Warning> {

@@ -3,10 +3,10 @@
 //! them), then the node states and error timeline; at the end the input counts.
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
-use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
@@ -14,6 +14,7 @@ use crate::analyze::{
     Sink,
 };
 use crate::canopen::NodeId;
+use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::text::printable;
 use crate::timeline::Interval;
@@ -38,13 +39,58 @@ pub struct TableReport<W: Write> {
     line: String,
     /// Register column texts, padded, by register value.
     registers: Vec<Option<String>>,
+    /// The terminal's width to fit (`None`: a pipe, full lines).
+    width: Option<usize>,
+    /// The date of the last time shown as a time of day (a narrow table).
+    date: String,
+    /// How often each node sent each warning about the form of its frames,
+    /// by channel: said in full the first time, counted after.
+    repeats: HashMap<String, HashMap<(NodeId, Warning), u64>>,
 }
 
+/// The event columns, fixed by the first event of an input. At a terminal
+/// narrower than the full columns, the least useful give way first (see
+/// [`TableReport::layout_for`]); in a pipe every column is there.
 #[derive(Clone, Copy)]
 struct Layout {
     time: usize,
     channel: usize,
+    /// Times of day, the date on a line of its own when it changes.
+    time_of_day: bool,
+    transition: bool,
+    /// The register's width: the hex and its bits, the hex alone, or none.
+    register: Option<usize>,
+    manufacturer: bool,
+    /// Room for the description on the event's row (`None`: unlimited).
+    description: Option<usize>,
 }
+
+impl Layout {
+    /// Where the description starts: the columns before it.
+    fn description_indent(&self) -> usize {
+        self.code_column()
+            + 8
+            + if self.transition { 4 } else { 0 }
+            + self.register.map_or(0, |w| w + 2)
+            + if self.manufacturer {
+                MANUFACTURER_WIDTH + 2
+            } else {
+                0
+            }
+    }
+
+    /// Where the code (or an NMT event's tag) starts.
+    fn code_column(&self) -> usize {
+        self.time + 2 + self.channel + 2 + 6
+    }
+}
+
+/// What the description is given before columns give way to it.
+const DESCRIPTION_ROOM: usize = 50;
+/// The narrowest width fitted: below it columns cannot give way enough.
+pub const MIN_WIDTH: usize = 40;
+/// A channel column longer than this is cut when fitting.
+const CHANNEL_MAX: usize = 16;
 
 const REGISTER_WIDTH: usize = 16;
 const MANUFACTURER_WIDTH: usize = 14;
@@ -60,7 +106,17 @@ impl<W: Write> TableReport<W> {
             times: TimeFormat::default(),
             line: String::new(),
             registers: vec![None; 256],
+            width: None,
+            date: String::new(),
+            repeats: HashMap::new(),
         }
+    }
+
+    /// Fits the table to `width` columns (a terminal's); `None` keeps the
+    /// full lines (a pipe: scripts grep them).
+    pub fn fit_width(mut self, width: Option<usize>) -> Self {
+        self.width = width.map(|w| w.max(MIN_WIDTH));
+        self
     }
 
     /// `--time`.
@@ -93,12 +149,72 @@ impl<W: Write> TableReport<W> {
                 *w = (*w).max(c);
             }
         }
+        let shown = self.fit(&mut widths, &NODES_HEADER, &NODES_FIT);
         writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
-        write_row(&mut self.out, &NODES_HEADER, &widths, &NODES_RIGHT)?;
+        write_row(&mut self.out, &NODES_HEADER, &widths, &shown, &NODES_RIGHT)?;
         let mut line = String::new();
         for n in &input.nodes {
             let cell_widths = node_cells(&mut cells, &times, input, n);
-            push_row(&mut line, &cells, &cell_widths, &widths, &NODES_RIGHT);
+            push_row(
+                &mut line,
+                &cells,
+                &cell_widths,
+                &widths,
+                &shown,
+                &NODES_RIGHT,
+            );
+            self.out.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// The summary's codes: per node, each code it raised, how often, and
+    /// what the node's profile says it is (the nodes' row gives codes
+    /// only). Two passes, widths then rows, as for the nodes.
+    fn write_codes(&mut self, input: &InputReport) -> io::Result<()> {
+        let rows = || {
+            input.nodes.iter().flat_map(|n| {
+                let texts = NodeTexts::of(n);
+                n.stats.raised.iter().map(move |(&code, &count)| {
+                    let (text, width) = texts.get(code);
+                    let cells = [
+                        printable(&n.channel).into_owned(),
+                        n.node.to_string(),
+                        code_text(code),
+                        count.to_string(),
+                        text.to_owned(),
+                    ];
+                    let mut widths = cells.each_ref().map(|c| display_width(c));
+                    widths[4] = width;
+                    (cells, widths)
+                })
+            })
+        };
+        let mut widths = CODES_HEADER.map(str::len);
+        let mut any = false;
+        for (_, cell_widths) in rows() {
+            any = true;
+            for (w, c) in widths.iter_mut().zip(cell_widths) {
+                *w = (*w).max(c);
+            }
+        }
+        if !any {
+            return Ok(());
+        }
+        let shown = self.fit(&mut widths, &CODES_HEADER, &CODES_FIT);
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Errors seen"))?;
+        write_row(&mut self.out, &CODES_HEADER, &widths, &shown, &CODES_RIGHT)?;
+        let mut line = String::new();
+        for (cells, cell_widths) in rows() {
+            push_row(
+                &mut line,
+                &cells,
+                &cell_widths,
+                &widths,
+                &shown,
+                &CODES_RIGHT,
+            );
             self.out.write_all(line.as_bytes())?;
         }
         Ok(())
@@ -122,13 +238,27 @@ impl<W: Write> TableReport<W> {
                 *w = (*w).max(c);
             }
         }
+        let shown = self.fit(&mut widths, &HEALTH_HEADER, &HEALTH_FIT);
         writeln!(self.out)?;
         writeln!(self.out, "{}", self.paint(BOLD, "Node health"))?;
-        write_row(&mut self.out, &HEALTH_HEADER, &widths, &HEALTH_RIGHT)?;
+        write_row(
+            &mut self.out,
+            &HEALTH_HEADER,
+            &widths,
+            &shown,
+            &HEALTH_RIGHT,
+        )?;
         let mut line = String::new();
         for n in input.nodes.iter().filter(told) {
             let cell_widths = health_cells(&mut cells, &times, n);
-            push_row(&mut line, &cells, &cell_widths, &widths, &HEALTH_RIGHT);
+            push_row(
+                &mut line,
+                &cells,
+                &cell_widths,
+                &widths,
+                &shown,
+                &HEALTH_RIGHT,
+            );
             self.out.write_all(line.as_bytes())?;
         }
         Ok(())
@@ -180,14 +310,14 @@ impl<W: Write> TableReport<W> {
             1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),
             n => format!(", {n} frames dropped (DROPCOUNT): EMCYs may be missing"),
         };
-        writeln!(
-            self.out,
+        let line = format!(
             "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed{dropped}",
             c.emcy,
             input.nodes_with_errors(),
             input.nodes.len(),
             c.malformed,
-        )
+        );
+        self.write_wrapped(&line, 5)
     }
 
     fn paint(&self, style: Style, text: &str) -> String {
@@ -202,35 +332,68 @@ impl<W: Write> TableReport<W> {
         if let Some(l) = self.layout {
             return Ok(l);
         }
-        let l = Layout {
-            time: time.map_or(1, |t| self.times.show(t).len()).max(4),
-            channel: printable(channel).len().max(7),
+        let time_text = time.map(|t| self.times.show(t));
+        let time_width = time_text.as_ref().map_or(1, |t| t.len()).max(4);
+        let mut l = Layout {
+            time: time_width,
+            channel: printable(channel).chars().count().max(7),
+            time_of_day: false,
+            transition: true,
+            register: Some(REGISTER_WIDTH),
+            manufacturer: true,
+            description: None,
         };
+        if let Some(width) = self.width {
+            // The least useful columns give way first, until the description
+            // has room: the register's bit names (its hex stays), the raw
+            // manufacturer bytes (the profile's reading stays, as its line),
+            // the date (on a line of its own), the transition (the colour
+            // says it), the register.
+            l.channel = l.channel.min(CHANNEL_MAX);
+            let dated = time_text.as_deref().is_some_and(|t| iso_date(t).is_some());
+            let mut step = 0;
+            while l.description_indent() + DESCRIPTION_ROOM > width {
+                match step {
+                    0 => l.register = Some(3),
+                    1 => l.manufacturer = false,
+                    2 if dated => {
+                        l.time_of_day = true;
+                        l.time = (time_width - DATE_PREFIX).max(4);
+                    }
+                    3 => l.transition = false,
+                    4 => l.register = None,
+                    5 => break,
+                    _ => {}
+                }
+                step += 1;
+            }
+            l.description = Some(width.saturating_sub(l.description_indent()).max(8));
+        }
         self.layout = Some(l);
-        let header = format!(
-            "{:<tw$}  {:<cw$}  NODE  CODE    TR  {:<rw$}  {:<mw$}  DESCRIPTION",
-            "TIME",
-            "CHANNEL",
-            "REGISTER",
-            "MANUFACTURER",
-            tw = l.time,
-            cw = l.channel,
-            rw = REGISTER_WIDTH,
-            mw = MANUFACTURER_WIDTH,
-        );
+        let mut header = String::new();
+        push_padded(&mut header, "TIME", l.time);
+        push_padded(&mut header, "CHANNEL", l.channel);
+        header.push_str("NODE  CODE    ");
+        if l.transition {
+            header.push_str("TR  ");
+        }
+        match l.register {
+            Some(REGISTER_WIDTH) => push_padded(&mut header, "REGISTER", REGISTER_WIDTH),
+            Some(w) => push_padded(&mut header, "REG", w),
+            None => {}
+        }
+        if l.manufacturer {
+            push_padded(&mut header, "MANUFACTURER", MANUFACTURER_WIDTH);
+        }
+        header.push_str("DESCRIPTION");
         writeln!(self.out, "{}", self.paint(BOLD, &header))?;
         Ok(l)
     }
 
-    fn prefix(&self, l: Layout, time: Option<Timestamp>, channel: &str, node: NodeId) -> String {
-        let mut s = String::with_capacity(64);
-        self.push_prefix(&mut s, l, time, channel, node);
-        s
-    }
-
-    /// `TIME  CHANNEL  NODE  ` padded to the layout, appended to `line`.
+    /// `TIME  CHANNEL  NODE  ` padded to the layout, appended to `line`;
+    /// before it, for times of day, the date when it changed.
     fn push_prefix(
-        &self,
+        &mut self,
         line: &mut String,
         l: Layout,
         time: Option<Timestamp>,
@@ -238,13 +401,39 @@ impl<W: Write> TableReport<W> {
         node: NodeId,
     ) {
         let start = line.len();
+        let mut row_start = start;
         self.times.push_opt(line, time);
-        pad_to(line, start + l.time);
+        // `iso_date` checked the 11 ASCII bytes the ranges below remove.
+        if l.time_of_day
+            && let Some(date) = line.get(start..).and_then(iso_date)
+        {
+            if date != self.date {
+                self.date.clear();
+                self.date.push_str(date);
+                let mut head = String::with_capacity(16);
+                head.push_str(&self.paint(BOLD, date));
+                head.push('\n');
+                line.insert_str(start, &head);
+                row_start = start + head.len();
+                line.replace_range(row_start..row_start + DATE_PREFIX, "");
+            } else {
+                line.replace_range(start..start + DATE_PREFIX, "");
+            }
+        }
+        pad_to(line, row_start + l.time);
         line.push_str("  ");
         let channel = printable(channel);
-        line.push_str(&channel);
-        for _ in channel.chars().count()..l.channel {
-            line.push(' ');
+        match self.width {
+            Some(_) => {
+                let shown = push_cut(line, &channel, l.channel);
+                line.push_str(&blanks(l.channel.saturating_sub(shown)));
+            }
+            None => {
+                line.push_str(&channel);
+                for _ in channel.chars().count()..l.channel {
+                    line.push(' ');
+                }
+            }
         }
         line.push_str("  ");
         let mut digits = itoa::Buffer::new();
@@ -256,35 +445,201 @@ impl<W: Write> TableReport<W> {
         line.push_str("  ");
     }
 
-    fn description_indent(l: Layout) -> usize {
-        l.time + 2 + l.channel + 2 + 6 + 8 + 4 + REGISTER_WIDTH + 2 + MANUFACTURER_WIDTH + 2
+    /// `text` in the description column: cut to the room there is (one row
+    /// per event) when fitting.
+    fn push_description(&self, line: &mut String, l: Layout, text: &str) {
+        match l.description {
+            Some(room) => {
+                push_cut(line, text, room);
+            }
+            None => line.push_str(text),
+        }
+    }
+
+    /// A line of detail under an event (the profile's reading, a warning),
+    /// indented to `indent`; wrapped to the width when fitting.
+    fn write_detail(&mut self, indent: usize, text: &str, style: Option<Style>) -> io::Result<()> {
+        let lines = match self.width {
+            Some(width) => textwrap::wrap(text, width.saturating_sub(indent).max(8)),
+            None => vec![Cow::Borrowed(text)],
+        };
+        for piece in lines {
+            self.out.write_all(blanks(indent).as_bytes())?;
+            match style {
+                Some(style) if self.color => write!(
+                    self.out,
+                    "{}{piece}{}",
+                    style.render(),
+                    style.render_reset()
+                )?,
+                _ => self.out.write_all(piece.as_bytes())?,
+            }
+            self.out.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+
+    /// An NMT event's row: its tag in the code column, its text as the
+    /// description.
+    #[allow(clippy::too_many_arguments)]
+    fn write_tagged(
+        &mut self,
+        l: Layout,
+        time: Option<Timestamp>,
+        channel: &str,
+        node: NodeId,
+        tag: &str,
+        style: Option<Style>,
+        what: &str,
+    ) -> io::Result<()> {
+        // The event line's buffer: NMT and heartbeat rows are many too.
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        self.push_prefix(&mut line, l, time, channel, node);
+        match style {
+            Some(style) if self.color => {
+                line.push_str(&self.paint(style, tag));
+            }
+            _ => line.push_str(tag),
+        }
+        let column = l.description_indent();
+        line.push_str(&blanks(column.saturating_sub(l.code_column() + tag.len())));
+        self.push_description(&mut line, l, what);
+        line.push('\n');
+        let written = self.out.write_all(line.as_bytes());
+        self.line = line;
+        written
+    }
+
+    /// A line of its own (legend, bus line), wrapped to the width when
+    /// fitting, its continuation indented by `hang`.
+    fn write_wrapped(&mut self, text: &str, hang: usize) -> io::Result<()> {
+        match self.width {
+            Some(width) => {
+                let indent = blanks(hang);
+                let options = textwrap::Options::new(width).subsequent_indent(&indent);
+                for piece in textwrap::wrap(text, options) {
+                    writeln!(self.out, "{piece}")?;
+                }
+                Ok(())
+            }
+            None => writeln!(self.out, "{text}"),
+        }
     }
 
     /// The error timeline, in two passes over the history (column widths,
     /// then rows): a trace with millions of errors needs no stored rows.
     fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
-        let mut widths = TIMELINE_HEADER.map(str::len);
-        let mut rows = 0u64;
         let times = self.times.clone();
-        for_each_timeline_row(input, &times, |_, cell_widths| {
-            rows += 1;
-            for (w, c) in widths.iter_mut().zip(cell_widths) {
-                *w = (*w).max(*c);
-            }
-            Ok(())
-        })?;
-        if rows == 0 {
+        let Some(mut widths) = timeline_widths(input, &times)? else {
             return Ok(());
-        }
+        };
+        let shown = self.fit(&mut widths, &TIMELINE_HEADER, &TIMELINE_FIT);
         writeln!(self.out)?;
         writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
-        write_row(&mut self.out, &TIMELINE_HEADER, &widths, &TIMELINE_RIGHT)?;
+        write_row(
+            &mut self.out,
+            &TIMELINE_HEADER,
+            &widths,
+            &shown,
+            &TIMELINE_RIGHT,
+        )?;
         let out = &mut self.out;
         let mut line = String::new();
         for_each_timeline_row(input, &times, |cells, cell_widths| {
-            push_row(&mut line, cells, cell_widths, &widths, &TIMELINE_RIGHT);
+            push_row(
+                &mut line,
+                cells,
+                cell_widths,
+                &widths,
+                &shown,
+                &TIMELINE_RIGHT,
+            );
             out.write_all(line.as_bytes())
         })
+    }
+
+    /// The columns shown of a table with these widths, fitted to the
+    /// terminal (all of them in a pipe).
+    fn fit<const N: usize>(
+        &self,
+        widths: &mut [usize; N],
+        header: &[&str; N],
+        fit: &Fit,
+    ) -> [bool; N] {
+        let mut shown = [true; N];
+        if let Some(width) = self.width {
+            fit_columns(widths, &mut shown, header, fit, width);
+        }
+        shown
+    }
+
+    /// Counts `w` for the node; true when it was said for the node before
+    /// and saying it again adds nothing: the form of a node's frames
+    /// (register bits, byte counts, bytes that should be zero) is the same
+    /// on every frame. What the state machine says of one frame (a reset
+    /// that cleared nothing) is always said.
+    fn repeated(&mut self, channel: &str, node: NodeId, w: &Warning) -> bool {
+        let Some(key) = repeat_key(w) else {
+            return false;
+        };
+        let nodes = match self.repeats.get_mut(channel) {
+            Some(nodes) => nodes,
+            None => self.repeats.entry(channel.to_owned()).or_default(),
+        };
+        let count = nodes.entry((node, key)).or_insert(0);
+        *count += 1;
+        *count > 1
+    }
+
+    /// The warnings said once per node above, with how often each came.
+    fn write_repeats(&mut self) -> io::Result<()> {
+        let mut rows: Vec<(&str, NodeId, &'static str, u64)> = self
+            .repeats
+            .iter()
+            .flat_map(|(channel, nodes)| {
+                nodes
+                    .iter()
+                    .filter(|(_, n)| **n > 1)
+                    .map(move |((node, w), n)| (channel.as_str(), *node, w.tag(), *n))
+            })
+            .collect();
+        if rows.is_empty() {
+            return Ok(());
+        }
+        rows.sort_unstable();
+        let cells: Vec<[String; 4]> = rows
+            .iter()
+            .map(|(channel, node, tag, n)| {
+                [
+                    printable(channel).into_owned(),
+                    node.to_string(),
+                    (*tag).to_string(),
+                    n.to_string(),
+                ]
+            })
+            .collect();
+        let mut widths = REPEATS_HEADER.map(str::len);
+        for row in &cells {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = self.fit(&mut widths, &REPEATS_HEADER, &REPEATS_FIT);
+        writeln!(self.out)?;
+        let title = self.paint(BOLD, "Repeated warnings");
+        self.write_wrapped(&format!("{title} (said once per node above)"), 0)?;
+        write_row(
+            &mut self.out,
+            &REPEATS_HEADER,
+            &widths,
+            &shown,
+            &REPEATS_RIGHT,
+        )?;
+        for row in &cells {
+            write_row(&mut self.out, row, &widths, &shown, &REPEATS_RIGHT)?;
+        }
+        Ok(())
     }
 
     fn end_event(&mut self) -> io::Result<()> {
@@ -304,6 +659,10 @@ const HEALTH_HEADER: [&str; 6] = [
     "ERROR HISTORY (1003h)",
 ];
 const HEALTH_RIGHT: [bool; 6] = [false, true, false, false, false, false];
+const HEALTH_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(3, 40, 12), (4, 40, 10), (5, 40, 12), (0, CHANNEL_MAX, 7)],
+};
 
 /// Fills the cells of one node health row; returns their display widths.
 fn health_cells(cells: &mut [String; 6], times: &TimeFormat, n: &NodeReport) -> [usize; 6] {
@@ -383,6 +742,42 @@ fn heartbeat_text(n: &NodeReport) -> String {
         parts.push("silent at end".to_string());
     }
     parts.join(", ")
+}
+
+const CODES_HEADER: [&str; 5] = ["CHANNEL", "NODE", "CODE", "TIMES", "DESCRIPTION"];
+const CODES_RIGHT: [bool; 5] = [false, true, false, true, false];
+const CODES_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(4, usize::MAX, 12), (0, CHANNEL_MAX, 7)],
+};
+
+const REPEATS_HEADER: [&str; 4] = ["CHANNEL", "NODE", "WARNING", "FRAMES"];
+const REPEATS_RIGHT: [bool; 4] = [false, true, false, true];
+const REPEATS_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(0, CHANNEL_MAX, 7)],
+};
+
+/// What makes a warning a repeat of one said before for the node (`None`:
+/// never one). The register, the bytes, the length may differ from frame
+/// to frame; what the warning says of the node does not.
+fn repeat_key(w: &Warning) -> Option<Warning> {
+    Some(match *w {
+        Warning::ShortFrame { .. } => Warning::ShortFrame { len: 0 },
+        Warning::NoGenericBit { .. } => Warning::NoGenericBit { register: 0 },
+        Warning::ManufacturerBytesNonZero { .. } => {
+            Warning::ManufacturerBytesNonZero { first: 0, last: 0 }
+        }
+        Warning::ReservedBit
+        | Warning::EmptyRegister
+        | Warning::ProfileReservedBit { .. }
+        | Warning::ClassRegisterMismatch { .. }
+        | Warning::OddResetCode { .. }
+        | Warning::UndefinedCode { .. } => *w,
+        Warning::ResetWhileErrorFree
+        | Warning::PartialResetWhileErrorFree
+        | Warning::PartialResetUnattributed { .. } => return None,
+    })
 }
 
 /// The first outages: `start-end (duration s)`, then how many more.
@@ -487,6 +882,61 @@ fn push_hex_byte(s: &mut String, b: u8) {
     s.push(hex_digit(b));
 }
 
+/// `YYYY-MM-DDT`: the date of an ISO-8601 time, which a narrow table shows
+/// once on a line of its own.
+const DATE_PREFIX: usize = 11;
+
+/// The date of an ISO-8601 time text (`2023-11-14` of `2023-11-14T22:13:20Z`).
+fn iso_date(time: &str) -> Option<&str> {
+    let b = time.as_bytes();
+    let shape = b.len() > DATE_PREFIX
+        && b.iter().take(10).enumerate().all(|(i, c)| match i {
+            4 | 7 => *c == b'-',
+            _ => c.is_ascii_digit(),
+        })
+        && b.get(10) == Some(&b'T');
+    if shape { time.get(..10) } else { None }
+}
+
+/// `n` blanks.
+fn blanks(n: usize) -> Cow<'static, str> {
+    const BLANKS: &str = "                                                                                                                                ";
+    match BLANKS.get(..n) {
+        Some(b) => Cow::Borrowed(b),
+        None => Cow::Owned(" ".repeat(n)),
+    }
+}
+
+/// `text` padded to `width` columns, then the two blanks between columns.
+fn push_padded(line: &mut String, text: &str, width: usize) {
+    line.push_str(text);
+    line.push_str(&blanks(width.saturating_sub(display_width(text)) + 2));
+}
+
+/// Appends `text` cut to `width` columns, an ellipsis marking the cut;
+/// returns the columns it took.
+fn push_cut(line: &mut String, text: &str, width: usize) -> usize {
+    let full = display_width(text);
+    if full <= width {
+        line.push_str(text);
+        return full;
+    }
+    let mut used = 0;
+    for c in text.chars() {
+        let w = unicode_width::UnicodeWidthChar::width(c).unwrap_or(0);
+        if used + w + 1 > width {
+            break;
+        }
+        line.push(c);
+        used += w;
+    }
+    if width > 0 {
+        line.push('…');
+        used += 1;
+    }
+    used
+}
+
 /// Pads `s` with blanks up to `width` bytes (ASCII columns).
 fn pad_to(s: &mut String, width: usize) {
     while s.len() < width {
@@ -514,11 +964,16 @@ impl<W: Write> Sink for TableReport<W> {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
         self.layout = None;
         self.times.origin = None;
-        writeln!(
-            self.out,
-            "{}",
-            self.paint(BOLD, &format!("== {}", printable(file)))
-        )
+        self.date.clear();
+        self.repeats.clear();
+        let mut head = String::from("== ");
+        match self.width {
+            Some(width) => {
+                push_cut(&mut head, &printable(file), width - 3);
+            }
+            None => head.push_str(&printable(file)),
+        }
+        writeln!(self.out, "{}", self.paint(BOLD, &head))
     }
 
     fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
@@ -544,56 +999,81 @@ impl<W: Write> Sink for TableReport<W> {
             push_code(&mut line, ev.emcy.code);
         }
         line.push_str("  ");
-        match ev.transition {
-            Some(t) => {
-                line.push(' ');
-                line.push(char::from(b'0' + t % 10));
-            }
-            None => line.push_str(" -"),
-        }
-        line.push_str("  ");
-        let reg = ev.emcy.register.0;
-        let register = self.registers[usize::from(reg)].get_or_insert_with(|| {
-            format!(
-                "{:<rw$}",
-                format!("{reg:02X} {}", ev.emcy.register.short()),
-                rw = REGISTER_WIDTH
-            )
-        });
-        line.push_str(register);
-        line.push_str("  ");
-        let start = line.len();
-        for (i, b) in ev.emcy.manufacturer().iter().enumerate() {
-            if i > 0 {
-                line.push(' ');
-            }
-            push_hex_byte(&mut line, *b);
-        }
-        pad_to(&mut line, start + MANUFACTURER_WIDTH);
-        line.push_str("  ");
-        line.push_str(&printable(ev.description));
-        if !ev.cleared.is_empty() {
-            line.push_str(" (cleared ");
-            for (i, &c) in ev.cleared.iter().enumerate() {
-                if i > 0 {
-                    line.push_str(", ");
+        if l.transition {
+            match ev.transition {
+                Some(t) => {
+                    line.push(' ');
+                    line.push(char::from(b'0' + t % 10));
                 }
-                push_code(&mut line, c);
+                None => line.push_str(" -"),
             }
+            line.push_str("  ");
+        }
+        let reg = ev.emcy.register.0;
+        match l.register {
+            Some(REGISTER_WIDTH) => {
+                let register = self.registers[usize::from(reg)].get_or_insert_with(|| {
+                    format!(
+                        "{:<rw$}",
+                        format!("{reg:02X} {}", ev.emcy.register.short()),
+                        rw = REGISTER_WIDTH
+                    )
+                });
+                line.push_str(register);
+                line.push_str("  ");
+            }
+            Some(w) => {
+                let start = line.len();
+                push_hex_byte(&mut line, reg);
+                pad_to(&mut line, start + w + 2);
+            }
+            None => {}
+        }
+        if l.manufacturer {
+            let start = line.len();
+            for (i, b) in ev.emcy.manufacturer().iter().enumerate() {
+                if i > 0 {
+                    line.push(' ');
+                }
+                push_hex_byte(&mut line, *b);
+            }
+            pad_to(&mut line, start + MANUFACTURER_WIDTH);
+            line.push_str("  ");
+        }
+        let description = printable(ev.description);
+        if ev.cleared.is_empty() {
+            self.push_description(&mut line, l, &description);
+        } else if l.description.is_none() {
+            // Full lines (a pipe): straight into the line, no text to cut.
+            line.push_str(&description);
+            line.push_str(" (cleared ");
+            push_codes(&mut line, ev.cleared);
             line.push(')');
+        } else {
+            let mut text = String::with_capacity(description.len() + 16);
+            text.push_str(&description);
+            text.push_str(" (cleared ");
+            push_codes(&mut text, ev.cleared);
+            text.push(')');
+            self.push_description(&mut line, l, &text);
         }
         let trimmed = line.trim_end().len();
         line.truncate(trimmed);
         line.push('\n');
         self.out.write_all(line.as_bytes())?;
         self.line = line;
-        let indent = Self::description_indent(l);
-        if let Some(decoded) = ev.decoded {
-            writeln!(self.out, "{:indent$}{}", "", decoded_text(decoded))?;
+        let indent = l.description_indent();
+        // A reset with bytes 3-7 zero, as the manuals say resets are: its
+        // reading (`category: 0`) adds nothing.
+        let plain_reset = ev.emcy.is_reset() && ev.emcy.manufacturer().iter().all(|b| *b == 0);
+        if let Some(decoded) = ev.decoded.filter(|_| !plain_reset) {
+            self.write_detail(indent, &decoded_text(decoded), None)?;
         }
         for w in ev.warnings {
-            let text = self.paint(YELLOW, &format!("warning: {w}"));
-            writeln!(self.out, "{:indent$}{text}", "")?;
+            if self.repeated(ev.channel, ev.node, w) {
+                continue;
+            }
+            self.write_detail(indent, &format!("warning: {w}"), Some(YELLOW))?;
         }
         self.end_event()
     }
@@ -609,15 +1089,7 @@ impl<W: Write> Sink for TableReport<W> {
         } else {
             format!("NMT boot-up (cleared {})", codes_list(ev.cleared))
         };
-        let indent = Self::description_indent(l) - (l.time + 2 + l.channel + 2 + 6);
-        writeln!(
-            self.out,
-            "{}{}{:pad$}{what}",
-            self.prefix(l, ev.time, ev.channel, ev.node),
-            self.paint(GREEN, "boot  "),
-            "",
-            pad = indent - 6,
-        )?;
+        self.write_tagged(l, ev.time, ev.channel, ev.node, "boot", Some(GREEN), &what)?;
         self.end_event()
     }
 
@@ -635,27 +1107,20 @@ impl<W: Write> Sink for TableReport<W> {
             Health::SdoAbort { .. } => ("abort", Some(YELLOW)),
             Health::ErrorHistory(_) | Health::ErrorHistoryCleared => ("1003h", None),
         };
-        let indent = Self::description_indent(l) - (l.time + 2 + l.channel + 2 + 6);
-        let tag = format!("{tag:<6}");
-        let tag = match style {
-            Some(style) => self.paint(style, &tag),
-            None => tag,
-        };
-        writeln!(
-            self.out,
-            "{}{tag}{:pad$}{}",
-            self.prefix(l, ev.time, ev.channel, ev.node),
-            "",
-            printable(&what),
-            pad = indent - 6,
+        self.write_tagged(
+            l,
+            ev.time,
+            ev.channel,
+            ev.node,
+            tag,
+            style,
+            &printable(&what),
         )?;
         if let Health::ErrorHistory(h) = ev.health {
-            let indent = Self::description_indent(l) + 2;
+            let indent = l.description_indent() + 2;
             for e in &h.entries {
-                writeln!(
-                    self.out,
-                    "{:indent$}0x{:04X} (info 0x{:04X}) {}{}",
-                    "",
+                let text = format!(
+                    "0x{:04X} (info 0x{:04X}) {}{}",
                     e.code,
                     e.info,
                     printable(&e.description),
@@ -664,7 +1129,8 @@ impl<W: Write> Sink for TableReport<W> {
                     } else {
                         ""
                     }
-                )?;
+                );
+                self.write_detail(indent, &text, None)?;
             }
         }
         self.end_event()
@@ -674,6 +1140,7 @@ impl<W: Write> Sink for TableReport<W> {
         if self.summary_only {
             if !input.nodes.is_empty() {
                 self.write_nodes(input)?;
+                self.write_codes(input)?;
                 self.write_health(input)?;
             }
             self.write_bus_line(input)?;
@@ -682,11 +1149,15 @@ impl<W: Write> Sink for TableReport<W> {
         if self.layout.is_none() {
             writeln!(self.out, "no EMCY frames")?;
         } else {
-            writeln!(
-                self.out,
-                "TR = transition: 1 first error, 2 one error reset, 3 further error, 4 all reset"
-            )?;
+            // The legend of a column a narrow terminal went without is not said.
+            if self.layout.is_some_and(|l| l.transition) {
+                self.write_wrapped(
+                    "TR = transition: 1 first error, 2 one error reset, 3 further error, 4 all reset",
+                    5,
+                )?;
+            }
         }
+        self.write_repeats()?;
         if input.nodes.is_empty() {
             self.write_bus_line(input)?;
             return writeln!(self.out);
@@ -702,32 +1173,40 @@ impl<W: Write> Sink for TableReport<W> {
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
-        let mut t = new_table(&[
-            "FILE",
-            "FORMAT",
-            "LINES",
-            "FRAMES",
-            "EMCY",
-            "BOOT",
-            "SKIPPED",
-            "MALFORMED",
-        ]);
-        for i in inputs {
-            let c = &i.counts;
-            t.add_row(vec![
-                printable(&i.file).into_owned(),
-                i.format.map_or("-", |f| f.name()).to_string(),
-                c.lines.to_string(),
-                c.frames.to_string(),
-                c.emcy.to_string(),
-                c.boot.to_string(),
-                c.skipped.to_string(),
-                c.malformed.to_string(),
-            ]);
+        let rows: Vec<[String; 8]> = inputs
+            .iter()
+            .map(|i| {
+                let c = &i.counts;
+                [
+                    printable(&i.file).into_owned(),
+                    i.format.map_or("-", |f| f.name()).to_string(),
+                    c.lines.to_string(),
+                    c.frames.to_string(),
+                    c.emcy.to_string(),
+                    c.boot.to_string(),
+                    c.skipped.to_string(),
+                    c.malformed.to_string(),
+                ]
+            })
+            .collect();
+        let mut widths = INPUTS_HEADER.map(str::len);
+        for row in &rows {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
         }
-        right_align(&mut t, &[2, 3, 4, 5, 6, 7]);
+        let shown = self.fit(&mut widths, &INPUTS_HEADER, &INPUTS_FIT);
         writeln!(self.out, "{}", self.paint(BOLD, "Inputs"))?;
-        write_table(&mut self.out, &t)?;
+        write_row(
+            &mut self.out,
+            &INPUTS_HEADER,
+            &widths,
+            &shown,
+            &INPUTS_RIGHT,
+        )?;
+        for row in &rows {
+            write_row(&mut self.out, row, &widths, &shown, &INPUTS_RIGHT)?;
+        }
         self.out.flush()
     }
 }
@@ -786,6 +1265,12 @@ const NODES_HEADER: [&str; 11] = [
 const NODES_RIGHT: [bool; 11] = [
     false, true, true, false, false, false, false, true, false, false, false,
 ];
+/// First and last EMCY are in the events above, the profile is the
+/// description's; the errors seen and the active ones are what the row is for.
+const NODES_FIT: Fit = Fit {
+    drop: &[9, 10, 6, 8, 7, 2],
+    flex: &[(5, 40, 14), (4, 24, 8), (0, CHANNEL_MAX, 7)],
+};
 
 /// Fills the cells of one node row; returns their display widths.
 fn node_cells(
@@ -869,6 +1354,71 @@ const TIMELINE_HEADER: [&str; 8] = [
     "CLEARED BY",
 ];
 const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
+/// The end is the start plus the duration.
+const TIMELINE_FIT: Fit = Fit {
+    drop: &[7, 5],
+    flex: &[(3, 40, 12), (0, CHANNEL_MAX, 7)],
+};
+const INPUTS_HEADER: [&str; 8] = [
+    "FILE",
+    "FORMAT",
+    "LINES",
+    "FRAMES",
+    "EMCY",
+    "BOOT",
+    "SKIPPED",
+    "MALFORMED",
+];
+const INPUTS_RIGHT: [bool; 8] = [false, false, true, true, true, true, true, true];
+const INPUTS_FIT: Fit = Fit {
+    drop: &[5, 6, 2],
+    flex: &[(0, 60, 12)],
+};
+
+/// How a table gives way to a terminal's width: columns are dropped, least
+/// useful first, then the flexible ones cut (an ellipsis marks a cut cell).
+struct Fit {
+    drop: &'static [usize],
+    /// Column, width kept before any column is dropped, narrowest width.
+    flex: &'static [(usize, usize, usize)],
+}
+
+fn fit_columns(widths: &mut [usize], shown: &mut [bool], header: &[&str], fit: &Fit, width: usize) {
+    let total = |widths: &[usize], shown: &[bool]| {
+        let (sum, n) = widths
+            .iter()
+            .zip(shown)
+            .filter(|(_, s)| **s)
+            .fold((0usize, 0usize), |(sum, n), (w, _)| (sum + w, n + 1));
+        sum + 2 * n.saturating_sub(1)
+    };
+    let least = |i: usize, min: usize| min.max(header.get(i).map_or(0, |h| h.len()));
+    for &(i, keep, min) in fit.flex {
+        if let Some(w) = widths.get_mut(i) {
+            *w = (*w).min(keep.max(least(i, min)));
+        }
+    }
+    for &d in fit.drop {
+        if total(widths, shown) <= width {
+            return;
+        }
+        if let Some(s) = shown.get_mut(d) {
+            *s = false;
+        }
+    }
+    // The widest flexible column gives a column at a time.
+    while total(widths, shown) > width {
+        let widest = fit
+            .flex
+            .iter()
+            .filter(|&&(i, _, min)| widths.get(i).is_some_and(|w| *w > least(i, min)))
+            .max_by_key(|&&(i, _, _)| widths.get(i).copied().unwrap_or(0));
+        match widest.and_then(|&(i, _, _)| widths.get_mut(i)) {
+            Some(w) => *w -= 1,
+            None => break,
+        }
+    }
+}
 
 /// Fills the cells of one error timeline row; returns their display widths.
 fn timeline_cells(
@@ -935,6 +1485,54 @@ fn timeline_cells(
     widths
 }
 
+/// The timeline's column widths (`None`: no rows), measured without
+/// writing the rows: the first of two passes over millions of errors, it
+/// cost as much as writing them.
+fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option<[usize; 8]>> {
+    let mut widths = TIMELINE_HEADER.map(str::len);
+    let mut any = false;
+    let mut merge = input.history.merge();
+    let mut scratch = Vec::with_capacity(32);
+    for n in &input.nodes {
+        let texts = NodeTexts::of(n);
+        let channel = display_width(&printable(&n.channel));
+        let node = itoa::Buffer::new().format(n.node).len();
+        for iv in merge.node_errors(&n.channel, n.node) {
+            any = true;
+            let end_time = iv.end.and_then(|e| e.time);
+            let line_width = |line: u64| 5 + itoa::Buffer::new().format(line).len();
+            let start = match iv.start.time {
+                Some(t) => times.width(t),
+                None => line_width(iv.start.line),
+            };
+            let (end, duration) = match (iv.end, iv.start.time, end_time) {
+                (None, _, _) => ("active".len(), 1),
+                (Some(_), Some(s), Some(e)) => {
+                    scratch.clear();
+                    e.push_since(s, &mut scratch);
+                    (times.width(e), scratch.len())
+                }
+                (Some(e), _, _) => (line_width(e.line), 1),
+            };
+            let cleared_by = iv.cleared_by.map_or(1, |c| c.slug().len());
+            let row = [
+                channel,
+                node,
+                6,
+                texts.get(iv.code).1,
+                start,
+                end,
+                duration,
+                cleared_by,
+            ];
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(c);
+            }
+        }
+    }
+    merge.take_error().map_or(Ok(any.then_some(widths)), Err)
+}
+
 /// Calls `row` for every error of the selected nodes, in report order,
 /// with the cells' display widths.
 fn for_each_timeline_row(
@@ -960,87 +1558,68 @@ fn push_row(
     cells: &[String],
     cell_widths: &[usize],
     widths: &[usize],
+    shown: &[bool],
     right: &[bool],
 ) {
-    const BLANKS: &str = "                                                                ";
-    fn pad(line: &mut String, mut n: usize) {
-        while n > 0 {
-            let k = n.min(BLANKS.len());
-            line.push_str(BLANKS.get(..k).unwrap_or_default());
-            n -= k;
-        }
-    }
     line.clear();
     for (i, cell) in cells.iter().enumerate() {
-        let n = widths
-            .get(i)
-            .copied()
-            .unwrap_or(0)
-            .saturating_sub(cell_widths.get(i).copied().unwrap_or(0));
-        if right.get(i).copied().unwrap_or(false) {
-            pad(line, n);
-            line.push_str(cell);
-        } else {
-            line.push_str(cell);
-            pad(line, n);
+        if !shown.get(i).copied().unwrap_or(true) {
+            continue;
         }
-        line.push_str("  ");
+        let width = widths.get(i).copied().unwrap_or(0);
+        let cell_width = cell_widths.get(i).copied().unwrap_or(0);
+        push_cell(
+            line,
+            cell,
+            cell_width,
+            width,
+            right.get(i).copied().unwrap_or(false),
+        );
     }
     let trimmed = line.trim_end().len();
     line.truncate(trimmed);
     line.push('\n');
 }
 
+/// A cell padded to its column (cut to it when fitting), then the two
+/// blanks between columns.
+fn push_cell(line: &mut String, cell: &str, cell_width: usize, width: usize, right: bool) {
+    if cell_width > width {
+        push_cut(line, cell, width);
+    } else if right {
+        line.push_str(&blanks(width - cell_width));
+        line.push_str(cell);
+    } else {
+        line.push_str(cell);
+        line.push_str(&blanks(width - cell_width));
+    }
+    line.push_str("  ");
+}
+
 /// One aligned row: cells padded to their column, two blanks between
-/// columns, no trailing blanks (the same layout as the comfy-table tables).
+/// columns, no trailing blanks.
 fn write_row(
     out: &mut impl Write,
     cells: &[impl AsRef<str>],
     widths: &[usize],
+    shown: &[bool],
     right: &[bool],
 ) -> io::Result<()> {
+    let cell_widths: Vec<usize> = cells.iter().map(|c| display_width(c.as_ref())).collect();
     let mut line = String::new();
     for (i, cell) in cells.iter().enumerate() {
-        let cell = cell.as_ref();
-        let pad = widths
-            .get(i)
-            .copied()
-            .unwrap_or(0)
-            .saturating_sub(display_width(cell));
-        if right.get(i).copied().unwrap_or(false) {
-            line.extend(std::iter::repeat_n(' ', pad));
-            line.push_str(cell);
-        } else {
-            line.push_str(cell);
-            line.extend(std::iter::repeat_n(' ', pad));
+        if !shown.get(i).copied().unwrap_or(true) {
+            continue;
         }
-        line.push_str("  ");
+        let width = widths.get(i).copied().unwrap_or(0);
+        let cell_width = cell_widths.get(i).copied().unwrap_or(0);
+        push_cell(
+            &mut line,
+            cell.as_ref(),
+            cell_width,
+            width,
+            right.get(i).copied().unwrap_or(false),
+        );
     }
     writeln!(out, "{}", line.trim_end())
-}
-
-fn new_table(header: &[&str]) -> Table {
-    let mut t = Table::new();
-    t.load_style(presets::NOTHING);
-    t.set_header(header.to_vec());
-    for c in t.column_iter_mut() {
-        c.set_padding((0, 2));
-    }
-    t
-}
-
-/// comfy-table pads every cell; trailing blanks make golden files noisy.
-fn write_table(out: &mut impl Write, table: &Table) -> io::Result<()> {
-    for line in table.lines() {
-        writeln!(out, "{}", line.trim_end())?;
-    }
-    Ok(())
-}
-
-fn right_align(t: &mut Table, columns: &[usize]) {
-    for &i in columns {
-        if let Some(c) = t.column_mut(i) {
-            c.set_cell_alignment(CellAlignment::Right);
-        }
-    }
 }

@@ -103,6 +103,27 @@ impl TimeFormat {
         out.push_str(std::str::from_utf8(text).unwrap_or_default());
     }
 
+    /// The columns [`TimeFormat::show`] takes for `t`, counted without
+    /// writing it where the style allows (ISO-8601 UTC: a fixed shape).
+    pub fn width(&self, t: Timestamp) -> usize {
+        /// 9999-12-31T23:59:59Z: the last second the calendar writes.
+        const LAST_ISO_SECOND: u64 = 253_402_300_799;
+        let iso = match self.style {
+            TimeStyle::Iso => true,
+            TimeStyle::Auto => t.secs() >= UNIX_FROM,
+            _ => false,
+        };
+        if iso && t.secs() <= LAST_ISO_SECOND {
+            let (_, _, digits) = t.to_raw();
+            let digits = usize::from(digits).min(crate::trace::time::MAX_FRACTION_DIGITS);
+            // `YYYY-MM-DDTHH:MM:SS`, `.` and the digits, `Z`.
+            return 19 + if digits == 0 { 0 } else { digits + 1 } + 1;
+        }
+        let mut s = String::new();
+        self.push(&mut s, t);
+        s.len()
+    }
+
     /// [`TimeFormat::push`], `-` for no time.
     pub fn push_opt(&self, out: &mut String, t: Option<Timestamp>) {
         match t {
@@ -180,6 +201,33 @@ pub(crate) fn calendar_second(secs: u64) -> Option<[u8; 19]> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn widths_are_the_shown_lengths() {
+        let times = [
+            "1700000001.250000",
+            "1700000001",
+            "1700000001.123456789",
+            "1700000001.5",
+            "12.5",
+            "999999999.000",
+            "253402300799.1",
+            "253402300800.1",
+            "99999999999999.123",
+        ];
+        for style in [
+            TimeStyle::Auto,
+            TimeStyle::Absolute,
+            TimeStyle::Relative,
+            TimeStyle::Iso,
+        ] {
+            let mut f = TimeFormat::new(style);
+            f.set_origin(Some(ts("1.0")));
+            for t in times {
+                assert_eq!(f.width(ts(t)), f.show(ts(t)).len(), "{style:?} {t}");
+            }
+        }
+    }
 
     #[test]
     fn local_times_carry_the_zone_offset_of_their_instant() {

@@ -35,5 +35,6 @@ mod output;
 mod pcap;
 mod readme;
 mod roundtrip;
+mod table;
 mod timestamps;
 mod trc;
