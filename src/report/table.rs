@@ -2,6 +2,7 @@
 //! with fixed columns, so a trace with a million events prints without holding
 //! them), then the node states and error timeline; at the end the input counts.
 
+use comfy_table::{CellAlignment, Table, presets};
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::{self, Write};
@@ -1197,16 +1198,14 @@ impl<W: Write> Sink for TableReport<W> {
         }
         let shown = self.fit(&mut widths, &INPUTS_HEADER, &INPUTS_FIT);
         writeln!(self.out, "{}", self.paint(BOLD, "Inputs"))?;
-        write_row(
+        write_comfy_table(
             &mut self.out,
             &INPUTS_HEADER,
+            &rows,
             &widths,
             &shown,
             &INPUTS_RIGHT,
         )?;
-        for row in &rows {
-            write_row(&mut self.out, row, &widths, &shown, &INPUTS_RIGHT)?;
-        }
         self.out.flush()
     }
 }
@@ -1550,6 +1549,48 @@ fn for_each_timeline_row(
         }
     }
     merge.take_error().map_or(Ok(()), Err)
+}
+
+/// A small table (one row per input) laid out by comfy-table, the
+/// project's table crate: the shown columns, cells cut to the widths a
+/// terminal left them (see [`fit_columns`]), two blanks between columns and
+/// no trailing blanks. The per-event rows are written by hand instead: they
+/// stream, and a table crate would hold them all.
+fn write_comfy_table<const N: usize>(
+    out: &mut impl Write,
+    header: &[&str; N],
+    rows: &[[String; N]],
+    widths: &[usize; N],
+    shown: &[bool; N],
+    right: &[bool; N],
+) -> io::Result<()> {
+    let columns: Vec<usize> = (0..N).filter(|&i| shown[i]).collect();
+    let mut table = Table::new();
+    table.load_style(presets::NOTHING);
+    table.set_header(columns.iter().map(|&i| header[i]).collect::<Vec<_>>());
+    for row in rows {
+        table.add_row(columns.iter().map(|&i| {
+            let cell = &row[i];
+            if display_width(cell) > widths[i] {
+                let mut cut = String::new();
+                push_cut(&mut cut, cell, widths[i]);
+                cut
+            } else {
+                cell.clone()
+            }
+        }));
+    }
+    for (column, &i) in table.column_iter_mut().zip(&columns) {
+        column.set_padding((0, 2));
+        if right[i] {
+            column.set_cell_alignment(CellAlignment::Right);
+        }
+    }
+    // comfy-table pads every cell; trailing blanks make golden files noisy.
+    for line in table.lines() {
+        writeln!(out, "{}", line.trim_end())?;
+    }
+    Ok(())
 }
 
 /// [`write_row`] into `line` (cleared first), with the cells' widths known.
