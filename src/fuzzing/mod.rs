@@ -988,6 +988,7 @@ pub fn decode_timeline(data: &[u8]) {
             nmt_state: None,
             heartbeat: None,
             error_history: None,
+            axis: None,
         })
         .collect();
     let report = InputReport {

@@ -17,6 +17,7 @@ use crate::canopen::NodeId;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::text::printable;
 use crate::timeline::Interval;
+use crate::timeline::axis::Via as AxisVia;
 use crate::trace::Timestamp;
 use unicode_width::UnicodeWidthStr;
 
@@ -634,6 +635,9 @@ impl<W: Write> Sink for TableReport<W> {
             Health::HeartbeatBack { .. } => ("back", Some(GREEN)),
             Health::SdoAbort { .. } => ("abort", Some(YELLOW)),
             Health::ErrorHistory(_) | Health::ErrorHistoryCleared => ("1003h", None),
+            Health::AxisState { state, .. } if state.is_fault() => ("axis", Some(RED)),
+            Health::AxisState { .. } => ("axis", None),
+            Health::FaultReset { .. } => ("reset", Some(GREEN)),
         };
         let indent = Self::description_indent(l) - (l.time + 2 + l.channel + 2 + 6);
         let tag = format!("{tag:<6}");
@@ -767,6 +771,31 @@ pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String 
         ),
         Health::ErrorHistory(h) => history_head(h),
         Health::ErrorHistoryCleared => "error history cleared".to_string(),
+        Health::AxisState {
+            state,
+            from,
+            statusword,
+            via,
+        } => {
+            let source = match via {
+                AxisVia::Pdo { cob_id } => format!("PDO 0x{cob_id:03X}"),
+                AxisVia::Sdo => "SDO".to_string(),
+            };
+            match from {
+                Some(f) => format!(
+                    "axis {} -> {} (statusword 0x{statusword:04X}, {source})",
+                    f.slug(),
+                    state.slug()
+                ),
+                None => format!(
+                    "axis {} (statusword 0x{statusword:04X}, {source})",
+                    state.slug()
+                ),
+            }
+        }
+        Health::FaultReset { controlword } => {
+            format!("fault reset (controlword 0x{controlword:04X})")
+        }
     }
 }
 

@@ -8,10 +8,6 @@
 //! back to the caller, as [`super::NodeTimeline`] hands back intervals: the
 //! axis keeps only the open one, so its memory is constant.
 
-// The pipeline (issue 19) calls this next; until then nothing does. Remove
-// when it is wired, so dead code shows again.
-#![allow(dead_code)]
-
 use super::At;
 use crate::canopen::cia402::{self, Command, State};
 use crate::trace::{Span, Timestamp};
@@ -336,6 +332,82 @@ impl Axis {
     /// state add up to.
     pub fn span(&self) -> Option<Span> {
         Some(self.last_time?.since(self.first_time?))
+    }
+}
+
+/// Closed faults a node keeps for its report; later ones are only counted
+/// ([`Axis::fault_count`]): a drive flapping in and out of fault for hours
+/// must not grow memory without bound.
+pub const MAX_FAULTS_KEPT: usize = 1000;
+
+/// How near (before or after) the fault's entry an EMCY of the same node
+/// must be to count as the one that came with it: drives send the EMCY
+/// within a cycle or two of the statusword, 1 s leaves room for slow ones
+/// and busy buses without pairing unrelated events.
+const EMCY_NEAR_MILLIS: u64 = 1000;
+
+/// One node's axis with what the report needs of it: the closed faults and
+/// the last EMCY (to pair with a fault entered just after it).
+#[derive(Clone, Debug, Default)]
+pub struct AxisRecord {
+    pub axis: Axis,
+    /// Closed faults, oldest first (the first [`MAX_FAULTS_KEPT`]).
+    pub faults: Vec<Fault>,
+    /// The node's last error EMCY: when, and its code.
+    last_emcy: Option<(Timestamp, u16)>,
+}
+
+/// Whether two times are within [`EMCY_NEAR_MILLIS`] of each other.
+fn near(a: Timestamp, b: Timestamp) -> bool {
+    let gap = if a >= b { a.since(b) } else { b.since(a) };
+    gap.as_f64() * 1000.0 <= EMCY_NEAR_MILLIS as f64
+}
+
+impl AxisRecord {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Feeds a statusword (see [`Axis::statusword`]); a fault it closes is
+    /// kept, a fault it opens gets the EMCY sent just before it.
+    pub fn statusword(&mut self, at: At, statusword: u16, via: Via) -> Option<Change> {
+        let mut change = self.axis.statusword(at, statusword, via)?;
+        if let Some(f) = change.closed_fault.take() {
+            self.keep(f.clone());
+            change.closed_fault = Some(f);
+        }
+        if change.opened_fault
+            && let (Some((t, code)), Some(now)) = (self.last_emcy, at.time)
+            && near(t, now)
+        {
+            self.axis.attach_emcy(code);
+        }
+        Some(change)
+    }
+
+    /// An error EMCY of the node (not a reset): attached to the open fault
+    /// if it came near the fault's entry, else remembered for the next one.
+    pub fn emcy(&mut self, at: At, code: u16) {
+        if let Some(t) = at.time {
+            self.last_emcy = Some((t, code));
+        }
+        let start = self.axis.open_fault().and_then(|f| f.start.time);
+        if let (Some(start), Some(now)) = (start, at.time)
+            && near(start, now)
+        {
+            self.axis.attach_emcy(code);
+        }
+    }
+
+    fn keep(&mut self, f: Fault) {
+        if self.faults.len() < MAX_FAULTS_KEPT {
+            self.faults.push(f);
+        }
+    }
+
+    /// Every fault, closed ones then the open one.
+    pub fn all_faults(&self) -> impl Iterator<Item = &Fault> + '_ {
+        self.faults.iter().chain(self.axis.open_fault())
     }
 }
 
