@@ -819,6 +819,11 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         if !self.interest.wants(frame.id, frame.extended) {
             return Ok(());
         }
+        // A drive's PDO of unknown mapping is only noted: it moves no time,
+        // as when it was not wanted.
+        if self.watched(frame.id, frame.extended) {
+            return Ok(());
+        }
         if let Some(t) = frame.time {
             self.time(t);
             if self.health.passed(t) {
@@ -838,9 +843,6 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         let data = frame.data.as_slice();
         if let Some(slot) = self.drives.slot(frame.id, frame.extended) {
             return self.pdo(frame.channel, at, frame.id, slot, data);
-        }
-        if self.watched(frame.id, frame.extended) {
-            return Ok(());
         }
         if let Some(node) = self.emcy_node(frame.id, frame.extended) {
             self.emcy(at, frame.channel, node, Some(frame.id), data)?;

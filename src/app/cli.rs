@@ -163,7 +163,7 @@ pub struct DecodeArgs {
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
     /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), a node
-    /// `lost` its heartbeat, `never`
+    /// `lost` its heartbeat, a CiA 402 drive entered `fault`, `never`
     #[arg(long, value_parser = parse_fail_on, value_name = "WHEN", help_heading = CI)]
     pub fail_on: Vec<FailOn>,
 
@@ -780,13 +780,14 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             "active" => f.active = true,
             "warning" | "warnings" => f.warning = true,
             "lost" => f.lost = true,
+            "fault" | "faults" => f.fault = true,
             _ if in_codes => {
                 f.codes.push(fail_on_code(item)?);
                 continue;
             }
             _ => {
                 return Err(format!(
-                    "'{item}' is not a condition: never, any, active, warning, lost, \
+                    "'{item}' is not a condition: never, any, active, warning, lost, fault, \
                      code=CODE[,CODE...], category<=N"
                 ));
             }

@@ -49,6 +49,10 @@ pub enum Kind {
     HeartbeatLostNew,
     /// The baseline's node lost its heartbeat; now it does not.
     HeartbeatLostGone,
+    /// The node's CiA 402 axis faulted more often than in the baseline.
+    AxisFaultNew,
+    /// The baseline's axis faulted; now it does not.
+    AxisFaultGone,
 }
 
 impl Kind {
@@ -61,12 +65,14 @@ impl Kind {
             | Kind::NewNode
             | Kind::NewError
             | Kind::NowActive
-            | Kind::HeartbeatLostNew => Severity::Regression,
+            | Kind::HeartbeatLostNew
+            | Kind::AxisFaultNew => Severity::Regression,
             Kind::MalformedFell
             | Kind::EmcyInvalidFell
             | Kind::ErrorGone
             | Kind::NowCleared
-            | Kind::HeartbeatLostGone => Severity::Improvement,
+            | Kind::HeartbeatLostGone
+            | Kind::AxisFaultGone => Severity::Improvement,
             Kind::FormatChanged
             | Kind::NewNodeWithoutErrors
             | Kind::NodeGone
@@ -314,6 +320,29 @@ fn compare_node(
         c.add(
             at,
             Kind::HeartbeatLostGone,
+            None,
+            (Some(now), Some(was)),
+            false,
+            msg,
+        );
+    }
+    let faults = |e: Option<&NodeEntry>| e.map_or(0, |e| e.axis_faults);
+    let (was, now) = (faults(old), faults(new));
+    if now > was {
+        let msg = format!("axis faulted {now}x, baseline {was}x");
+        c.add(
+            at,
+            Kind::AxisFaultNew,
+            None,
+            (Some(now), Some(was)),
+            false,
+            msg,
+        );
+    } else if now == 0 && was > 0 && new.is_some() {
+        let msg = format!("axis no longer faults (baseline {was}x)");
+        c.add(
+            at,
+            Kind::AxisFaultGone,
             None,
             (Some(now), Some(was)),
             false,

@@ -10,7 +10,7 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
-    BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport, NodeReport,
+    AxisReport, BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport, NodeReport,
     Sink,
 };
 use crate::canopen::NodeId;
@@ -133,6 +133,48 @@ impl<W: Write> TableReport<W> {
             self.out.write_all(line.as_bytes())?;
         }
         Ok(())
+    }
+
+    /// The CiA 402 drives' axes (none: no section): state at the end,
+    /// faults, where the mapping came from, and the summary's sentence.
+    /// Drives are few: one comfy table.
+    fn write_axes(&mut self, input: &InputReport) -> io::Result<()> {
+        let axes: Vec<(&NodeReport, &AxisReport)> = input
+            .nodes
+            .iter()
+            .filter_map(|n| n.axis.as_deref().map(|a| (n, a)))
+            .collect();
+        if axes.is_empty() {
+            return Ok(());
+        }
+        let mut t = new_table(&[
+            "CHANNEL", "NODE", "AXIS AT END", "FAULTS", "RESETS", "MAPPING", "SUMMARY",
+        ]);
+        for (n, a) in axes {
+            let mapping: Vec<String> = a
+                .mappings
+                .iter()
+                .map(|m| format!("0x{:03X} {}", m.cob_id.id, m.source.slug()))
+                .collect();
+            t.add_row(vec![
+                printable(&n.channel).into_owned(),
+                n.node.to_string(),
+                a.state.map_or("-", |s| s.slug()).to_string(),
+                a.fault_count.to_string(),
+                a.fault_resets.to_string(),
+                if mapping.is_empty() {
+                    "-".to_string()
+                } else {
+                    mapping.join(", ")
+                },
+                a.fault_summary()
+                    .unwrap_or_else(|| "never faulted".to_string()),
+            ]);
+        }
+        right_align(&mut t, &[1, 3, 4]);
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Drive axes (CiA 402)"))?;
+        write_table(&mut self.out, &t)
     }
 
     /// The bus-level line: frames, EMCY rate, nodes with errors.
@@ -679,6 +721,7 @@ impl<W: Write> Sink for TableReport<W> {
             if !input.nodes.is_empty() {
                 self.write_nodes(input)?;
                 self.write_health(input)?;
+                self.write_axes(input)?;
             }
             self.write_bus_line(input)?;
             return writeln!(self.out);
@@ -698,6 +741,7 @@ impl<W: Write> Sink for TableReport<W> {
         writeln!(self.out)?;
         self.write_nodes(input)?;
         self.write_health(input)?;
+        self.write_axes(input)?;
 
         self.write_timeline(input)?;
         writeln!(self.out)?;

@@ -24,6 +24,11 @@ use crate::trace::Interest;
 /// Standard CAN ids: the per-PDO lookup is an index into this many slots.
 const STANDARD_IDS: usize = 0x800;
 
+/// Undecoded PDOs of a drive that make the note: a cyclic state stream
+/// (ten frames are 10-100 ms of one), not the odd PDO of a trace recorded
+/// for its EMCYs, which would make every such trace say it.
+const UNMAPPED_NOTE_AT: u64 = 10;
+
 /// Profile number of CiA 402 in the low 16 bits of the device type (0x1000).
 const CIA402_PROFILE: u32 = 402;
 
@@ -46,8 +51,8 @@ pub(in crate::analyze) struct Drives {
     /// TPDO ids of CiA 402 drives (device type 402) with no known mapping,
     /// watched for the note that says how to give one.
     watched: BTreeMap<u32, NodeId>,
-    /// Drives whose PDOs went by undecoded, with the first such id.
-    unmapped: BTreeMap<NodeId, u32>,
+    /// Drives whose PDOs went by undecoded: the first such id, how many.
+    unmapped: BTreeMap<NodeId, (u32, u64)>,
 }
 
 impl Drives {
@@ -244,7 +249,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         let Some(&node) = self.drives.watched.get(&id) else {
             return false;
         };
-        self.drives.unmapped.entry(node).or_insert(id);
+        self.drives.unmapped.entry(node).or_insert((id, 0)).1 += 1;
         true
     }
 
@@ -333,8 +338,8 @@ impl<E: Write> Consumer<'_, '_, E> {
             .drives
             .unmapped
             .iter()
-            .filter(|(n, _)| !self.drives.has_tpdo(**n))
-            .map(|(n, id)| (*n, *id))
+            .filter(|(n, (_, count))| *count >= UNMAPPED_NOTE_AT && !self.drives.has_tpdo(**n))
+            .map(|(n, (id, _))| (*n, *id))
             .collect();
         if let Some(&(node, id)) = unmapped.first() {
             let list: Vec<String> = unmapped
