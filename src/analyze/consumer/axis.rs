@@ -107,6 +107,10 @@ impl Drives {
                 *s = Some(slot);
             }
         }
+        // A watched id that a mapping now decodes is no longer unknown.
+        let by_id = &self.by_id;
+        self.watched
+            .retain(|&id, _| by_id.get(id as usize).is_none_or(Option::is_none));
     }
 
     /// The slot of a frame's id: the per-frame call (one index for
