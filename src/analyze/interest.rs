@@ -5,8 +5,8 @@
 use super::Options;
 use crate::canopen::cia402;
 use crate::canopen::emcy;
-use crate::canopen::pdo;
 use crate::canopen::nmt;
+use crate::canopen::pdo;
 use crate::canopen::sdo;
 use crate::trace::{ContentFilter, Frame, Interest};
 

@@ -48,8 +48,8 @@ use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub(crate) use diagnostics::DiagnosticLog;
 pub(crate) use event::{
-    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
-    InputReport, NodeReport,
+    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
+    HistoryReport, InputReport, NodeReport,
 };
 pub(crate) use sink::{Discard, Sink, WithoutEvents};
 

@@ -474,7 +474,8 @@ impl DriveArgs {
             opts.pdo.extend(spec.mappings.iter().cloned());
         }
         for (node, path) in &self.dcf {
-            let dcf = crate::canopen::dcf::load(path, *node).map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
+            let dcf =
+                crate::canopen::dcf::load(path, *node).map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
             if dcf.mappings.is_empty() && dcf.vendor_id.is_none() {
                 bail!(
                     "--dcf {}: no PDO mapping and no identity in it: not a DCF or EDS file{}",

@@ -452,7 +452,50 @@ mod tests {
                 })
                 .collect(),
             heartbeat_lost: 0,
+            axis_faults: 0,
         }
+    }
+
+    fn faulted(n: u64) -> NodeEntry {
+        NodeEntry {
+            axis_faults: n,
+            ..node(&[])
+        }
+    }
+
+    #[test]
+    fn more_axis_faults_than_the_baseline_regress_none_improve() {
+        let old = one(&[
+            (1, node(&[])),
+            (2, faulted(1)),
+            (3, faulted(2)),
+            (5, faulted(2)),
+        ]);
+        let new = one(&[
+            (1, faulted(1)),
+            (2, node(&[])),
+            (3, faulted(2)),
+            (5, faulted(3)),
+        ]);
+        let diff = compare(&old, &new, &Allow::default());
+        let found: Vec<(Option<NodeId>, Kind)> = diff
+            .findings
+            .iter()
+            .filter(|f| matches!(f.kind, Kind::AxisFaultNew | Kind::AxisFaultGone))
+            .map(|f| (f.node, f.kind))
+            .collect();
+        assert_eq!(
+            found,
+            [
+                (Some(1), Kind::AxisFaultNew),
+                (Some(2), Kind::AxisFaultGone),
+                (Some(5), Kind::AxisFaultNew),
+            ]
+        );
+        assert_eq!(
+            serde_json::to_value(Kind::AxisFaultNew).ok(),
+            Some(serde_json::json!("axis_fault_new"))
+        );
     }
 
     fn lost(n: u64) -> NodeEntry {

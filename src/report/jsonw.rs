@@ -13,15 +13,15 @@ use std::sync::Arc;
 
 use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::{
-    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
-    InputReport, NodeReport,
+    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
+    HistoryReport, InputReport, NodeReport,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::emcy::Warning;
+use crate::canopen::pdo::{Direction, Mapped};
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
-use crate::canopen::pdo::{Direction, Mapped};
 use crate::timeline::axis::Via as AxisVia;
 use crate::trace::time::SecondsText;
 use crate::trace::{Format, Span, Timestamp};

@@ -10,8 +10,8 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
-    AxisReport, BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport, NodeReport,
-    Sink,
+    AxisReport, BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport,
+    NodeReport, Sink,
 };
 use crate::canopen::NodeId;
 use crate::canopen::profile::{Decoded, FieldValue};
@@ -148,7 +148,13 @@ impl<W: Write> TableReport<W> {
             return Ok(());
         }
         let mut t = new_table(&[
-            "CHANNEL", "NODE", "AXIS AT END", "FAULTS", "RESETS", "MAPPING", "SUMMARY",
+            "CHANNEL",
+            "NODE",
+            "AXIS AT END",
+            "FAULTS",
+            "RESETS",
+            "MAPPING",
+            "SUMMARY",
         ]);
         for (n, a) in axes {
             let mapping: Vec<String> = a

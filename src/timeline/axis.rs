@@ -690,3 +690,60 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod record_tests {
+    use super::*;
+
+    const PDO: Via = Via::Pdo { cob_id: 0x185 };
+
+    fn at_ms(ms: u64) -> At {
+        At {
+            time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
+            line: ms,
+        }
+    }
+
+    #[test]
+    fn an_emcy_just_before_or_after_the_fault_is_its_emcy() {
+        // Before: the EMCY 2 ms ahead of the statusword.
+        let mut r = AxisRecord::new();
+        r.statusword(at_ms(0), 0x0237, PDO);
+        r.emcy(at_ms(998), 0x7305);
+        r.statusword(at_ms(1000), 0x0238, PDO);
+        assert_eq!(r.axis.open_fault().and_then(|f| f.emcy_code), Some(0x7305));
+        // After: the first one attached stays.
+        let mut r = AxisRecord::new();
+        r.statusword(at_ms(0), 0x0237, PDO);
+        r.statusword(at_ms(1000), 0x0238, PDO);
+        r.emcy(at_ms(1001), 0x2310);
+        r.emcy(at_ms(1002), 0x7305);
+        assert_eq!(r.axis.open_fault().and_then(|f| f.emcy_code), Some(0x2310));
+        // Closed, it is kept with its EMCY.
+        let c = r.statusword(at_ms(1500), 0x0250, PDO).expect("change");
+        assert_eq!(c.closed_fault.and_then(|f| f.emcy_code), Some(0x2310));
+        assert_eq!(r.faults.len(), 1);
+    }
+
+    #[test]
+    fn an_emcy_far_from_the_fault_is_not_its_emcy() {
+        let mut r = AxisRecord::new();
+        r.statusword(at_ms(0), 0x0237, PDO);
+        r.emcy(at_ms(100), 0x7305);
+        r.statusword(at_ms(5000), 0x0238, PDO);
+        r.emcy(at_ms(9000), 0x2310);
+        assert_eq!(r.axis.open_fault().map(|f| f.emcy_code), Some(None));
+        assert_eq!(r.all_faults().count(), 1);
+    }
+
+    #[test]
+    fn closed_faults_kept_are_bounded_and_all_counted() {
+        let mut r = AxisRecord::new();
+        for i in 0..(MAX_FAULTS_KEPT as u64 + 5) {
+            r.statusword(at_ms(i * 10), 0x0238, PDO);
+            r.statusword(at_ms(i * 10 + 5), 0x0250, PDO);
+        }
+        assert_eq!(r.faults.len(), MAX_FAULTS_KEPT);
+        assert_eq!(r.axis.fault_count(), MAX_FAULTS_KEPT as u64 + 5);
+    }
+}

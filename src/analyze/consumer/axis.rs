@@ -10,7 +10,7 @@ use std::io::Write;
 use super::Consumer;
 use super::health::emit;
 use crate::analyze::event::{AxisReport, Health};
-use crate::analyze::{OutputError, Options};
+use crate::analyze::{Options, OutputError};
 use crate::canopen::NodeId;
 use crate::canopen::cia402::{self, Command};
 use crate::canopen::pdo::{
@@ -150,7 +150,8 @@ impl Drives {
 
     /// Whether a node has a transmit PDO that decodes a word.
     fn has_tpdo(&self, node: NodeId) -> bool {
-        self.by_id.iter().flatten().any(|s| s.node == node) || self.extended.iter().any(|(_, s)| s.node == node)
+        self.by_id.iter().flatten().any(|s| s.node == node)
+            || self.extended.iter().any(|(_, s)| s.node == node)
     }
 
     /// The node's mappings in force, transmit first (for its report).
@@ -241,7 +242,15 @@ impl<E: Write> Consumer<'_, '_, E> {
     ) -> Result<(), OutputError> {
         let values = slot.fields.read(data);
         let via = Via::Pdo { cob_id };
-        self.axis_words(raw, slot.node, at, values.statusword, values.controlword, values.error_code, via)
+        self.axis_words(
+            raw,
+            slot.node,
+            at,
+            values.statusword,
+            values.controlword,
+            values.error_code,
+            via,
+        )
     }
 
     /// A frame on a watched id: a drive's PDO whose mapping is unknown.

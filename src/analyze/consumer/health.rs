@@ -623,5 +623,8 @@ pub(super) fn report_health(report: &mut NodeReport, health: Option<Box<NodeHeal
         .last_read_out
         .as_ref()
         .map(|r| history_report(r, |_| String::new()));
-    report.axis = h.axis.as_deref().map(|a| Box::new(super::axis::report_axis(a)));
+    report.axis = h
+        .axis
+        .as_deref()
+        .map(|a| Box::new(super::axis::report_axis(a)));
 }
