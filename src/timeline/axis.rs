@@ -328,6 +328,11 @@ impl Axis {
             })
     }
 
+    /// The time of the last timed statusword.
+    pub fn last_time(&self) -> Option<Timestamp> {
+        self.last_time
+    }
+
     /// From the first timed statusword to the last: what the times in
     /// state add up to.
     pub fn span(&self) -> Option<Span> {

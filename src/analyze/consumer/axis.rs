@@ -14,7 +14,7 @@ use crate::analyze::{Options, OutputError};
 use crate::canopen::NodeId;
 use crate::canopen::cia402::{self, Command};
 use crate::canopen::pdo::{
-    self, Cia402Fields, CobId, Downloads, Learner, Mapping, MappingTable, Source,
+    self, Cia402Fields, Cia402Values, CobId, Downloads, Learner, Mapping, MappingTable, Source,
 };
 use crate::canopen::sdo::{self, Sdo};
 use crate::timeline::At;
@@ -39,6 +39,17 @@ pub(in crate::analyze) struct PdoSlot {
     fields: Cia402Fields,
 }
 
+/// The last words a PDO id carried, and the time of the latest repeat of
+/// them not yet told to the axis: nearly every PDO repeats the one before
+/// (a drive sends its statusword every cycle), and a repeat changes nothing
+/// but the axis's last time, which is needed only at the end.
+#[derive(Clone, Debug)]
+struct Last {
+    channel: Box<[u8]>,
+    values: Cia402Values,
+    repeat: Option<At>,
+}
+
 /// Mappings and what the consumer derived from them.
 pub(in crate::analyze) struct Drives {
     table: MappingTable,
@@ -51,6 +62,9 @@ pub(in crate::analyze) struct Drives {
     /// TPDO ids of CiA 402 drives (device type 402) with no known mapping,
     /// watched for the note that says how to give one.
     watched: BTreeMap<u32, NodeId>,
+    /// The last words of each standard id decoded (29-bit ids are rare:
+    /// not cached).
+    last: Vec<Option<Last>>,
     /// Drives whose PDOs went by undecoded: the first such id, how many.
     unmapped: BTreeMap<NodeId, (u32, u64)>,
 }
@@ -81,6 +95,7 @@ impl Drives {
             extended: Vec::new(),
             watched: BTreeMap::new(),
             unmapped: BTreeMap::new(),
+            last: vec![None; STANDARD_IDS],
         };
         d.rebuild();
         d
@@ -90,6 +105,9 @@ impl Drives {
     /// word we decode, of a known node.
     fn rebuild(&mut self) {
         self.by_id.iter_mut().for_each(|s| *s = None);
+        // Words cached under the old mappings may read otherwise now; their
+        // last repeats were told first (`Consumer::flush_repeats`).
+        self.last.iter_mut().for_each(|l| *l = None);
         self.extended.clear();
         let ids: Vec<CobId> = self.table.decoded_ids().collect();
         for cob in ids {
@@ -211,6 +229,7 @@ impl<E: Write> Consumer<'_, '_, E> {
             return;
         };
         let mapping = self.drives.learner.mapping(pdo);
+        self.flush_repeats();
         self.drives.table.learnt(pdo, mapping);
         self.drives.rebuild();
         self.widen_interest();
@@ -241,6 +260,21 @@ impl<E: Write> Consumer<'_, '_, E> {
         data: &[u8],
     ) -> Result<(), OutputError> {
         let values = slot.fields.read(data);
+        // A repeat on the same channel: only its time is kept.
+        if let Some(Some(last)) = self.drives.last.get_mut(cob_id as usize) {
+            if last.values == values && *last.channel == *raw {
+                last.repeat = Some(at);
+                return Ok(());
+            }
+            self.flush_repeat(cob_id, slot.node);
+        }
+        if let Some(l) = self.drives.last.get_mut(cob_id as usize) {
+            *l = Some(Last {
+                channel: raw.into(),
+                values,
+                repeat: None,
+            });
+        }
         let via = Via::Pdo { cob_id };
         self.axis_words(
             raw,
@@ -251,6 +285,34 @@ impl<E: Write> Consumer<'_, '_, E> {
             values.error_code,
             via,
         )
+    }
+
+    /// Tells the axis the last repeat of `cob_id`'s words (moves its last
+    /// time, changes nothing else), unless a later statusword already did.
+    fn flush_repeat(&mut self, cob_id: u32, node: NodeId) {
+        let Some(Some(last)) = self.drives.last.get_mut(cob_id as usize) else {
+            return;
+        };
+        let (Some(at), Some(word)) = (last.repeat.take(), last.values.statusword) else {
+            return;
+        };
+        let channel = last.channel.clone();
+        let slot = self.nodes.get(&channel, node);
+        let Some(rec) = slot.timeline.axis_mut() else {
+            return;
+        };
+        if at.time > rec.axis.last_time() {
+            rec.axis.statusword(at, word, Via::Pdo { cob_id });
+        }
+    }
+
+    /// Every id's last repeat told to its axis.
+    fn flush_repeats(&mut self) {
+        for id in 0..STANDARD_IDS as u32 {
+            if let Some(slot) = self.drives.slot(id, false) {
+                self.flush_repeat(id, slot.node);
+            }
+        }
     }
 
     /// A frame on a watched id: a drive's PDO whose mapping is unknown.
@@ -347,6 +409,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// and PDO configurations not kept.
     pub(super) fn finish_axes(&mut self) {
         let file = self.file;
+        self.flush_repeats();
         let unmapped: Vec<(NodeId, u32)> = self
             .drives
             .unmapped
