@@ -22,7 +22,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use tracegen::{
-    TraceFormat, write_drive_trace, write_ethercat, write_heartbeat_trace, write_mf4_dz, write_trace,
+    TraceFormat, write_drive_trace, write_ethercat, write_heartbeat_trace, write_mf4_dz,
+    write_trace,
 };
 
 /// The heartbeat case's label (and the word that picks it).
@@ -300,7 +301,10 @@ fn main() {
         if label == DRIVES {
             let assume = "--assume-cia402-pdo";
             cases.push(("ndjson axis", vec!["--format", "ndjson", assume, &f]));
-            cases.push(("ndjson -j1 axis", vec!["--format", "ndjson", "-j1", assume, &f]));
+            cases.push((
+                "ndjson -j1 axis",
+                vec!["--format", "ndjson", "-j1", assume, &f],
+            ));
         }
         for (case, args) in cases {
             let (t, peak) = measure(runs, &f, bin, &args);

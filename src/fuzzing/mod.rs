@@ -151,7 +151,11 @@ pub fn dcf(data: &[u8]) {
     assert!(parsed.problem_count >= parsed.problems.len() as u64);
     let lines = text.split(|&b| b == b'\n').count() as u64;
     for p in &parsed.problems {
-        assert!(p.line >= 1 && p.line <= lines, "problem on line {} of {lines}", p.line);
+        assert!(
+            p.line >= 1 && p.line <= lines,
+            "problem on line {} of {lines}",
+            p.line
+        );
     }
     let mut table = MappingTable::new();
     for m in &parsed.mappings {

@@ -327,3 +327,24 @@ fn the_summary_says_how_often_the_drive_faulted_and_how_it_ended() {
         "{stdout}"
     );
 }
+
+#[test]
+fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
+    let out = emcy_decode()
+        .args(["--format", "svg", COMMISSIONING])
+        .output()
+        .expect("runs");
+    let svg = String::from_utf8(out.stdout).expect("utf-8");
+    assert_eq!(svg.matches("<title>axis fault from").count(), 1, "{svg}");
+    assert!(
+        svg.contains("EMCY 0x7305, cleared by a fault reset at"),
+        "{svg}"
+    );
+    // A trace without an axis has no such band.
+    let out = emcy_decode()
+        .args(["--format", "svg", UNKNOWN])
+        .output()
+        .expect("runs");
+    let svg = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(!svg.contains("axis fault"), "{svg}");
+}
