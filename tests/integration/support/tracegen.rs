@@ -648,7 +648,7 @@ pub fn write_drive_trace<W: Write>(
     let mut fault_until = vec![0u64; drives as usize + 1];
     let mut position = vec![0u32; drives as usize + 1];
     let mut cycle: u64 = 0;
-    let mut frame = |line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]| {
+    let frame = |line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]| {
         line.clear();
         line.extend_from_slice(
             format!(
