@@ -9,7 +9,8 @@
 //! throughput -- pcapng`): `candump log`, `candump -td`, `Vector ASC`,
 //! `30% EMCY`, `gzip`, `pcapng` (both pcapng cases), `EtherCAT`,
 //! `BUSMASTER`, `MF4` (both MF4 cases), `MF4 DZ`, `heartbeating` (32
-//! nodes' heartbeats every 100 ms).
+//! nodes' heartbeats every 100 ms), `drives` (32 CiA 402 drives' TPDO1 at
+//! 1 kHz, with and without `--assume-cia402-pdo`).
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -20,10 +21,15 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use tracegen::{TraceFormat, write_ethercat, write_heartbeat_trace, write_mf4_dz, write_trace};
+use tracegen::{
+    TraceFormat, write_drive_trace, write_ethercat, write_heartbeat_trace, write_mf4_dz,
+    write_trace,
+};
 
 /// The heartbeat case's label (and the word that picks it).
 const HEARTBEATS: &str = "candump log, 32 nodes heartbeating";
+/// Issue 19's case: 32 CiA 402 drives' TPDO1 at 1 kHz.
+const DRIVES: &str = "candump log, 32 drives TPDO1 1 kHz";
 
 fn env_u64(name: &str, default: u64) -> u64 {
     std::env::var(name)
@@ -207,6 +213,19 @@ fn main() {
         drop(w);
         std::fs::rename(&tmp, &heartbeats).expect("rename");
     }
+    // Issue 19: 32 drives sending TPDO1 every millisecond (nearly every
+    // frame), measured with --assume-cia402-pdo (every PDO decoded) and
+    // without (the EMCY-only path, the PDOs only counted).
+    let drives = dir.join(format!("candump-drives32-{mb}MB.log"));
+    if chosen(DRIVES) && !drives.exists() {
+        eprintln!("generating {} ...", drives.display());
+        let tmp = drives.with_extension("tmp");
+        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp).expect("create"));
+        write_drive_trace(&mut w, mb * 1024 * 1024, 2, 42, 32).expect("write");
+        w.flush().expect("flush");
+        drop(w);
+        std::fs::rename(&tmp, &drives).expect("rename");
+    }
     if chosen("MF4 DZ") && !mf4_dz.exists() {
         eprintln!("generating {} ...", mf4_dz.display());
         let tmp = mf4_dz.with_extension("tmp");
@@ -242,7 +261,11 @@ fn main() {
     let measured = files
         .iter()
         .map(|(label, file, _, _)| (*label, *file))
-        .chain([(ethercat_label, &ethercat), (HEARTBEATS, &heartbeats)]);
+        .chain([
+            (ethercat_label, &ethercat),
+            (HEARTBEATS, &heartbeats),
+            (DRIVES, &drives),
+        ]);
     for (label, file) in measured {
         if !chosen(label) {
             continue;
@@ -274,6 +297,14 @@ fn main() {
         // Binary traces are read on one thread whatever -j says.
         if !label.starts_with("pcapng") && !label.starts_with("MF4") {
             cases.push(("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]));
+        }
+        if label == DRIVES {
+            let assume = "--assume-cia402-pdo";
+            cases.push(("ndjson axis", vec!["--format", "ndjson", assume, &f]));
+            cases.push((
+                "ndjson -j1 axis",
+                vec!["--format", "ndjson", "-j1", assume, &f],
+            ));
         }
         for (case, args) in cases {
             let (t, peak) = measure(runs, &f, bin, &args);

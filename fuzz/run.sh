@@ -16,7 +16,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
-all=(candump_log candump_screen asc trc busmaster blf pcap ethercat mf4 detect decode_timeline)
+all=(candump_log candump_screen asc trc busmaster blf pcap ethercat mf4 detect decode_timeline dcf)
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 
 # The fixtures each target starts from (by the format it forces).
@@ -34,6 +34,8 @@ fixtures_of() {
         # Seeds of its own shape (a framing byte, an EtherCAT frame) in
         # fuzz/corpus/ethercat, written by scripts/make_ethercat_fixtures.py.
         ethercat | decode_timeline) ;;
+        # Seeded in fuzz/corpus/dcf (the fixture DCF behind a node byte).
+        dcf) ;;
         *) echo "unknown target $1 (known: ${all[*]})" >&2; return 1 ;;
     esac
 }

@@ -1,6 +1,7 @@
 //! The consumer: turns classified lines into timelines, events and counts,
 //! in line order, and hands events to the sink.
 
+mod axis;
 mod deadlines;
 mod health;
 
@@ -31,6 +32,7 @@ use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::ethercat::{CoeMessage, CoeService, Retries};
 use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
+use axis::Drives;
 use health::HealthState;
 
 /// Per-channel node timelines. Channels are usually few, but every distinct
@@ -273,6 +275,7 @@ impl Nodes {
                     nmt_state: None,
                     heartbeat: None,
                     error_history: None,
+                    axis: None,
                 };
                 health::report_health(&mut report, end.health);
                 out.push(report);
@@ -379,6 +382,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     codes: Cache<(usize, u16), CodeEntry, 64>,
     /// NMT states, heartbeat deadlines, error history read-outs.
     health: HealthState,
+    /// CiA 402: PDO mappings and the ids they decode.
+    drives: Drives,
 }
 
 /// A code as a profile reads it.
@@ -404,7 +409,8 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         log: &'l mut DiagnosticLog<E>,
         decided: bool,
     ) -> Self {
-        Consumer {
+        let drives = Drives::new(opts);
+        let mut c = Consumer {
             file,
             opts,
             sink,
@@ -432,7 +438,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
                 .iter()
                 .map(|e| ((e.id, e.extended), e.node))
                 .collect(),
-            interest: interest(opts),
+            interest: {
+                let mut i = interest(opts);
+                drives.add_to(&mut i);
+                i
+            },
             interest_gen: 0,
             shared_interest: None,
             warnings: Vec::new(),
@@ -443,7 +453,10 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             step_buffers: Step::default(),
             codes: Cache::default(),
             health: HealthState::default(),
-        }
+            drives,
+        };
+        c.dcf_identities();
+        c
     }
 
     /// The end of the input: held diagnostics, node reports, the history;
@@ -456,6 +469,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     ) -> Result<Analysis, OutputError> {
         let file = self.file;
         self.finish_health()?;
+        self.finish_axes();
         if format.is_none() && self.counts.malformed > 0 && error.is_none() {
             error = Some(
                 "cannot detect the trace format: no line is a candump log, candump screen, \
@@ -488,6 +502,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.profiles.reason(n.node).map(str::to_string);
+            self.axis_report(n.node, &mut n.axis);
             if let Some(h) = &mut n.error_history {
                 for e in &mut h.entries {
                     e.description = n.profile.describe(e.code);
@@ -561,6 +576,9 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// A node holds `value` in `object` (SDO upload or confirmed download).
     fn object_value(&mut self, node: NodeId, object: sdo::Object, value: u32) {
         self.profiles.object_value(node, object, value);
+        if object.index == sdo::DEVICE_TYPE && object.sub == 0 {
+            self.device_type(node, value);
+        }
         if object.index == sdo::COB_ID_EMCY
             && object.sub == 0
             && let Some((id, extended)) = sdo::cob_id_emcy(value)
@@ -638,6 +656,9 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         );
         for iv in &step.closed {
             history.push(channel_id, node, iv.clone());
+        }
+        if !emcy.is_reset() {
+            Self::axis_emcy(timeline.axis_mut(), at, emcy.code);
         }
         if !self.opts.selects(channel, node) {
             self.step_buffers = step;
@@ -853,6 +874,11 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         if !self.interest.wants(frame.id, frame.extended) {
             return Ok(());
         }
+        // A drive's PDO of unknown mapping is only noted: it moves no time,
+        // as when it was not wanted.
+        if self.watched(frame.id, frame.extended) {
+            return Ok(());
+        }
         if let Some(t) = frame.time {
             self.time(t);
             if self.health.passed(t) {
@@ -870,10 +896,18 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             line: line_no,
         };
         let data = frame.data.as_slice();
+        if let Some(slot) = self.drives.slot(frame.id, frame.extended) {
+            return self.pdo(frame.channel, at, frame.id, slot, data);
+        }
         if let Some(node) = self.emcy_node(frame.id, frame.extended) {
             self.emcy(at, frame.channel, node, Some(frame.id), data)?;
         } else if frame.extended {
             return Ok(());
+        } else if sdo::is_sdo_id(frame.id) {
+            self.pdo_configuration(frame.id, data);
+            if let Some(access) = sdo::parse(frame.id, data) {
+                self.sdo_access(frame.channel, at, access)?;
+            }
         } else if let Some(access) = sdo::parse(frame.id, data) {
             self.sdo_access(frame.channel, at, access)?;
         } else if let Some(node) = emcy::boot_node(frame.id, data) {

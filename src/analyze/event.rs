@@ -10,8 +10,10 @@ use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::nmt::NmtState;
+use crate::canopen::pdo::Mapping;
 use crate::canopen::profile::{Decoded, Profile};
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
+use crate::timeline::axis::{self, AxisState, Fault};
 use crate::timeline::heartbeat::{Outage, TimeoutSource};
 use crate::timeline::history::ErrorHistory;
 use crate::timeline::nmt::Via;
@@ -110,6 +112,17 @@ pub enum Health {
     ErrorHistory(HistoryReport),
     /// A confirmed write of 0 to 0x1003 sub 0.
     ErrorHistoryCleared,
+    /// A CiA 402 statusword showed another state (issue 19).
+    AxisState {
+        state: AxisState,
+        /// The state before; `None` for the axis's first statusword.
+        from: Option<AxisState>,
+        statusword: u16,
+        /// A PDO (with its COB-ID) or an SDO upload.
+        via: axis::Via,
+    },
+    /// A controlword's bit 7 rose: the master reset the drive's fault.
+    FaultReset { controlword: u16 },
 }
 
 impl Health {
@@ -122,6 +135,8 @@ impl Health {
             Health::SdoAbort { .. } => "sdo_abort",
             Health::ErrorHistory(_) => "error_history",
             Health::ErrorHistoryCleared => "error_history_cleared",
+            Health::AxisState { .. } => "axis_state",
+            Health::FaultReset { .. } => "fault_reset",
         }
     }
 }
@@ -189,6 +204,50 @@ pub struct NodeReport {
     pub heartbeat: Option<HeartbeatReport>,
     /// The last read-out of 0x1003.
     pub error_history: Option<HistoryReport>,
+    /// Its CiA 402 axis; `None` for a node no statusword, controlword or
+    /// PDO mapping was seen of.
+    pub axis: Option<Box<AxisReport>>,
+}
+
+/// A node's CiA 402 axis at the end of an input (the `axis` object).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisReport {
+    /// The state the last statusword showed; `None` before any.
+    pub state: Option<AxisState>,
+    pub statusword: Option<u16>,
+    /// Faults, oldest first, the open one last (at most
+    /// [`axis::MAX_FAULTS_KEPT`] closed ones).
+    pub faults: Vec<Fault>,
+    /// Every fault entered, kept or not.
+    pub fault_count: u64,
+    /// Fault resets the master sent.
+    pub fault_resets: u64,
+    /// The states it was in, with the time in each (standard's order).
+    pub time_in_state: Vec<(AxisState, Span)>,
+    /// The node's PDO mappings in force at the end, transmit then receive.
+    pub mappings: Vec<Mapping>,
+}
+
+impl AxisReport {
+    /// "faulted 2 times, recovered to operation enabled": the summary's
+    /// sentence; `None` for an axis that never faulted.
+    pub fn fault_summary(&self) -> Option<String> {
+        let n = self.fault_count;
+        if n == 0 {
+            return None;
+        }
+        let times = if n == 1 {
+            "1 time".to_string()
+        } else {
+            format!("{n} times")
+        };
+        let end = match self.state {
+            Some(s) if s.is_fault() => "still in fault at the end".to_string(),
+            Some(AxisState::State(s)) => format!("recovered to {}", s.words()),
+            _ => "state unknown at the end".to_string(),
+        };
+        Some(format!("faulted {times}, {end}"))
+    }
 }
 
 /// Descriptions of a node's codes, made once per input: its error list

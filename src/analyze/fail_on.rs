@@ -18,6 +18,8 @@ pub struct FailOn {
     pub category_at_most: Option<u8>,
     /// A node lost its heartbeat (an outage, or silent at the end).
     pub lost: bool,
+    /// A node's CiA 402 axis entered fault.
+    pub fault: bool,
 }
 
 impl FailOn {
@@ -29,6 +31,7 @@ impl FailOn {
             all.active |= f.active;
             all.warning |= f.warning;
             all.lost |= f.lost;
+            all.fault |= f.fault;
             all.codes.extend(&f.codes);
             all.category_at_most = match (all.category_at_most, f.category_at_most) {
                 (Some(a), Some(b)) => Some(a.max(b)),
@@ -100,6 +103,22 @@ pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<Stri
                 "lost: {n} node{} lost {} heartbeat",
                 plural(n),
                 if n == 1 { "its" } else { "their" }
+            ));
+        }
+    }
+    if fail_on.fault {
+        let faults: u64 = nodes()
+            .filter_map(|n| n.axis.as_ref())
+            .map(|a| a.fault_count)
+            .sum();
+        let axes = nodes()
+            .filter(|n| n.axis.as_ref().is_some_and(|a| a.fault_count > 0))
+            .count() as u64;
+        if faults > 0 {
+            met.push(format!(
+                "fault: {axes} drive{} faulted {faults} time{}",
+                plural(axes),
+                plural(faults)
             ));
         }
     }

@@ -3,8 +3,10 @@
 //! counted, so most lines of a trace never get past the reader.
 
 use super::Options;
+use crate::canopen::cia402;
 use crate::canopen::emcy;
 use crate::canopen::nmt;
+use crate::canopen::pdo;
 use crate::canopen::sdo;
 use crate::trace::{ContentFilter, Frame, Interest};
 
@@ -41,10 +43,40 @@ pub(super) fn content_matters(id: u32, data: &[u8]) -> bool {
     if emcy::is_nmt_error_control(id) {
         data.len() <= 1
     } else if sdo::is_sdo_id(id) {
-        sdo::names_followed_object(id, data) || sdo::is_abort(data)
+        sdo::names_followed_object(id, data) || sdo::is_abort(data) || concerns_axis(id, data)
     } else {
         true
     }
+}
+
+/// Whether an SDO frame can matter to CiA 402 decoding (issue 19): it
+/// names a PDO parameter (0x1400-0x1BFF) or one of 0x6040/0x6041/0x603F,
+/// or it is a download segment or its confirmation (segments name no
+/// object; the PDO assembler keeps only those of a transfer it follows).
+pub(super) fn concerns_axis(id: u32, data: &[u8]) -> bool {
+    let Some(&[cmd, lo, hi]) = data.get(..3).and_then(|d| <&[u8; 3]>::try_from(d).ok()) else {
+        return false;
+    };
+    let index = u16::from_le_bytes([lo, hi]);
+    let request = id >= sdo::REQUEST_BASE;
+    pdo::PdoId::is_pdo_parameter(index)
+        || cia402::DECODED.contains(&index)
+        || (request && cmd >> 5 == 0)
+        || (!request && cmd >> 5 == 1)
+}
+
+/// Whether a frame can widen the interest when the consumer reads it: an
+/// SDO access of 0x1014 (moves an EMCY id), of 0x1000 (a CiA 402 drive's
+/// PDOs get watched) or one that can complete a PDO configuration. A
+/// worker's block holding one is classified again on the consumer's thread.
+pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
+    if frame.extended || !sdo::is_sdo_id(frame.id) {
+        return false;
+    }
+    let data = frame.data.as_slice();
+    sdo::names_object(frame.id, data, sdo::COB_ID_EMCY)
+        || sdo::names_object(frame.id, data, sdo::DEVICE_TYPE)
+        || concerns_axis(frame.id, data)
 }
 
 /// An EMCY id besides 0x80 + node (`--emcy-id`, or moved by object
@@ -62,9 +94,4 @@ fn add_id(interest: &mut Interest, id: u32, extended: bool) {
     } else {
         interest.add_standard(id);
     }
-}
-
-/// An SDO request or response naming object 0x1014 (COB-ID EMCY).
-pub(super) fn is_cob_id_emcy_access(frame: &Frame<'_>) -> bool {
-    !frame.extended && sdo::names_object(frame.id, frame.data.as_slice(), sdo::COB_ID_EMCY)
 }

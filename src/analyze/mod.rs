@@ -28,6 +28,8 @@ mod tests;
 use std::io::{self, Read, Write};
 
 use crate::canopen::NodeId;
+use crate::canopen::dcf::Dcf;
+use crate::canopen::pdo::Mapping;
 use crate::canopen::profile_choice::ProfileChoice;
 use crate::timeline::history::{DEFAULT_SPILL_AT, ErrorHistory};
 use crate::trace::Format;
@@ -46,8 +48,8 @@ use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub(crate) use diagnostics::DiagnosticLog;
 pub(crate) use event::{
-    BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
-    InputReport, NodeReport,
+    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
+    HistoryReport, InputReport, NodeReport,
 };
 pub(crate) use sink::{Discard, Sink, WithoutEvents};
 
@@ -83,6 +85,13 @@ pub struct Options {
     pub cancel: Cancel,
     /// `--heartbeat-timeout`: every node's heartbeat timeout.
     pub heartbeat_timeout: Option<Span>,
+    /// `--pdo`: PDO mappings the user gives (source `option`).
+    pub pdo: Vec<Mapping>,
+    /// `--dcf NODE=FILE`, read: mappings (source `dcf`) and identities.
+    pub dcf: Vec<(NodeId, Dcf)>,
+    /// `--assume-cia402-pdo`: the predefined CiA 402 mapping for PDOs no
+    /// other source maps (source `assumed`).
+    pub assume_cia402_pdo: bool,
 }
 
 /// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
@@ -110,6 +119,9 @@ impl Default for Options {
             profiles: ProfileChoice::default(),
             cancel: Cancel::new(),
             heartbeat_timeout: None,
+            pdo: Vec::new(),
+            dcf: Vec::new(),
+            assume_cia402_pdo: false,
         }
     }
 }

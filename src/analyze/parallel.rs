@@ -13,7 +13,7 @@ use super::OutputError;
 use super::batch::spawn_scoped;
 use super::classify::{Foreign, LineSink, classify_block};
 use super::consumer::Consumer;
-use super::interest::is_cob_id_emcy_access;
+use super::interest::may_widen;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
 use crate::trace::{Frame, FrameKind, Interest, Payload, Reason, Timestamp};
@@ -147,7 +147,7 @@ impl LineSink for Recorder {
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         self.flush_time();
-        if is_cob_id_emcy_access(frame) {
+        if may_widen(frame) {
             self.result.moves_emcy_id = true;
         }
         let start = self.result.channels.len();

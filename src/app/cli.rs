@@ -151,6 +151,9 @@ pub struct DecodeArgs {
     #[arg(long, value_name = "FILE.toml", help_heading = DECODING)]
     pub profile_file: Vec<PathBuf>,
 
+    #[command(flatten)]
+    pub drive: DriveArgs,
+
     /// Output format
     #[arg(long, short = 'f', value_enum, default_value_t = OutputFormat::Table, help_heading = OUTPUT)]
     pub format: OutputFormat,
@@ -160,7 +163,7 @@ pub struct DecodeArgs {
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
     /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), a node
-    /// `lost` its heartbeat, `never`
+    /// `lost` its heartbeat, a CiA 402 drive entered `fault`, `never`
     #[arg(long, value_parser = parse_fail_on, value_name = "WHEN", help_heading = CI)]
     pub fail_on: Vec<FailOn>,
 
@@ -414,6 +417,106 @@ impl DecodeArgs {
     }
 }
 
+/// CiA 402 drive decoding (issue 19): where PDO mappings come from besides
+/// the trace's own SDO writes. The same for decoding, `baseline` and
+/// `check`.
+#[derive(Args, Debug, Default)]
+pub struct DriveArgs {
+    /// PDO mapping for CiA 402 decoding: COBID=OBJECT[:BITS],... e.g. 0x181=0x6041,0x603F
+    ///
+    /// A PDO mapping for CiA 402 decoding, for a trace that does not configure its
+    /// PDOs: COBID=OBJECT[:BITS], further objects of the same PDO after commas
+    /// (0x181=0x6041,0x6061:8); OBJECT is a hex index (.SUB optional), BITS defaults
+    /// to 16 for 0x6040/0x6041/0x603F. The COB-ID must be a predefined PDO id
+    /// (0x181-0x57F), which names its node. Repeatable; the trace's own SDO writes
+    /// and a --dcf win over it
+    #[arg(long, value_parser = parse_pdo, value_name = "COBID=OBJECT[:BITS],...", help_heading = DECODING)]
+    pub pdo: Vec<PdoSpec>,
+
+    /// A node's DCF or EDS file: its PDO mappings and identity, NODE=FILE (repeatable)
+    ///
+    /// A node's DCF or EDS file, NODE=FILE (repeatable): the PDO mappings it declares
+    /// decode the node's statusword and controlword (the trace's own SDO writes win),
+    /// its vendor id chooses its profile as a 0x1018 upload does
+    #[arg(long, value_parser = parse_dcf, value_name = "NODE=FILE", help_heading = DECODING)]
+    pub dcf: Vec<(NodeId, PathBuf)>,
+
+    /// Assume the CiA 402 predefined PDO mapping (TPDO1 statusword, RPDO1 controlword)
+    ///
+    /// Assume the CiA 402 predefined PDO mapping where nothing else maps a PDO: TPDO1
+    /// (0x180 + node) starts with the statusword, RPDO1 (0x200 + node) with the
+    /// controlword. Reported with source `assumed`
+    #[arg(long, help_heading = DECODING)]
+    pub assume_cia402_pdo: bool,
+}
+
+/// A `--pdo` flag: its text (as a baseline records it) and its mappings.
+#[derive(Clone, Debug)]
+pub struct PdoSpec {
+    pub text: String,
+    pub mappings: Vec<crate::canopen::pdo::Mapping>,
+}
+
+fn parse_pdo(s: &str) -> Result<PdoSpec, String> {
+    let mappings = crate::canopen::pdo::parse_spec(s)?;
+    if let Some(m) = mappings.iter().find(|m| m.node.is_none()) {
+        return Err(format!(
+            "COB-ID {:#x} is no predefined PDO id (0x181-0x57F): its node is unknown",
+            m.cob_id.id
+        ));
+    }
+    Ok(PdoSpec {
+        text: s.to_string(),
+        mappings,
+    })
+}
+
+fn parse_dcf(s: &str) -> Result<(NodeId, PathBuf), String> {
+    crate::canopen::dcf::parse_option(s)
+}
+
+impl DriveArgs {
+    /// Sets the drive options: DCFs read here (a missing or unreadable one
+    /// is an error before any trace is read).
+    fn apply(&self, opts: &mut Options) -> Result<()> {
+        for spec in &self.pdo {
+            opts.pdo.extend(spec.mappings.iter().cloned());
+        }
+        for (node, path) in &self.dcf {
+            let dcf =
+                crate::canopen::dcf::load(path, *node).map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
+            if dcf.mappings.is_empty() && dcf.vendor_id.is_none() {
+                bail!(
+                    "--dcf {}: no PDO mapping and no identity in it: not a DCF or EDS file{}",
+                    path.display(),
+                    dcf.problems
+                        .first()
+                        .map(|p| format!(" ({p})"))
+                        .unwrap_or_default()
+                );
+            }
+            opts.dcf.push((*node, dcf));
+        }
+        opts.assume_cia402_pdo = self.assume_cia402_pdo;
+        Ok(())
+    }
+
+    /// As a baseline records them.
+    fn recorded(&self) -> (Vec<String>, Vec<String>, bool) {
+        (
+            self.pdo.iter().map(|p| p.text.clone()).collect(),
+            self.dcf
+                .iter()
+                .map(|(n, p)| {
+                    let name = p.file_name().map(|f| f.to_string_lossy().into_owned());
+                    format!("{n}={}", name.unwrap_or_default())
+                })
+                .collect(),
+            self.assume_cia402_pdo,
+        )
+    }
+}
+
 /// Traces and how to read them; the same for `baseline` and `check`, so a
 /// check reads its traces exactly as the baseline did.
 #[derive(Args, Debug)]
@@ -450,6 +553,9 @@ pub struct TraceArgs {
     /// A user profile (TOML), as for decoding
     #[arg(long, value_name = "FILE.toml", help_heading = DECODING)]
     pub profile_file: Vec<PathBuf>,
+
+    #[command(flatten)]
+    pub drive: DriveArgs,
 
     /// Record and look up traces by their path relative to DIR, not to the current directory
     /// (the same keys wherever baseline and check run)
@@ -590,6 +696,10 @@ impl DecodeArgs {
             heartbeat_timeout: self.heartbeat_timeout,
             ..Options::default()
         })
+        .and_then(|mut o| {
+            self.drive.apply(&mut o)?;
+            Ok(o)
+        })
     }
 }
 
@@ -628,6 +738,9 @@ impl TraceArgs {
                 .collect(),
             heartbeat_timeout: self.heartbeat_timeout.map(|s| s.to_string()),
             profile_file,
+            pdo: self.drive.recorded().0,
+            dcf: self.drive.recorded().1,
+            assume_cia402_pdo: self.drive.recorded().2,
         })
     }
 
@@ -641,6 +754,10 @@ impl TraceArgs {
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
             heartbeat_timeout: self.heartbeat_timeout,
             ..Options::default()
+        })
+        .and_then(|mut o| {
+            self.drive.apply(&mut o)?;
+            Ok(o)
         })
     }
 }
@@ -673,13 +790,14 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             "active" => f.active = true,
             "warning" | "warnings" => f.warning = true,
             "lost" => f.lost = true,
+            "fault" | "faults" => f.fault = true,
             _ if in_codes => {
                 f.codes.push(fail_on_code(item)?);
                 continue;
             }
             _ => {
                 return Err(format!(
-                    "'{item}' is not a condition: never, any, active, warning, lost, \
+                    "'{item}' is not a condition: never, any, active, warning, lost, fault, \
                      code=CODE[,CODE...], category<=N"
                 ));
             }

@@ -49,6 +49,10 @@ pub enum Kind {
     HeartbeatLostNew,
     /// The baseline's node lost its heartbeat; now it does not.
     HeartbeatLostGone,
+    /// The node's CiA 402 axis faulted more often than in the baseline.
+    AxisFaultNew,
+    /// The baseline's axis faulted; now it does not.
+    AxisFaultGone,
 }
 
 impl Kind {
@@ -61,12 +65,14 @@ impl Kind {
             | Kind::NewNode
             | Kind::NewError
             | Kind::NowActive
-            | Kind::HeartbeatLostNew => Severity::Regression,
+            | Kind::HeartbeatLostNew
+            | Kind::AxisFaultNew => Severity::Regression,
             Kind::MalformedFell
             | Kind::EmcyInvalidFell
             | Kind::ErrorGone
             | Kind::NowCleared
-            | Kind::HeartbeatLostGone => Severity::Improvement,
+            | Kind::HeartbeatLostGone
+            | Kind::AxisFaultGone => Severity::Improvement,
             Kind::FormatChanged
             | Kind::NewNodeWithoutErrors
             | Kind::NodeGone
@@ -320,6 +326,29 @@ fn compare_node(
             msg,
         );
     }
+    let faults = |e: Option<&NodeEntry>| e.map_or(0, |e| e.axis_faults);
+    let (was, now) = (faults(old), faults(new));
+    if now > was {
+        let msg = format!("axis faulted {now}x, baseline {was}x");
+        c.add(
+            at,
+            Kind::AxisFaultNew,
+            None,
+            (Some(now), Some(was)),
+            false,
+            msg,
+        );
+    } else if now == 0 && was > 0 && new.is_some() {
+        let msg = format!("axis no longer faults (baseline {was}x)");
+        c.add(
+            at,
+            Kind::AxisFaultGone,
+            None,
+            (Some(now), Some(was)),
+            false,
+            msg,
+        );
+    }
     match (old, new) {
         (None, Some(n)) if n.errors.is_empty() => {
             let msg = "new node, no errors".to_string();
@@ -423,7 +452,50 @@ mod tests {
                 })
                 .collect(),
             heartbeat_lost: 0,
+            axis_faults: 0,
         }
+    }
+
+    fn faulted(n: u64) -> NodeEntry {
+        NodeEntry {
+            axis_faults: n,
+            ..node(&[])
+        }
+    }
+
+    #[test]
+    fn more_axis_faults_than_the_baseline_regress_none_improve() {
+        let old = one(&[
+            (1, node(&[])),
+            (2, faulted(1)),
+            (3, faulted(2)),
+            (5, faulted(2)),
+        ]);
+        let new = one(&[
+            (1, faulted(1)),
+            (2, node(&[])),
+            (3, faulted(2)),
+            (5, faulted(3)),
+        ]);
+        let diff = compare(&old, &new, &Allow::default());
+        let found: Vec<(Option<NodeId>, Kind)> = diff
+            .findings
+            .iter()
+            .filter(|f| matches!(f.kind, Kind::AxisFaultNew | Kind::AxisFaultGone))
+            .map(|f| (f.node, f.kind))
+            .collect();
+        assert_eq!(
+            found,
+            [
+                (Some(1), Kind::AxisFaultNew),
+                (Some(2), Kind::AxisFaultGone),
+                (Some(5), Kind::AxisFaultNew),
+            ]
+        );
+        assert_eq!(
+            serde_json::to_value(Kind::AxisFaultNew).ok(),
+            Some(serde_json::json!("axis_fault_new"))
+        );
     }
 
     fn lost(n: u64) -> NodeEntry {

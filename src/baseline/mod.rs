@@ -60,6 +60,14 @@ pub struct ReadOptions {
     pub profile: Vec<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub profile_file: Vec<String>,
+    /// `--pdo` specs as given.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pdo: Vec<String>,
+    /// `--dcf` as NODE=file name (paths differ between machines).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dcf: Vec<String>,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub assume_cia402_pdo: bool,
 }
 
 impl ReadOptions {
@@ -92,6 +100,11 @@ impl std::fmt::Display for ReadOptions {
                 .iter()
                 .map(|v| format!("--profile-file (profile {v})")),
         );
+        flags.extend(self.pdo.iter().map(|v| format!("--pdo {v}")));
+        flags.extend(self.dcf.iter().map(|v| format!("--dcf {v}")));
+        if self.assume_cia402_pdo {
+            flags.push("--assume-cia402-pdo".to_string());
+        }
         f.write_str(&flags.join(" "))
     }
 }
@@ -128,6 +141,9 @@ pub struct NodeEntry {
     /// so baselines of traces without outages read and write as before.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub heartbeat_lost: u64,
+    /// CiA 402 faults its axis entered; left out when none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub axis_faults: u64,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -246,6 +262,7 @@ impl TraceEntry {
                 emcy: n.emcy_count,
                 errors,
                 heartbeat_lost: n.heartbeat.as_ref().map_or(0, |h| h.lost),
+                axis_faults: n.axis.as_ref().map_or(0, |a| a.fault_count),
             };
             nodes
                 .entry(n.channel.clone())

@@ -15,10 +15,6 @@
 //! and reading goes on; only the objects used are evaluated, so a broken
 //! entry elsewhere in a vendor's file does not matter.
 
-// The pipeline (issue 19) calls this next; until then nothing does. Remove
-// when it is wired, so dead code shows again.
-#![allow(dead_code)]
-
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;

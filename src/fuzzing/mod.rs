@@ -131,6 +131,62 @@ pub fn ethercat(data: &[u8]) {
     reader(Some(Format::Pcap), &capture);
 }
 
+/// The `dcf` target: the first byte picks the node (1-127), the rest is
+/// read as a DCF (`canopen::dcf::parse`). Checks: kept problems bounded and
+/// counted, on lines of the file; every mapping a DCF mapping of that node,
+/// its direction known, at most 64 entries and 64 bits, a valid COB-ID;
+/// the mappings file into a [`MappingTable`](crate::canopen::pdo::MappingTable)
+/// whose decoded ids each read any PDO bytes without panicking. The text is
+/// also a `--pdo` spec and a `--dcf` option (errors, never a panic; a spec
+/// accepted keeps its bit total within 64).
+pub fn dcf(data: &[u8]) {
+    use crate::canopen::dcf;
+    use crate::canopen::pdo::{self, MappingTable, Source};
+    let (node, text) = match data.split_first() {
+        Some((n, rest)) => ((n % 127 + 1) as NodeId, rest),
+        None => (1, data),
+    };
+    let parsed = dcf::parse(text, node);
+    assert!(parsed.problems.len() <= dcf::MAX_PROBLEMS);
+    assert!(parsed.problem_count >= parsed.problems.len() as u64);
+    let lines = text.split(|&b| b == b'\n').count() as u64;
+    for p in &parsed.problems {
+        assert!(
+            p.line >= 1 && p.line <= lines,
+            "problem on line {} of {lines}",
+            p.line
+        );
+    }
+    let mut table = MappingTable::new();
+    for m in &parsed.mappings {
+        assert_eq!(m.source, Source::Dcf);
+        assert_eq!(m.node, Some(node));
+        assert!(m.direction.is_some());
+        assert!(!m.objects.is_empty() && m.objects.len() <= 64);
+        if !m.cob_id.extended {
+            assert!(m.cob_id.id <= 0x7FF);
+        }
+        table.insert(m.clone());
+    }
+    let ids: Vec<pdo::CobId> = table.decoded_ids().collect();
+    for id in ids {
+        let fields = table.fields(id).copied().expect("a decoded id has fields");
+        for len in [0usize, 1, 2, 8] {
+            let _ = fields.read(text.get(..len.min(text.len())).unwrap_or_default());
+        }
+    }
+    let as_text = String::from_utf8_lossy(text);
+    if let Ok(specs) = pdo::parse_spec(&as_text) {
+        for m in specs {
+            let bits: u32 = m.objects.iter().map(|o| u32::from(o.bits)).sum();
+            assert!(bits <= 64, "{bits} bits accepted");
+        }
+    }
+    if let Ok((n, _)) = dcf::parse_option(&as_text) {
+        assert!((1..=127).contains(&n));
+    }
+}
+
 /// The `mf4` target: the reader's own checks (well-formed frames, no
 /// endless loop, bounded queues and metadata), then [`reader`] with the
 /// format forced (as `--input-format mf4`).
@@ -988,6 +1044,7 @@ pub fn decode_timeline(data: &[u8]) {
             nmt_state: None,
             heartbeat: None,
             error_history: None,
+            axis: None,
         })
         .collect();
     let report = InputReport {

@@ -13,14 +13,16 @@ use std::sync::Arc;
 
 use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::{
-    BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport, HistoryReport,
-    InputReport, NodeReport,
+    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
+    HistoryReport, InputReport, NodeReport,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::emcy::Warning;
+use crate::canopen::pdo::{Direction, Mapped};
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
+use crate::timeline::axis::Via as AxisVia;
 use crate::trace::time::SecondsText;
 use crate::trace::{Format, Span, Timestamp};
 
@@ -70,6 +72,14 @@ fn push_code(out: &mut Vec<u8>, code: u16) {
         *d = HEX[usize::from((code >> shift) & 15)];
     }
     out.extend_from_slice(&text);
+}
+
+/// A mapped object as `--pdo` writes one: `0x6041:16`, `0x6041.2:8`.
+pub(crate) fn mapped_text(m: &Mapped) -> String {
+    match m.object.sub {
+        0 => format!("0x{:04X}:{}", m.object.index, m.bits),
+        sub => format!("0x{:04X}.{sub}:{}", m.object.index, m.bits),
+    }
 }
 
 fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
@@ -558,6 +568,27 @@ impl JsonWriter {
             }
             Health::ErrorHistory(h) => history_members(&mut o, h),
             Health::ErrorHistoryCleared => {}
+            Health::AxisState {
+                state,
+                from,
+                statusword,
+                via,
+            } => {
+                o.str("state", state.slug());
+                match from {
+                    Some(f) => o.str("from", f.slug()),
+                    None => o.null("from"),
+                }
+                o.str("statusword", &format!("0x{statusword:04X}"));
+                o.str("via", via.slug());
+                match via {
+                    AxisVia::Pdo { cob_id } => o.u64("cob_id", u64::from(*cob_id)),
+                    AxisVia::Sdo => o.null("cob_id"),
+                }
+            }
+            Health::FaultReset { controlword } => {
+                o.str("controlword", &format!("0x{controlword:04X}"));
+            }
         }
         o.end();
     }
@@ -658,7 +689,98 @@ impl JsonWriter {
             }
             None => o.null("error_history"),
         }
+        // Only nodes with an axis: other nodes' objects stay as they were.
+        if let Some(axis) = &node.axis {
+            self.axis(o.key("axis"), axis);
+        }
         o.key("errors").push(b'[');
+    }
+
+    /// A node's `axis` object (CiA 402, issue 19).
+    fn axis(&mut self, out: &mut Vec<u8>, axis: &AxisReport) {
+        let mut o = Obj::new(out);
+        match axis.state {
+            Some(s) => o.str("state", s.slug()),
+            None => o.null("state"),
+        }
+        match axis.statusword {
+            Some(w) => o.str("statusword", &format!("0x{w:04X}")),
+            None => o.null("statusword"),
+        }
+        o.u64("fault_count", axis.fault_count);
+        o.u64("fault_resets", axis.fault_resets);
+        let list = o.key("faults");
+        list.push(b'[');
+        for (i, f) in axis.faults.iter().enumerate() {
+            if i > 0 {
+                list.push(b',');
+            }
+            let mut fo = Obj::new(list);
+            self.time_pair(&mut fo, ["start", "start_text"], f.start.time);
+            fo.u64("start_line", f.start.line);
+            self.time_pair(&mut fo, ["end", "end_text"], f.end.and_then(|e| e.time));
+            match f.end {
+                Some(e) => fo.u64("end_line", e.line),
+                None => fo.null("end_line"),
+            }
+            push_span(fo.key("duration"), f.duration());
+            match f.emcy_code {
+                Some(c) => push_code(fo.key("emcy_code"), c),
+                None => fo.null("emcy_code"),
+            }
+            match f.error_code {
+                Some(c) => push_code(fo.key("error_code"), c),
+                None => fo.null("error_code"),
+            }
+            self.time_pair(
+                &mut fo,
+                ["cleared_by", "cleared_by_text"],
+                f.cleared_by.and_then(|c| c.time),
+            );
+            fo.end();
+        }
+        list.push(b']');
+        let times = o.key("time_in_state");
+        times.push(b'{');
+        for (i, (state, span)) in axis.time_in_state.iter().enumerate() {
+            if i > 0 {
+                times.push(b',');
+            }
+            push_str(times, state.slug());
+            times.push(b':');
+            push_span(times, Some(*span));
+        }
+        times.push(b'}');
+        let mut mo = Obj::new(o.key("mapping"));
+        for direction in [Direction::Tpdo, Direction::Rpdo] {
+            let list = mo.key(direction.slug());
+            list.push(b'[');
+            let of = axis
+                .mappings
+                .iter()
+                .filter(|m| m.direction == Some(direction));
+            for (i, m) in of.enumerate() {
+                if i > 0 {
+                    list.push(b',');
+                }
+                let mut po = Obj::new(list);
+                po.u64("cob_id", u64::from(m.cob_id.id));
+                let objects = po.key("objects");
+                objects.push(b'[');
+                for (j, mapped) in m.objects.iter().enumerate() {
+                    if j > 0 {
+                        objects.push(b',');
+                    }
+                    push_str(objects, &mapped_text(mapped));
+                }
+                objects.push(b']');
+                po.str("source", m.source.slug());
+                po.end();
+            }
+            list.push(b']');
+        }
+        mo.end();
+        o.end();
     }
 
     /// A node's `heartbeat` object.

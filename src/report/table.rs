@@ -11,14 +11,15 @@ use anstyle::{AnsiColor, Style};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
-    BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport, NodeReport,
-    Sink,
+    AxisReport, BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport,
+    NodeReport, Sink,
 };
 use crate::canopen::NodeId;
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::text::printable;
 use crate::timeline::Interval;
+use crate::timeline::axis::Via as AxisVia;
 use crate::trace::Timestamp;
 use unicode_width::UnicodeWidthStr;
 
@@ -263,6 +264,61 @@ impl<W: Write> TableReport<W> {
             self.out.write_all(line.as_bytes())?;
         }
         Ok(())
+    }
+
+    /// The CiA 402 drives' axes (none: no section): state at the end,
+    /// faults, where the mapping came from, and the summary's sentence.
+    /// Drives are few: one comfy table.
+    fn write_axes(&mut self, input: &InputReport) -> io::Result<()> {
+        let axes: Vec<(&NodeReport, &AxisReport)> = input
+            .nodes
+            .iter()
+            .filter_map(|n| n.axis.as_deref().map(|a| (n, a)))
+            .collect();
+        if axes.is_empty() {
+            return Ok(());
+        }
+        let rows: Vec<[String; 7]> = axes
+            .iter()
+            .map(|(n, a)| {
+                let mapping: Vec<String> = a
+                    .mappings
+                    .iter()
+                    .map(|m| format!("0x{:03X} {}", m.cob_id.id, m.source.slug()))
+                    .collect();
+                [
+                    printable(&n.channel).into_owned(),
+                    n.node.to_string(),
+                    a.state.map_or("-", |s| s.slug()).to_string(),
+                    a.fault_count.to_string(),
+                    a.fault_resets.to_string(),
+                    if mapping.is_empty() {
+                        "-".to_string()
+                    } else {
+                        mapping.join(", ")
+                    },
+                    a.fault_summary()
+                        .unwrap_or_else(|| "never faulted".to_string()),
+                ]
+            })
+            .collect();
+        let mut widths = AXES_HEADER.map(str::len);
+        for row in &rows {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = self.fit(&mut widths, &AXES_HEADER, &AXES_FIT);
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Drive axes (CiA 402)"))?;
+        write_comfy_table(
+            &mut self.out,
+            &AXES_HEADER,
+            &rows,
+            &widths,
+            &shown,
+            &AXES_RIGHT,
+        )
     }
 
     /// The bus-level line: frames, EMCY rate, nodes with errors.
@@ -1107,6 +1163,9 @@ impl<W: Write> Sink for TableReport<W> {
             Health::HeartbeatBack { .. } => ("back", Some(GREEN)),
             Health::SdoAbort { .. } => ("abort", Some(YELLOW)),
             Health::ErrorHistory(_) | Health::ErrorHistoryCleared => ("1003h", None),
+            Health::AxisState { state, .. } if state.is_fault() => ("axis", Some(RED)),
+            Health::AxisState { .. } => ("axis", None),
+            Health::FaultReset { .. } => ("reset", Some(GREEN)),
         };
         self.write_tagged(
             l,
@@ -1143,6 +1202,7 @@ impl<W: Write> Sink for TableReport<W> {
                 self.write_nodes(input)?;
                 self.write_codes(input)?;
                 self.write_health(input)?;
+                self.write_axes(input)?;
             }
             self.write_bus_line(input)?;
             return writeln!(self.out);
@@ -1166,6 +1226,7 @@ impl<W: Write> Sink for TableReport<W> {
         writeln!(self.out)?;
         self.write_nodes(input)?;
         self.write_health(input)?;
+        self.write_axes(input)?;
 
         self.write_timeline(input)?;
         writeln!(self.out)?;
@@ -1245,6 +1306,31 @@ pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String 
         ),
         Health::ErrorHistory(h) => history_head(h),
         Health::ErrorHistoryCleared => "error history cleared".to_string(),
+        Health::AxisState {
+            state,
+            from,
+            statusword,
+            via,
+        } => {
+            let source = match via {
+                AxisVia::Pdo { cob_id } => format!("PDO 0x{cob_id:03X}"),
+                AxisVia::Sdo => "SDO".to_string(),
+            };
+            match from {
+                Some(f) => format!(
+                    "axis {} -> {} (statusword 0x{statusword:04X}, {source})",
+                    f.slug(),
+                    state.slug()
+                ),
+                None => format!(
+                    "axis {} (statusword 0x{statusword:04X}, {source})",
+                    state.slug()
+                ),
+            }
+        }
+        Health::FaultReset { controlword } => {
+            format!("fault reset (controlword 0x{controlword:04X})")
+        }
     }
 }
 
@@ -1357,6 +1443,21 @@ const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true
 const TIMELINE_FIT: Fit = Fit {
     drop: &[7, 5],
     flex: &[(3, 40, 12), (0, CHANNEL_MAX, 7)],
+};
+const AXES_HEADER: [&str; 7] = [
+    "CHANNEL",
+    "NODE",
+    "AXIS AT END",
+    "FAULTS",
+    "RESETS",
+    "MAPPING",
+    "SUMMARY",
+];
+const AXES_RIGHT: [bool; 7] = [false, true, false, true, true, false, false];
+/// The summary sentence says the faults and the state at the end again.
+const AXES_FIT: Fit = Fit {
+    drop: &[5, 4, 3],
+    flex: &[(6, 60, 20), (0, CHANNEL_MAX, 7)],
 };
 const INPUTS_HEADER: [&str; 8] = [
     "FILE",

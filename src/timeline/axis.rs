@@ -8,10 +8,6 @@
 //! back to the caller, as [`super::NodeTimeline`] hands back intervals: the
 //! axis keeps only the open one, so its memory is constant.
 
-// The pipeline (issue 19) calls this next; until then nothing does. Remove
-// when it is wired, so dead code shows again.
-#![allow(dead_code)]
-
 use super::At;
 use crate::canopen::cia402::{self, Command, State};
 use crate::trace::{Span, Timestamp};
@@ -332,10 +328,91 @@ impl Axis {
             })
     }
 
+    /// The time of the last timed statusword.
+    pub fn last_time(&self) -> Option<Timestamp> {
+        self.last_time
+    }
+
     /// From the first timed statusword to the last: what the times in
     /// state add up to.
     pub fn span(&self) -> Option<Span> {
         Some(self.last_time?.since(self.first_time?))
+    }
+}
+
+/// Closed faults a node keeps for its report; later ones are only counted
+/// ([`Axis::fault_count`]): a drive flapping in and out of fault for hours
+/// must not grow memory without bound.
+pub const MAX_FAULTS_KEPT: usize = 1000;
+
+/// How near (before or after) the fault's entry an EMCY of the same node
+/// must be to count as the one that came with it: drives send the EMCY
+/// within a cycle or two of the statusword, 1 s leaves room for slow ones
+/// and busy buses without pairing unrelated events.
+const EMCY_NEAR_MILLIS: u64 = 1000;
+
+/// One node's axis with what the report needs of it: the closed faults and
+/// the last EMCY (to pair with a fault entered just after it).
+#[derive(Clone, Debug, Default)]
+pub struct AxisRecord {
+    pub axis: Axis,
+    /// Closed faults, oldest first (the first [`MAX_FAULTS_KEPT`]).
+    pub faults: Vec<Fault>,
+    /// The node's last error EMCY: when, and its code.
+    last_emcy: Option<(Timestamp, u16)>,
+}
+
+/// Whether two times are within [`EMCY_NEAR_MILLIS`] of each other.
+fn near(a: Timestamp, b: Timestamp) -> bool {
+    let gap = if a >= b { a.since(b) } else { b.since(a) };
+    gap.as_f64() * 1000.0 <= EMCY_NEAR_MILLIS as f64
+}
+
+impl AxisRecord {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Feeds a statusword (see [`Axis::statusword`]); a fault it closes is
+    /// kept, a fault it opens gets the EMCY sent just before it.
+    pub fn statusword(&mut self, at: At, statusword: u16, via: Via) -> Option<Change> {
+        let mut change = self.axis.statusword(at, statusword, via)?;
+        if let Some(f) = change.closed_fault.take() {
+            self.keep(f.clone());
+            change.closed_fault = Some(f);
+        }
+        if change.opened_fault
+            && let (Some((t, code)), Some(now)) = (self.last_emcy, at.time)
+            && near(t, now)
+        {
+            self.axis.attach_emcy(code);
+        }
+        Some(change)
+    }
+
+    /// An error EMCY of the node (not a reset): attached to the open fault
+    /// if it came near the fault's entry, else remembered for the next one.
+    pub fn emcy(&mut self, at: At, code: u16) {
+        if let Some(t) = at.time {
+            self.last_emcy = Some((t, code));
+        }
+        let start = self.axis.open_fault().and_then(|f| f.start.time);
+        if let (Some(start), Some(now)) = (start, at.time)
+            && near(start, now)
+        {
+            self.axis.attach_emcy(code);
+        }
+    }
+
+    fn keep(&mut self, f: Fault) {
+        if self.faults.len() < MAX_FAULTS_KEPT {
+            self.faults.push(f);
+        }
+    }
+
+    /// Every fault, closed ones then the open one.
+    pub fn all_faults(&self) -> impl Iterator<Item = &Fault> + '_ {
+        self.faults.iter().chain(self.axis.open_fault())
     }
 }
 
@@ -616,5 +693,62 @@ mod tests {
             }
             proptest::prop_assert!(a.fault_count() >= u64::from(a.open_fault().is_some()));
         }
+    }
+}
+
+#[cfg(test)]
+mod record_tests {
+    use super::*;
+
+    const PDO: Via = Via::Pdo { cob_id: 0x185 };
+
+    fn at_ms(ms: u64) -> At {
+        At {
+            time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
+            line: ms,
+        }
+    }
+
+    #[test]
+    fn an_emcy_just_before_or_after_the_fault_is_its_emcy() {
+        // Before: the EMCY 2 ms ahead of the statusword.
+        let mut r = AxisRecord::new();
+        r.statusword(at_ms(0), 0x0237, PDO);
+        r.emcy(at_ms(998), 0x7305);
+        r.statusword(at_ms(1000), 0x0238, PDO);
+        assert_eq!(r.axis.open_fault().and_then(|f| f.emcy_code), Some(0x7305));
+        // After: the first one attached stays.
+        let mut r = AxisRecord::new();
+        r.statusword(at_ms(0), 0x0237, PDO);
+        r.statusword(at_ms(1000), 0x0238, PDO);
+        r.emcy(at_ms(1001), 0x2310);
+        r.emcy(at_ms(1002), 0x7305);
+        assert_eq!(r.axis.open_fault().and_then(|f| f.emcy_code), Some(0x2310));
+        // Closed, it is kept with its EMCY.
+        let c = r.statusword(at_ms(1500), 0x0250, PDO).expect("change");
+        assert_eq!(c.closed_fault.and_then(|f| f.emcy_code), Some(0x2310));
+        assert_eq!(r.faults.len(), 1);
+    }
+
+    #[test]
+    fn an_emcy_far_from_the_fault_is_not_its_emcy() {
+        let mut r = AxisRecord::new();
+        r.statusword(at_ms(0), 0x0237, PDO);
+        r.emcy(at_ms(100), 0x7305);
+        r.statusword(at_ms(5000), 0x0238, PDO);
+        r.emcy(at_ms(9000), 0x2310);
+        assert_eq!(r.axis.open_fault().map(|f| f.emcy_code), Some(None));
+        assert_eq!(r.all_faults().count(), 1);
+    }
+
+    #[test]
+    fn closed_faults_kept_are_bounded_and_all_counted() {
+        let mut r = AxisRecord::new();
+        for i in 0..(MAX_FAULTS_KEPT as u64 + 5) {
+            r.statusword(at_ms(i * 10), 0x0238, PDO);
+            r.statusword(at_ms(i * 10 + 5), 0x0250, PDO);
+        }
+        assert_eq!(r.faults.len(), MAX_FAULTS_KEPT);
+        assert_eq!(r.axis.fault_count(), MAX_FAULTS_KEPT as u64 + 5);
     }
 }

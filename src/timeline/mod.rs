@@ -319,6 +319,12 @@ impl NodeTimeline {
             .get_or_insert_with(|| Box::new(health::NodeHealth::new(timeout)))
     }
 
+    /// The node's CiA 402 axis, if a word of it was decoded.
+    #[inline]
+    pub fn axis_mut(&mut self) -> Option<&mut axis::AxisRecord> {
+        self.health.as_deref_mut()?.axis.as_deref_mut()
+    }
+
     /// Whether the node raised `code` in the trace.
     pub fn has_raised(&self, code: u16) -> bool {
         self.stats

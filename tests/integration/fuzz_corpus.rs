@@ -14,7 +14,7 @@ use emcy_decode::fuzzing;
 type Body = fn(&[u8]);
 
 /// The fuzz targets (`fuzz/fuzz_targets/`) and the bodies they run.
-const TARGETS: [(&str, Body); 11] = [
+const TARGETS: [(&str, Body); 12] = [
     ("candump_log", fuzzing::candump_log),
     ("candump_screen", fuzzing::candump_screen),
     ("asc", fuzzing::asc),
@@ -26,6 +26,7 @@ const TARGETS: [(&str, Body); 11] = [
     ("mf4", fuzzing::mf4),
     ("detect", fuzzing::detect),
     ("decode_timeline", fuzzing::decode_timeline),
+    ("dcf", fuzzing::dcf),
 ];
 
 fn files(dir: &Path) -> Vec<PathBuf> {

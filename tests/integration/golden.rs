@@ -32,6 +32,8 @@ fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
         "acme-servo" => &["--profile-file", "fixtures/profiles/acme-servo.toml"],
         // 1001 reads its vendor id over CoE; 1002 is named by station address.
         "stoeber-ecat" => &["--profile", "1002=stoeber"],
+        // Only the DCF gives this drive's PDO mapping.
+        "cia402-dcf" => &["--dcf", "5=fixtures/cia402-drive.dcf"],
         _ => &[],
     }
 }

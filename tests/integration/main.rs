@@ -18,6 +18,7 @@ mod baseline;
 mod blf;
 mod busmaster;
 mod chart;
+mod cia402;
 mod cli;
 mod csv;
 mod differential;

@@ -8,11 +8,12 @@ use crate::support::emcy_decode;
 
 /// Fixtures with long descriptions, warnings, profiles' readings, NMT and
 /// several nodes or channels.
-const FIXTURES: [&str; 5] = [
+const FIXTURES: [&str; 6] = [
     "fixtures/s300.log",
     "fixtures/stoeber.log",
     "fixtures/festo.log",
     "fixtures/commissioning.log",
+    "fixtures/cia402-commissioning.log",
     "fixtures/mixed.pcapng",
 ];
 

@@ -28,7 +28,7 @@ pub(in crate::analyze) struct HealthState {
     /// When monitored nodes may have passed their heartbeat deadline.
     deadlines: Deadlines,
     /// Buffers reused from frame to frame.
-    events: Vec<(At, Health)>,
+    pub(super) events: Vec<(At, Health)>,
     warnings: Vec<NmtWarning>,
     read_outs: Vec<ReadOut>,
     groups: Vec<u32>,
@@ -53,7 +53,7 @@ impl HealthState {
 }
 
 /// Hands `events` (emptied) to the sink as the node's events.
-fn emit(
+pub(super) fn emit(
     sink: &mut dyn Sink,
     file: &str,
     channel: &str,
@@ -430,6 +430,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         at: At,
         access: Sdo,
     ) -> Result<(), OutputError> {
+        self.axis_sdo(raw, at, &access)?;
         let written = matches!(access, Sdo::Written { .. });
         if let Sdo::Aborted {
             node,
@@ -679,4 +680,8 @@ pub(super) fn report_health(report: &mut NodeReport, health: Option<Box<NodeHeal
         .last_read_out
         .as_ref()
         .map(|r| history_report(r, |_| String::new()));
+    report.axis = h
+        .axis
+        .as_deref()
+        .map(|a| Box::new(super::axis::report_axis(a)));
 }

@@ -381,3 +381,26 @@ fn nmt_heartbeats_and_error_history_across_blocks() {
     assert!(out.contains("\"via\":\"guarding\""));
     assert!(err.contains("toggle bit did not alternate"), "{err}");
 }
+
+/// Issue 19's commissioning fixture: PDO mappings learnt mid-trace (one
+/// COB-ID by a segmented download) widen the interest; split anywhere, the
+/// drive's states, fault and fault reset are the same. The unknown-mapping
+/// trace's watched ids too.
+#[test]
+fn cia402_mappings_learnt_mid_trace_across_blocks() {
+    let trace = include_bytes!("../../../fixtures/cia402-commissioning.log");
+    assert_split_independent("cia402 commissioning", trace);
+    let (out, _) = run(trace, 2, 64);
+    assert_eq!(out.matches("\"type\":\"axis_state\"").count(), 10);
+    assert_eq!(out.matches("\"type\":\"fault_reset\"").count(), 1);
+    let unknown = include_bytes!("../../../fixtures/cia402-unknown.log");
+    let reference = run(unknown, 1, 1 << 20);
+    assert!(
+        reference.1.contains("mapping is unknown"),
+        "{}",
+        reference.1
+    );
+    for (threads, block) in [(2, 64), (3, 300), (2, 7)] {
+        assert_eq!(run(unknown, threads, block), reference);
+    }
+}

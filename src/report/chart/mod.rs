@@ -30,6 +30,7 @@
 mod axis;
 mod bars;
 mod draw;
+mod drive;
 mod legend;
 mod marks;
 mod style;
@@ -375,7 +376,11 @@ impl Panel {
                 node,
                 bars,
                 marks,
-                shades: shades(&clock, scale, node, &changes),
+                shades: {
+                    let mut s = shades(&clock, scale, node, &changes);
+                    s.extend(drive::fault_shades(&clock, scale, node));
+                    s
+                },
                 height: (rows * ROW_H + 10.0).max(LANE_MIN_H),
             });
         }

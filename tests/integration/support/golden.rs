@@ -27,6 +27,7 @@ pub fn fixtures() -> Vec<PathBuf> {
             !name.ends_with(".py")
                 && !name.ends_with(".md")
                 && !name.ends_with(".toml")
+                && !name.ends_with(".dcf")
                 && p.is_file()
         })
         .collect();

@@ -623,3 +623,83 @@ pub fn write_ethercat<W: Write>(
     }
     Ok((packets, emcy))
 }
+
+/// A candump log of `drives` CiA 402 drives (nodes 1..=drives) each sending
+/// TPDO1 (0x180 + node: statusword, 32-bit position) every millisecond, as
+/// a motion controller's cyclic bus does (issue 19's benchmark). About
+/// `emcy_per_mille` of the frames are EMCYs, each raise with the drive's
+/// statusword in fault until the reset 20 ms later; the statusword's
+/// bits 10 and 12 (target reached, set-point acknowledge) toggle as a
+/// moving drive's do. Decoded with `--assume-cia402-pdo`; without it the
+/// PDOs are only counted (the EMCY-only path). Returns (lines, emcy frames).
+pub fn write_drive_trace<W: Write>(
+    out: &mut W,
+    bytes: u64,
+    emcy_per_mille: u64,
+    seed: u64,
+    drives: u32,
+) -> io::Result<(u64, u64)> {
+    let mut rng = Rng::new(seed);
+    let mut written = 0u64;
+    let mut lines = 0u64;
+    let mut emcy = 0u64;
+    let mut line = Vec::with_capacity(64);
+    // Per drive: fault until this cycle (0: none), position.
+    let mut fault_until = vec![0u64; drives as usize + 1];
+    let mut position = vec![0u32; drives as usize + 1];
+    let mut cycle: u64 = 0;
+    let frame = |line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]| {
+        line.clear();
+        line.extend_from_slice(
+            format!(
+                "({}.{:06}) can0 {:03X}#",
+                1_700_000_000 + micros / 1_000_000,
+                micros % 1_000_000,
+                id
+            )
+            .as_bytes(),
+        );
+        for b in data {
+            line.push(HEX[usize::from(b >> 4)]);
+            line.push(HEX[usize::from(b & 15)]);
+        }
+        line.push(b'\n');
+    };
+    while written < bytes {
+        cycle += 1;
+        for node in 1..=drives {
+            let micros = cycle * 1000 + u64::from(node) * 20;
+            let n = node as usize;
+            let mut extra = None;
+            if fault_until[n] == cycle {
+                fault_until[n] = 0;
+                extra = Some([0u8; 8]);
+            } else if fault_until[n] == 0 && rng.below(1000) < emcy_per_mille {
+                fault_until[n] = cycle + 20;
+                extra = Some([0x10, 0x43, 0x09, 0, 0, 0, 0, 0]);
+            }
+            let statusword: u16 = if fault_until[n] != 0 {
+                0x0238
+            } else {
+                // Moving: target reached and set-point acknowledge come and go.
+                0x0237 | if cycle % 50 < 25 { 0x0400 } else { 0x1000 }
+            };
+            position[n] = position[n].wrapping_add(100 + rng.below(8) as u32);
+            let sw = statusword.to_le_bytes();
+            let p = position[n].to_le_bytes();
+            let data = [sw[0], sw[1], p[0], p[1], p[2], p[3]];
+            frame(&mut line, micros, 0x180 + node, &data);
+            out.write_all(&line)?;
+            written += line.len() as u64;
+            lines += 1;
+            if let Some(e) = extra {
+                frame(&mut line, micros + 5, 0x80 + node, &e);
+                out.write_all(&line)?;
+                written += line.len() as u64;
+                lines += 1;
+                emcy += 1;
+            }
+        }
+    }
+    Ok((lines, emcy))
+}

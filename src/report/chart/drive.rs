@@ -1,0 +1,57 @@
+//! A CiA 402 drive's faults on its lane (issue 19): one band per fault,
+//! from entering fault reaction active or fault to leaving it (the end of
+//! the trace for one still open), titled with its EMCY and reset. Kept in
+//! its own function: the lane's other bands are the NMT states and
+//! heartbeat outages of `shades`.
+
+use super::{Clock, Scale, Shade};
+use crate::analyze::NodeReport;
+
+/// The fault bands of a node with an axis; none for other nodes.
+pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Vec<Shade> {
+    let Some(axis) = &node.axis else {
+        return Vec::new();
+    };
+    let end = scale.x(scale.end);
+    let mut out = Vec::new();
+    for f in &axis.faults {
+        let Some(v0) = clock.value(&f.start) else {
+            continue;
+        };
+        let x0 = scale.x(v0);
+        let x1 = f
+            .end
+            .as_ref()
+            .and_then(|e| clock.value(e))
+            .map_or(end, |v| scale.x(v));
+        let mut title = match (&f.end, f.duration()) {
+            (Some(e), Some(d)) => format!(
+                "axis fault from {} to {} ({d} s)",
+                clock.at(&f.start),
+                clock.at(e)
+            ),
+            _ => format!(
+                "axis fault from {} to the end of the trace",
+                clock.at(&f.start)
+            ),
+        };
+        if let Some(code) = f.emcy_code {
+            title.push_str(&format!(", EMCY 0x{code:04X}"));
+        }
+        if let Some(reset) = &f.cleared_by {
+            title.push_str(&format!(
+                ", cleared by a fault reset at {}",
+                clock.at(reset)
+            ));
+        }
+        out.push(Shade {
+            x0,
+            x1: x1.max(x0 + 1.0),
+            // The outage style (red): a fault is as bad, and the CSS every chart
+            // embeds stays as it is.
+            class: "out",
+            title,
+        });
+    }
+    out
+}
