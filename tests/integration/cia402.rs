@@ -8,7 +8,7 @@ use std::fs;
 
 use serde_json::Value;
 
-use crate::support::{emcy_decode, ndjson};
+use crate::support::{Rig, emcy_decode, ndjson};
 
 const COMMISSIONING: &str = "fixtures/cia402-commissioning.log";
 const DCF_TRACE: &str = "fixtures/cia402-dcf.log";
@@ -253,8 +253,6 @@ fn a_missing_or_bad_dcf_is_one_error_line_and_exit_2() {
 
 #[test]
 fn check_reports_a_new_axis_fault_as_a_regression() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let trace = dir.path().join("rig.log");
     // The baseline: the drive enabled, never faulted (the trace up to the fault).
     let healthy: String = fs::read_to_string(COMMISSIONING)
         .expect("fixture")
@@ -262,54 +260,20 @@ fn check_reports_a_new_axis_fault_as_a_regression() {
         .take_while(|l| !l.contains("185#3F02"))
         .map(|l| format!("{l}\n"))
         .collect();
-    fs::write(&trace, healthy).expect("write");
-    emcy_decode()
-        .current_dir(dir.path())
-        .args(["baseline", "-o", "base.json", "rig.log"])
-        .assert()
-        .success();
-    let text = fs::read_to_string(dir.path().join("base.json")).expect("baseline");
+    let rig = Rig::new(&healthy);
+    let text = rig.baseline(&[]);
     assert!(!text.contains("axis_faults"), "{text}");
-    fs::copy(COMMISSIONING, &trace).expect("copy");
-    let out = emcy_decode()
-        .current_dir(dir.path())
-        .args(["check", "-b", "base.json", "--format", "json", "rig.log"])
-        .output()
-        .expect("runs");
-    assert_eq!(out.status.code(), Some(1));
-    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
-    let found: Vec<&Value> = doc["findings"]
-        .as_array()
-        .map(|f| f.iter().filter(|f| f["kind"] == "axis_fault_new").collect())
-        .unwrap_or_default();
-    assert_eq!(found.len(), 1, "{doc}");
+    rig.trace_from(COMMISSIONING);
+    let (code, found) = rig.check("axis_fault_new");
+    assert_eq!(code, Some(1));
+    assert_eq!(found.len(), 1, "{found:?}");
     assert_eq!(found[0]["node"], 5);
     assert_eq!(found[0]["severity"], "regression");
     // Recorded, then nothing regresses; the options are recorded too.
-    emcy_decode()
-        .current_dir(dir.path())
-        .args(["baseline", "-o", "base.json", "rig.log"])
-        .assert()
-        .success();
-    let text = fs::read_to_string(dir.path().join("base.json")).expect("baseline");
+    let text = rig.baseline(&[]);
     assert!(text.contains("\"axis_faults\": 1"), "{text}");
-    emcy_decode()
-        .current_dir(dir.path())
-        .args(["check", "-b", "base.json", "rig.log"])
-        .assert()
-        .code(0);
-    emcy_decode()
-        .current_dir(dir.path())
-        .args([
-            "baseline",
-            "--assume-cia402-pdo",
-            "-o",
-            "base.json",
-            "rig.log",
-        ])
-        .assert()
-        .success();
-    let text = fs::read_to_string(dir.path().join("base.json")).expect("baseline");
+    assert_eq!(rig.check("axis_fault_new"), (Some(0), vec![]));
+    let text = rig.baseline(&["--assume-cia402-pdo"]);
     assert!(text.contains("\"assume_cia402_pdo\": true"), "{text}");
 }
 

@@ -7,7 +7,7 @@ use std::fs;
 
 use serde_json::{Value, json};
 
-use crate::support::{emcy_decode, ndjson};
+use crate::support::{Rig, emcy_decode, ndjson};
 
 const TRACE: &str = "fixtures/commissioning.log";
 
@@ -315,8 +315,6 @@ fn chart_shades_nmt_states_and_outages() {
 
 #[test]
 fn check_reports_a_new_heartbeat_loss_as_a_regression() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let trace = dir.path().join("rig.log");
     // The baseline: the trace without the pulled cable and the silence.
     let healthy: String = fs::read_to_string(TRACE)
         .expect("fixture")
@@ -324,50 +322,18 @@ fn check_reports_a_new_heartbeat_loss_as_a_regression() {
         .filter(|l| !l.contains(" 702#") && !l.contains(" 703#"))
         .map(|l| format!("{l}\n"))
         .collect();
-    fs::write(&trace, healthy).expect("write");
-    let base = dir.path().join("base.json");
-    emcy_decode()
-        .current_dir(dir.path())
-        .args(["baseline", "-o", "base.json", "rig.log"])
-        .assert()
-        .success();
-    let text = fs::read_to_string(&base).expect("baseline");
+    let rig = Rig::new(&healthy);
+    let text = rig.baseline(&[]);
     assert!(!text.contains("heartbeat_lost"), "{text}");
-    fs::copy(TRACE, &trace).expect("copy");
-    let out = emcy_decode()
-        .current_dir(dir.path())
-        .args(["check", "-b", "base.json", "--format", "json", "rig.log"])
-        .output()
-        .expect("runs");
-    assert_eq!(out.status.code(), Some(1));
-    let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
-    let lost: Vec<&Value> = doc["findings"]
-        .as_array()
-        .map(|f| {
-            f.iter()
-                .filter(|f| f["kind"] == "heartbeat_lost_new")
-                .collect()
-        })
-        .unwrap_or_default();
+    rig.trace_from(TRACE);
+    let (code, lost) = rig.check("heartbeat_lost_new");
+    assert_eq!(code, Some(1));
     let nodes: Vec<u64> = lost.iter().filter_map(|f| f["node"].as_u64()).collect();
     assert_eq!(nodes, [2, 3]);
     assert!(lost.iter().all(|f| f["severity"] == "regression"));
     // The baseline of this trace records it, and then nothing regresses.
-    emcy_decode()
-        .current_dir(dir.path())
-        .args(["baseline", "-o", "base.json", "rig.log"])
-        .assert()
-        .success();
-    assert!(
-        fs::read_to_string(&base)
-            .expect("baseline")
-            .contains("\"heartbeat_lost\": 1")
-    );
-    emcy_decode()
-        .current_dir(dir.path())
-        .args(["check", "-b", "base.json", "rig.log"])
-        .assert()
-        .success();
+    assert!(rig.baseline(&[]).contains("\"heartbeat_lost\": 1"));
+    assert_eq!(rig.check("heartbeat_lost_new"), (Some(0), vec![]));
 }
 
 #[test]

@@ -212,3 +212,51 @@ pub fn run(args: &[&str], stdin: &[u8]) -> (String, String, i32) {
         out.status.code().unwrap_or(-1),
     )
 }
+
+/// A CI rig as a user's pipeline has one: `rig.log` in a temporary folder,
+/// a baseline `base.json` recorded from it, later checked against it.
+pub struct Rig {
+    dir: tempfile::TempDir,
+}
+
+impl Rig {
+    /// A rig whose trace is `text`.
+    pub fn new(text: &str) -> Rig {
+        let dir = tempfile::tempdir().expect("temp dir");
+        std::fs::write(dir.path().join("rig.log"), text).expect("write");
+        Rig { dir }
+    }
+
+    /// The trace becomes the file at `path`.
+    pub fn trace_from(&self, path: &str) {
+        std::fs::copy(path, self.dir.path().join("rig.log")).expect("copy");
+    }
+
+    /// Records the baseline (with `options`); returns its text.
+    pub fn baseline(&self, options: &[&str]) -> String {
+        emcy_decode()
+            .current_dir(self.dir.path())
+            .arg("baseline")
+            .args(options)
+            .args(["-o", "base.json", "rig.log"])
+            .assert()
+            .success();
+        std::fs::read_to_string(self.dir.path().join("base.json")).expect("baseline")
+    }
+
+    /// Checks the trace against the baseline: the exit code and the JSON
+    /// report's findings of `kind`.
+    pub fn check(&self, kind: &str) -> (Option<i32>, Vec<Value>) {
+        let out = emcy_decode()
+            .current_dir(self.dir.path())
+            .args(["check", "-b", "base.json", "--format", "json", "rig.log"])
+            .output()
+            .expect("runs");
+        let doc: Value = serde_json::from_slice(&out.stdout).expect("json");
+        let found = doc["findings"]
+            .as_array()
+            .map(|f| f.iter().filter(|f| f["kind"] == kind).cloned().collect())
+            .unwrap_or_default();
+        (out.status.code(), found)
+    }
+}
