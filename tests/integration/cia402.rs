@@ -304,6 +304,29 @@ fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
         svg.contains("EMCY 0x7305, cleared by a fault reset at"),
         "{svg}"
     );
+    // The axis states as a strip along the lane's foot, in trace order,
+    // and their fills in the style sheet.
+    let strips: Vec<&str> = svg
+        .match_indices("<title>axis state ")
+        .filter_map(|(i, _)| svg[i + 18..].split(' ').next())
+        .collect();
+    assert_eq!(
+        strips,
+        [
+            "switch_on_disabled",
+            "ready_to_switch_on",
+            "switched_on",
+            "operation_enabled",
+            "fault_reaction_active",
+            "fault",
+            "switch_on_disabled",
+            "ready_to_switch_on",
+            "switched_on",
+            "operation_enabled",
+        ],
+        "{svg}"
+    );
+    assert!(svg.contains(".ec .a-operation_enabled{fill:"));
     // A trace without an axis has no such band.
     let out = emcy_decode()
         .args(["--format", "svg", UNKNOWN])
@@ -311,4 +334,6 @@ fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
         .expect("runs");
     let svg = String::from_utf8(out.stdout).expect("utf-8");
     assert!(!svg.contains("axis fault"), "{svg}");
+    assert!(!svg.contains("axis state"), "{svg}");
+    assert!(!svg.contains(".a-operation_enabled"), "no axis: no fills");
 }

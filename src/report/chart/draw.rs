@@ -189,13 +189,20 @@ fn write_lane(
         )?,
     }
     for shade in &lane.shades {
+        // An axis state is a strip along the lane's foot, under the bars.
+        let (y, height) = if shade.strip {
+            (lane.height - AXIS_STRIP_H, AXIS_STRIP_H)
+        } else {
+            (0.0, lane.height)
+        };
         writeln!(
             out,
-            "<rect class=\"{}\" x=\"{}\" y=\"0\" width=\"{}\" height=\"{}\"><title>{}</title></rect>",
+            "<rect class=\"{}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"><title>{}</title></rect>",
             shade.class,
             N(shade.x0),
+            N(y),
             N(shade.x1 - shade.x0),
-            N(lane.height),
+            N(height),
             esc(&shade.title)
         )?;
     }
@@ -414,13 +421,26 @@ fn write_marks(
 
 /// The legend: classes drawn in this panel, then the marker kinds.
 /// The lane bands the legend explains, in its order.
-const SHADES: [(&str, &str); 5] = [
+const SHADES: [(&str, &str); 15] = [
     ("n-initialising", "NMT initialising"),
     ("n-pre_operational", "NMT pre-operational"),
     ("n-operational", "NMT operational"),
     ("n-stopped", "NMT stopped"),
     ("out", "heartbeat lost"),
+    ("fault", "axis faulted"),
+    ("a-not_ready_to_switch_on", "axis not ready to switch on"),
+    ("a-switch_on_disabled", "axis switch on disabled"),
+    ("a-ready_to_switch_on", "axis ready to switch on"),
+    ("a-switched_on", "axis switched on"),
+    ("a-operation_enabled", "axis operation enabled"),
+    ("a-quick_stop_active", "axis quick stop active"),
+    ("a-fault_reaction_active", "axis fault reaction active"),
+    ("a-fault", "axis fault"),
+    ("a-unknown", "axis state unknown"),
 ];
+
+/// The height of the axis state strip along a lane's foot.
+const AXIS_STRIP_H: f64 = 4.0;
 
 fn write_legend(
     out: &mut String,

@@ -6,6 +6,9 @@
 
 use super::{Clock, Scale, Shade};
 use crate::analyze::NodeReport;
+use crate::canopen::cia402::State;
+use crate::timeline::At;
+use crate::timeline::axis::AxisState;
 
 /// The fault bands of a node with an axis; none for other nodes.
 pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Vec<Shade> {
@@ -47,11 +50,52 @@ pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Ve
         out.push(Shade {
             x0,
             x1: x1.max(x0 + 1.0),
-            // The outage style (red): a fault is as bad, and the CSS every chart
-            // embeds stays as it is.
-            class: "out",
+            class: "fault",
             title,
+            strip: false,
         });
+    }
+    out
+}
+
+/// The CSS class of an axis state's strip.
+pub(super) fn axis_class(state: AxisState) -> &'static str {
+    let AxisState::State(state) = state else {
+        return "a-unknown";
+    };
+    match state {
+        State::NotReadyToSwitchOn => "a-not_ready_to_switch_on",
+        State::SwitchOnDisabled => "a-switch_on_disabled",
+        State::ReadyToSwitchOn => "a-ready_to_switch_on",
+        State::SwitchedOn => "a-switched_on",
+        State::OperationEnabled => "a-operation_enabled",
+        State::QuickStopActive => "a-quick_stop_active",
+        State::FaultReactionActive => "a-fault_reaction_active",
+        State::Fault => "a-fault",
+    }
+}
+
+/// The axis states along the lane's foot: each from its change to the
+/// next (the last to the end of the trace).
+pub(super) fn axis_shades(clock: &Clock, scale: Scale, changes: &[(At, AxisState)]) -> Vec<Shade> {
+    let end = scale.x(scale.end);
+    let mut out = Vec::new();
+    for (i, (at, state)) in changes.iter().enumerate() {
+        let Some(v) = clock.value(at) else { continue };
+        let x0 = scale.x(v);
+        let x1 = changes
+            .get(i + 1)
+            .and_then(|(next, _)| clock.value(next))
+            .map_or(end, |n| scale.x(n));
+        if x1 > x0 {
+            out.push(Shade {
+                x0,
+                x1,
+                class: axis_class(*state),
+                title: format!("axis state {} from {}", state.slug(), clock.at(at)),
+                strip: true,
+            });
+        }
     }
     out
 }

@@ -43,6 +43,7 @@ use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport, Nod
 use crate::canopen::NodeId;
 use crate::canopen::nmt::NmtState;
 use crate::timeline::At;
+use crate::timeline::axis::AxisState;
 use crate::trace::Format;
 
 use axis::Axis;
@@ -71,28 +72,33 @@ pub(super) struct Collector {
     current: Streamed,
     /// Per lane, the NMT state changes in trace order.
     nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
+    /// Per lane, the CiA 402 axis state changes in trace order.
+    axis: BTreeMap<(String, NodeId), Vec<(At, AxisState)>>,
 }
 
 impl Collector {
     pub(super) fn begin_input(&mut self) {
         self.current = Streamed::default();
         self.nmt.clear();
+        self.axis.clear();
     }
 
-    /// NMT state changes shade the lane; outages come from the report.
+    /// NMT and axis state changes shade the lane; outages and faults
+    /// come from the report.
     pub(super) fn health(&mut self, ev: &HealthEvent<'_>) {
-        if let Health::Nmt { state, .. } = ev.health {
-            let changes = self
-                .nmt
-                .entry((ev.channel.to_string(), ev.node))
-                .or_default();
-            if changes.len() < MAX_NMT_CHANGES {
-                let at = At {
-                    time: ev.time,
-                    line: ev.line,
-                };
-                changes.push((at, *state));
+        let at = At {
+            time: ev.time,
+            line: ev.line,
+        };
+        let lane = || (ev.channel.to_string(), ev.node);
+        match ev.health {
+            Health::Nmt { state, .. } => {
+                push_change(self.nmt.entry(lane()).or_default(), at, *state)
             }
+            Health::AxisState { state, .. } => {
+                push_change(self.axis.entry(lane()).or_default(), at, *state)
+            }
+            _ => {}
         }
     }
 
@@ -123,9 +129,25 @@ impl Collector {
     /// Lays out the input that just ended.
     pub(super) fn end_input(&mut self, input: &InputReport) -> io::Result<Panel> {
         let streamed = std::mem::take(&mut self.current);
-        let nmt = std::mem::take(&mut self.nmt);
-        Panel::build(input, streamed, nmt)
+        let changes = Changes {
+            nmt: std::mem::take(&mut self.nmt),
+            axis: std::mem::take(&mut self.axis),
+        };
+        Panel::build(input, streamed, changes)
     }
+}
+
+/// A lane's state changes, up to [`MAX_NMT_CHANGES`].
+fn push_change<S>(changes: &mut Vec<(At, S)>, at: At, state: S) {
+    if changes.len() < MAX_NMT_CHANGES {
+        changes.push((at, state));
+    }
+}
+
+/// The state changes an input's lanes are shaded by.
+struct Changes {
+    nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
+    axis: BTreeMap<(String, NodeId), Vec<(At, AxisState)>>,
 }
 
 /// The label of a lane: `can0 · node 5`, and a second line.
@@ -164,6 +186,9 @@ pub(in crate::report) struct Panel {
     /// The `(class, shade)` colours its codes use beyond the class colours
     /// (the document's style sheet has a rule for each).
     pub(super) shades: BTreeSet<(usize, usize)>,
+    /// A lane has a CiA 402 axis state strip (the style sheet then has
+    /// their fills).
+    pub(super) axes: bool,
     /// The attributes of the panel's `<g>` that let the HTML page re-lay
     /// the time axis (fill the window, zoom, pan): the plot's edges in px,
     /// the axis values at them, what the axis measures and its origin.
@@ -183,9 +208,12 @@ struct Lane<'a> {
 struct Shade {
     x0: f64,
     x1: f64,
-    /// The CSS class (`n-operational`, `out`).
+    /// The CSS class (`n-operational`, `out`, `a-fault`).
     class: &'static str,
     title: String,
+    /// A strip along the lane's foot (the drive's axis state) rather than
+    /// the lane's whole height (NMT state, outages, faults).
+    strip: bool,
 }
 
 /// The CSS class of an NMT state's band.
@@ -216,6 +244,7 @@ fn shades(clock: &Clock, scale: Scale, node: &NodeReport, nmt: &[(At, NmtState)]
                 x1,
                 class: nmt_class(*state),
                 title: format!("NMT {} from {}", state.slug(), clock.at(at)),
+                strip: false,
             });
         }
     }
@@ -249,6 +278,7 @@ fn shades(clock: &Clock, scale: Scale, node: &NodeReport, nmt: &[(At, NmtState)]
                 x1: x1.max(x0 + 1.0),
                 class: "out",
                 title,
+                strip: false,
             });
         }
     }
@@ -278,7 +308,7 @@ impl Panel {
     fn build(
         input: &InputReport,
         mut streamed: Streamed,
-        mut nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
+        mut changes: Changes,
     ) -> io::Result<Panel> {
         let timed = streamed.timed.unwrap_or(input.first_time.is_some());
         let origin = input.first_time.or(streamed.origin);
@@ -369,16 +399,17 @@ impl Panel {
                 .get_mut(node.channel.as_str())
                 .and_then(|n| n.remove(&node.node));
             let rows = bars.rows.len().max(1) as f64;
-            let changes = nmt
-                .remove(&(node.channel.clone(), node.node))
-                .unwrap_or_default();
+            let lane = (node.channel.clone(), node.node);
+            let nmt = changes.nmt.remove(&lane).unwrap_or_default();
+            let axis = changes.axis.remove(&lane).unwrap_or_default();
             lanes.push(Lane {
                 node,
                 bars,
                 marks,
                 shades: {
-                    let mut s = shades(&clock, scale, node, &changes);
+                    let mut s = shades(&clock, scale, node, &nmt);
                     s.extend(drive::fault_shades(&clock, scale, node));
+                    s.extend(drive::axis_shades(&clock, scale, &axis));
                     s
                 },
                 height: (rows * ROW_H + 10.0).max(LANE_MIN_H),
@@ -401,6 +432,9 @@ impl Panel {
         let mut svg = String::new();
         let height = write_panel(&mut svg, input, &clock, scale, &lanes, &keys, &streamed)
             .map_err(|_| io::Error::other("formatting the chart failed"))?;
+        let axes = lanes
+            .iter()
+            .any(|l| l.shades.iter().any(|s| s.strip || s.class == "fault"));
         let lanes = lanes
             .iter()
             .map(|l| {
@@ -416,6 +450,7 @@ impl Panel {
             clock,
             lanes,
             shades: keys.shades(),
+            axes,
             view,
         })
     }

@@ -59,6 +59,23 @@ pub(in crate::report) const STYLE: &str = "\
 .ec .out{fill:#d62728;fill-opacity:.28}
 ";
 
+/// The axis state strips' fills, only in documents that have a CiA 402
+/// drive (every other chart's style sheet stays as it was): disabled
+/// states grey, ready and switched on light green, operation enabled
+/// green, quick stop amber, fault reaction and fault red.
+const AXIS_STYLE: &str = "\
+.ec .a-not_ready_to_switch_on{fill:#bbb}
+.ec .a-switch_on_disabled{fill:#888}
+.ec .a-ready_to_switch_on{fill:#a6dba0}
+.ec .a-switched_on{fill:#5aae61}
+.ec .a-operation_enabled{fill:#1b7837}
+.ec .a-quick_stop_active{fill:#e69f00}
+.ec .a-fault_reaction_active{fill:#f4a582}
+.ec .a-fault{fill:#d62728}
+.ec .a-unknown{fill:#fff;stroke:#888;stroke-width:.5}
+.ec .fault{fill:#d62728;fill-opacity:.22}
+";
+
 /// Classes in legend order (the CiA 301 classes users look for first)
 /// with the hue of each: colour-blind-safe where there are enough.
 pub(super) const CLASS_COLOURS: [(Class, u32); 14] = [
@@ -158,12 +175,17 @@ fn rgb(h: f64, s: f64, l: f64) -> u32 {
 
 /// The style sheet of a document: [`STYLE`], a fill per class, and a fill
 /// per `(class, shade)` the panels use beyond the first shade.
+/// With `axes`, the axis state strips' fills too.
 pub(in crate::report) fn style_sheet(
     shades: &std::collections::BTreeSet<(usize, usize)>,
+    axes: bool,
 ) -> String {
     use std::fmt::Write as _;
     let mut s = String::with_capacity(STYLE.len() + 1024);
     s.push_str(STYLE);
+    if axes {
+        s.push_str(AXIS_STYLE);
+    }
     for (class, colour) in CLASS_COLOURS {
         let _ = writeln!(s, ".ec .c-{}{{fill:#{colour:06x}}}", class.slug());
     }
