@@ -9,7 +9,7 @@
 //! (a heartbeat or boot-up); monitoring begins with the first one.
 
 use super::At;
-use crate::trace::{Span, Timestamp};
+use crate::trace::{Span, Step, Timestamp};
 
 /// Intervals seen before a timeout is learnt.
 pub const LEARN_FROM: usize = 8;
@@ -102,6 +102,8 @@ pub struct HeartbeatMonitor {
     /// date: asked for on every heartbeat.
     timeout: Option<(Span, TimeoutSource)>,
     deadline: Option<Timestamp>,
+    /// The timeout split for adding, kept with it.
+    step: Option<Step>,
 }
 
 impl HeartbeatMonitor {
@@ -124,6 +126,7 @@ impl HeartbeatMonitor {
     /// on changed.
     fn refresh(&mut self) {
         self.timeout = self.compute_timeout();
+        self.step = self.timeout.and_then(|(t, _)| t.step());
         self.deadline = match (self.timeout, self.last.and_then(|l| l.time)) {
             (Some((timeout, _)), Some(last)) => last.checked_add_span(timeout),
             _ => None,
@@ -211,15 +214,13 @@ impl HeartbeatMonitor {
     /// nothing changed; use [`HeartbeatMonitor::seen`]).
     #[inline]
     pub fn steady(&mut self, at: At) -> bool {
-        let (Some(now), Some(deadline), Some((timeout, _))) =
-            (at.time, self.deadline, self.timeout)
-        else {
+        let (Some(now), Some(deadline), Some(step)) = (at.time, self.deadline, self.step) else {
             return false;
         };
         if self.lost.is_some() || self.period.is_none() || now > deadline {
             return false;
         }
-        let Some(next) = now.checked_add_span(timeout) else {
+        let Some(next) = now.checked_add_step(step) else {
             return false;
         };
         self.beats += 1;

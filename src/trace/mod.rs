@@ -30,7 +30,7 @@ pub mod trc;
 use std::borrow::Cow;
 use std::fmt;
 
-pub use time::{Span, Timestamp};
+pub use time::{Span, Step, Timestamp};
 
 /// The text formats we read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -52,6 +52,16 @@ pub struct Span {
     digits: u8,
 }
 
+/// A span that is not negative, split into whole seconds and the
+/// attoseconds below them, to add to many times ([`Timestamp::checked_add_step`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    secs: u64,
+    /// < 10^18.
+    atto: u64,
+    digits: u8,
+}
+
 /// 10^0 ..= 10^18.
 const POW10: [u64; MAX_FRACTION_DIGITS + 1] = {
     let mut t = [1u64; MAX_FRACTION_DIGITS + 1];
@@ -153,19 +163,16 @@ impl Timestamp {
     /// `self + span` for a span that is not negative (a deadline), at the
     /// finer precision; `None` for a negative span or on overflow.
     pub fn checked_add_span(self, span: Span) -> Option<Timestamp> {
-        let atto = u128::try_from(span.atto).ok()?;
-        // Heartbeat timeouts are under a second: no 128-bit division (this
-        // runs for every heartbeat).
-        let (secs, atto) = if atto < ATTO_PER_SEC {
-            (0, atto as u64)
-        } else {
-            (
-                u64::try_from(atto / ATTO_PER_SEC).ok()?,
-                (atto % ATTO_PER_SEC) as u64,
-            )
-        };
-        let mut secs = self.secs.checked_add(secs)?;
-        let mut atto = self.atto + atto;
+        self.checked_add_step(span.step()?)
+    }
+
+    /// `self + step`: [`Timestamp::checked_add_span`] with the span's split
+    /// done once (a heartbeat's deadline is its time plus the same timeout,
+    /// for every heartbeat). `None` on overflow.
+    #[inline]
+    pub fn checked_add_step(self, step: Step) -> Option<Timestamp> {
+        let mut secs = self.secs.checked_add(step.secs)?;
+        let mut atto = self.atto + step.atto;
         if u128::from(atto) >= ATTO_PER_SEC {
             atto -= ATTO_PER_SEC as u64;
             secs = secs.checked_add(1)?;
@@ -173,7 +180,7 @@ impl Timestamp {
         Some(Timestamp {
             secs,
             atto,
-            digits: self.digits.max(span.digits),
+            digits: self.digits.max(step.digits),
         })
     }
 
@@ -225,6 +232,25 @@ impl Ord for Timestamp {
 }
 
 impl Span {
+    /// The span split for adding; `None` when negative or over 2^64 s.
+    pub fn step(self) -> Option<Step> {
+        let atto = u128::try_from(self.atto).ok()?;
+        // Heartbeat timeouts are under a second: no 128-bit division.
+        let (secs, atto) = if atto < ATTO_PER_SEC {
+            (0, atto as u64)
+        } else {
+            (
+                u64::try_from(atto / ATTO_PER_SEC).ok()?,
+                (atto % ATTO_PER_SEC) as u64,
+            )
+        };
+        Some(Step {
+            secs,
+            atto,
+            digits: self.digits,
+        })
+    }
+
     /// No time at all.
     pub const ZERO: Span = Span { atto: 0, digits: 0 };
 
@@ -552,6 +578,24 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// Adding a span's step is adding the span: exact, carries into
+        /// the seconds, keeps the finer precision.
+        #[test]
+        fn adding_a_step_adds_its_span(
+            secs in 0u64..4_000_000_000,
+            frac in 0u64..1_000_000,
+            later_secs in 1u64..100_000,
+            later_frac in 0u64..1_000_000_000,
+        ) {
+            let t = Timestamp::from_parts(secs, frac, 6);
+            let later = Timestamp::from_parts(secs + later_secs, later_frac, 9);
+            let span = later.since(t);
+            let step = span.step().expect("not negative");
+            proptest::prop_assert_eq!(t.checked_add_step(step), Some(later));
+            proptest::prop_assert_eq!(t.checked_add_span(span), Some(later));
+            proptest::prop_assert_eq!(t.since(later).step(), None);
+        }
+
         /// Every width, the constant-division ones (3, 6, 9) included,
         /// writes the leading digits of the fraction, zero-padded.
         #[test]
