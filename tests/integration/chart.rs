@@ -16,8 +16,14 @@ use crate::support::golden::{self, check, fixtures};
 use serde_json::Value;
 
 fn render(format: &str, args: &[&Path]) -> String {
+    render_with(format, &[], args)
+}
+
+/// [`render`] with `flags` before the inputs.
+fn render_with(format: &str, flags: &[&str], args: &[&Path]) -> String {
     let out = emcy_decode()
         .args(["--format", format])
+        .args(flags)
         .args(args)
         .output()
         .expect("runs");
@@ -33,8 +39,10 @@ fn render(format: &str, args: &[&Path]) -> String {
 fn every_fixture_as_svg_and_html_matches_its_golden_file() {
     let mut failures = Vec::new();
     for fixture in fixtures() {
+        // The same flags as the other goldens (a profile, a DCF).
+        let flags = crate::golden::scenario_flags(&fixture);
         for format in ["svg", "html"] {
-            let out = render(format, &[&fixture]);
+            let out = render_with(format, flags, &[&fixture]);
             check(&golden::path(&fixture, format), &out, &mut failures);
         }
     }

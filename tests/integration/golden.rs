@@ -21,7 +21,7 @@ const OUTPUTS: [(&str, &[&str]); 5] = [
 /// Flags a scenario needs: the profile its trace cannot choose itself
 /// (CANopenNode devices have no vendor id of their own; an AX2000 reports
 /// Kollmorgen's).
-fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
+pub(crate) fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
     let name = fixture
         .file_name()
         .and_then(|n| n.to_str())
