@@ -393,8 +393,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         if events.is_empty() {
             return Ok(());
         }
-        let selected = self.opts.selects(slot.channel, node);
-        emit(self.sink, self.file, slot.channel, node, selected, events)
+        emit(self.sink, self.file, self.opts, slot.channel, node, events)
     }
 
     /// An error EMCY of a node with an axis: the fault it came with.

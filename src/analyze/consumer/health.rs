@@ -6,6 +6,7 @@ use std::io::Write;
 
 use super::deadlines::Deadlines;
 use super::{Consumer, NodeSlot, Nodes};
+use crate::analyze::Options;
 use crate::analyze::OutputError;
 use crate::analyze::event::{
     Health, HealthEvent, HeartbeatReport, HistoryItem, HistoryReport, NodeReport,
@@ -52,15 +53,17 @@ impl HealthState {
     }
 }
 
-/// Hands `events` (emptied) to the sink as the node's events.
+/// Hands `events` (emptied) to the sink as the node's events, if the
+/// options select the node (`--channel`, `--node`).
 pub(super) fn emit(
     sink: &mut dyn Sink,
     file: &str,
+    opts: &Options,
     channel: &str,
     node: NodeId,
-    selected: bool,
     events: &mut Vec<(At, Health)>,
 ) -> Result<(), OutputError> {
+    let selected = events.is_empty() || opts.selects(channel, node);
     for (at, health) in events.drain(..) {
         if selected {
             sink.health(&HealthEvent {
@@ -213,13 +216,12 @@ impl<E: Write> Consumer<'_, '_, E> {
             if self.health.events.is_empty() {
                 continue;
             }
-            let selected = self.opts.selects(slot.channel, node);
             emit(
                 self.sink,
                 self.file,
+                self.opts,
                 slot.channel,
                 node,
-                selected,
                 &mut self.health.events,
             )?;
         }
@@ -287,13 +289,12 @@ impl<E: Write> Consumer<'_, '_, E> {
             .heartbeat(NmtState::Initialising, &mut self.health.warnings);
         nmt_event(change, at, &mut self.health.events);
         self.health.schedule(slot.channel_id, node, h);
-        let selected = self.opts.selects(slot.channel, node);
         emit(
             self.sink,
             self.file,
+            self.opts,
             slot.channel,
             node,
-            selected,
             &mut self.health.events,
         )?;
         self.nmt_warnings(node, at.line);
@@ -366,13 +367,12 @@ impl<E: Write> Consumer<'_, '_, E> {
             }
         }
         self.health.schedule(slot.channel_id, node, h);
-        let selected = self.opts.selects(slot.channel, node);
         emit(
             self.sink,
             self.file,
+            self.opts,
             slot.channel,
             node,
-            selected,
             &mut self.health.events,
         )?;
         if let Some(byte) = undefined {
@@ -408,13 +408,12 @@ impl<E: Write> Consumer<'_, '_, E> {
             let slot = self.nodes.get(raw, node);
             let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
             nmt_event(h.nmt.command(command), at, &mut self.health.events);
-            let selected = self.opts.selects(slot.channel, node);
             emit(
                 self.sink,
                 self.file,
+                self.opts,
                 slot.channel,
                 node,
-                selected,
                 &mut self.health.events,
             )?;
         }
@@ -476,13 +475,12 @@ impl<E: Write> Consumer<'_, '_, E> {
         let id = slot.channel_id;
         self.read_outs_out(id, node);
         let slot = self.nodes.get(raw, node);
-        let selected = self.opts.selects(slot.channel, node);
         emit(
             self.sink,
             self.file,
+            self.opts,
             slot.channel,
             node,
-            selected,
             &mut self.health.events,
         )
     }
@@ -529,13 +527,12 @@ impl<E: Write> Consumer<'_, '_, E> {
                     });
                 }
                 let slot = self.nodes.get(raw, node);
-                let selected = self.opts.selects(slot.channel, node);
                 emit(
                     self.sink,
                     self.file,
+                    self.opts,
                     slot.channel,
                     node,
-                    selected,
                     &mut self.health.events,
                 )
             }
@@ -628,13 +625,12 @@ impl<E: Write> Consumer<'_, '_, E> {
             let Some(slot) = self.nodes.slot_by_id(id, node) else {
                 continue;
             };
-            let selected = self.opts.selects(slot.channel, node);
             emit(
                 self.sink,
                 self.file,
+                self.opts,
                 slot.channel,
                 node,
-                selected,
                 &mut self.health.events,
             )?;
         }
