@@ -133,6 +133,48 @@ impl<W: Write> TableReport<W> {
         self
     }
 
+    /// An end table in two passes, widths then rows, so no table of a
+    /// million rows is held: `rows` gives the rows again for each pass and
+    /// `fill` puts a row's cells in `cells`, returning their display widths.
+    /// `title` is written first (after a blank line with `blank`); no rows:
+    /// nothing is written.
+    fn write_in_two_passes<T, I, const N: usize>(
+        &mut self,
+        (title, blank): (&str, bool),
+        (header, right, fit): (&[&str; N], &[bool; N], &Fit),
+        rows: impl Fn() -> I,
+        mut fill: impl FnMut(&mut [String; N], T) -> [usize; N],
+    ) -> io::Result<()>
+    where
+        I: Iterator<Item = T>,
+    {
+        let mut cells: [String; N] = std::array::from_fn(|_| String::new());
+        let mut widths = header.map(str::len);
+        let mut any = false;
+        for row in rows() {
+            any = true;
+            for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
+                *w = (*w).max(c);
+            }
+        }
+        if !any {
+            return Ok(());
+        }
+        let shown = self.fit(&mut widths, header, fit);
+        if blank {
+            writeln!(self.out)?;
+        }
+        writeln!(self.out, "{}", self.paint(BOLD, title))?;
+        write_row(&mut self.out, header, &widths, &shown, right)?;
+        let mut line = String::new();
+        for row in rows() {
+            let cell_widths = fill(&mut cells, row);
+            push_row(&mut line, &cells, &cell_widths, &widths, &shown, right);
+            self.out.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
     /// One line per node: state, errors seen with counts, time in error,
     /// longest error, first and last EMCY.
     fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
@@ -141,33 +183,12 @@ impl<W: Write> TableReport<W> {
         // took about 2.5 KB per node on top of the reports.
         self.times.set_origin(input.first_time);
         let times = self.times.clone();
-        let mut cells: [String; 11] = Default::default();
-        let mut widths = NODES_HEADER.map(str::len);
-        for n in &input.nodes {
-            for (w, c) in widths
-                .iter_mut()
-                .zip(node_cells(&mut cells, &times, input, n))
-            {
-                *w = (*w).max(c);
-            }
-        }
-        let shown = self.fit(&mut widths, &NODES_HEADER, &NODES_FIT);
-        writeln!(self.out, "{}", self.paint(BOLD, "Nodes"))?;
-        write_row(&mut self.out, &NODES_HEADER, &widths, &shown, &NODES_RIGHT)?;
-        let mut line = String::new();
-        for n in &input.nodes {
-            let cell_widths = node_cells(&mut cells, &times, input, n);
-            push_row(
-                &mut line,
-                &cells,
-                &cell_widths,
-                &widths,
-                &shown,
-                &NODES_RIGHT,
-            );
-            self.out.write_all(line.as_bytes())?;
-        }
-        Ok(())
+        self.write_in_two_passes(
+            ("Nodes", false),
+            (&NODES_HEADER, &NODES_RIGHT, &NODES_FIT),
+            || input.nodes.iter(),
+            |cells, n| node_cells(cells, &times, input, n),
+        )
     }
 
     /// The summary's codes: per node, each code it raised, how often, and
@@ -192,34 +213,15 @@ impl<W: Write> TableReport<W> {
                 })
             })
         };
-        let mut widths = CODES_HEADER.map(str::len);
-        let mut any = false;
-        for (_, cell_widths) in rows() {
-            any = true;
-            for (w, c) in widths.iter_mut().zip(cell_widths) {
-                *w = (*w).max(c);
-            }
-        }
-        if !any {
-            return Ok(());
-        }
-        let shown = self.fit(&mut widths, &CODES_HEADER, &CODES_FIT);
-        writeln!(self.out)?;
-        writeln!(self.out, "{}", self.paint(BOLD, "Errors seen"))?;
-        write_row(&mut self.out, &CODES_HEADER, &widths, &shown, &CODES_RIGHT)?;
-        let mut line = String::new();
-        for (cells, cell_widths) in rows() {
-            push_row(
-                &mut line,
-                &cells,
-                &cell_widths,
-                &widths,
-                &shown,
-                &CODES_RIGHT,
-            );
-            self.out.write_all(line.as_bytes())?;
-        }
-        Ok(())
+        self.write_in_two_passes(
+            ("Errors seen", true),
+            (&CODES_HEADER, &CODES_RIGHT, &CODES_FIT),
+            rows,
+            |cells, (row, widths)| {
+                *cells = row;
+                widths
+            },
+        )
     }
 
     /// The nodes' NMT state, heartbeat and error history, for the nodes the
@@ -233,37 +235,12 @@ impl<W: Write> TableReport<W> {
             return Ok(());
         }
         let times = self.times.clone();
-        let mut cells: [String; 6] = Default::default();
-        let mut widths = HEALTH_HEADER.map(str::len);
-        for n in input.nodes.iter().filter(told) {
-            for (w, c) in widths.iter_mut().zip(health_cells(&mut cells, &times, n)) {
-                *w = (*w).max(c);
-            }
-        }
-        let shown = self.fit(&mut widths, &HEALTH_HEADER, &HEALTH_FIT);
-        writeln!(self.out)?;
-        writeln!(self.out, "{}", self.paint(BOLD, "Node health"))?;
-        write_row(
-            &mut self.out,
-            &HEALTH_HEADER,
-            &widths,
-            &shown,
-            &HEALTH_RIGHT,
-        )?;
-        let mut line = String::new();
-        for n in input.nodes.iter().filter(told) {
-            let cell_widths = health_cells(&mut cells, &times, n);
-            push_row(
-                &mut line,
-                &cells,
-                &cell_widths,
-                &widths,
-                &shown,
-                &HEALTH_RIGHT,
-            );
-            self.out.write_all(line.as_bytes())?;
-        }
-        Ok(())
+        self.write_in_two_passes(
+            ("Node health", true),
+            (&HEALTH_HEADER, &HEALTH_RIGHT, &HEALTH_FIT),
+            || input.nodes.iter().filter(told),
+            |cells, n| health_cells(cells, &times, n),
+        )
     }
 
     /// The CiA 402 drives' axes (none: no section): state at the end,
