@@ -908,8 +908,6 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             if let Some(access) = sdo::parse(frame.id, data) {
                 self.sdo_access(frame.channel, at, access)?;
             }
-        } else if let Some(access) = sdo::parse(frame.id, data) {
-            self.sdo_access(frame.channel, at, access)?;
         } else if let Some(node) = emcy::boot_node(frame.id, data) {
             self.counts.boot += 1;
             self.check_clock(at);
