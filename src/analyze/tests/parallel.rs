@@ -382,6 +382,41 @@ fn nmt_heartbeats_and_error_history_across_blocks() {
     assert!(err.contains("toggle bit did not alternate"), "{err}");
 }
 
+/// A drive's TPDO made valid by a segmented download of its COB-ID, its
+/// statuswords right after the confirmation (the interest widens between
+/// two frames of one block): split anywhere, with any number of threads,
+/// the PDOs are decoded the same.
+#[test]
+fn a_segmented_download_completing_a_mapping_across_blocks() {
+    let frames = [
+        "605#2300180185010080", // TPDO1 COB-ID 0x185, not valid yet
+        "585#6000180100000000",
+        "605#2F001A0000000000",
+        "585#60001A0000000000",
+        "605#23001A0110004160", // the statusword, 16 bits
+        "585#60001A0100000000",
+        "605#2F001A0001000000",
+        "585#60001A0000000000",
+        "605#2100180104000000", // segmented: 4 bytes
+        "585#6000180100000000",
+        "605#0785010000000000", // the last segment: 0x00000185, valid
+        "585#2000000000000000",
+        "185#4002",
+        "185#2102",
+        "185#3302",
+        "185#3702",
+        "085#1032010000000000", // an EMCY (the split check wants one)
+    ];
+    let trace: String = frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| format!("(1700000000.{:06}) can0 {f}\n", i * 1000))
+        .collect();
+    assert_split_independent("segmented COB-ID", trace.as_bytes());
+    let (out, _) = run(trace.as_bytes(), 2, 64);
+    assert_eq!(out.matches("\"type\":\"axis_state\"").count(), 4, "{out}");
+}
+
 /// Issue 19's commissioning fixture: PDO mappings learnt mid-trace (one
 /// COB-ID by a segmented download) widen the interest; split anywhere, the
 /// drive's states, fault and fault reset are the same. The unknown-mapping
