@@ -6,7 +6,11 @@ use super::OutputError;
 use crate::trace::candump_log;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{self, Block, RawLine};
-use crate::trace::{Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp};
+use std::ops::Range;
+
+use crate::trace::{
+    Fold, Folds, Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp,
+};
 
 /// A frame read in another format than the file's: (its format, the file's).
 pub(super) type Foreign = Option<(Format, Format)>;
@@ -20,6 +24,10 @@ pub(super) trait LineSink {
     /// `n` wanted frames that only move the input's first/last time (see
     /// [`content_matters`](super::interest::content_matters)), the first and last of their times.
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
+    /// A run of lines whose repeated frames the reader folded: taken whole
+    /// (its plain and timed frames counted as by `plain_frames` and
+    /// `timed_frames`), or `false`: give me those lines one at a time.
+    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<bool, OutputError>;
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     /// Frames a skipped line says were lost before they were logged
@@ -38,6 +46,21 @@ pub(super) fn too_long(n: u64, max_line: usize) -> Reason {
     format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
 }
 
+/// A run of lines of one layout with frames folded ([`Folds`]): the
+/// lines before the run's frame, `range` of the block's bytes.
+pub(super) struct FoldedRun<'a> {
+    pub range: Range<usize>,
+    pub plain: u64,
+    /// Timed frames, the folded ones included.
+    pub timed: u64,
+    pub first: Timestamp,
+    pub last: Timestamp,
+    /// The last frame folded (the latest time: folds only go forward).
+    pub latest: Timestamp,
+    pub channel: &'a [u8],
+    pub folds: &'a [Fold],
+}
+
 /// The one loop that classifies lines, sequentially or on a worker: runs
 /// of common lines through the parser's hot loop, anything else a line at
 /// a time.
@@ -50,24 +73,51 @@ pub(super) fn classify_block(
     let bytes = block.text();
     let mut idx = 0u64;
     let mut pos = 0usize;
+    let mut folds = Folds::default();
     if let Some(n) = block.too_long_before {
         sink.malformed(idx, too_long(n, max_line));
         idx += 1;
     }
     loop {
+        let start = pos;
+        // Emptied here: in the reader's hot loop it made every line slower.
+        folds.clear();
         let run = detector.run(
             bytes.get(pos..).unwrap_or_default(),
             max_line,
             sink.interest(),
+            &mut folds,
         );
         pos += run.bytes;
-        if run.plain > 0 {
-            sink.plain_frames(run.plain);
-            idx += run.plain;
-        }
-        if let (Some(first), Some(last)) = (run.first_time, run.last_time) {
-            sink.timed_frames(run.timed, first, last);
-            idx += run.timed;
+        let lines = start..start + run.before_frame;
+        let folded = match (folds.latest(), run.first_time, run.last_time) {
+            (Some(latest), Some(first), Some(last)) => Some(FoldedRun {
+                range: lines.clone(),
+                plain: run.plain,
+                timed: run.timed,
+                first,
+                last,
+                latest,
+                channel: run.fold_channel,
+                folds: folds.as_slice(),
+            }),
+            _ => None,
+        };
+        if let Some(folded) = folded {
+            if sink.folded(idx, &folded)? {
+                idx += run.plain + run.timed;
+            } else {
+                idx = classify_lines(bytes, lines, idx, max_line, detector, sink)?;
+            }
+        } else {
+            if run.plain > 0 {
+                sink.plain_frames(run.plain);
+                idx += run.plain;
+            }
+            if let (Some(first), Some(last)) = (run.first_time, run.last_time) {
+                sink.timed_frames(run.timed, first, last);
+                idx += run.timed;
+            }
         }
         if let Some(frame) = run.frame {
             deliver(sink, idx, &frame, None)?;
@@ -78,39 +128,72 @@ pub(super) fn classify_block(
             break;
         };
         pos = next;
-        match raw {
-            RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
-            RawLine::Text(text) => match detector.scan(text, sink.interest()) {
-                Scan::Plain => sink.plain_frames(1),
-                Scan::Timed(t) => sink.timed_frames(1, t, t),
-                Scan::Frame(frame) => deliver(sink, idx, &frame, None)?,
-                Scan::Parse => {
-                    let known = detector.format().is_some();
-                    match detector.parse(text, sink.interest()) {
-                        Parsed::Frame(frame) => {
-                            if let Some(warning) = detector.take_warning() {
-                                sink.warning(idx, warning);
-                            }
-                            let foreign = detector.take_foreign().zip(detector.format());
-                            deliver(sink, idx, &frame, foreign)?;
-                        }
-                        Parsed::Skipped => {
-                            sink.skipped();
-                            if let Some(n) = candump_log::dropped_frames(text) {
-                                sink.dropped(n);
-                            }
-                            if !known && detector.format().is_some() {
-                                sink.format_known();
-                            }
-                        }
-                        Parsed::Malformed(reason) => sink.malformed(idx, reason),
-                    }
-                }
-            },
-        }
+        classify_line(raw, idx, detector, sink, max_line)?;
         idx += 1;
     }
     sink.lines(idx);
+    Ok(())
+}
+
+/// The lines of `bytes[range]` one at a time, the first being line `idx`
+/// of the block (a run whose folds the sink would not take); returns the
+/// index after them.
+pub(super) fn classify_lines(
+    bytes: &[u8],
+    range: Range<usize>,
+    mut idx: u64,
+    max_line: usize,
+    detector: &mut Detector,
+    sink: &mut impl LineSink,
+) -> Result<u64, OutputError> {
+    let bytes = bytes.get(..range.end).unwrap_or_default();
+    let mut pos = range.start;
+    while let Some((raw, next)) = lines::line_at(bytes, pos, max_line) {
+        pos = next;
+        classify_line(raw, idx, detector, sink, max_line)?;
+        idx += 1;
+    }
+    Ok(idx)
+}
+
+/// One line outside the parser's hot loop.
+fn classify_line(
+    raw: RawLine<'_>,
+    idx: u64,
+    detector: &mut Detector,
+    sink: &mut impl LineSink,
+    max_line: usize,
+) -> Result<(), OutputError> {
+    match raw {
+        RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
+        RawLine::Text(text) => match detector.scan(text, sink.interest()) {
+            Scan::Plain => sink.plain_frames(1),
+            Scan::Timed(t) => sink.timed_frames(1, t, t),
+            Scan::Frame(frame) => deliver(sink, idx, &frame, None)?,
+            Scan::Parse => {
+                let known = detector.format().is_some();
+                match detector.parse(text, sink.interest()) {
+                    Parsed::Frame(frame) => {
+                        if let Some(warning) = detector.take_warning() {
+                            sink.warning(idx, warning);
+                        }
+                        let foreign = detector.take_foreign().zip(detector.format());
+                        deliver(sink, idx, &frame, foreign)?;
+                    }
+                    Parsed::Skipped => {
+                        sink.skipped();
+                        if let Some(n) = candump_log::dropped_frames(text) {
+                            sink.dropped(n);
+                        }
+                        if !known && detector.format().is_some() {
+                            sink.format_known();
+                        }
+                    }
+                    Parsed::Malformed(reason) => sink.malformed(idx, reason),
+                }
+            }
+        },
+    }
     Ok(())
 }
 

@@ -3,7 +3,7 @@
 
 mod axis;
 mod deadlines;
-mod health;
+pub(super) mod health;
 
 use std::borrow::Borrow;
 use std::collections::HashMap;
@@ -11,7 +11,7 @@ use std::hash::{Hash, Hasher};
 use std::io::Write;
 use std::sync::Arc;
 
-use super::classify::{Foreign, LineSink};
+use super::classify::{FoldedRun, Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
 use super::event::{
     BootEvent, CodeTexts, Counts, EVENT_ACTIVE_MAX, EmcyEvent, InputReport, NodeReport,
@@ -196,6 +196,33 @@ impl Nodes {
         let ch = self.channels.get_mut(c)?;
         let i = ch.position(node).ok()?;
         ch.nodes.get_mut(i).map(|(_, timeline)| timeline)
+    }
+
+    /// The index of the channel named by `raw`, if known.
+    #[inline]
+    fn channel_index(&mut self, raw: &[u8]) -> Option<usize> {
+        let same = |ch: &ChannelNodes| ch.name.len() == raw.len() && ch.name.as_bytes() == raw;
+        match self.last {
+            Some(c) if self.channels.get(c).is_some_and(same) => Some(c),
+            _ => {
+                let c = *self.index.get(raw)?;
+                self.last = Some(c);
+                Some(c)
+            }
+        }
+    }
+
+    /// The timeline of `node` on the channel at `c`, if known.
+    #[inline]
+    fn timeline_at(&mut self, c: usize, node: NodeId) -> Option<&mut NodeTimeline> {
+        let ch = self.channels.get_mut(c)?;
+        let i = ch.position(node).ok()?;
+        ch.nodes.get_mut(i).map(|(_, timeline)| timeline)
+    }
+
+    /// The history id of the channel at `c`.
+    fn channel_id_at(&self, c: usize) -> Option<u32> {
+        self.channels.get(c).map(|ch| ch.id)
     }
 
     /// The channel of bytes the index does not know: the channel of their
@@ -811,6 +838,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         self.decide();
         self.time(first);
         self.time(last);
+    }
+
+    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<bool, OutputError> {
+        Ok(self.fold_heartbeats(idx, run))
     }
 
     fn lines(&mut self, n: u64) {

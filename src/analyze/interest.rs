@@ -23,9 +23,14 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     let requests = sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127;
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard(nmt::COMMAND_ID);
-    for ids in [nmt, responses, requests] {
+    for ids in [nmt.clone(), responses, requests] {
         i.add_standard_range(ids.clone());
         i.filter_content(ids, filter);
+    }
+    // Steady heartbeats are taken a run at a time (the consumer's
+    // `fold_heartbeats`).
+    if folding() {
+        i.fold(nmt);
     }
     for e in &opts.emcy_ids {
         add_emcy_id(&mut i, e.id, e.extended);
@@ -93,5 +98,32 @@ fn add_id(interest: &mut Interest, id: u32, extended: bool) {
         interest.add_extended(id);
     } else {
         interest.add_standard(id);
+    }
+}
+
+/// Whether readers may fold repeated frames; tests turn it off on their
+/// thread to check that the result never depends on folding.
+#[cfg(not(test))]
+fn folding() -> bool {
+    true
+}
+
+#[cfg(test)]
+pub(crate) use test_folding::{folding, set_folding};
+
+#[cfg(test)]
+mod test_folding {
+    use std::cell::Cell;
+
+    thread_local! {
+        static FOLDING: Cell<bool> = const { Cell::new(true) };
+    }
+
+    pub(crate) fn folding() -> bool {
+        FOLDING.with(Cell::get)
+    }
+
+    pub(crate) fn set_folding(on: bool) {
+        FOLDING.with(|f| f.set(on));
     }
 }

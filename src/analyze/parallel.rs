@@ -11,12 +11,12 @@ use std::sync::{Arc, Mutex, RwLock};
 
 use super::OutputError;
 use super::batch::spawn_scoped;
-use super::classify::{Foreign, LineSink, classify_block};
+use super::classify::{FoldedRun, Foreign, LineSink, classify_block, classify_lines};
 use super::consumer::Consumer;
 use super::interest::may_widen;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
-use crate::trace::{Frame, FrameKind, Interest, Payload, Reason, Timestamp};
+use crate::trace::{Fold, Frame, FrameKind, Interest, Payload, Reason, Timestamp};
 
 /// The current interest and its generation, shared with workers: a block
 /// parsed with an older generation is parsed again in order.
@@ -47,6 +47,20 @@ enum BlockRecord {
     /// A wanted frame that only moves the input's first/last time (already
     /// counted in `plain_frames`).
     Time(Timestamp),
+    /// A run with folded frames ([`FoldedRun`]), for the consumer to take
+    /// or to read again line by line: its channel is `channel` of the
+    /// channel bytes, its folds `folds` of the block's.
+    Folded {
+        idx: u64,
+        range: Range<usize>,
+        plain: u64,
+        timed: u64,
+        first: Timestamp,
+        last: Timestamp,
+        latest: Timestamp,
+        channel: Range<usize>,
+        folds: Range<usize>,
+    },
 }
 
 /// A worker's summary of one block.
@@ -76,6 +90,8 @@ struct BlockResult {
     records: Vec<BlockRecord>,
     /// Channel names of the frame records, back to back.
     channels: Vec<u8>,
+    /// The folds of the folded runs, back to back.
+    folds: Vec<Fold>,
 }
 
 /// The worker-side sink: keeps only what the consumer needs.
@@ -104,6 +120,27 @@ impl LineSink for Recorder {
         self.result.plain_frames += n;
         self.time_only(first);
         self.time_only(last);
+    }
+
+    /// Kept for the consumer, who alone knows whether it can take them.
+    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<bool, OutputError> {
+        self.flush_time();
+        let channel = self.result.channels.len();
+        self.result.channels.extend_from_slice(run.channel);
+        let folds = self.result.folds.len();
+        self.result.folds.extend_from_slice(run.folds);
+        self.result.records.push(BlockRecord::Folded {
+            idx,
+            range: run.range.clone(),
+            plain: run.plain,
+            timed: run.timed,
+            first: run.first,
+            last: run.last,
+            latest: run.latest,
+            channel: channel..self.result.channels.len(),
+            folds: folds..self.result.folds.len(),
+        });
+        Ok(true)
     }
 
     fn lines(&mut self, n: u64) {
@@ -189,8 +226,14 @@ impl Recorder {
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
-    /// Replays a worker's block result as if its lines had been read here.
-    fn replay(&mut self, r: BlockResult) -> Result<Block, OutputError> {
+    /// Replays a worker's block result as if its lines had been read here
+    /// (folded runs the consumer does not take are, with `detector`).
+    fn replay(
+        &mut self,
+        r: BlockResult,
+        detector: &mut Detector,
+        max_line: usize,
+    ) -> Result<Block, OutputError> {
         self.counts.frames += r.plain_frames;
         self.counts.skipped += r.skipped;
         self.counts.dropped = self.counts.dropped.saturating_add(r.dropped);
@@ -201,6 +244,31 @@ impl<E: Write> Consumer<'_, '_, E> {
                 BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
                 BlockRecord::Warning { idx, reason } => self.warning(idx, reason),
                 BlockRecord::Time(t) => self.time(t),
+                BlockRecord::Folded {
+                    idx,
+                    range,
+                    plain,
+                    timed,
+                    first,
+                    last,
+                    latest,
+                    channel,
+                    folds,
+                } => {
+                    let run = FoldedRun {
+                        range: range.clone(),
+                        plain,
+                        timed,
+                        first,
+                        last,
+                        latest,
+                        channel: r.channels.get(channel).unwrap_or_default(),
+                        folds: r.folds.get(folds).unwrap_or_default(),
+                    };
+                    if !self.folded(idx, &run)? {
+                        classify_lines(r.block.text(), range, idx, max_line, detector, self)?;
+                    }
+                }
                 BlockRecord::Frame {
                     idx,
                     time,
@@ -303,6 +371,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             unreported_warnings: 0,
                             records: Vec::new(),
                             channels: Vec::new(),
+                            folds: Vec::new(),
                         },
                     };
                     // A recorder never fails: it only collects.
@@ -452,7 +521,7 @@ fn consume_in_order<E: Write>(
             let block = if valid {
                 let mut r = r;
                 std::mem::swap(current, &mut r.end);
-                consumer.replay(r)?
+                consumer.replay(r, current, max_line)?
             } else {
                 classify_block(&r.block, max_line, current, consumer)?;
                 r.block

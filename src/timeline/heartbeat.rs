@@ -229,6 +229,52 @@ impl HeartbeatMonitor {
         true
     }
 
+    /// Whether heartbeats folded by the reader would each have been
+    /// [`HeartbeatMonitor::steady`], one after the other: the first (at
+    /// `first`) by the deadline, no gap between two over the timeout
+    /// (`max_gap`, attoseconds; times of one layout carry the same digits,
+    /// so comparing values is comparing times). And whether the deadline
+    /// after the last (at `last`) is not passed at `latest`, the time of
+    /// the last heartbeat folded with them (of any node): then no frame
+    /// among them found the node lost either.
+    pub fn takes_fold(
+        &self,
+        first: Timestamp,
+        max_gap: i128,
+        last: Timestamp,
+        latest: Timestamp,
+    ) -> bool {
+        let (Some(deadline), Some(step), Some((timeout, _))) =
+            (self.deadline, self.step, self.timeout)
+        else {
+            return false;
+        };
+        if self.lost.is_some() || self.period.is_none() || first > deadline {
+            return false;
+        }
+        max_gap <= timeout.attos()
+            && last
+                .checked_add_step(step)
+                .is_some_and(|next| latest <= next)
+    }
+
+    /// The deadline a heartbeat at `last` would give.
+    pub fn deadline_after(&self, last: Timestamp) -> Option<Timestamp> {
+        last.checked_add_step(self.step?)
+    }
+
+    /// Takes `count` heartbeats [`HeartbeatMonitor::takes_fold`] accepted,
+    /// the last at `last`: as many [`HeartbeatMonitor::steady`] calls.
+    pub fn fold(&mut self, count: u64, last: At) {
+        let next = match (last.time, self.step) {
+            (Some(t), Some(step)) => t.checked_add_step(step),
+            _ => None,
+        };
+        self.beats += count;
+        self.last = Some(last);
+        self.deadline = next;
+    }
+
     /// A boot-up at `at`: a sign of life that restarts the node.
     pub fn boot(&mut self, at: At) -> (Option<Lost>, Option<Back>) {
         self.seen_as(at, true)

@@ -11,7 +11,7 @@
 
 use super::time::MAX_FRACTION_DIGITS;
 use super::{
-    Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Run, Scan, Timestamp,
+    Folds, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Run, Scan, Timestamp,
     is_blank, split_token, trim_end, trim_start,
 };
 use super::{hex, scan};
@@ -67,7 +67,13 @@ impl LineParser for CandumpLogParser {
     /// Lines of the last line's layout, found without a separate newline
     /// search: the data field's end is where the line must end.
     #[inline]
-    fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+    fn run<'a>(
+        &mut self,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        folds: &mut Folds,
+    ) -> Run<'a> {
         let mut run = Run::default();
         let Some(layout) = self.layout.as_ref() else {
             return run;
@@ -89,9 +95,23 @@ impl LineParser for CandumpLogParser {
                     last_timed = Some((line, shape));
                 }
                 Kind::Frame(frame) => {
-                    run.bytes += len + 1;
-                    run.frame = Some(frame);
-                    break;
+                    if let Some(time) = frame.time
+                        && interest.folds(frame.id)
+                        && fold_frame(folds, &frame, time, run.plain + run.timed)
+                    {
+                        run.timed += 1;
+                        run.last_time = Some(time);
+                        run.first_time.get_or_insert(time);
+                        last_timed = None;
+                        if run.fold_channel.is_empty() {
+                            run.fold_channel = frame.channel;
+                        }
+                    } else {
+                        run.before_frame = run.bytes;
+                        run.bytes += len + 1;
+                        run.frame = Some(frame);
+                        break;
+                    }
                 }
                 Kind::Parse => break,
             }
@@ -112,6 +132,9 @@ impl LineParser for CandumpLogParser {
                 shape.time(line)
             };
         }
+        if run.frame.is_none() {
+            run.before_frame = run.bytes;
+        }
         run
     }
 
@@ -123,6 +146,19 @@ impl LineParser for CandumpLogParser {
             Err(reason) => Parsed::Malformed(reason),
         }
     }
+}
+
+/// Folds a frame of [`CandumpLogParser::run`] on a foldable id ([`Folds`]);
+/// `false`: not a repeat, the run's frame. Not inlined: in the loop's body
+/// it made every line slower (callgrind on plain lines).
+#[inline(never)]
+fn fold_frame(folds: &mut Folds, frame: &Frame<'_>, time: Timestamp, idx: u64) -> bool {
+    frame.kind == FrameKind::Data
+        && !frame.extended
+        && frame
+            .data
+            .word()
+            .is_some_and(|(word, len)| folds.add(frame.id, word, len, time, idx))
 }
 
 /// Lines every candump output may contain besides frames: blank lines,
@@ -836,11 +872,13 @@ mod tests {
 
     /// What `run` must return: line by line with `scan`, as the general
     /// loop would read them.
+    /// Frames on foldable ids are folded as [`Folds::add`] allows.
     fn run_by_lines<'a>(
         p: &mut CandumpLogParser,
         bytes: &'a [u8],
         max_line: usize,
         interest: &Interest,
+        folds: &mut Folds,
     ) -> Run<'a> {
         let mut run = Run::default();
         while let Some(rest) = bytes.get(run.bytes..)
@@ -852,27 +890,45 @@ mod tests {
                 Scan::Plain => run.plain += 1,
                 Scan::Timed(t) => run.timed(t),
                 Scan::Frame(f) => {
-                    run.bytes += len + 1;
-                    run.frame = Some(f);
-                    break;
+                    let idx = run.plain + run.timed;
+                    let folded = match (f.time, f.data.word()) {
+                        (Some(t), Some((word, n))) if interest.folds(f.id) && !f.extended => {
+                            (f.kind == FrameKind::Data && folds.add(f.id, word, n, t, idx))
+                                .then_some(t)
+                        }
+                        _ => None,
+                    };
+                    if let Some(t) = folded {
+                        run.timed(t);
+                        if run.fold_channel.is_empty() {
+                            run.fold_channel = f.channel;
+                        }
+                    } else {
+                        run.before_frame = run.bytes;
+                        run.bytes += len + 1;
+                        run.frame = Some(f);
+                        return run;
+                    }
                 }
                 Scan::Parse => break,
             }
             run.bytes += len + 1;
         }
+        run.before_frame = run.bytes;
         run
     }
 
-    fn fields<'a>(
-        r: &Run<'a>,
-    ) -> (
-        usize,
+    type Fields<'a> = (
+        (usize, usize),
         u64,
         u64,
         Option<Timestamp>,
         Option<Timestamp>,
         Option<Frame<'a>>,
-    ) {
+        &'a [u8],
+    );
+
+    fn fields<'a>(r: &Run<'a>) -> Fields<'a> {
         // A run that ends in a data frame with a time may leave its last
         // time unconverted (the frame's time supersedes it).
         let superseded = r
@@ -880,12 +936,13 @@ mod tests {
             .as_ref()
             .is_some_and(|f| f.kind == FrameKind::Data && f.time.is_some());
         (
-            r.bytes,
+            (r.bytes, r.before_frame),
             r.plain,
             r.timed,
             r.first_time,
             if superseded { None } else { r.last_time },
             r.frame.clone(),
+            r.fold_channel,
         )
     }
 
@@ -899,6 +956,8 @@ mod tests {
                 3 => r"\(1700000000\.[0-9]{6}\) can0 [0-9A-Fa-fg]{3}#[0-9A-Fa-f]{0,18}[g ]?( T| R|\r| X)?",
                 1 => r"\(1700000000\.[0-9]{6}\) can[01] [0-9A-Fa-f]{3,8}#[0-9A-Fa-fR._]{0,18}( T| R|\r)?",
                 1 => r"\(17000000[0-9]{2}\.[0-9]{5,6}\)  ?[a-z0-9]{3,5} [0-9a-f]{3}#[0-9a-f]{0,17}",
+                // Heartbeat-like repeats on foldable ids, times mostly rising.
+                3 => r"\(170000000[0-2]\.[0-9]{6}\) can0 70[1-3]#0[05]",
             ], 1..12),
             last_newline in proptest::bool::ANY,
             max_line in 30usize..60,
@@ -908,9 +967,14 @@ mod tests {
             let mut interest = if narrow { Interest::none() } else { Interest::all() };
             interest.add_standard(0x181);
             if filtered {
-                // Frames on 0x100-0x3FF matter only when their data starts with 00.
+                // Frames on 0x100-0x3FF and 0x700-0x77F matter only when
+                // their data starts with 00; repeats on 0x701-0x77F fold.
                 interest.add_standard_range(0x100..=0x3FF);
-                interest.filter_content(0x100..=0x3FF, ContentFilter(|_, d| d.first() == Some(&0)));
+                interest.add_standard_range(0x700..=0x77F);
+                let filter = ContentFilter(|_, d| d.first() == Some(&0));
+                interest.filter_content(0x100..=0x3FF, filter);
+                interest.filter_content(0x700..=0x77F, filter);
+                interest.fold(0x701..=0x77F);
             }
             let mut text = lines.join("\n");
             if last_newline {
@@ -925,10 +989,12 @@ mod tests {
             for _ in 0..lines.len() + 1 {
                 // It may stop early (a line of another layout), but the lines
                 // it read, read one by one, give the same.
-                let got = fast.run(&bytes[at..], max_line, &interest);
+                let (mut fast_folds, mut slow_folds) = (Folds::default(), Folds::default());
+                let got = fast.run(&bytes[at..], max_line, &interest, &mut fast_folds);
                 let consumed = &bytes[at..at + got.bytes];
-                let want = run_by_lines(&mut slow, consumed, max_line, &interest);
+                let want = run_by_lines(&mut slow, consumed, max_line, &interest, &mut slow_folds);
                 proptest::prop_assert_eq!(fields(&got), fields(&want));
+                proptest::prop_assert_eq!(fast_folds.as_slice(), slow_folds.as_slice());
                 at += got.bytes;
                 if got.frame.is_none() {
                     // The general loop reads the next line; skip it here.
@@ -968,15 +1034,28 @@ mod tests {
         let mut interest = Interest::none();
         interest.add_standard(0x81);
         let mut p = CandumpLogParser::new();
-        assert_eq!(p.run(block, 100, &interest).bytes, 0, "no layout yet");
+        let folds = &mut Folds::default();
+        assert_eq!(
+            p.run(block, 100, &interest, folds).bytes,
+            0,
+            "no layout yet"
+        );
         p.scan(b"(9.000000) can0 080#", &interest);
-        let run = p.run(block, 100, &interest);
+        let run = p.run(block, 100, &interest, folds);
         assert_eq!((run.bytes, run.plain), (94, 3));
         assert_eq!(run.frame.map(|f| f.id), Some(0x81));
-        let run = p.run(&block[94..], 100, &interest);
+        let run = p.run(&block[94..], 100, &interest, folds);
         assert_eq!((run.bytes, run.plain, run.frame), (21, 1, None));
-        assert_eq!(p.run(&block[..22], 100, &interest).bytes, 0, "no newline");
-        assert_eq!(p.run(block, 20, &interest).bytes, 0, "longer than max_line");
+        assert_eq!(
+            p.run(&block[..22], 100, &interest, folds).bytes,
+            0,
+            "no newline"
+        );
+        assert_eq!(
+            p.run(block, 20, &interest, folds).bytes,
+            0,
+            "longer than max_line"
+        );
     }
 
     #[test]

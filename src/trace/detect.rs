@@ -19,7 +19,7 @@ use super::blf::{self, read_full};
 use super::deltas::{self, DeltaClock};
 use super::mf4;
 use super::pcap;
-use super::{AnyParser, Format, Interest, LineParser, Parsed, Run, Scan, Timestamp};
+use super::{AnyParser, Folds, Format, Interest, LineParser, Parsed, Run, Scan, Timestamp};
 
 /// The input with the bytes [`sniff_binary`] read put back in front.
 pub type Sniffed<R> = io::Chain<io::Cursor<Vec<u8>>, R>;
@@ -199,12 +199,18 @@ impl Detector {
     /// See [`LineParser::run`]; only once the format is known (nothing
     /// read before), and only for the detected format.
     #[inline]
-    pub fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+    pub fn run<'a>(
+        &mut self,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        folds: &mut Folds,
+    ) -> Run<'a> {
         if self.deltas.is_some() {
             return Run::default();
         }
         match self.primary.and_then(|i| self.parsers.get_mut(i)) {
-            Some(p) => p.run(bytes, max_line, interest),
+            Some(p) => p.run(bytes, max_line, interest, folds),
             None => Run::default(),
         }
     }
@@ -532,8 +538,13 @@ mod tests {
         }
         // The hot loop cannot report each line's time: it is never run.
         assert_eq!(
-            d.run(b"(000.1) can0 701#05\n", 100, &Interest::none())
-                .bytes,
+            d.run(
+                b"(000.1) can0 701#05\n",
+                100,
+                &Interest::none(),
+                &mut Folds::default()
+            )
+            .bytes,
             0
         );
         d.set_deltas(false);

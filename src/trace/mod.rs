@@ -16,6 +16,7 @@ pub mod candump_screen;
 pub mod deltas;
 pub mod detect;
 pub mod ethercat;
+pub mod fold;
 pub mod follow;
 pub mod hex;
 pub mod input;
@@ -30,6 +31,7 @@ pub mod trc;
 use std::borrow::Cow;
 use std::fmt;
 
+pub use fold::{Fold, Folds};
 pub use time::{Span, Step, Timestamp};
 
 /// The text formats we read.
@@ -148,6 +150,19 @@ impl Payload {
             len: 0,
             long: None,
         }
+    }
+
+    /// The bytes of a payload of at most 8 as one word (first byte lowest,
+    /// zeros after the last), and how many.
+    #[inline]
+    pub fn word(&self) -> Option<(u64, u8)> {
+        if self.long.is_some() || self.len > 8 {
+            return None;
+        }
+        let keep = u64::MAX
+            .checked_shr(8 * (8 - u32::from(self.len)))
+            .unwrap_or(0);
+        Some((u64::from_le_bytes(self.inline) & keep, self.len))
     }
 
     /// The first `len` (at most 8) of `bytes`.
@@ -306,6 +321,9 @@ pub struct Interest {
     /// Standard ids under `content`.
     filtered: [u64; 32],
     content: ContentFilter,
+    /// Standard ids (under the content filter, 0x700 + node) whose
+    /// repeated frames a reader's hot loop may fold ([`fold`]).
+    foldable: [u64; 32],
 }
 
 /// Whether a frame's data matters (see [`Interest`]).
@@ -348,6 +366,7 @@ impl Interest {
             extended: Vec::new(),
             filtered: [0; 32],
             content: ContentFilter(ContentFilter::any),
+            foldable: [0; 32],
         }
     }
 
@@ -358,6 +377,7 @@ impl Interest {
             extended: Vec::new(),
             filtered: [0; 32],
             content: ContentFilter(ContentFilter::any),
+            foldable: [0; 32],
         }
     }
 
@@ -371,11 +391,32 @@ impl Interest {
         }
     }
 
-    /// Takes a standard id out of the content filter: all its frames matter.
+    /// Takes a standard id out of the content filter: all its frames
+    /// matter, one by one.
     pub fn unfilter(&mut self, id: u32) {
-        if let Some(word) = self.filtered.get_mut((id >> 6) as usize) {
-            *word &= !(1 << (id & 63));
+        for set in [&mut self.filtered, &mut self.foldable] {
+            if let Some(word) = set.get_mut((id >> 6) as usize) {
+                *word &= !(1 << (id & 63));
+            }
         }
+    }
+
+    /// Lets readers fold repeated frames on filtered ids in `ids` (only
+    /// 0x700 + node: [`fold::Folds`] looks ids up by their low 7 bits).
+    pub fn fold(&mut self, ids: std::ops::RangeInclusive<u32>) {
+        for id in ids.filter(|id| id & !0x7F == 0x700) {
+            if bit(&self.filtered, id)
+                && let Some(word) = self.foldable.get_mut((id >> 6) as usize)
+            {
+                *word |= 1 << (id & 63);
+            }
+        }
+    }
+
+    /// Whether a reader may fold repeated frames on a standard id.
+    #[inline]
+    pub fn folds(&self, id: u32) -> bool {
+        bit(&self.foldable, id)
     }
 
     /// Whether a frame on a wanted id is only to be timed: a standard id
@@ -459,6 +500,11 @@ pub struct Run<'a> {
     pub first_time: Option<Timestamp>,
     pub last_time: Option<Timestamp>,
     pub frame: Option<Frame<'a>>,
+    /// The bytes of the lines before `frame` (all of `bytes` without one).
+    pub before_frame: usize,
+    /// The channel of the frames folded into the run's [`Folds`] (counted
+    /// in `timed`; a run has one layout, so one channel).
+    pub fold_channel: &'a [u8],
 }
 
 impl Run<'_> {
@@ -496,7 +542,13 @@ pub trait LineParser: Send {
     /// no newline, or not the common shape), which the caller then reads
     /// one at a time. Saves the per-line dispatch of the general loop.
     #[inline]
-    fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+    fn run<'a>(
+        &mut self,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        _folds: &mut Folds,
+    ) -> Run<'a> {
         let mut run = Run::default();
         while let Some(rest) = bytes.get(run.bytes..)
             && let Some(len) = memchr::memchr(b'\n', rest)
@@ -514,13 +566,15 @@ pub trait LineParser: Send {
                     run.bytes += len + 1;
                 }
                 Scan::Frame(frame) => {
+                    run.before_frame = run.bytes;
                     run.bytes += len + 1;
                     run.frame = Some(frame);
-                    break;
+                    return run;
                 }
                 Scan::Parse => break,
             }
         }
+        run.before_frame = run.bytes;
         run
     }
 
@@ -616,14 +670,20 @@ impl LineParser for AnyParser {
     }
 
     #[inline]
-    fn run<'a>(&mut self, bytes: &'a [u8], max_line: usize, interest: &Interest) -> Run<'a> {
+    fn run<'a>(
+        &mut self,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        folds: &mut Folds,
+    ) -> Run<'a> {
         match self {
-            AnyParser::CandumpLog(p) => p.run(bytes, max_line, interest),
-            AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest),
-            AnyParser::Asc(p) => p.run(bytes, max_line, interest),
-            AnyParser::Trc(p) => p.run(bytes, max_line, interest),
-            AnyParser::Busmaster(p) => p.run(bytes, max_line, interest),
-            AnyParser::Binary(p) => p.run(bytes, max_line, interest),
+            AnyParser::CandumpLog(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::Asc(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::Trc(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::Busmaster(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::Binary(p) => p.run(bytes, max_line, interest, folds),
         }
     }
 

@@ -232,6 +232,11 @@ impl Ord for Timestamp {
 }
 
 impl Span {
+    /// The value in attoseconds (whatever the digits it is shown with).
+    pub fn attos(self) -> i128 {
+        self.atto
+    }
+
     /// The span split for adding; `None` when negative or over 2^64 s.
     pub fn step(self) -> Option<Step> {
         let atto = u128::try_from(self.atto).ok()?;

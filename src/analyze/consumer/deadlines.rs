@@ -97,6 +97,15 @@ impl Deadlines {
         self.next = self.due.first().map(|e| e.0);
     }
 
+    /// The groups whose bound `now` passed, left as they are (a look that
+    /// changes nothing).
+    pub(super) fn passed_groups(&self, now: Timestamp) -> impl Iterator<Item = u32> + '_ {
+        self.due
+            .iter()
+            .take_while(move |&&(bound, _)| now > bound)
+            .map(|&(_, g)| g)
+    }
+
     /// The members of group `g`.
     pub(super) fn members(&self, g: u32) -> &[Member] {
         let start = (g as usize).saturating_mul(GROUP);

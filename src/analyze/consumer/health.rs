@@ -8,6 +8,7 @@ use super::deadlines::Deadlines;
 use super::{Consumer, NodeSlot, Nodes};
 use crate::analyze::Options;
 use crate::analyze::OutputError;
+use crate::analyze::classify::{FoldedRun, LineSink};
 use crate::analyze::event::{
     Health, HealthEvent, HeartbeatReport, HistoryItem, HistoryReport, NodeReport,
 };
@@ -34,6 +35,7 @@ pub(in crate::analyze) struct HealthState {
     read_outs: Vec<ReadOut>,
     groups: Vec<u32>,
     due: Vec<(Timestamp, u32, NodeId)>,
+    rebounds: Vec<(u32, Option<Timestamp>)>,
 }
 
 impl HealthState {
@@ -270,6 +272,138 @@ impl<E: Write> Consumer<'_, '_, E> {
         }
         self.counts.frames += 1;
         self.time(time);
+        true
+    }
+
+    /// Heartbeats the reader folded ([`FoldedRun`]), with the rest of
+    /// their run, taken whole when reading the lines one by one would have
+    /// sent each heartbeat down [`Consumer::steady_heartbeat`] and found no
+    /// node lost at any of them. `false` (nothing changed): the caller
+    /// reads the lines one by one, so the result never depends on folding.
+    pub(super) fn fold_heartbeats(&mut self, idx: u64, run: &FoldedRun<'_>) -> bool {
+        let mut rebounds = std::mem::take(&mut self.health.rebounds);
+        rebounds.clear();
+        let taken = self.decided
+            && self
+                .nodes
+                .channel_index(run.channel)
+                .is_some_and(|c| self.takes_folds(run, c, &mut rebounds));
+        if taken {
+            self.plain_frames(run.plain);
+            self.timed_frames(run.timed, run.first, run.last);
+            if let Some(c) = self.nodes.channel_index(run.channel) {
+                for f in run.folds {
+                    let at = At {
+                        time: Some(f.last),
+                        line: self.line_no(idx + f.last_idx),
+                    };
+                    if let Some(h) = nmt::error_control_node(f.id)
+                        .and_then(|node| self.nodes.timeline_at(c, node))
+                        .and_then(|timeline| timeline.health_if_any())
+                    {
+                        h.heartbeat.fold(f.count, at);
+                    }
+                }
+            }
+            // The groups looked at get the bounds found: nobody is due.
+            if !rebounds.is_empty() {
+                let mut groups = std::mem::take(&mut self.health.groups);
+                self.health.deadlines.due_groups(run.latest, &mut groups);
+                for &(g, earliest) in &rebounds {
+                    self.health.deadlines.rebound(g, earliest);
+                }
+                groups.clear();
+                self.health.groups = groups;
+            }
+        }
+        self.health.rebounds = rebounds;
+        #[cfg(test)]
+        fold_tally::count(taken);
+        taken
+    }
+
+    /// Whether [`Consumer::fold_heartbeats`] can take `run`'s folds (on
+    /// the channel at `c`): each one heartbeats of a known node in the
+    /// steady state its data says, each of them steady
+    /// ([`HeartbeatMonitor::takes_fold`]), and every other node within its
+    /// deadline at the last of them. When the schedule's bound passed, the
+    /// groups looked at and their earliest deadline after the folds go to
+    /// `rebounds`.
+    ///
+    /// [`HeartbeatMonitor::takes_fold`]: crate::timeline::heartbeat::HeartbeatMonitor::takes_fold
+    fn takes_folds(
+        &mut self,
+        run: &FoldedRun<'_>,
+        c: usize,
+        rebounds: &mut Vec<(u32, Option<Timestamp>)>,
+    ) -> bool {
+        // Index + 1 into the folds by node (0: not folded).
+        let mut folded = [0u8; 128];
+        for (i, f) in run.folds.iter().enumerate() {
+            let (Some(node), 1) = (nmt::error_control_node(f.id), f.len) else {
+                return false;
+            };
+            let byte = f.data as u8;
+            let Some(state) = NmtState::from_byte(byte).filter(|&s| s != NmtState::Initialising)
+            else {
+                return false;
+            };
+            if !self.interest.wants(f.id, false)
+                || (!self.emcy_ids.is_empty() && self.emcy_node(f.id, false).is_some())
+            {
+                return false;
+            }
+            let Some(h) = self
+                .nodes
+                .timeline_at(c, node)
+                .and_then(|timeline| timeline.health_if_any())
+            else {
+                return false;
+            };
+            if !(h.nmt.steady(state)
+                && h.heartbeat
+                    .takes_fold(f.first, f.max_gap, f.last, run.latest))
+            {
+                return false;
+            }
+            if let Some(slot) = folded.get_mut(usize::from(node)) {
+                *slot = u8::try_from(i + 1).unwrap_or(0);
+            }
+        }
+        let latest = run.latest;
+        if !self.health.passed(latest) {
+            // Every deadline is after the bound, the bound not before `latest`.
+            return true;
+        }
+        let channel = self.nodes.channel_id_at(c);
+        let HealthState { deadlines, .. } = &self.health;
+        for g in deadlines.passed_groups(latest) {
+            let mut earliest: Option<Timestamp> = None;
+            for &(id, node) in deadlines.members(g) {
+                let fold = (Some(id) == channel)
+                    .then(|| folded.get(usize::from(node)))
+                    .flatten()
+                    .and_then(|&i| run.folds.get(usize::from(i).checked_sub(1)?));
+                let monitor = self
+                    .nodes
+                    .slot_by_id(id, node)
+                    .and_then(|slot| slot.timeline.health())
+                    .map(|h| &h.heartbeat);
+                // A folded node's deadline after its fold (its last
+                // heartbeat plus the timeout, checked above not to pass).
+                let deadline = match (fold, monitor) {
+                    (Some(f), Some(m)) => m.deadline_after(f.last),
+                    (None, Some(m)) => m.deadline(),
+                    (_, None) => None,
+                };
+                match deadline {
+                    Some(d) if fold.is_none() && latest > d => return false,
+                    Some(d) => earliest = Some(earliest.map_or(d, |e| e.min(d))),
+                    None => {}
+                }
+            }
+            rebounds.push((g, earliest));
+        }
         true
     }
 
@@ -680,4 +814,27 @@ pub(super) fn report_health(report: &mut NodeReport, health: Option<Box<NodeHeal
         .axis
         .as_deref()
         .map(|a| Box::new(super::axis::report_axis(a)));
+}
+
+/// How many folded runs the consumer took and refused on this thread, for
+/// tests that must see both paths taken.
+#[cfg(test)]
+pub(crate) mod fold_tally {
+    use std::cell::Cell;
+
+    thread_local! {
+        static TALLY: Cell<(u64, u64)> = const { Cell::new((0, 0)) };
+    }
+
+    pub(super) fn count(taken: bool) {
+        TALLY.with(|t| {
+            let (a, r) = t.get();
+            t.set(if taken { (a + 1, r) } else { (a, r + 1) });
+        });
+    }
+
+    /// (taken, refused) since the last call.
+    pub(crate) fn take() -> (u64, u64) {
+        TALLY.with(|t| t.replace((0, 0)))
+    }
 }

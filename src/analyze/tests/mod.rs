@@ -6,7 +6,8 @@
 //! - [`parallel`]: output never depends on how the input was split or how
 //!   many threads read it;
 //! - [`threads`]: nor on how many threads the system would start;
-//! - [`active`]: an event's size does not grow with its node's active errors.
+//! - [`active`]: an event's size does not grow with its node's active errors;
+//! - [`folds`]: nor on the reader folding steady heartbeats.
 //!
 //! The random frames and their renderings are the integration tests'
 //! (`tests/integration/support/frames.rs`), one file compiled in both.
@@ -16,5 +17,6 @@ mod frames;
 
 mod active;
 mod conservation;
+mod folds;
 mod parallel;
 mod threads;

@@ -17,7 +17,7 @@ fn run(trace: &[u8], threads: usize, block_size: usize) -> (String, String) {
     )
 }
 
-fn base_options() -> Options {
+pub(super) fn base_options() -> Options {
     Options {
         max_line: 200,
         max_diagnostics: 5,
@@ -25,7 +25,7 @@ fn base_options() -> Options {
     }
 }
 
-fn run_with(trace: &[u8], opts: Options) -> (String, String) {
+pub(super) fn run_with(trace: &[u8], opts: Options) -> (String, String) {
     let mut out = Vec::new();
     let mut err = Vec::new();
     {

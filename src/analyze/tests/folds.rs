@@ -1,0 +1,239 @@
+//! Folding (the candump reader taking runs of steady heartbeats whole, see
+//! `trace::fold`) never changes the output: each trace below is decoded
+//! with folding and without it, with one thread and two, in blocks of many
+//! sizes, and stdout and stderr must be identical. The traces are made so
+//! that the consumer both takes folded runs and refuses them (a node lost
+//! while the others beat, state changes, NMT commands, a boot-up, a clock
+//! that goes back, a timeout shorter than the period), which the tally
+//! checks: a test of only one path could not fail on the other.
+
+use super::parallel::{base_options, run_with};
+use crate::analyze::Options;
+use crate::analyze::consumer::health::fold_tally;
+use crate::analyze::interest::set_folding;
+use crate::trace::Span;
+
+/// A small deterministic generator (the traces must be the same every run).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        self.0 >> 33
+    }
+
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+/// What a trace of `nodes` heartbeating nodes does besides beating.
+#[derive(Clone, Copy, Default)]
+struct Twists {
+    /// Node 3 falls silent for this many periods from period 40.
+    silence: u64,
+    /// Node 3 stays silent from period 60 to the end.
+    dies: bool,
+    /// Node 2 goes pre-operational at period 30 and back at 50, an NMT
+    /// command to all at 45, node 4 boots at 55 and again at 56.
+    nmt: bool,
+    /// The clock goes back by a second at period 70.
+    clock_back: bool,
+    /// A second channel with the same nodes.
+    two_channels: bool,
+    /// One heartbeat slot in this many has an EMCY after it (EMCYs end
+    /// the reader's runs); 0: one in 60.
+    emcy_every: u64,
+}
+
+/// `periods` heartbeat periods of 100 ms with jitter, `nodes` nodes, PDO and
+/// SDO traffic between, an EMCY now and then (runs end at them).
+fn trace(seed: u64, nodes: u32, periods: u64, twists: Twists) -> Vec<u8> {
+    let mut rng = Lcg(seed);
+    let mut t = Vec::new();
+    let mut clock: u64 = 1_700_000_000_000_000; // microseconds
+    let channels: &[&str] = if twists.two_channels {
+        &["can0", "can1"]
+    } else {
+        &["can0"]
+    };
+    let line = |t: &mut Vec<u8>, clock: u64, channel: &str, frame: &str| {
+        t.extend(
+            format!(
+                "({}.{:06}) {channel} {frame}\n",
+                clock / 1_000_000,
+                clock % 1_000_000
+            )
+            .bytes(),
+        );
+    };
+    line(&mut t, clock, "can0", "085#1043090100000000");
+    for period in 0..periods {
+        if twists.clock_back && period == 70 {
+            clock -= 1_000_000;
+        }
+        if twists.nmt && period == 45 {
+            line(&mut t, clock, "can0", "000#0100");
+        }
+        for node in 1..=nodes {
+            for &channel in channels {
+                clock += 100_000 / u64::from(nodes * channels.len() as u32) + rng.below(500);
+                let silent = node == 3
+                    && ((40..40 + twists.silence).contains(&period)
+                        || (twists.dies && period >= 60));
+                if !silent {
+                    let state = match (twists.nmt, node, period) {
+                        (true, 2, 30..50) => "7F",
+                        (true, 4, 55..57) => "00",
+                        _ => "05",
+                    };
+                    line(
+                        &mut t,
+                        clock,
+                        channel,
+                        &format!("{:03X}#{state}", 0x700 + node),
+                    );
+                }
+                for _ in 0..rng.below(4) {
+                    clock += rng.below(200);
+                    let frame = match rng.below(10) {
+                        0 => format!("{:03X}#4000600000000000", 0x600 + rng.below(8) + 1),
+                        1 => format!("{:03X}#4B00200037060000", 0x580 + rng.below(8) + 1),
+                        _ => format!("{:03X}#1122334455667788", 0x180 + rng.below(8) + 1),
+                    };
+                    line(&mut t, clock, channel, &frame);
+                }
+                if rng.below(if twists.emcy_every == 0 {
+                    60
+                } else {
+                    twists.emcy_every
+                }) == 0
+                {
+                    line(&mut t, clock, channel, "085#1043090100000000");
+                }
+            }
+        }
+    }
+    t
+}
+
+/// Decodes `t` with folding and without, threads 1 and 2, blocks from 64
+/// bytes to 1 MiB (runs of a line or two, of a period or a few, of the
+/// whole trace): all the same. Returns the tally of folded runs taken
+/// and refused over the runs with folding.
+fn assert_fold_independent(name: &str, t: &[u8], opts: &Options) -> (u64, u64) {
+    let with = |threads, block_size| Options {
+        threads,
+        block_size,
+        heartbeat_timeout: opts.heartbeat_timeout,
+        ..base_options()
+    };
+    set_folding(false);
+    let reference = run_with(t, with(1, 1 << 20));
+    set_folding(true);
+    assert!(
+        reference.0.contains("\"type\":\"emcy\""),
+        "{name}: no EMCY decoded"
+    );
+    fold_tally::take();
+    let mut tally = (0, 0);
+    for threads in [1, 2] {
+        for block in [64, 4096, 16 << 10, 1 << 20] {
+            let got = run_with(t, with(threads, block));
+            assert_eq!(
+                got.0, reference.0,
+                "{name}: stdout, {threads} threads, {block}"
+            );
+            assert_eq!(
+                got.1, reference.1,
+                "{name}: stderr, {threads} threads, {block}"
+            );
+            let (taken, refused) = fold_tally::take();
+            tally = (tally.0 + taken, tally.1 + refused);
+        }
+    }
+    tally
+}
+
+#[test]
+fn steady_heartbeats_are_folded_and_give_what_they_give_one_by_one() {
+    let t = trace(1, 32, 40, Twists::default());
+    let (taken, _) = assert_fold_independent("steady", &t, &base_options());
+    assert!(taken > 50, "folded runs taken: {taken}");
+}
+
+#[test]
+fn a_node_lost_while_others_beat_is_found_where_it_was_one_by_one() {
+    // (seed, periods silent, EMCY every, silent to the end): long runs
+    // (EMCYs rare) hold a node's gap inside one fold; the last case goes
+    // silent after its last heartbeat of a run while the others beat on.
+    let cases = [
+        (2, 5, 0, false),
+        (3, 30, 0, false),
+        (6, 4, 600, false),
+        (7, 8, 600, false),
+        (8, 0, 600, true),
+    ];
+    for (seed, silence, emcy_every, dies) in cases {
+        let twists = Twists {
+            silence,
+            emcy_every,
+            dies,
+            ..Twists::default()
+        };
+        let t = trace(seed, 8, 100, twists);
+        let (taken, refused) = assert_fold_independent("silence", &t, &base_options());
+        assert!(
+            taken > 0 && refused > 0,
+            "{silence}: {taken} taken, {refused} refused"
+        );
+        let (out, _) = run_with(&t, base_options());
+        assert!(out.contains("\"type\":\"heartbeat_lost\""), "{silence}");
+    }
+}
+
+/// State changes, an NMT command the node ignores, a boot-up, the clock
+/// going back and silence to the end; with runs of a few lines (a state
+/// change is then often a node's first heartbeat of a run, its fold
+/// refused) and of many, on one channel and on two (lines of two
+/// channels alternating end the reader's runs at every line).
+#[test]
+fn nmt_changes_boot_ups_clock_jumps_and_silence_to_the_end() {
+    for (seed, emcy_every, two_channels) in [(4, 0, true), (9, 3, false), (10, 40, false)] {
+        let twists = Twists {
+            dies: true,
+            nmt: true,
+            clock_back: true,
+            two_channels,
+            emcy_every,
+            ..Twists::default()
+        };
+        let t = trace(seed, 6, 90, twists);
+        let (taken, refused) = assert_fold_independent("twists", &t, &base_options());
+        assert!(
+            taken > 0 && refused > 0,
+            "{seed}: {taken} taken, {refused} refused"
+        );
+        let (out, err) = run_with(&t, base_options());
+        assert!(out.contains("\"state\":\"pre_operational\""), "{seed}");
+        assert!(out.contains("\"state\":\"initialising\""), "{seed}");
+        assert!(out.contains("\"silent_at_end\":true"), "{seed}");
+        assert!(err.contains("ignored the NMT command"), "{seed}: {err}");
+        assert!(err.contains("clock went backwards"), "{seed}: {err}");
+    }
+}
+
+#[test]
+fn a_timeout_shorter_than_the_period_refuses_every_fold() {
+    let opts = Options {
+        heartbeat_timeout: Some(Span::from_millis(50)),
+        ..base_options()
+    };
+    let t = trace(5, 4, 30, Twists::default());
+    let (taken, refused) = assert_fold_independent("short timeout", &t, &opts);
+    assert_eq!(taken, 0, "every heartbeat is an outage's end");
+    assert!(refused > 0);
+}
