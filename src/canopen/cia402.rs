@@ -45,6 +45,16 @@ const STATUS_TABLE: [(u16, u16, State); 8] = [
 /// Statusword bit 7: a warning (the drive runs on; not a fault).
 const WARNING_BIT: u16 = 1 << 7;
 
+/// The statusword bits anything decoded depends on: the state masks of
+/// [`State::of_statusword`] (0x6F) and the warning bit. A drive toggles
+/// others many times a second (target reached, set-point acknowledge); a
+/// word differing only there repeats the one before.
+pub const STATUSWORD_BITS: u16 = 0x006F | WARNING_BIT;
+
+/// The controlword bits [`Command::of_controlword`] reads: 0-3 and the
+/// fault reset bit 7.
+pub const CONTROLWORD_BITS: u16 = 0x008F;
+
 impl State {
     /// Every state, in the order of the standard's table (and of
     /// [`State::index`]).

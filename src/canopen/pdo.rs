@@ -262,7 +262,42 @@ pub struct Cia402Values {
     pub error_code: Option<u16>,
 }
 
+impl Cia402Values {
+    /// The bits anything decoded depends on ([`cia402::STATUSWORD_BITS`],
+    /// [`cia402::CONTROLWORD_BITS`], all of the error code): two PDOs
+    /// equal here tell an axis the same.
+    pub fn relevant(self) -> Cia402Values {
+        Cia402Values {
+            statusword: self.statusword.map(|w| w & cia402::STATUSWORD_BITS),
+            controlword: self.controlword.map(|w| w & cia402::CONTROLWORD_BITS),
+            error_code: self.error_code,
+        }
+    }
+}
+
 impl Cia402Fields {
+    /// The bits of a PDO's data (its first 8 bytes as a little-endian word)
+    /// that [`Cia402Values::relevant`] reads: two PDOs equal there are
+    /// repeats. `None` when a field reaches past the 8th byte.
+    pub fn relevant_bits(&self) -> Option<u64> {
+        let mut mask = 0u64;
+        for (field, bits) in [
+            (self.statusword, cia402::STATUSWORD_BITS),
+            (self.controlword, cia402::CONTROLWORD_BITS),
+            (self.error_code, u16::MAX),
+        ] {
+            let Some(f) = field else { continue };
+            // A word is read as its field's low 16 bits at most.
+            let width = u32::from(f.bits.min(16));
+            let low = u64::from(bits) & ((1u64 << width) - 1);
+            if u32::from(f.offset) + width > 64 {
+                return None;
+            }
+            mask |= low << f.offset;
+        }
+        Some(mask)
+    }
+
     /// Where a mapping puts the objects; `None` when it maps none of them
     /// (the PDO is not worth parsing).
     pub fn of(mapping: &Mapping) -> Option<Cia402Fields> {
@@ -1393,6 +1428,48 @@ mod tests {
         let other = parse_spec("0x185=0x6064:32").expect("valid").remove(0);
         assert_eq!(Cia402Fields::of(&other), None);
         assert!(!other.maps_decoded());
+    }
+
+    #[test]
+    fn relevant_bits_are_the_state_command_and_error_code_bits() {
+        let m = parse_spec("0x185=0x6061:8,0x6041,0x603F")
+            .expect("valid")
+            .remove(0);
+        let f = Cia402Fields::of(&m).expect("maps the statusword");
+        // Statusword bits 0-3, 5-7 at bit 8, the error code at bits 24-39.
+        assert_eq!(f.relevant_bits(), Some(0x00FF_FF00_EF00));
+        let rpdo = parse_spec("0x205=0x6040:16").expect("valid").remove(0);
+        let f = Cia402Fields::of(&rpdo).expect("maps the controlword");
+        assert_eq!(f.relevant_bits(), Some(0x008F));
+        // A statusword of 8 bits: only those.
+        let short = parse_spec("0x185=0x6041:8").expect("valid").remove(0);
+        assert_eq!(
+            Cia402Fields::of(&short).and_then(|f| f.relevant_bits()),
+            Some(0xEF)
+        );
+        // Past the 8th byte (a CAN FD PDO): not foldable.
+        let far = Cia402Fields {
+            statusword: Some(field(56, 16)),
+            ..Cia402Fields::default()
+        };
+        assert_eq!(far.relevant_bits(), None);
+        // Words differing only in other bits are the same to an axis.
+        let a = Cia402Values {
+            statusword: Some(0x0637),
+            controlword: Some(0x000F),
+            error_code: Some(0),
+        };
+        let b = Cia402Values {
+            statusword: Some(0x1237),
+            controlword: Some(0x001F),
+            error_code: Some(0),
+        };
+        assert_eq!(a.relevant(), b.relevant());
+        let warning = Cia402Values {
+            statusword: Some(0x06B7),
+            ..a
+        };
+        assert_ne!(a.relevant(), warning.relevant());
     }
 
     #[test]

@@ -97,7 +97,7 @@ impl LineParser for CandumpLogParser {
                 Kind::Frame(frame) => {
                     if let Some(time) = frame.time
                         && interest.folds(frame.id)
-                        && fold_frame(folds, &frame, time, run.plain + run.timed)
+                        && fold_frame(folds, &frame, time, run.plain + run.timed, interest)
                     {
                         run.timed += 1;
                         run.last_time = Some(time);
@@ -152,13 +152,20 @@ impl LineParser for CandumpLogParser {
 /// `false`: not a repeat, the run's frame. Not inlined: in the loop's body
 /// it made every line slower (callgrind on plain lines).
 #[inline(never)]
-fn fold_frame(folds: &mut Folds, frame: &Frame<'_>, time: Timestamp, idx: u64) -> bool {
+fn fold_frame(
+    folds: &mut Folds,
+    frame: &Frame<'_>,
+    time: Timestamp,
+    idx: u64,
+    interest: &Interest,
+) -> bool {
     frame.kind == FrameKind::Data
         && !frame.extended
-        && frame
-            .data
-            .word()
-            .is_some_and(|(word, len)| folds.add(frame.id, word, len, time, idx))
+        && frame.data.word().is_some_and(|(word, len)| {
+            folds.add(frame.id, word, len, time, idx, || {
+                interest.fold_mask(frame.id)
+            })
+        })
 }
 
 /// Lines every candump output may contain besides frames: blank lines,
@@ -893,7 +900,8 @@ mod tests {
                     let idx = run.plain + run.timed;
                     let folded = match (f.time, f.data.word()) {
                         (Some(t), Some((word, n))) if interest.folds(f.id) && !f.extended => {
-                            (f.kind == FrameKind::Data && folds.add(f.id, word, n, t, idx))
+                            let mask = || interest.fold_mask(f.id);
+                            (f.kind == FrameKind::Data && folds.add(f.id, word, n, t, idx, mask))
                                 .then_some(t)
                         }
                         _ => None,

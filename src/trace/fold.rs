@@ -1,7 +1,9 @@
 //! Frames a reader's hot loop folds instead of handing them over one by
 //! one: on the ids the [`Interest`](super::Interest) marks foldable (NMT
-//! error control, 0x700 + node), a frame whose data repeats the one before
-//! it on its id in the same run. A node heartbeating every 100 ms on a busy
+//! error control, 0x700 + node; a drive's PDOs), a frame whose data
+//! repeats the one before it on its id in the same run, in the bits the
+//! interest says matter (a PDO's position changes every frame, its
+//! statusword's state bits seldom). A node heartbeating every 100 ms on a busy
 //! bus sends one such frame every few hundred lines, and each used to end
 //! the hot loop, be built, recorded and replayed on its own (about 830
 //! instructions a heartbeat, measured in docs/performance.md). A fold keeps
@@ -16,8 +18,12 @@ use super::Timestamp;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fold {
     pub id: u32,
-    /// The data every frame of the fold carried, as [`Payload::word`](super::Payload::word) gives it.
+    /// The data of the fold's first frame, as [`Payload::word`](super::Payload::word) gives it;
+    /// every frame of the fold had the same bits under `mask`.
     pub data: u64,
+    /// The data of its last frame.
+    pub last_data: u64,
+    pub mask: u64,
     pub len: u8,
     pub count: u64,
     pub first: Timestamp,
@@ -29,13 +35,12 @@ pub struct Fold {
     pub max_gap: i128,
 }
 
-/// The folds of one run, at most one per id; ids are looked up by their
-/// low 7 bits (every foldable id is 0x700 + node).
+/// The folds of one run, at most one per (standard) id.
 #[derive(Clone, Debug)]
 pub struct Folds {
     list: Vec<Fold>,
-    /// Index + 1 into `list` by the id's low 7 bits; 0: none.
-    slot: [u8; 128],
+    /// Index + 1 into `list` by id; 0: none.
+    slot: Box<[u16; 2048]>,
     /// The time of the last frame folded: times only go forward in a fold
     /// (the consumer's checks of the folds rely on it).
     latest: Option<Timestamp>,
@@ -45,7 +50,7 @@ impl Default for Folds {
     fn default() -> Self {
         Folds {
             list: Vec::new(),
-            slot: [0; 128],
+            slot: Box::new([0; 2048]),
             latest: None,
         }
     }
@@ -59,7 +64,7 @@ impl Folds {
             return;
         }
         for f in &self.list {
-            if let Some(s) = self.slot.get_mut((f.id & 0x7F) as usize) {
+            if let Some(s) = self.slot.get_mut(f.id as usize) {
                 *s = 0;
             }
         }
@@ -77,25 +82,37 @@ impl Folds {
         self.latest
     }
 
-    /// Folds a frame on `id` with `data` (a [`Payload::word`](super::Payload::word), `len` bytes) at
-    /// `time`, line `idx` of the run; `false` when it cannot be (other data
-    /// than its id's fold, another id with the same low bits, a time
-    /// before the last one folded): the caller hands it over. Not inlined:
-    /// in a reader's hot loop that cost every line there ~50 instructions
-    /// (callgrind, a trace of plain lines; the loop's code got worse).
+    /// Folds a frame on standard `id` with `data` (a [`Payload::word`](super::Payload::word), `len`
+    /// bytes) at `time`, line `idx` of the run; `mask` gives the bits that
+    /// matter on the id (asked for its first frame in the run). `false`
+    /// when it cannot be (other data than its id's fold under the mask, a
+    /// time before the last one folded): the caller hands it over. Not
+    /// inlined: in a reader's hot loop that cost every line there ~50
+    /// instructions (callgrind, a trace of plain lines; the loop's code got
+    /// worse).
     #[inline(never)]
-    pub fn add(&mut self, id: u32, data: u64, len: u8, time: Timestamp, idx: u64) -> bool {
+    pub fn add(
+        &mut self,
+        id: u32,
+        data: u64,
+        len: u8,
+        time: Timestamp,
+        idx: u64,
+        mask: impl FnOnce() -> u64,
+    ) -> bool {
         if self.latest.is_some_and(|l| time < l) {
             return false;
         }
-        let Some(slot) = self.slot.get_mut((id & 0x7F) as usize) else {
+        let Some(slot) = self.slot.get_mut(id as usize) else {
             return false;
         };
         if *slot == 0 {
-            // At most 128 folds: one per slot.
+            // At most 2048 folds: one per slot.
             self.list.push(Fold {
                 id,
                 data,
+                last_data: data,
+                mask: mask(),
                 len,
                 count: 1,
                 first: time,
@@ -103,12 +120,12 @@ impl Folds {
                 last_idx: idx,
                 max_gap: 0,
             });
-            *slot = self.list.len() as u8;
+            *slot = self.list.len() as u16;
         } else {
             let Some(f) = self.list.get_mut(usize::from(*slot) - 1) else {
                 return false;
             };
-            if f.id != id || f.len != len || f.data != data {
+            if f.len != len || (f.data ^ data) & f.mask != 0 {
                 return false;
             }
             let (s, a, _) = time.to_raw();
@@ -123,6 +140,7 @@ impl Folds {
             };
             f.max_gap = f.max_gap.max(gap);
             f.count += 1;
+            f.last_data = data;
             f.last = time;
             f.last_idx = idx;
         }
@@ -139,13 +157,17 @@ mod tests {
         Timestamp::from_parts(ms / 1000, ms % 1000, 3)
     }
 
+    fn all() -> u64 {
+        u64::MAX
+    }
+
     #[test]
     fn repeats_of_an_id_fold_with_their_largest_gap() {
         let mut f = Folds::default();
-        assert!(f.add(0x705, 5, 1, t(100), 0));
-        assert!(f.add(0x706, 5, 1, t(150), 3));
-        assert!(f.add(0x705, 5, 1, t(200), 7));
-        assert!(f.add(0x705, 5, 1, t(450), 9));
+        assert!(f.add(0x705, 5, 1, t(100), 0, all));
+        assert!(f.add(0x706, 5, 1, t(150), 3, all));
+        assert!(f.add(0x705, 5, 1, t(200), 7, all));
+        assert!(f.add(0x705, 5, 1, t(450), 9, all));
         let folds = f.as_slice();
         assert_eq!(folds.len(), 2);
         let a = folds[0];
@@ -161,34 +183,55 @@ mod tests {
     #[test]
     fn gaps_across_seconds_are_exact() {
         let mut f = Folds::default();
-        assert!(f.add(0x705, 5, 1, t(900), 0));
-        assert!(f.add(0x705, 5, 1, t(1_050), 1));
-        assert!(f.add(0x705, 5, 1, t(3_000), 2));
+        assert!(f.add(0x705, 5, 1, t(900), 0, all));
+        assert!(f.add(0x705, 5, 1, t(1_050), 1, all));
+        assert!(f.add(0x705, 5, 1, t(3_000), 2, all));
         assert_eq!(f.as_slice()[0].max_gap, 1_950 * 1_000_000_000_000_000);
     }
 
     #[test]
-    fn other_data_other_ids_on_the_slot_and_earlier_times_are_refused() {
+    fn other_data_and_earlier_times_are_refused() {
         let mut f = Folds::default();
-        assert!(f.add(0x705, 5, 1, t(100), 0));
-        assert!(!f.add(0x705, 0x7F, 1, t(200), 1), "other state");
-        assert!(!f.add(0x705, 5, 2, t(200), 1), "other length");
-        assert!(!f.add(0x785, 5, 1, t(200), 1), "same low bits");
-        assert!(!f.add(0x706, 5, 1, t(50), 1), "backwards");
+        assert!(f.add(0x705, 5, 1, t(100), 0, all));
+        assert!(!f.add(0x705, 0x7F, 1, t(200), 1, all), "other state");
+        assert!(!f.add(0x705, 5, 2, t(200), 1, all), "other length");
+        assert!(!f.add(0x706, 5, 1, t(50), 1, all), "backwards");
         assert_eq!(f.as_slice().len(), 1);
         assert_eq!(f.as_slice()[0].count, 1);
     }
 
     #[test]
+    fn only_the_bits_that_matter_must_repeat() {
+        let mut f = Folds::default();
+        let low_byte = || 0xFF;
+        assert!(f.add(0x185, 0x1234_0637, 4, t(1), 0, low_byte));
+        assert!(
+            f.add(0x185, 0x9999_1237, 4, t(2), 1, low_byte),
+            "position, bit 12"
+        );
+        assert!(
+            !f.add(0x185, 0x1234_0638, 4, t(3), 2, low_byte),
+            "state bits"
+        );
+        assert!(
+            f.add(0x205, 0x0F, 2, t(3), 2, low_byte),
+            "another id, its own fold"
+        );
+        assert_eq!(f.as_slice()[0].count, 2);
+        assert_eq!(f.as_slice()[0].data, 0x1234_0637, "the first frame's data");
+        assert_eq!(f.as_slice()[0].last_data, 0x9999_1237, "and the last's");
+    }
+
+    #[test]
     fn clear_empties_every_slot() {
         let mut f = Folds::default();
-        for node in 1..=127 {
-            assert!(f.add(0x700 + node, 5, 1, t(u64::from(node)), 0));
+        for id in 0..2048 {
+            assert!(f.add(id, 5, 1, t(u64::from(id)), 0, all));
         }
         f.clear();
         assert!(f.as_slice().is_empty());
         assert_eq!(f.latest(), None);
-        assert!(f.add(0x701, 4, 1, t(1), 0), "a fresh fold, other data");
+        assert!(f.add(0x701, 4, 1, t(1), 0, all), "a fresh fold, other data");
         assert_eq!(f.as_slice()[0].count, 1);
     }
 }

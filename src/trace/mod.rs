@@ -321,9 +321,12 @@ pub struct Interest {
     /// Standard ids under `content`.
     filtered: [u64; 32],
     content: ContentFilter,
-    /// Standard ids (under the content filter, 0x700 + node) whose
-    /// repeated frames a reader's hot loop may fold ([`fold`]).
+    /// Standard ids whose repeated frames a reader's hot loop may fold
+    /// ([`fold`]).
     foldable: [u64; 32],
+    /// The bits that must repeat for a fold, by id (sorted; ids not here:
+    /// every bit).
+    fold_masks: Vec<(u32, u64)>,
 }
 
 /// Whether a frame's data matters (see [`Interest`]).
@@ -367,6 +370,7 @@ impl Interest {
             filtered: [0; 32],
             content: ContentFilter(ContentFilter::any),
             foldable: [0; 32],
+            fold_masks: Vec::new(),
         }
     }
 
@@ -378,6 +382,7 @@ impl Interest {
             filtered: [0; 32],
             content: ContentFilter(ContentFilter::any),
             foldable: [0; 32],
+            fold_masks: Vec::new(),
         }
     }
 
@@ -401,15 +406,35 @@ impl Interest {
         }
     }
 
-    /// Lets readers fold repeated frames on filtered ids in `ids` (only
-    /// 0x700 + node: [`fold::Folds`] looks ids up by their low 7 bits).
+    /// Lets readers fold frames on the standard ids in `ids` that repeat
+    /// the one before on their id.
     pub fn fold(&mut self, ids: std::ops::RangeInclusive<u32>) {
-        for id in ids.filter(|id| id & !0x7F == 0x700) {
-            if bit(&self.filtered, id)
-                && let Some(word) = self.foldable.get_mut((id >> 6) as usize)
-            {
+        for id in ids {
+            if let Some(word) = self.foldable.get_mut((id >> 6) as usize) {
                 *word |= 1 << (id & 63);
             }
+        }
+    }
+
+    /// Lets readers fold frames on standard `id` whose data (the first 8
+    /// bytes as a little-endian word) repeats the one before under `mask`.
+    pub fn fold_masked(&mut self, id: u32, mask: u64) {
+        self.fold(id..=id);
+        match self.fold_masks.binary_search_by_key(&id, |&(i, _)| i) {
+            Ok(i) => {
+                if let Some(m) = self.fold_masks.get_mut(i) {
+                    m.1 = mask;
+                }
+            }
+            Err(i) => self.fold_masks.insert(i, (id, mask)),
+        }
+    }
+
+    /// The bits that must repeat for a fold on `id`.
+    pub fn fold_mask(&self, id: u32) -> u64 {
+        match self.fold_masks.binary_search_by_key(&id, |&(i, _)| i) {
+            Ok(i) => self.fold_masks.get(i).map_or(u64::MAX, |m| m.1),
+            Err(_) => u64::MAX,
         }
     }
 

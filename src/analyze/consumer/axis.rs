@@ -19,7 +19,7 @@ use crate::canopen::pdo::{
 use crate::canopen::sdo::{self, Sdo};
 use crate::timeline::At;
 use crate::timeline::axis::{AxisRecord, Via};
-use crate::trace::Interest;
+use crate::trace::{Fold, Interest};
 
 /// Standard CAN ids: the per-PDO lookup is an index into this many slots.
 const STANDARD_IDS: usize = 0x800;
@@ -39,15 +39,16 @@ pub(in crate::analyze) struct PdoSlot {
     fields: Cia402Fields,
 }
 
-/// The last words a PDO id carried, and the time of the latest repeat of
-/// them not yet told to the axis: nearly every PDO repeats the one before
-/// (a drive sends its statusword every cycle), and a repeat changes nothing
-/// but the axis's last time, which is needed only at the end.
+/// The last words a PDO id carried, and the time and statusword of the
+/// latest repeat of them (equal in the bits an axis reads) not yet told to
+/// the axis: nearly every PDO repeats the one before (a drive sends its
+/// statusword every cycle), and a repeat changes nothing but the axis's
+/// last time and statusword, which are needed only at the end.
 #[derive(Clone, Debug)]
 struct Last {
     channel: Box<[u8]>,
     values: Cia402Values,
-    repeat: Option<At>,
+    repeat: Option<(At, Option<u16>)>,
 }
 
 /// Mappings and what the consumer derived from them.
@@ -152,9 +153,14 @@ impl Drives {
     /// On ids under the SDO/NMT content filter every frame matters.
     pub(in crate::analyze) fn add_to(&self, interest: &mut Interest) {
         for (id, slot) in self.by_id.iter().enumerate() {
-            if slot.is_some() {
+            if let Some(slot) = slot {
                 interest.add_standard(id as u32);
                 interest.unfilter(id as u32);
+                // Repeats in the bits an axis reads are folded by the
+                // reader (`Consumer::takes_folds` checks them).
+                if let Some(mask) = slot.fields.relevant_bits() {
+                    interest.fold_masked(id as u32, mask);
+                }
             }
         }
         for (id, _) in &self.extended {
@@ -260,10 +266,11 @@ impl<E: Write> Consumer<'_, '_, E> {
         data: &[u8],
     ) -> Result<(), OutputError> {
         let values = slot.fields.read(data);
-        // A repeat on the same channel: only its time is kept.
+        // A repeat on the same channel (in the bits an axis reads): only
+        // its time is kept.
         if let Some(Some(last)) = self.drives.last.get_mut(cob_id as usize) {
-            if last.values == values && *last.channel == *raw {
-                last.repeat = Some(at);
+            if last.values.relevant() == values.relevant() && *last.channel == *raw {
+                last.repeat = Some((at, values.statusword));
                 return Ok(());
             }
             self.flush_repeat(cob_id, slot.node);
@@ -287,13 +294,44 @@ impl<E: Write> Consumer<'_, '_, E> {
         )
     }
 
+    /// Whether PDOs the reader folded on `channel` ([`Fold`]) all repeat
+    /// the words their id carried last ([`Consumer::pdo`] would keep only
+    /// their time).
+    pub(super) fn takes_pdo_fold(&self, channel: &[u8], f: &Fold) -> bool {
+        let Some(slot) = self.drives.slot(f.id, false) else {
+            return false;
+        };
+        let bytes = f.data.to_le_bytes();
+        let data = bytes.get(..usize::from(f.len)).unwrap_or_default();
+        let values = slot.fields.read(data);
+        matches!(
+            self.drives.last.get(f.id as usize),
+            Some(Some(last)) if last.values.relevant() == values.relevant()
+                && *last.channel == *channel
+        )
+    }
+
+    /// Takes the PDOs of a fold [`Consumer::takes_pdo_fold`] accepted, the
+    /// last at `at`: as many repeats.
+    pub(super) fn fold_pdos(&mut self, f: &Fold, at: At) {
+        let Some(slot) = self.drives.slot(f.id, false) else {
+            return;
+        };
+        let bytes = f.last_data.to_le_bytes();
+        let data = bytes.get(..usize::from(f.len)).unwrap_or_default();
+        let statusword = slot.fields.read(data).statusword;
+        if let Some(Some(last)) = self.drives.last.get_mut(f.id as usize) {
+            last.repeat = Some((at, statusword));
+        }
+    }
+
     /// Tells the axis the last repeat of `cob_id`'s words (moves its last
     /// time, changes nothing else), unless a later statusword already did.
     fn flush_repeat(&mut self, cob_id: u32, node: NodeId) {
         let Some(Some(last)) = self.drives.last.get_mut(cob_id as usize) else {
             return;
         };
-        let (Some(at), Some(word)) = (last.repeat.take(), last.values.statusword) else {
+        let Some((at, Some(word))) = last.repeat.take() else {
             return;
         };
         let channel = last.channel.clone();

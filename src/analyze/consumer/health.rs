@@ -297,7 +297,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                         time: Some(f.last),
                         line: self.line_no(idx + f.last_idx),
                     };
-                    if let Some(h) = nmt::error_control_node(f.id)
+                    if nmt::error_control_node(f.id).is_none() {
+                        self.fold_pdos(f, at);
+                    } else if let Some(h) = nmt::error_control_node(f.id)
                         .and_then(|node| self.nodes.timeline_at(c, node))
                         .and_then(|timeline| timeline.health_if_any())
                     {
@@ -340,9 +342,16 @@ impl<E: Write> Consumer<'_, '_, E> {
         // Index + 1 into the folds by node (0: not folded).
         let mut folded = [0u8; 128];
         for (i, f) in run.folds.iter().enumerate() {
-            let (Some(node), 1) = (nmt::error_control_node(f.id), f.len) else {
-                return false;
+            let Some(node) = nmt::error_control_node(f.id) else {
+                // A drive's PDOs (the frame path tries heartbeats first).
+                if !(self.interest.wants(f.id, false) && self.takes_pdo_fold(run.channel, f)) {
+                    return false;
+                }
+                continue;
             };
+            if f.len != 1 {
+                return false;
+            }
             let byte = f.data as u8;
             let Some(state) = NmtState::from_byte(byte).filter(|&s| s != NmtState::Initialising)
             else {

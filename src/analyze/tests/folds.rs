@@ -129,6 +129,7 @@ fn assert_fold_independent(name: &str, t: &[u8], opts: &Options) -> (u64, u64) {
         threads,
         block_size,
         heartbeat_timeout: opts.heartbeat_timeout,
+        assume_cia402_pdo: opts.assume_cia402_pdo,
         ..base_options()
     };
     set_folding(false);
@@ -236,4 +237,84 @@ fn a_timeout_shorter_than_the_period_refuses_every_fold() {
     let (taken, refused) = assert_fold_independent("short timeout", &t, &opts);
     assert_eq!(taken, 0, "every heartbeat is an outage's end");
     assert!(refused > 0);
+}
+
+/// Drives sending TPDO1 (statusword and position) every millisecond, the
+/// statusword's bits 10 and 12 toggling, a fault with its EMCY and a
+/// reset on RPDO1, heartbeats between: PDO repeats are folded with the
+/// heartbeats, and the axis ends on the last statusword sent.
+fn drive_trace(seed: u64, drives: u32, millis: u64, emcy_every: u64) -> Vec<u8> {
+    let mut rng = Lcg(seed);
+    let mut t = Vec::new();
+    let mut clock: u64 = 1_700_000_000_000_000;
+    let mut line = |clock: u64, frame: String| {
+        t.extend(
+            format!(
+                "({}.{:06}) can0 {frame}\n",
+                clock / 1_000_000,
+                clock % 1_000_000
+            )
+            .bytes(),
+        );
+    };
+    line(clock, "085#1043090100000000".into());
+    for ms in 0..millis {
+        for d in 1..=drives {
+            clock += 1_000 / u64::from(drives);
+            let toggles = ((ms / 25) % 4) as u16;
+            let mut word = 0x0637u16 | (toggles & 1) << 10 | (toggles >> 1) << 12;
+            // Drive 2 faults from 300 ms to its reset at 340 ms.
+            if d == 2 && (300..345).contains(&ms) {
+                word = 0x0618;
+            }
+            if d == 2 && ms == 300 {
+                line(clock, "082#1043090100000000".into());
+            }
+            let position = (ms * 17 + u64::from(d)) as u32;
+            let [w0, w1] = word.to_le_bytes();
+            let [p0, p1, p2, p3] = position.to_le_bytes();
+            line(
+                clock,
+                format!(
+                    "{:03X}#{w0:02X}{w1:02X}{p0:02X}{p1:02X}{p2:02X}{p3:02X}",
+                    0x180 + d
+                ),
+            );
+            if d == 2 && (340..342).contains(&ms) {
+                let cw = if ms == 340 { "8000" } else { "0F00" };
+                line(clock, format!("{:03X}#{cw}", 0x200 + d));
+            }
+            if ms % 100 == u64::from(d) {
+                line(clock, format!("{:03X}#05", 0x700 + d));
+            }
+            if rng.below(emcy_every) == 0 {
+                line(clock, "085#0000000000000000".into());
+            }
+        }
+    }
+    t
+}
+
+#[test]
+fn pdo_repeats_are_folded_and_give_what_they_give_one_by_one() {
+    for (seed, emcy_every) in [(11, 40), (12, 2_000)] {
+        let t = drive_trace(seed, 4, 600, emcy_every);
+        let opts = Options {
+            assume_cia402_pdo: true,
+            ..base_options()
+        };
+        let (taken, refused) = assert_fold_independent("drives", &t, &opts);
+        assert!(
+            taken > 0 && refused > 0,
+            "{seed}: {taken} taken, {refused} refused"
+        );
+        let (out, _) = run_with(&t, opts);
+        assert!(out.contains("\"type\":\"fault_reset\""), "{seed}");
+        // The last statusword of 599 ms: bits 10 and 12 both set.
+        assert_eq!(
+            out.matches("\"statusword\":\"0x1637\"").count(),
+            4,
+            "{seed}"
+        );
+    }
 }
