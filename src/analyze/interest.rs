@@ -101,17 +101,18 @@ fn add_id(interest: &mut Interest, id: u32, extended: bool) {
     }
 }
 
-/// Whether readers may fold repeated frames; tests turn it off on their
-/// thread to check that the result never depends on folding.
-#[cfg(not(test))]
+/// Whether readers may fold repeated frames; tests and fuzz targets turn
+/// it off on their thread to check that the result never depends on
+/// folding.
+#[cfg(not(any(test, feature = "fuzzing")))]
 fn folding() -> bool {
     true
 }
 
-#[cfg(test)]
+#[cfg(any(test, feature = "fuzzing"))]
 pub(crate) use test_folding::{folding, set_folding};
 
-#[cfg(test)]
+#[cfg(any(test, feature = "fuzzing"))]
 mod test_folding {
     use std::cell::Cell;
 

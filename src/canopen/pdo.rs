@@ -293,7 +293,8 @@ impl Cia402Fields {
             if u32::from(f.offset) + width > 64 {
                 return None;
             }
-            mask |= low << f.offset;
+            // A field of no bits at bit 64 reads nothing.
+            mask |= low.checked_shl(u32::from(f.offset)).unwrap_or(0);
         }
         Some(mask)
     }
@@ -1453,6 +1454,11 @@ mod tests {
             ..Cia402Fields::default()
         };
         assert_eq!(far.relevant_bits(), None);
+        let empty = Cia402Fields {
+            statusword: Some(field(64, 0)),
+            ..Cia402Fields::default()
+        };
+        assert_eq!(empty.relevant_bits(), Some(0), "no bits, no panic");
         // Words differing only in other bits are the same to an axis.
         let a = Cia402Values {
             statusword: Some(0x0637),

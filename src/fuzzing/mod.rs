@@ -35,7 +35,8 @@ use crate::trace::{Format, FrameKind, Interest, LineParser, Parsed, Scan, Timest
 
 // ---- readers: one trace through analyze ------------------------------------------
 
-/// The `candump_log` target: [`reader`] with the format forced.
+/// The `candump_log` target: [`reader`] with the format forced (and the
+/// output the same with the reader's folding off).
 pub fn candump_log(data: &[u8]) {
     reader(Some(Format::CandumpLog), data);
 }
@@ -217,6 +218,19 @@ pub fn reader(format: Option<Format>, data: &[u8]) {
     };
     let run = run(data, false, &opts, Output::Ndjson);
     check_run(&run, format, Some(data));
+    if format == Some(Format::CandumpLog) {
+        // Only the candump reader folds repeats: reading the lines one by
+        // one must give the same.
+        crate::analyze::interest::set_folding(false);
+        let unfolded = self::run(data, false, &opts, Output::Ndjson);
+        crate::analyze::interest::set_folding(true);
+        assert_eq!(
+            String::from_utf8_lossy(&unfolded.out),
+            String::from_utf8_lossy(&run.out),
+            "ndjson differs without folding"
+        );
+        assert_eq!(unfolded.err, run.err, "stderr differs without folding");
+    }
 }
 
 /// The `detect` target: the format is detected; gzip is read when the bytes
@@ -515,7 +529,9 @@ fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
                 | "heartbeat_back"
                 | "sdo_abort"
                 | "error_history"
-                | "error_history_cleared",
+                | "error_history_cleared"
+                | "axis_state"
+                | "fault_reset",
             ) => {
                 // Several can share a line with each other and with the
                 // EMCY or boot-up event of that line.
