@@ -6,10 +6,8 @@ use super::OutputError;
 use crate::trace::candump_log;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{self, Block, RawLine};
-use std::ops::Range;
-
 use crate::trace::{
-    Fold, Folds, Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp,
+    Fold, Folded, Folds, Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp,
 };
 
 /// A frame read in another format than the file's: (its format, the file's).
@@ -24,10 +22,10 @@ pub(super) trait LineSink {
     /// `n` wanted frames that only move the input's first/last time (see
     /// [`content_matters`](super::interest::content_matters)), the first and last of their times.
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
-    /// A run of lines whose repeated frames the reader folded: taken whole
-    /// (its plain and timed frames counted as by `plain_frames` and
-    /// `timed_frames`), or `false`: give me those lines one at a time.
-    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<bool, OutputError>;
+    /// A run of lines whose repeated frames the reader folded, its plain
+    /// and timed frames (the folded ones among them) to count as by
+    /// `plain_frames` and `timed_frames`.
+    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError>;
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     /// Frames a skipped line says were lost before they were logged
@@ -46,10 +44,9 @@ pub(super) fn too_long(n: u64, max_line: usize) -> Reason {
     format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
 }
 
-/// A run of lines of one layout with frames folded ([`Folds`]): the
-/// lines before the run's frame, `range` of the block's bytes.
+/// A run of lines of one layout with frames folded ([`Folds`]), without
+/// the frame that ended it.
 pub(super) struct FoldedRun<'a> {
-    pub range: Range<usize>,
     pub plain: u64,
     /// Timed frames, the folded ones included.
     pub timed: u64,
@@ -59,6 +56,8 @@ pub(super) struct FoldedRun<'a> {
     pub latest: Timestamp,
     pub channel: &'a [u8],
     pub folds: &'a [Fold],
+    /// Their frames one by one, for a sink that cannot take them whole.
+    pub frames: &'a [Folded],
 }
 
 /// The one loop that classifies lines, sequentially or on a worker: runs
@@ -79,7 +78,6 @@ pub(super) fn classify_block(
         idx += 1;
     }
     loop {
-        let start = pos;
         // Emptied here: in the reader's hot loop it made every line slower.
         folds.clear();
         let run = detector.run(
@@ -89,10 +87,8 @@ pub(super) fn classify_block(
             &mut folds,
         );
         pos += run.bytes;
-        let lines = start..start + run.before_frame;
         let folded = match (folds.latest(), run.first_time, run.last_time) {
             (Some(latest), Some(first), Some(last)) => Some(FoldedRun {
-                range: lines.clone(),
                 plain: run.plain,
                 timed: run.timed,
                 first,
@@ -100,15 +96,13 @@ pub(super) fn classify_block(
                 latest,
                 channel: run.fold_channel,
                 folds: folds.as_slice(),
+                frames: folds.frames(),
             }),
             _ => None,
         };
         if let Some(folded) = folded {
-            if sink.folded(idx, &folded)? {
-                idx += run.plain + run.timed;
-            } else {
-                idx = classify_lines(bytes, lines, idx, max_line, detector, sink)?;
-            }
+            sink.folded(idx, &folded)?;
+            idx += run.plain + run.timed;
         } else {
             if run.plain > 0 {
                 sink.plain_frames(run.plain);
@@ -133,27 +127,6 @@ pub(super) fn classify_block(
     }
     sink.lines(idx);
     Ok(())
-}
-
-/// The lines of `bytes[range]` one at a time, the first being line `idx`
-/// of the block (a run whose folds the sink would not take); returns the
-/// index after them.
-pub(super) fn classify_lines(
-    bytes: &[u8],
-    range: Range<usize>,
-    mut idx: u64,
-    max_line: usize,
-    detector: &mut Detector,
-    sink: &mut impl LineSink,
-) -> Result<u64, OutputError> {
-    let bytes = bytes.get(..range.end).unwrap_or_default();
-    let mut pos = range.start;
-    while let Some((raw, next)) = lines::line_at(bytes, pos, max_line) {
-        pos = next;
-        classify_line(raw, idx, detector, sink, max_line)?;
-        idx += 1;
-    }
-    Ok(idx)
 }
 
 /// One line outside the parser's hot loop.

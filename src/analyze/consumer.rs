@@ -840,8 +840,8 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         self.time(last);
     }
 
-    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<bool, OutputError> {
-        Ok(self.fold_heartbeats(idx, run))
+    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
+        self.fold_heartbeats(idx, run)
     }
 
     fn lines(&mut self, n: u64) {

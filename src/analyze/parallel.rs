@@ -11,12 +11,12 @@ use std::sync::{Arc, Mutex, RwLock};
 
 use super::OutputError;
 use super::batch::spawn_scoped;
-use super::classify::{FoldedRun, Foreign, LineSink, classify_block, classify_lines};
+use super::classify::{FoldedRun, Foreign, LineSink, classify_block};
 use super::consumer::Consumer;
 use super::interest::may_widen;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
-use crate::trace::{Fold, Frame, FrameKind, Interest, Payload, Reason, Timestamp};
+use crate::trace::{Fold, Folded, Frame, FrameKind, Interest, Payload, Reason, Timestamp};
 
 /// The current interest and its generation, shared with workers: a block
 /// parsed with an older generation is parsed again in order.
@@ -47,12 +47,10 @@ enum BlockRecord {
     /// A wanted frame that only moves the input's first/last time (already
     /// counted in `plain_frames`).
     Time(Timestamp),
-    /// A run with folded frames ([`FoldedRun`]), for the consumer to take
-    /// or to read again line by line: its channel is `channel` of the
-    /// channel bytes, its folds `folds` of the block's.
+    /// A run with folded frames ([`FoldedRun`]): its channel is `channel`
+    /// of the channel bytes, its folds and frames those of the block's.
     Folded {
         idx: u64,
-        range: Range<usize>,
         plain: u64,
         timed: u64,
         first: Timestamp,
@@ -60,6 +58,7 @@ enum BlockRecord {
         latest: Timestamp,
         channel: Range<usize>,
         folds: Range<usize>,
+        frames: Range<usize>,
     },
 }
 
@@ -90,8 +89,9 @@ struct BlockResult {
     records: Vec<BlockRecord>,
     /// Channel names of the frame records, back to back.
     channels: Vec<u8>,
-    /// The folds of the folded runs, back to back.
+    /// The folds of the folded runs, back to back, and their frames.
     folds: Vec<Fold>,
+    folded: Vec<Folded>,
 }
 
 /// The worker-side sink: keeps only what the consumer needs.
@@ -123,15 +123,16 @@ impl LineSink for Recorder {
     }
 
     /// Kept for the consumer, who alone knows whether it can take them.
-    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<bool, OutputError> {
+    fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
         self.flush_time();
         let channel = self.result.channels.len();
         self.result.channels.extend_from_slice(run.channel);
         let folds = self.result.folds.len();
         self.result.folds.extend_from_slice(run.folds);
+        let frames = self.result.folded.len();
+        self.result.folded.extend_from_slice(run.frames);
         self.result.records.push(BlockRecord::Folded {
             idx,
-            range: run.range.clone(),
             plain: run.plain,
             timed: run.timed,
             first: run.first,
@@ -139,8 +140,9 @@ impl LineSink for Recorder {
             latest: run.latest,
             channel: channel..self.result.channels.len(),
             folds: folds..self.result.folds.len(),
+            frames: frames..self.result.folded.len(),
         });
-        Ok(true)
+        Ok(())
     }
 
     fn lines(&mut self, n: u64) {
@@ -226,14 +228,8 @@ impl Recorder {
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
-    /// Replays a worker's block result as if its lines had been read here
-    /// (folded runs the consumer does not take are, with `detector`).
-    fn replay(
-        &mut self,
-        r: BlockResult,
-        detector: &mut Detector,
-        max_line: usize,
-    ) -> Result<Block, OutputError> {
+    /// Replays a worker's block result as if its lines had been read here.
+    fn replay(&mut self, r: BlockResult) -> Result<Block, OutputError> {
         self.counts.frames += r.plain_frames;
         self.counts.skipped += r.skipped;
         self.counts.dropped = self.counts.dropped.saturating_add(r.dropped);
@@ -246,7 +242,6 @@ impl<E: Write> Consumer<'_, '_, E> {
                 BlockRecord::Time(t) => self.time(t),
                 BlockRecord::Folded {
                     idx,
-                    range,
                     plain,
                     timed,
                     first,
@@ -254,9 +249,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                     latest,
                     channel,
                     folds,
+                    frames,
                 } => {
                     let run = FoldedRun {
-                        range: range.clone(),
                         plain,
                         timed,
                         first,
@@ -264,10 +259,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                         latest,
                         channel: r.channels.get(channel).unwrap_or_default(),
                         folds: r.folds.get(folds).unwrap_or_default(),
+                        frames: r.folded.get(frames).unwrap_or_default(),
                     };
-                    if !self.folded(idx, &run)? {
-                        classify_lines(r.block.text(), range, idx, max_line, detector, self)?;
-                    }
+                    self.folded(idx, &run)?;
                 }
                 BlockRecord::Frame {
                     idx,
@@ -372,6 +366,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             records: Vec::new(),
                             channels: Vec::new(),
                             folds: Vec::new(),
+                            folded: Vec::new(),
                         },
                     };
                     // A recorder never fails: it only collects.
@@ -521,7 +516,7 @@ fn consume_in_order<E: Write>(
             let block = if valid {
                 let mut r = r;
                 std::mem::swap(current, &mut r.end);
-                consumer.replay(r, current, max_line)?
+                consumer.replay(r)?
             } else {
                 classify_block(&r.block, max_line, current, consumer)?;
                 r.block

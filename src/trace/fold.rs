@@ -7,10 +7,10 @@
 //! bus sends one such frame every few hundred lines, and each used to end
 //! the hot loop, be built, recorded and replayed on its own (about 830
 //! instructions a heartbeat, measured in docs/performance.md). A fold keeps
-//! what the consumer needs to take them all at once, or to tell it cannot
-//! (then the lines are read again one at a time, so the result never
-//! depends on folding): how many, the first and last time, the last line,
-//! and the largest gap between two of them.
+//! what the consumer needs to take them all at once (how many, the first
+//! and last time, the last line, the largest gap between two of them), and
+//! each frame, for when it cannot: then it takes them one by one, so the
+//! result never depends on folding.
 
 use super::Timestamp;
 
@@ -35,10 +35,25 @@ pub struct Fold {
     pub max_gap: i128,
 }
 
+/// One frame of a fold, kept so that a consumer refusing the folds can
+/// take the frames one by one without reading the lines again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Folded {
+    /// The frame's line, as an index into the run's lines.
+    pub idx: u64,
+    pub time: Timestamp,
+    pub id: u32,
+    /// As [`Payload::word`](super::Payload::word) gives it.
+    pub data: u64,
+    pub len: u8,
+}
+
 /// The folds of one run, at most one per (standard) id.
 #[derive(Clone, Debug)]
 pub struct Folds {
     list: Vec<Fold>,
+    /// Every frame folded, in line order.
+    frames: Vec<Folded>,
     /// Index + 1 into `list` by id; 0: none.
     slot: Box<[u16; 2048]>,
     /// The time of the last frame folded: times only go forward in a fold
@@ -50,6 +65,7 @@ impl Default for Folds {
     fn default() -> Self {
         Folds {
             list: Vec::new(),
+            frames: Vec::new(),
             slot: Box::new([0; 2048]),
             latest: None,
         }
@@ -69,11 +85,17 @@ impl Folds {
             }
         }
         self.list.clear();
+        self.frames.clear();
         self.latest = None;
     }
 
     pub fn as_slice(&self) -> &[Fold] {
         &self.list
+    }
+
+    /// Every frame folded, in line order.
+    pub fn frames(&self) -> &[Folded] {
+        &self.frames
     }
 
     /// The time of the last frame folded (the latest: times only go
@@ -145,6 +167,13 @@ impl Folds {
             f.last_idx = idx;
         }
         self.latest = Some(time);
+        self.frames.push(Folded {
+            idx,
+            time,
+            id,
+            data,
+            len,
+        });
         true
     }
 }
@@ -178,6 +207,8 @@ mod tests {
         assert_eq!(a.max_gap, 250 * 1_000_000_000_000_000);
         assert_eq!((folds[1].count, folds[1].max_gap), (1, 0));
         assert_eq!(f.latest(), Some(t(450)));
+        let lines: Vec<(u64, u32)> = f.frames().iter().map(|x| (x.idx, x.id)).collect();
+        assert_eq!(lines, [(0, 0x705), (3, 0x706), (7, 0x705), (9, 0x705)]);
     }
 
     #[test]
@@ -198,6 +229,7 @@ mod tests {
         assert!(!f.add(0x706, 5, 1, t(50), 1, all), "backwards");
         assert_eq!(f.as_slice().len(), 1);
         assert_eq!(f.as_slice()[0].count, 1);
+        assert_eq!(f.frames().len(), 1, "refused frames are not kept");
     }
 
     #[test]
@@ -229,7 +261,7 @@ mod tests {
             assert!(f.add(id, 5, 1, t(u64::from(id)), 0, all));
         }
         f.clear();
-        assert!(f.as_slice().is_empty());
+        assert!(f.as_slice().is_empty() && f.frames().is_empty());
         assert_eq!(f.latest(), None);
         assert!(f.add(0x701, 4, 1, t(1), 0, all), "a fresh fold, other data");
         assert_eq!(f.as_slice()[0].count, 1);

@@ -31,7 +31,7 @@ pub mod trc;
 use std::borrow::Cow;
 use std::fmt;
 
-pub use fold::{Fold, Folds};
+pub use fold::{Fold, Folded, Folds};
 pub use time::{Span, Step, Timestamp};
 
 /// The text formats we read.

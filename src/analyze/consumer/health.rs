@@ -22,7 +22,7 @@ use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
 use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
 use crate::timeline::nmt::{NmtChange, NmtWarning};
-use crate::trace::{Frame, FrameKind, Span, Timestamp};
+use crate::trace::{Frame, FrameKind, Payload, Span, Timestamp};
 
 /// What the consumer keeps for every node's health.
 #[derive(Default)]
@@ -275,12 +275,50 @@ impl<E: Write> Consumer<'_, '_, E> {
         true
     }
 
-    /// Heartbeats the reader folded ([`FoldedRun`]), with the rest of
-    /// their run, taken whole when reading the lines one by one would have
-    /// sent each heartbeat down [`Consumer::steady_heartbeat`] and found no
-    /// node lost at any of them. `false` (nothing changed): the caller
-    /// reads the lines one by one, so the result never depends on folding.
-    pub(super) fn fold_heartbeats(&mut self, idx: u64, run: &FoldedRun<'_>) -> bool {
+    /// Heartbeats and PDOs the reader folded ([`FoldedRun`]), with the
+    /// rest of their run: taken whole when reading the lines one by one
+    /// would have sent each heartbeat down [`Consumer::steady_heartbeat`],
+    /// made each PDO a repeat and found no node lost at any of them; else
+    /// the folded frames are taken one by one, as if their lines had been
+    /// read (the others of the run only count and move the input's first
+    /// and last time), so the result never depends on folding.
+    pub(super) fn fold_heartbeats(
+        &mut self,
+        idx: u64,
+        run: &FoldedRun<'_>,
+    ) -> Result<(), OutputError> {
+        if !self.take_folds(idx, run) {
+            self.unfold(idx, run)?;
+        }
+        Ok(())
+    }
+
+    /// The folded frames of `run` one by one; its other lines counted.
+    fn unfold(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
+        self.plain_frames(run.plain);
+        let others = run.timed.saturating_sub(run.frames.len() as u64);
+        self.counts.frames += others;
+        // The run's first time before its frames', its last after.
+        self.time(run.first);
+        for f in run.frames {
+            let frame = Frame {
+                time: Some(f.time),
+                channel: run.channel,
+                id: f.id,
+                extended: false,
+                kind: FrameKind::Data,
+                len: f.len,
+                data: Payload::inline(f.data.to_le_bytes(), f.len),
+            };
+            self.frame(idx + f.idx, &frame, None)?;
+        }
+        self.time(run.last);
+        Ok(())
+    }
+
+    /// [`Consumer::fold_heartbeats`] when the folds can be taken whole:
+    /// `false`, nothing changed, when they cannot.
+    fn take_folds(&mut self, idx: u64, run: &FoldedRun<'_>) -> bool {
         let mut rebounds = std::mem::take(&mut self.health.rebounds);
         rebounds.clear();
         let taken = self.decided
