@@ -184,22 +184,12 @@ impl Nodes {
     /// instructions; heartbeats are a tenth of a busy trace's frames).
     #[inline(always)]
     fn known(&mut self, raw: &[u8], node: NodeId) -> Option<&mut NodeTimeline> {
-        let same = |ch: &ChannelNodes| ch.name.len() == raw.len() && ch.name.as_bytes() == raw;
-        let c = match self.last {
-            Some(c) if self.channels.get(c).is_some_and(same) => c,
-            _ => {
-                let c = *self.index.get(raw)?;
-                self.last = Some(c);
-                c
-            }
-        };
-        let ch = self.channels.get_mut(c)?;
-        let i = ch.position(node).ok()?;
-        ch.nodes.get_mut(i).map(|(_, timeline)| timeline)
+        let c = self.channel_index(raw)?;
+        self.timeline_at(c, node)
     }
 
     /// The index of the channel named by `raw`, if known.
-    #[inline]
+    #[inline(always)]
     fn channel_index(&mut self, raw: &[u8]) -> Option<usize> {
         let same = |ch: &ChannelNodes| ch.name.len() == raw.len() && ch.name.as_bytes() == raw;
         match self.last {
@@ -213,7 +203,7 @@ impl Nodes {
     }
 
     /// The timeline of `node` on the channel at `c`, if known.
-    #[inline]
+    #[inline(always)]
     fn timeline_at(&mut self, c: usize, node: NodeId) -> Option<&mut NodeTimeline> {
         let ch = self.channels.get_mut(c)?;
         let i = ch.position(node).ok()?;
@@ -841,7 +831,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
     }
 
     fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
-        self.fold_heartbeats(idx, run)
+        self.take_folded_run(idx, run)
     }
 
     fn lines(&mut self, n: u64) {

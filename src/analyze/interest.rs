@@ -28,7 +28,7 @@ pub(crate) fn interest(opts: &Options) -> Interest {
         i.filter_content(ids, filter);
     }
     // Steady heartbeats are taken a run at a time (the consumer's
-    // `fold_heartbeats`).
+    // `take_folded_run`).
     if folding() {
         i.fold(nmt);
     }

@@ -266,10 +266,7 @@ impl HeartbeatMonitor {
     /// Takes `count` heartbeats [`HeartbeatMonitor::takes_fold`] accepted,
     /// the last at `last`: as many [`HeartbeatMonitor::steady`] calls.
     pub fn fold(&mut self, count: u64, last: At) {
-        let next = match (last.time, self.step) {
-            (Some(t), Some(step)) => t.checked_add_step(step),
-            _ => None,
-        };
+        let next = last.time.and_then(|t| self.deadline_after(t));
         self.beats += count;
         self.last = Some(last);
         self.deadline = next;

@@ -149,6 +149,15 @@ impl Drives {
         self.by_id.get(id as usize).copied().flatten()
     }
 
+    /// The words of a PDO on standard `id` whose `len` bytes are `word`
+    /// (as [`Payload::word`](crate::trace::Payload::word) gives them), if
+    /// its mapping decodes any.
+    fn read_word(&self, id: u32, word: u64, len: u8) -> Option<Cia402Values> {
+        let slot = self.slot(id, false)?;
+        let bytes = word.to_le_bytes();
+        Some(slot.fields.read(bytes.get(..usize::from(len))?))
+    }
+
     /// Adds the ids worth reading to `interest`: decoded PDOs, watched ones.
     /// On ids under the SDO/NMT content filter every frame matters.
     pub(in crate::analyze) fn add_to(&self, interest: &mut Interest) {
@@ -298,12 +307,9 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// the words their id carried last ([`Consumer::pdo`] would keep only
     /// their time).
     pub(super) fn takes_pdo_fold(&self, channel: &[u8], f: &Fold) -> bool {
-        let Some(slot) = self.drives.slot(f.id, false) else {
+        let Some(values) = self.drives.read_word(f.id, f.data, f.len) else {
             return false;
         };
-        let bytes = f.data.to_le_bytes();
-        let data = bytes.get(..usize::from(f.len)).unwrap_or_default();
-        let values = slot.fields.read(data);
         matches!(
             self.drives.last.get(f.id as usize),
             Some(Some(last)) if last.values.relevant() == values.relevant()
@@ -314,12 +320,10 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// Takes the PDOs of a fold [`Consumer::takes_pdo_fold`] accepted, the
     /// last at `at`: as many repeats.
     pub(super) fn fold_pdos(&mut self, f: &Fold, at: At) {
-        let Some(slot) = self.drives.slot(f.id, false) else {
-            return;
-        };
-        let bytes = f.last_data.to_le_bytes();
-        let data = bytes.get(..usize::from(f.len)).unwrap_or_default();
-        let statusword = slot.fields.read(data).statusword;
+        let statusword = self
+            .drives
+            .read_word(f.id, f.last_data, f.len)
+            .and_then(|v| v.statusword);
         if let Some(Some(last)) = self.drives.last.get_mut(f.id as usize) {
             last.repeat = Some((at, statusword));
         }

@@ -282,7 +282,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// the folded frames are taken one by one, as if their lines had been
     /// read (the others of the run only count and move the input's first
     /// and last time), so the result never depends on folding.
-    pub(super) fn fold_heartbeats(
+    pub(super) fn take_folded_run(
         &mut self,
         idx: u64,
         run: &FoldedRun<'_>,
@@ -316,7 +316,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         Ok(())
     }
 
-    /// [`Consumer::fold_heartbeats`] when the folds can be taken whole:
+    /// [`Consumer::take_folded_run`] when the folds can be taken whole:
     /// `false`, nothing changed, when they cannot.
     fn take_folds(&mut self, idx: u64, run: &FoldedRun<'_>) -> bool {
         let mut rebounds = std::mem::take(&mut self.health.rebounds);
@@ -335,13 +335,17 @@ impl<E: Write> Consumer<'_, '_, E> {
                         time: Some(f.last),
                         line: self.line_no(idx + f.last_idx),
                     };
-                    if nmt::error_control_node(f.id).is_none() {
-                        self.fold_pdos(f, at);
-                    } else if let Some(h) = nmt::error_control_node(f.id)
-                        .and_then(|node| self.nodes.timeline_at(c, node))
-                        .and_then(|timeline| timeline.health_if_any())
-                    {
-                        h.heartbeat.fold(f.count, at);
+                    match nmt::error_control_node(f.id) {
+                        None => self.fold_pdos(f, at),
+                        Some(node) => {
+                            if let Some(h) = self
+                                .nodes
+                                .timeline_at(c, node)
+                                .and_then(|timeline| timeline.health_if_any())
+                            {
+                                h.heartbeat.fold(f.count, at);
+                            }
+                        }
                     }
                 }
             }
@@ -362,7 +366,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         taken
     }
 
-    /// Whether [`Consumer::fold_heartbeats`] can take `run`'s folds (on
+    /// Whether [`Consumer::take_folded_run`] can take `run`'s folds (on
     /// the channel at `c`): each one heartbeats of a known node in the
     /// steady state its data says, each of them steady
     /// ([`HeartbeatMonitor::takes_fold`]), and every other node within its
