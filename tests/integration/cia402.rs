@@ -310,22 +310,7 @@ fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
         .match_indices("<title>axis state ")
         .filter_map(|(i, _)| svg[i + 18..].split(' ').next())
         .collect();
-    assert_eq!(
-        strips,
-        [
-            "switch_on_disabled",
-            "ready_to_switch_on",
-            "switched_on",
-            "operation_enabled",
-            "fault_reaction_active",
-            "fault",
-            "switch_on_disabled",
-            "ready_to_switch_on",
-            "switched_on",
-            "operation_enabled",
-        ],
-        "{svg}"
-    );
+    assert_eq!(strips, LIFE, "{svg}");
     assert!(svg.contains(".ec .a-operation_enabled{fill:"));
     // A trace without an axis has no such band.
     let out = emcy_decode()
