@@ -7,7 +7,8 @@ use crate::trace::candump_log;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{self, Block, RawLine};
 use crate::trace::{
-    Fold, Folded, Folds, Format, Frame, FrameKind, Interest, Parsed, Reason, Scan, Timestamp,
+    Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, Interest, Parsed, Reason, Scan,
+    Timestamp,
 };
 
 /// A frame read in another format than the file's: (its format, the file's).
@@ -26,6 +27,18 @@ pub(super) trait LineSink {
     /// and timed frames (the folded ones among them) to count as by
     /// `plain_frames` and `timed_frames`.
     fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError>;
+    /// Vectors for a block's folds: a sink gives back the last block's.
+    fn fold_buffers(&mut self) -> FoldBuffers {
+        FoldBuffers::default()
+    }
+    /// Whether the sink takes the block's folds whole at its end
+    /// ([`LineSink::block_folds`]): then every run's are kept till then.
+    fn keeps_folds(&self) -> bool {
+        false
+    }
+    /// The block's folds, every run's ([`FoldedRun::at`] says where each
+    /// run's are): a sink that keeps them takes them whole.
+    fn block_folds(&mut self, _folds: FoldBuffers) {}
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     fn skipped(&mut self);
     /// Frames a skipped line says were lost before they were logged
@@ -58,6 +71,16 @@ pub(super) struct FoldedRun<'a> {
     pub folds: &'a [Fold],
     /// Their frames one by one, for a sink that cannot take them whole.
     pub frames: &'a [Folded],
+    /// Where `folds` and `frames` begin in the block's.
+    pub at: RunAt,
+}
+
+/// Where a [`FoldedRun`]'s folds and frames begin in its block's
+/// ([`LineSink::block_folds`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct RunAt {
+    pub folds: usize,
+    pub frames: usize,
 }
 
 /// The one loop that classifies lines, sequentially or on a worker: runs
@@ -72,14 +95,15 @@ pub(super) fn classify_block(
     let bytes = block.text();
     let mut idx = 0u64;
     let mut pos = 0usize;
-    let mut folds = Folds::default();
+    let keep = sink.keeps_folds();
+    let mut folds = Folds::with_buffers(sink.fold_buffers(), keep);
     if let Some(n) = block.too_long_before {
         sink.malformed(idx, too_long(n, max_line));
         idx += 1;
     }
     loop {
-        // Emptied here: in the reader's hot loop it made every line slower.
-        folds.clear();
+        // Started here: in the reader's hot loop it made every line slower.
+        folds.next_run();
         let run = detector.run(
             bytes.get(pos..).unwrap_or_default(),
             max_line,
@@ -97,6 +121,10 @@ pub(super) fn classify_block(
                 channel: run.fold_channel,
                 folds: folds.as_slice(),
                 frames: folds.frames(),
+                at: RunAt {
+                    folds: folds.run_start().0,
+                    frames: folds.run_start().1,
+                },
             }),
             _ => None,
         };
@@ -126,6 +154,7 @@ pub(super) fn classify_block(
         idx += 1;
     }
     sink.lines(idx);
+    sink.block_folds(folds.into_buffers());
     Ok(())
 }
 

@@ -31,7 +31,7 @@ use crate::timeline::history::{ErrorHistory, History};
 use crate::timeline::{At, NodeTimeline, Step};
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::ethercat::{CoeMessage, CoeService, Retries};
-use crate::trace::{Format, Frame, FrameKind, Interest, Reason, Timestamp};
+use crate::trace::{FoldBuffers, Format, Frame, FrameKind, Interest, Reason, Timestamp};
 use axis::Drives;
 use health::HealthState;
 
@@ -832,6 +832,14 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn folded(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
         self.take_folded_run(idx, run)
+    }
+
+    fn fold_buffers(&mut self) -> FoldBuffers {
+        std::mem::take(&mut self.health.spare_folds)
+    }
+
+    fn block_folds(&mut self, folds: FoldBuffers) {
+        self.health.spare_folds = folds;
     }
 
     fn lines(&mut self, n: u64) {

@@ -8,7 +8,7 @@ use crate::canopen::emcy;
 use crate::canopen::nmt;
 use crate::canopen::pdo;
 use crate::canopen::sdo;
-use crate::trace::{ContentFilter, Frame, Interest};
+use crate::trace::{ContentFilter, DataHead, Frame, Interest};
 
 /// The ids whose frames are decoded; everything else is only counted:
 /// EMCY, NMT commands, NMT error control (boot-up, heartbeats, guarding),
@@ -44,11 +44,21 @@ pub(crate) fn interest(opts: &Options) -> Interest {
 /// node's heartbeat deadline or NMT state); on the SDO ids aborts and
 /// frames naming an object the decoder follows. SDO traffic for other
 /// objects, most frames on those ids, skips all further work.
-pub(super) fn content_matters(id: u32, data: &[u8]) -> bool {
+pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     if emcy::is_nmt_error_control(id) {
         data.len() <= 1
     } else if sdo::is_sdo_id(id) {
-        sdo::names_followed_object(id, data) || sdo::is_abort(data) || concerns_axis(id, data)
+        // What `names_followed_object || is_abort || concerns_axis` say
+        // (a test holds them equal), reading the command and index once:
+        // asked of every SDO frame of a trace.
+        let head = data.head();
+        match *head {
+            [cmd, lo, hi] => {
+                let index = index_of(lo, hi);
+                sdo::is_abort(head) || sdo::is_followed(index) || names_axis_object(id, cmd, index)
+            }
+            _ => sdo::is_abort(head),
+        }
     } else {
         true
     }
@@ -59,13 +69,22 @@ pub(super) fn content_matters(id: u32, data: &[u8]) -> bool {
 /// or it is a download segment or its confirmation (segments name no
 /// object; the PDO assembler keeps only those of a transfer it follows).
 pub(super) fn concerns_axis(id: u32, data: &[u8]) -> bool {
-    let Some(&[cmd, lo, hi]) = data.get(..3).and_then(|d| <&[u8; 3]>::try_from(d).ok()) else {
-        return false;
-    };
-    let index = u16::from_le_bytes([lo, hi]);
+    match *data {
+        [cmd, lo, hi, ..] => names_axis_object(id, cmd, index_of(lo, hi)),
+        _ => false,
+    }
+}
+
+fn index_of(lo: u8, hi: u8) -> u16 {
+    u16::from_le_bytes([lo, hi])
+}
+
+/// [`concerns_axis`] of a frame with command byte `cmd` naming `index`.
+#[inline]
+fn names_axis_object(id: u32, cmd: u8, index: u16) -> bool {
     let request = id >= sdo::REQUEST_BASE;
     pdo::PdoId::is_pdo_parameter(index)
-        || cia402::DECODED.contains(&index)
+        || cia402::is_decoded(index)
         || (request && cmd >> 5 == 0)
         || (!request && cmd >> 5 == 1)
 }
@@ -126,5 +145,43 @@ mod test_folding {
 
     pub(crate) fn set_folding(on: bool) {
         FOLDING.with(|f| f.set(on));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The one-pass filter says what its three questions say.
+        #[test]
+        fn content_matters_is_its_three_questions(
+            id in prop_oneof![0u32..0x800, 0x581u32..0x600, 0x601u32..0x680, 0x701u32..0x780],
+            cmd in any::<u8>(),
+            index in prop_oneof![
+                any::<u16>(),
+                0x1000u16..0x1020,
+                0x1400u16..0x1C00,
+                0x603Fu16..0x6042,
+            ],
+            rest in prop::collection::vec(any::<u8>(), 0..6),
+            len in 0usize..9,
+        ) {
+            let [lo, hi] = index.to_le_bytes();
+            let mut data = vec![cmd, lo, hi];
+            data.extend(rest);
+            data.truncate(len);
+            let expected = if emcy::is_nmt_error_control(id) {
+                data.len() <= 1
+            } else if sdo::is_sdo_id(id) {
+                sdo::names_followed_object(id, &data)
+                    || sdo::is_abort(&data)
+                    || concerns_axis(id, &data)
+            } else {
+                true
+            };
+            prop_assert_eq!(content_matters(id, DataHead::of(&data)), expected);
+        }
     }
 }

@@ -240,7 +240,7 @@ impl Mapping {
     pub fn maps_decoded(&self) -> bool {
         self.objects
             .iter()
-            .any(|m| cia402::DECODED.contains(&m.object.index))
+            .any(|m| cia402::is_decoded(m.object.index))
     }
 }
 

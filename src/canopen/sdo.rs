@@ -108,7 +108,10 @@ pub fn names_object(id: u32, data: &[u8], index: u16) -> bool {
 }
 
 /// Whether an SDO frame names one of the followed objects ([`is_followed`]): only those
-/// can change what the decoder knows.
+/// can change what the decoder knows. The content filter asks it in one
+/// pass with its other questions (`analyze::interest::content_matters`,
+/// tested equal to this).
+#[cfg(test)]
 pub fn names_followed_object(id: u32, data: &[u8]) -> bool {
     is_sdo_id(id) && named_index(data).is_some_and(is_followed)
 }

@@ -236,40 +236,36 @@ impl HeartbeatMonitor {
     /// so comparing values is comparing times). And whether the deadline
     /// after the last (at `last`) is not passed at `latest`, the time of
     /// the last heartbeat folded with them (of any node): then no frame
-    /// among them found the node lost either.
+    /// among them found the node lost either. `Some(that deadline)` when
+    /// so.
     pub fn takes_fold(
         &self,
         first: Timestamp,
         max_gap: i128,
         last: Timestamp,
         latest: Timestamp,
-    ) -> bool {
+    ) -> Option<Timestamp> {
         let (Some(deadline), Some(step), Some((timeout, _))) =
             (self.deadline, self.step, self.timeout)
         else {
-            return false;
+            return None;
         };
         if self.lost.is_some() || self.period.is_none() || first > deadline {
-            return false;
+            return None;
         }
-        max_gap <= timeout.attos()
-            && last
-                .checked_add_step(step)
-                .is_some_and(|next| latest <= next)
-    }
-
-    /// The deadline a heartbeat at `last` would give.
-    pub fn deadline_after(&self, last: Timestamp) -> Option<Timestamp> {
-        last.checked_add_step(self.step?)
+        if max_gap > timeout.attos() {
+            return None;
+        }
+        last.checked_add_step(step).filter(|&next| latest <= next)
     }
 
     /// Takes `count` heartbeats [`HeartbeatMonitor::takes_fold`] accepted,
-    /// the last at `last`: as many [`HeartbeatMonitor::steady`] calls.
-    pub fn fold(&mut self, count: u64, last: At) {
-        let next = last.time.and_then(|t| self.deadline_after(t));
+    /// the last at `last`, with the deadline it gave: as many
+    /// [`HeartbeatMonitor::steady`] calls.
+    pub fn fold(&mut self, count: u64, last: At, deadline: Timestamp) {
         self.beats += count;
         self.last = Some(last);
-        self.deadline = next;
+        self.deadline = Some(deadline);
     }
 
     /// A boot-up at `at`: a sign of life that restarts the node.

@@ -1268,7 +1268,10 @@ mod tests {
         fn frames_the_content_filter_rejects_are_only_timed() {
             let mut interest = Interest::none();
             interest.add_standard(0x705);
-            interest.filter_content(0x705..=0x705, crate::trace::ContentFilter(|_, d| d == [0]));
+            interest.filter_content(
+                0x705..=0x705,
+                crate::trace::ContentFilter(|_, d| d.head() == [0]),
+            );
             let mut p = parser(false, 0);
             assert_eq!(
                 p.scan(b"   2.500000 1  705             Rx   d 1 05", &interest),

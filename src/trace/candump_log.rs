@@ -11,8 +11,8 @@
 
 use super::time::MAX_FRACTION_DIGITS;
 use super::{
-    Folds, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Run, Scan, Timestamp,
-    is_blank, split_token, trim_end, trim_start,
+    DataHead, Folds, Frame, FrameKind, HexText, Interest, LineParser, Parsed, Payload, Reason, Run,
+    Scan, Ticks, Timestamp, is_blank, split_token, trim_end, trim_start,
 };
 use super::{hex, scan};
 use crate::trace::Format;
@@ -87,37 +87,49 @@ impl LineParser for CandumpLogParser {
             match shape.kind(line, interest) {
                 Kind::Plain => run.plain += 1,
                 Kind::Timed => {
-                    // Of a run of these only the first and last time count.
+                    // Of a run of these (folded frames among them) only the
+                    // first and last time count.
                     if run.first_time.is_none() {
                         run.first_time = shape.time(line);
                     }
                     run.timed += 1;
-                    last_timed = Some((line, shape));
+                    last_timed = Some(line);
                 }
                 Kind::Frame(frame) => {
-                    if let Some(time) = frame.time
-                        && interest.folds(frame.id)
-                        && fold_frame(folds, &frame, time, run.plain + run.timed, interest)
-                    {
-                        run.timed += 1;
-                        run.last_time = Some(time);
-                        run.first_time.get_or_insert(time);
-                        last_timed = None;
-                        if run.fold_channel.is_empty() {
-                            run.fold_channel = frame.channel;
+                    run.before_frame = run.bytes;
+                    run.bytes += len + 1;
+                    run.frame = Some(frame);
+                    break;
+                }
+                Kind::Fold => {
+                    match fold_line(folds, shape, line, run.plain + run.timed, interest) {
+                        Kind::Timed => {
+                            if run.first_time.is_none() {
+                                run.first_time = time_at(line, layout.dot, layout.close);
+                            }
+                            run.timed += 1;
+                            last_timed = Some(line);
                         }
-                    } else {
-                        run.before_frame = run.bytes;
-                        run.bytes += len + 1;
-                        run.frame = Some(frame);
-                        break;
+                        Kind::Frame(frame) => {
+                            run.before_frame = run.bytes;
+                            run.bytes += len + 1;
+                            run.frame = Some(frame);
+                            break;
+                        }
+                        _ => break,
                     }
                 }
                 Kind::Parse => break,
             }
             run.bytes += len + 1;
         }
-        if let Some((line, shape)) = last_timed {
+        if folds.latest().is_some()
+            && let Some(line) = last_timed
+        {
+            // Every line of the run has the layout, and so the channel.
+            run.fold_channel = layout.channel(line);
+        }
+        if let Some(line) = last_timed {
             // A run's last time only moves the input's last time, and a data
             // frame with a time after it moves it again: its conversion
             // (about 150 instructions, once per heartbeat in a busy trace)
@@ -129,7 +141,7 @@ impl LineParser for CandumpLogParser {
             run.last_time = if superseded {
                 run.first_time
             } else {
-                shape.time(line)
+                time_at(line, layout.dot, layout.close)
             };
         }
         if run.frame.is_none() {
@@ -148,24 +160,45 @@ impl LineParser for CandumpLogParser {
     }
 }
 
-/// Folds a frame of [`CandumpLogParser::run`] on a foldable id ([`Folds`]);
-/// `false`: not a repeat, the run's frame. Not inlined: in the loop's body
-/// it made every line slower (callgrind on plain lines).
+/// A line of [`CandumpLogParser::run`] on a foldable id: folded into
+/// `folds` ([`Folds::add`]) and then timed like a frame nobody wants, or
+/// what [`Shape::kind`] makes of it. Not inlined: in the loop's body it
+/// made every line slower (callgrind on plain lines).
 #[inline(never)]
-fn fold_frame(
+fn fold_line<'a>(
     folds: &mut Folds,
-    frame: &Frame<'_>,
-    time: Timestamp,
+    shape: Shape,
+    line: &'a [u8],
     idx: u64,
     interest: &Interest,
-) -> bool {
-    frame.kind == FrameKind::Data
-        && !frame.extended
-        && frame.data.word().is_some_and(|(word, len)| {
-            folds.add(frame.id, word, len, time, idx, || {
-                interest.fold_mask(frame.id)
-            })
-        })
+) -> Kind<'a> {
+    let text = HexText::of(line, shape.data.start, shape.data.end);
+    let time = shape.ticks(line);
+    let rule = || interest.fold_rule(shape.id);
+    if let (Some(text), Some(time)) = (text, time)
+        && folds.repeat(shape.id, text, time, idx, rule)
+    {
+        return Kind::Timed;
+    }
+    let Some(data) = shape.data(line) else {
+        return Kind::Parse;
+    };
+    if interest.timed_only(shape.id, false, data.as_slice()) {
+        return Kind::Timed;
+    }
+    if let (Some((word, _)), Some(text), Some(time)) = (data.word(), text, time)
+        && folds.add(shape.id, word, text, time, idx, rule)
+    {
+        return Kind::Timed;
+    }
+    match (shape.frame(line, false), shape.time(line)) {
+        (Some(frame), Some(time)) => Kind::Frame(Frame {
+            time: Some(time),
+            data,
+            ..frame
+        }),
+        _ => Kind::Parse,
+    }
 }
 
 /// Lines every candump output may contain besides frames: blank lines,
@@ -284,14 +317,26 @@ impl Shape {
 
     #[inline]
     fn time(&self, line: &[u8]) -> Option<Timestamp> {
-        // At most 19 digits: always fits in u64.
-        let secs = scan::decimal_u64(line.get(1..self.dot)?);
-        let frac = line.get(self.dot + 1..self.close)?;
-        Some(Timestamp::from_parts(
-            secs,
-            scan::decimal_u64(frac),
-            frac.len() as u8,
-        ))
+        time_at(line, self.dot, self.close)
+    }
+
+    /// The time as [`Ticks`] (what folding compares); `None` past 19 digits.
+    #[inline]
+    fn ticks(&self, line: &[u8]) -> Option<Ticks> {
+        let value = scan::decimal_ticks(line, 1, self.dot, self.close)?;
+        Ticks::new(value, (self.close - self.dot - 1) as u8)
+    }
+
+    /// The data's head ([`DataHead`]), its first three bytes parsed.
+    #[inline]
+    fn head(&self, line: &[u8]) -> Option<DataHead> {
+        // At most 8 bytes (the shape checked it).
+        let text = line.get(self.data.clone())?;
+        let mut bytes = [0u8; 3];
+        for (b, pair) in bytes.iter_mut().zip(text.chunks_exact(2)) {
+            *b = hex::parse_byte(pair[0], pair[1])?;
+        }
+        Some(DataHead::new((text.len() / 2) as u8, bytes))
     }
 
     #[inline]
@@ -308,11 +353,15 @@ impl Shape {
     /// What a line of this shape is to a caller with `interest`.
     #[inline]
     fn scan<'a>(&self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
-        match self.kind(line, interest) {
+        let kind = match self.kind(line, interest) {
+            Kind::Fold => self.wanted(line, interest),
+            kind => kind,
+        };
+        match kind {
             Kind::Plain => Scan::Plain,
             Kind::Timed => self.time(line).map_or(Scan::Parse, Scan::Timed),
             Kind::Frame(frame) => Scan::Frame(frame),
-            Kind::Parse => Scan::Parse,
+            Kind::Fold | Kind::Parse => Scan::Parse,
         }
     }
 
@@ -323,14 +372,27 @@ impl Shape {
         if !interest.wants(self.id, self.extended) {
             return Kind::Plain;
         }
-        if self.kind == FrameKind::Data && interest.filters(self.id) {
-            // Only the data decides; the frame is built only if it matters.
+        if self.kind == FrameKind::Data && !self.extended && interest.folds(self.id) {
+            return Kind::Fold;
+        }
+        self.wanted(line, interest)
+    }
+
+    /// [`Shape::kind`] of a frame on a wanted id, folding aside.
+    #[inline(always)]
+    fn wanted<'a>(&self, line: &'a [u8], interest: &Interest) -> Kind<'a> {
+        if self.kind == FrameKind::Data && !self.extended && interest.filters(self.id) {
+            // Only the data's head decides; the rest is parsed, and the
+            // frame built, only if it matters.
+            let Some(head) = self.head(line) else {
+                return Kind::Parse;
+            };
+            if interest.timed_only_head(self.id, head) {
+                return Kind::Timed;
+            }
             let Some(data) = self.data(line) else {
                 return Kind::Parse;
             };
-            if interest.timed_only(self.id, self.extended, data.as_slice()) {
-                return Kind::Timed;
-            }
             // Heartbeats get here (about 150 instructions saved on each by
             // not parsing the data twice).
             return match (self.frame(line, false), self.time(line)) {
@@ -354,7 +416,23 @@ enum Kind<'a> {
     Plain,
     Timed,
     Frame(Frame<'a>),
+    /// A data frame on an id the interest folds (a reader that folds
+    /// decides the rest, one that does not asks [`Shape::wanted`]).
+    Fold,
     Parse,
+}
+
+/// The time of a canonical line with its dot and `)` at `dot` and `close`.
+#[inline]
+fn time_at(line: &[u8], dot: usize, close: usize) -> Option<Timestamp> {
+    // At most 19 digits: always fits in u64.
+    let secs = scan::decimal_u64(line.get(1..dot)?);
+    let frac = line.get(dot + 1..close)?;
+    Some(Timestamp::from_parts(
+        secs,
+        scan::decimal_u64(frac),
+        frac.len() as u8,
+    ))
 }
 
 /// The fixed part of a canonical line: nearly every line of a log has the
@@ -407,6 +485,13 @@ impl Layout {
             return None;
         }
         Some((self.shape_at(id_start, bytes, data_end)?, len))
+    }
+
+    /// The interface of a line of this layout.
+    fn channel<'a>(&self, line: &'a [u8]) -> &'a [u8] {
+        // `) DEV `.
+        let end = (self.close + self.sep.width()).saturating_sub(1);
+        line.get(self.close + 2..end).unwrap_or_default()
     }
 
     /// Through the id: the index where the 3-digit id starts, when `line`
@@ -893,16 +978,22 @@ mod tests {
             && len <= max_line
             && !rest[..len].ends_with(b"\r")
         {
-            match p.scan(&rest[..len], interest) {
+            let line = &rest[..len];
+            match p.scan(line, interest) {
                 Scan::Plain => run.plain += 1,
                 Scan::Timed(t) => run.timed(t),
                 Scan::Frame(f) => {
                     let idx = run.plain + run.timed;
-                    let folded = match (f.time, f.data.word()) {
-                        (Some(t), Some((word, n))) if interest.folds(f.id) && !f.extended => {
-                            let mask = || interest.fold_mask(f.id);
-                            (f.kind == FrameKind::Data && folds.add(f.id, word, n, t, idx, mask))
-                                .then_some(t)
+                    // The data's digits, as the line wrote them.
+                    let start = line.iter().position(|b| *b == b'#').map_or(0, |i| i + 1);
+                    let text = HexText::of(line, start, start + 2 * usize::from(f.len));
+                    let folded = match (f.time.and_then(Timestamp::ticks), f.data.word(), text) {
+                        (Some(t), Some((word, _)), Some(text))
+                            if interest.folds(f.id) && !f.extended =>
+                        {
+                            let rule = || interest.fold_rule(f.id);
+                            (f.kind == FrameKind::Data && folds.add(f.id, word, text, t, idx, rule))
+                                .then(|| t.timestamp())
                         }
                         _ => None,
                     };
@@ -979,7 +1070,7 @@ mod tests {
                 // their data starts with 00; repeats on 0x701-0x77F fold.
                 interest.add_standard_range(0x100..=0x3FF);
                 interest.add_standard_range(0x700..=0x77F);
-                let filter = ContentFilter(|_, d| d.first() == Some(&0));
+                let filter = ContentFilter(|_, d| d.head().first() == Some(&0));
                 interest.filter_content(0x100..=0x3FF, filter);
                 interest.filter_content(0x700..=0x77F, filter);
                 interest.fold(0x701..=0x77F);
@@ -1003,6 +1094,7 @@ mod tests {
                 let want = run_by_lines(&mut slow, consumed, max_line, &interest, &mut slow_folds);
                 proptest::prop_assert_eq!(fields(&got), fields(&want));
                 proptest::prop_assert_eq!(fast_folds.as_slice(), slow_folds.as_slice());
+                proptest::prop_assert_eq!(fast_folds.frames(), slow_folds.frames());
                 at += got.bytes;
                 if got.frame.is_none() {
                     // The general loop reads the next line; skip it here.

@@ -307,6 +307,40 @@ pub fn decimal_u64(digits: &[u8]) -> u64 {
     })
 }
 
+/// The value of the digits in `start..end` with the one at `dot` left out
+/// (a time's integer and fraction digits as one number), for digits the
+/// caller validated; `None` past 19 digits (they could overflow). Six
+/// fraction digits, what candump writes, take two words: the last two
+/// integer digits and the fraction are one eight-digit word once the dot
+/// is cut out.
+#[inline]
+pub fn decimal_ticks(line: &[u8], start: usize, dot: usize, end: usize) -> Option<u64> {
+    let int = line.get(start..dot)?;
+    let frac = line.get(dot + 1..end)?;
+    if int.len() + frac.len() > 19 {
+        return None;
+    }
+    if frac.len() == 6
+        && let Some(head) = dot.checked_sub(2).filter(|&h| h >= start)
+    {
+        // [i, i, '.', f, f, f, f, f] and [i, '.', f, f, f, f, f, f].
+        let two = word(line, head)?;
+        let six = word(line, dot - 1)?;
+        let tail = eight_digits((two & 0xFFFF) | (six & !0xFFFF));
+        // Ten integer digits (Unix seconds) leave eight: one word.
+        let high = if head - start == 8 {
+            eight_digits(word(line, start)?)
+        } else {
+            decimal_u64(line.get(start..head)?)
+        };
+        return Some(high.wrapping_mul(100_000_000).wrapping_add(tail));
+    }
+    let scale = 10u64.checked_pow(frac.len() as u32)?;
+    decimal_u64(int)
+        .checked_mul(scale)?
+        .checked_add(decimal_u64(frac))
+}
+
 /// Eight ASCII digits (first digit in the lowest byte) to their value, in
 /// three multiplications: pairs, then quads, then the two halves.
 #[inline(always)]
@@ -433,6 +467,21 @@ mod tests {
                 v.wrapping_mul(10).wrapping_add(u64::from(d - b'0'))
             });
             prop_assert_eq!(decimal_u64(digits.as_bytes()), naive);
+        }
+
+        #[test]
+        fn ticks_are_the_digits_without_the_dot(
+            lead in "[(x ]{0,3}",
+            int in "[0-9]{1,20}",
+            frac in "[0-9]{0,12}",
+            tail in "[) a-z]{0,9}",
+        ) {
+            let line = format!("{lead}{int}.{frac}{tail}");
+            let (start, dot) = (lead.len(), lead.len() + int.len());
+            let end = dot + 1 + frac.len();
+            let naive = format!("{int}{frac}").parse::<u64>().ok()
+                .filter(|_| int.len() + frac.len() <= 19);
+            prop_assert_eq!(decimal_ticks(line.as_bytes(), start, dot, end), naive, "{}", line);
         }
     }
 }

@@ -807,7 +807,10 @@ mod tests {
     fn frames_the_content_filter_rejects_are_only_timed() {
         let mut interest = Interest::none();
         interest.add_standard(0x705);
-        interest.filter_content(0x705..=0x705, crate::trace::ContentFilter(|_, d| d == [0]));
+        interest.filter_content(
+            0x705..=0x705,
+            crate::trace::ContentFilter(|_, d| d.head() == [0]),
+        );
         let mut p = TrcParser::new();
         let Scan::Timed(t) = p.scan(b"     1)      1841      0705  1  05", &interest) else {
             panic!("a heartbeat is only timed");

@@ -307,7 +307,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// the words their id carried last ([`Consumer::pdo`] would keep only
     /// their time).
     pub(super) fn takes_pdo_fold(&self, channel: &[u8], f: &Fold) -> bool {
-        let Some(values) = self.drives.read_word(f.id, f.data, f.len) else {
+        let Some(values) = self.drives.read_word(f.id, f.data(), f.len()) else {
             return false;
         };
         matches!(
@@ -322,7 +322,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     pub(super) fn fold_pdos(&mut self, f: &Fold, at: At) {
         let statusword = self
             .drives
-            .read_word(f.id, f.last_data, f.len)
+            .read_word(f.id, f.last_data(), f.len())
             .and_then(|v| v.statusword);
         if let Some(Some(last)) = self.drives.last.get_mut(f.id as usize) {
             last.repeat = Some((at, statusword));

@@ -22,7 +22,7 @@ use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
 use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
 use crate::timeline::nmt::{NmtChange, NmtWarning};
-use crate::trace::{Frame, FrameKind, Payload, Span, Timestamp};
+use crate::trace::{FoldBuffers, Frame, FrameKind, Payload, Span, Timestamp};
 
 /// What the consumer keeps for every node's health.
 #[derive(Default)]
@@ -36,6 +36,19 @@ pub(in crate::analyze) struct HealthState {
     groups: Vec<u32>,
     due: Vec<(Timestamp, u32, NodeId)>,
     rebounds: Vec<(u32, Option<Timestamp>)>,
+    taken_as: Vec<TakenFold>,
+    /// The last block's fold vectors, for the next.
+    pub(super) spare_folds: FoldBuffers,
+}
+
+/// What taking a fold does ([`Consumer::takes_folds`]), worked out once:
+/// the time of its last frame, and for a heartbeat fold the node and its
+/// new deadline.
+#[derive(Clone, Copy)]
+pub(super) struct TakenFold {
+    last: Timestamp,
+    node: Option<NodeId>,
+    deadline: Option<Timestamp>,
 }
 
 impl HealthState {
@@ -302,13 +315,13 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.time(run.first);
         for f in run.frames {
             let frame = Frame {
-                time: Some(f.time),
+                time: Some(f.time()),
                 channel: run.channel,
-                id: f.id,
+                id: f.id(),
                 extended: false,
                 kind: FrameKind::Data,
-                len: f.len,
-                data: Payload::inline(f.data.to_le_bytes(), f.len),
+                len: f.len(),
+                data: Payload::inline(f.data().to_le_bytes(), f.len()),
             };
             self.frame(idx + f.idx, &frame, None)?;
         }
@@ -320,33 +333,31 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// `false`, nothing changed, when they cannot.
     fn take_folds(&mut self, idx: u64, run: &FoldedRun<'_>) -> bool {
         let mut rebounds = std::mem::take(&mut self.health.rebounds);
+        let mut taken_as = std::mem::take(&mut self.health.taken_as);
         rebounds.clear();
+        taken_as.clear();
+        let channel = self.nodes.channel_index(run.channel);
         let taken = self.decided
-            && self
-                .nodes
-                .channel_index(run.channel)
-                .is_some_and(|c| self.takes_folds(run, c, &mut rebounds));
-        if taken {
+            && channel.is_some_and(|c| self.takes_folds(run, c, &mut taken_as, &mut rebounds));
+        if let Some(c) = channel.filter(|_| taken) {
             self.plain_frames(run.plain);
             self.timed_frames(run.timed, run.first, run.last);
-            if let Some(c) = self.nodes.channel_index(run.channel) {
-                for f in run.folds {
-                    let at = At {
-                        time: Some(f.last),
-                        line: self.line_no(idx + f.last_idx),
-                    };
-                    match nmt::error_control_node(f.id) {
-                        None => self.fold_pdos(f, at),
-                        Some(node) => {
-                            if let Some(h) = self
-                                .nodes
-                                .timeline_at(c, node)
-                                .and_then(|timeline| timeline.health_if_any())
-                            {
-                                h.heartbeat.fold(f.count, at);
-                            }
+            for (f, taken) in run.folds.iter().zip(&taken_as) {
+                let at = At {
+                    time: Some(taken.last),
+                    line: self.line_no(idx + f.last_idx),
+                };
+                match (taken.node, taken.deadline) {
+                    (Some(node), Some(deadline)) => {
+                        if let Some(h) = self
+                            .nodes
+                            .timeline_at(c, node)
+                            .and_then(|timeline| timeline.health_if_any())
+                        {
+                            h.heartbeat.fold(f.count, at, deadline);
                         }
                     }
+                    _ => self.fold_pdos(f, at),
                 }
             }
             // The groups looked at get the bounds found: nobody is due.
@@ -361,6 +372,7 @@ impl<E: Write> Consumer<'_, '_, E> {
             }
         }
         self.health.rebounds = rebounds;
+        self.health.taken_as = taken_as;
         #[cfg(test)]
         fold_tally::count(taken);
         taken
@@ -369,32 +381,41 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// Whether [`Consumer::take_folded_run`] can take `run`'s folds (on
     /// the channel at `c`): each one heartbeats of a known node in the
     /// steady state its data says, each of them steady
-    /// ([`HeartbeatMonitor::takes_fold`]), and every other node within its
-    /// deadline at the last of them. When the schedule's bound passed, the
-    /// groups looked at and their earliest deadline after the folds go to
-    /// `rebounds`.
+    /// ([`HeartbeatMonitor::takes_fold`]), or a drive's PDOs that repeat,
+    /// and every other node within its deadline at the last of them. Each
+    /// fold's last time and node, and a heartbeat's new deadline, go to
+    /// `taken_as` (one per fold, in order); when the schedule's bound
+    /// passed, the groups looked at and their earliest deadline after the
+    /// folds go to `rebounds`.
     ///
     /// [`HeartbeatMonitor::takes_fold`]: crate::timeline::heartbeat::HeartbeatMonitor::takes_fold
     fn takes_folds(
         &mut self,
         run: &FoldedRun<'_>,
         c: usize,
+        taken_as: &mut Vec<TakenFold>,
         rebounds: &mut Vec<(u32, Option<Timestamp>)>,
     ) -> bool {
         // Index + 1 into the folds by node (0: not folded).
         let mut folded = [0u8; 128];
         for (i, f) in run.folds.iter().enumerate() {
+            let last = f.last();
             let Some(node) = nmt::error_control_node(f.id) else {
                 // A drive's PDOs (the frame path tries heartbeats first).
                 if !(self.interest.wants(f.id, false) && self.takes_pdo_fold(run.channel, f)) {
                     return false;
                 }
+                taken_as.push(TakenFold {
+                    last,
+                    node: None,
+                    deadline: None,
+                });
                 continue;
             };
-            if f.len != 1 {
+            if f.len() != 1 {
                 return false;
             }
-            let byte = f.data as u8;
+            let byte = f.data() as u8;
             let Some(state) = NmtState::from_byte(byte).filter(|&s| s != NmtState::Initialising)
             else {
                 return false;
@@ -411,12 +432,20 @@ impl<E: Write> Consumer<'_, '_, E> {
             else {
                 return false;
             };
-            if !(h.nmt.steady(state)
-                && h.heartbeat
-                    .takes_fold(f.first, f.max_gap, f.last, run.latest))
-            {
+            if !h.nmt.steady(state) {
                 return false;
             }
+            let Some(deadline) = h
+                .heartbeat
+                .takes_fold(f.first(), f.max_gap(), last, run.latest)
+            else {
+                return false;
+            };
+            taken_as.push(TakenFold {
+                last,
+                node: Some(node),
+                deadline: Some(deadline),
+            });
             if let Some(slot) = folded.get_mut(usize::from(node)) {
                 *slot = u8::try_from(i + 1).unwrap_or(0);
             }
@@ -431,24 +460,23 @@ impl<E: Write> Consumer<'_, '_, E> {
         for g in deadlines.passed_groups(latest) {
             let mut earliest: Option<Timestamp> = None;
             for &(id, node) in deadlines.members(g) {
-                let fold = (Some(id) == channel)
+                // A folded node's deadline is the one after its fold
+                // (checked above not to pass).
+                let after_fold = (Some(id) == channel)
                     .then(|| folded.get(usize::from(node)))
                     .flatten()
-                    .and_then(|&i| run.folds.get(usize::from(i).checked_sub(1)?));
-                let monitor = self
-                    .nodes
-                    .slot_by_id(id, node)
-                    .and_then(|slot| slot.timeline.health())
-                    .map(|h| &h.heartbeat);
-                // A folded node's deadline after its fold (its last
-                // heartbeat plus the timeout, checked above not to pass).
-                let deadline = match (fold, monitor) {
-                    (Some(f), Some(m)) => m.deadline_after(f.last),
-                    (None, Some(m)) => m.deadline(),
-                    (_, None) => None,
+                    .and_then(|&i| taken_as.get(usize::from(i).checked_sub(1)?))
+                    .map(|t| t.deadline);
+                let deadline = match after_fold {
+                    Some(d) => d,
+                    None => self
+                        .nodes
+                        .slot_by_id(id, node)
+                        .and_then(|slot| slot.timeline.health())
+                        .and_then(|h| h.heartbeat.deadline()),
                 };
                 match deadline {
-                    Some(d) if fold.is_none() && latest > d => return false,
+                    Some(d) if after_fold.is_none() && latest > d => return false,
                     Some(d) => earliest = Some(earliest.map_or(d, |e| e.min(d))),
                     None => {}
                 }
