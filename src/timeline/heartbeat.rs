@@ -209,9 +209,10 @@ impl HeartbeatMonitor {
         self.seen_as(at, false)
     }
 
-    /// A heartbeat at `at` before the deadline, once the period is known:
-    /// the common case, with nothing to report (`false`: not that case,
-    /// nothing changed; use [`HeartbeatMonitor::seen`]).
+    /// A heartbeat at `at` before the deadline, once the period is known,
+    /// that moves the deadline later: the common case, with nothing to
+    /// report (`false`: not that case, nothing changed; use
+    /// [`HeartbeatMonitor::seen`]).
     #[inline]
     pub fn steady(&mut self, at: At) -> bool {
         let (Some(now), Some(deadline), Some(step)) = (at.time, self.deadline, self.step) else {
@@ -220,7 +221,9 @@ impl HeartbeatMonitor {
         if self.lost.is_some() || self.period.is_none() || now > deadline {
             return false;
         }
-        let Some(next) = now.checked_add_step(step) else {
+        // A deadline that moves earlier (the clock went back) must be told
+        // to the consumer's schedule, which only lets them move later.
+        let Some(next) = now.checked_add_step(step).filter(|&next| next >= deadline) else {
             return false;
         };
         self.beats += 1;
@@ -256,7 +259,9 @@ impl HeartbeatMonitor {
         if max_gap > timeout.attos() {
             return None;
         }
-        last.checked_add_step(step).filter(|&next| latest <= next)
+        // Not earlier than the deadline now: see `steady`.
+        last.checked_add_step(step)
+            .filter(|&next| latest <= next && next >= deadline)
     }
 
     /// Takes `count` heartbeats [`HeartbeatMonitor::takes_fold`] accepted,
@@ -378,6 +383,42 @@ mod tests {
             Some((Span::from_millis(300), TimeoutSource::Learnt))
         );
         assert_eq!(m.deadline(), Some(t(1100)));
+    }
+
+    #[test]
+    fn steady_and_folded_beats_never_move_the_deadline_earlier() {
+        let mut m = HeartbeatMonitor::new(None);
+        beats(&mut m, 1000, 1800, 100);
+        assert_eq!(m.deadline(), Some(t(2100)));
+        assert!(m.steady(at(1900)), "the common case");
+        assert_eq!(m.deadline(), Some(t(2200)));
+        // The clock goes back: the deadline would move earlier, which the
+        // consumer's schedule must be told (the general path).
+        assert!(!m.steady(at(500)), "clock back");
+        assert_eq!(m.deadline(), Some(t(2200)), "nothing changed");
+        let max_gap = Span::from_millis(100).attos();
+        assert_eq!(
+            m.takes_fold(t(500), max_gap, t(600), t(600)),
+            None,
+            "a fold back in time"
+        );
+        assert_eq!(
+            m.takes_fold(t(2000), max_gap, t(2100), t(2150)),
+            Some(t(2400)),
+            "a fold later on"
+        );
+        assert_eq!(
+            m.takes_fold(t(2000), 4 * max_gap, t(2400), t(2400)),
+            None,
+            "a gap over the timeout"
+        );
+        assert_eq!(
+            m.takes_fold(t(2000), max_gap, t(2100), t(2500)),
+            None,
+            "its deadline passed at a later frame"
+        );
+        m.fold(3, at(2100), t(2400));
+        assert_eq!(m.deadline(), Some(t(2400)));
     }
 
     #[test]

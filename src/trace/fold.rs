@@ -47,17 +47,17 @@ impl HexText {
     /// The data bytes as [`Payload::word`](super::Payload::word) gives them.
     pub fn word(self) -> u64 {
         let [lo, hi] = self.words;
-        let digits = lo.to_le_bytes().into_iter().chain(hi.to_le_bytes());
+        let mut digits = [0u8; 16];
+        digits[..8].copy_from_slice(&lo.to_le_bytes());
+        digits[8..].copy_from_slice(&hi.to_le_bytes());
         let mut word = 0u64;
-        let mut high = None;
-        for (i, d) in digits.take(usize::from(self.len)).enumerate() {
-            match high.take() {
-                None => high = Some(d),
-                Some(h) => {
-                    let byte = hex::parse_byte(h, d).unwrap_or(0);
-                    word |= u64::from(byte) << (4 * (i - 1));
-                }
-            }
+        for (i, pair) in digits
+            .chunks_exact(2)
+            .take(usize::from(self.bytes()))
+            .enumerate()
+        {
+            let byte = hex::parse_byte(pair[0], pair[1]).unwrap_or(0);
+            word |= u64::from(byte) << (8 * i);
         }
         word
     }

@@ -42,12 +42,12 @@ pub(in crate::analyze) struct HealthState {
 }
 
 /// What taking a fold does ([`Consumer::takes_folds`]), worked out once:
-/// the time of its last frame, and for a heartbeat fold the node and its
-/// new deadline.
+/// the time of its last frame, and for a heartbeat fold the node (and
+/// where it is in its channel) and its new deadline.
 #[derive(Clone, Copy)]
 pub(super) struct TakenFold {
     last: Timestamp,
-    node: Option<NodeId>,
+    node: Option<(NodeId, usize)>,
     deadline: Option<Timestamp>,
 }
 
@@ -348,10 +348,10 @@ impl<E: Write> Consumer<'_, '_, E> {
                     line: self.line_no(idx + f.last_idx),
                 };
                 match (taken.node, taken.deadline) {
-                    (Some(node), Some(deadline)) => {
+                    (Some((node, i)), Some(deadline)) => {
                         if let Some(h) = self
                             .nodes
-                            .timeline_at(c, node)
+                            .timeline_of(c, i, node)
                             .and_then(|timeline| timeline.health_if_any())
                         {
                             h.heartbeat.fold(f.count, at, deadline);
@@ -425,9 +425,12 @@ impl<E: Write> Consumer<'_, '_, E> {
             {
                 return false;
             }
+            let Some(at) = self.nodes.node_index(c, node) else {
+                return false;
+            };
             let Some(h) = self
                 .nodes
-                .timeline_at(c, node)
+                .timeline_of(c, at, node)
                 .and_then(|timeline| timeline.health_if_any())
             else {
                 return false;
@@ -443,7 +446,7 @@ impl<E: Write> Consumer<'_, '_, E> {
             };
             taken_as.push(TakenFold {
                 last,
-                node: Some(node),
+                node: Some((node, at)),
                 deadline: Some(deadline),
             });
             if let Some(slot) = folded.get_mut(usize::from(node)) {
