@@ -689,7 +689,7 @@ impl<E: Write> Consumer<'_, '_, E> {
             h.history.flush(&mut self.health.read_outs);
         }
         let id = slot.channel_id;
-        self.read_outs_out(id, node);
+        self.read_outs_out(id, node, at);
         let slot = self.nodes.get(raw, node);
         emit(
             self.sink,
@@ -729,7 +729,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                 }
                 let cleared = written && object.sub == 0 && value == 0;
                 let id = slot.channel_id;
-                self.read_outs_out(id, node);
+                self.read_outs_out(id, node, at);
                 if cleared {
                     // Known empty from here.
                     let slot = self.nodes.get(raw, node);
@@ -778,10 +778,12 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.health.schedule(slot.channel_id, node, h);
     }
 
-    /// Read-outs finished by the last frame become events and the node's
-    /// last read-out: codes the node never raised in the trace are marked
-    /// as older than it.
-    fn read_outs_out(&mut self, channel_id: u32, node: NodeId) {
+    /// Read-outs finished by the frame at `now` become events at it (one
+    /// it interrupted ended there, after the events before: events stay in
+    /// line order) and the node's last read-out (which keeps its own
+    /// line): codes the node never raised in the trace are marked as older
+    /// than it.
+    fn read_outs_out(&mut self, channel_id: u32, node: NodeId, now: At) {
         if self.health.read_outs.is_empty() {
             return;
         }
@@ -794,9 +796,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                 e.before_trace = !slot.timeline.has_raised(e.code);
             }
             let report = history_report(&r, |code| profile.describe(code));
-            self.health
-                .events
-                .push((r.at, Health::ErrorHistory(report)));
+            self.health.events.push((now, Health::ErrorHistory(report)));
             slot.timeline
                 .health_mut(self.opts.heartbeat_timeout)
                 .last_read_out = Some(r);
@@ -834,10 +834,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                 .health_mut(self.opts.heartbeat_timeout)
                 .history
                 .flush(&mut self.health.read_outs);
-            self.read_outs_out(id, node);
-            for (at, _) in &mut self.health.events {
-                *at = end;
-            }
+            self.read_outs_out(id, node, end);
             let Some(slot) = self.nodes.slot_by_id(id, node) else {
                 continue;
             };
