@@ -101,41 +101,54 @@ impl HexText {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fold {
     pub id: u32,
+    count: u32,
+    /// The last frame's line, as an index into the run's lines.
+    last_idx: u32,
     digits: u8,
-    first_text: HexText,
-    last_text: HexText,
-    pub count: u64,
+    /// Data digits (twice the bytes).
+    len: u8,
+    first_text: [u64; 2],
+    last_text: [u64; 2],
     first: u64,
     last: u64,
-    /// The last frame's line, as an index into the run's lines.
-    pub last_idx: u64,
     /// In ticks.
     max_gap: u64,
 }
 
 impl Fold {
-    fn new(id: u32, text: HexText, time: Ticks, idx: u64) -> Fold {
+    fn new(id: u32, text: HexText, time: Ticks, idx: u32) -> Fold {
         Fold {
             id,
-            digits: time.digits,
-            first_text: text,
-            last_text: text,
             count: 1,
+            last_idx: idx,
+            digits: time.digits,
+            len: text.len,
+            first_text: text.words,
+            last_text: text.words,
             first: time.value,
             last: time.value,
-            last_idx: idx,
             max_gap: 0,
         }
     }
 
     /// One more frame, `text` at `t` ticks (not before the last).
     #[inline]
-    fn push(&mut self, text: HexText, t: u64, idx: u64) {
+    fn push(&mut self, text: HexText, t: u64, idx: u32) {
         self.max_gap = self.max_gap.max(t.saturating_sub(self.last));
-        self.count += 1;
-        self.last_text = text;
+        self.count = self.count.saturating_add(1);
+        self.last_text = text.words;
         self.last = t;
         self.last_idx = idx;
+    }
+
+    /// How many frames.
+    pub fn count(&self) -> u64 {
+        u64::from(self.count)
+    }
+
+    /// The last frame's line, as an index into the run's lines.
+    pub fn last_idx(&self) -> u64 {
+        u64::from(self.last_idx)
     }
 
     /// The time of the fold's first frame.
@@ -158,17 +171,24 @@ impl Fold {
     /// gives it; every frame of the fold had the same bits as it under the
     /// id's mask.
     pub fn data(&self) -> u64 {
-        self.first_text.word()
+        self.text(self.first_text).word()
     }
 
     /// The data of its last frame.
     pub fn last_data(&self) -> u64 {
-        self.last_text.word()
+        self.text(self.last_text).word()
     }
 
     /// Data bytes.
     pub fn len(&self) -> u8 {
-        self.first_text.bytes()
+        self.len / 2
+    }
+
+    fn text(&self, words: [u64; 2]) -> HexText {
+        HexText {
+            words,
+            len: self.len,
+        }
     }
 
     fn ticks(&self, value: u64) -> Ticks {
@@ -186,16 +206,16 @@ impl Fold {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Folded {
     /// The frame's line, as an index into the run's lines.
-    pub idx: u64,
-    ticks: u64,
-    text: [u64; 2],
+    idx: u32,
     id: u16,
     len: u8,
     digits: u8,
+    ticks: u64,
+    text: [u64; 2],
 }
 
 impl Folded {
-    fn new(id: u32, text: HexText, time: Ticks, idx: u64) -> Folded {
+    fn new(id: u32, text: HexText, time: Ticks, idx: u32) -> Folded {
         Folded {
             idx,
             ticks: time.value,
@@ -209,6 +229,11 @@ impl Folded {
 
     pub fn id(&self) -> u32 {
         u32::from(self.id)
+    }
+
+    /// The frame's line, as an index into the run's lines.
+    pub fn idx(&self) -> u64 {
+        u64::from(self.idx)
     }
 
     pub fn time(&self) -> Timestamp {
@@ -402,9 +427,10 @@ impl Folds {
         idx: u64,
         rule: impl FnOnce() -> FoldRule,
     ) -> bool {
-        if !self.in_order(time) {
+        // Lines of a block: far fewer than 2^32.
+        let (true, Ok(idx)) = (self.in_order(time), u32::try_from(idx)) else {
             return false;
-        }
+        };
         let run = self.run;
         let Some(state) = self
             .slot
@@ -457,9 +483,10 @@ impl Folds {
         idx: u64,
         rule: impl FnOnce() -> FoldRule,
     ) -> bool {
-        if !self.in_order(time) {
+        // Lines of a block: far fewer than 2^32.
+        let (true, Ok(idx)) = (self.in_order(time), u32::try_from(idx)) else {
             return false;
-        }
+        };
         let Some(slot) = self.slot.get_mut(id as usize) else {
             return false;
         };
@@ -608,17 +635,17 @@ mod tests {
         assert_eq!(folds.len(), 2);
         let a = folds[0];
         assert_eq!(
-            (a.id, a.count, a.first(), a.last(), a.last_idx),
+            (a.id, a.count(), a.first(), a.last(), a.last_idx()),
             (0x705, 3, ts(100), ts(450), 9)
         );
         assert_eq!((a.data(), a.last_data(), a.len()), (5, 5, 1));
         assert_eq!(a.max_gap(), 250 * 1_000_000_000_000_000);
-        assert_eq!((folds[1].count, folds[1].max_gap()), (1, 0));
+        assert_eq!((folds[1].count(), folds[1].max_gap()), (1, 0));
         assert_eq!(f.latest(), Some(ts(450)));
         let frames: Vec<_> = f
             .frames()
             .iter()
-            .map(|x| (x.idx, x.id(), x.time(), x.data(), x.len()))
+            .map(|x| (x.idx(), x.id(), x.time(), x.data(), x.len()))
             .collect();
         assert_eq!(
             frames,
@@ -655,7 +682,7 @@ mod tests {
         assert!(!f.repeat(0x705, x, micro, 1, all), "other digits");
         assert!(!f.add(0x705, 5, x, micro, 1, all), "other digits");
         assert_eq!(f.as_slice().len(), 1);
-        assert_eq!(f.as_slice()[0].count, 1);
+        assert_eq!(f.as_slice()[0].count(), 1);
         assert_eq!(f.frames().len(), 1, "refused frames are not kept");
     }
 
@@ -684,7 +711,7 @@ mod tests {
             "state bits"
         );
         let fold185 = f.as_slice()[0];
-        assert_eq!(fold185.count, 3);
+        assert_eq!(fold185.count(), 3);
         assert_eq!(fold185.data(), 0x1234_0637, "the first frame's data");
         assert_eq!(fold185.last_data(), 0x9999_0637, "and the last's");
     }
@@ -695,7 +722,7 @@ mod tests {
         assert!(fold(&mut f, 0x185, "0A", 1, 0, all));
         assert!(!f.repeat(0x185, text("0a"), t(2), 1, all), "other digits");
         assert!(f.add(0x185, 0x0A, text("0a"), t(2), 1, all), "same bits");
-        assert_eq!(f.as_slice()[0].count, 2);
+        assert_eq!(f.as_slice()[0].count(), 2);
     }
 
     #[test]
@@ -743,7 +770,7 @@ mod tests {
             fold(&mut f, 0x701, "04", 3000, 0, all),
             "a fresh fold, other data"
         );
-        assert_eq!(f.as_slice()[0].count, 1);
+        assert_eq!(f.as_slice()[0].count(), 1);
     }
 
     proptest! {
@@ -776,14 +803,14 @@ mod tests {
                 let view = |f: &Folds| {
                     f.as_slice()
                         .iter()
-                        .map(|x| (x.id, x.count, x.first(), x.last(), x.max_gap(), x.data(), x.last_data(), x.len(), x.last_idx))
+                        .map(|x| (x.id, x.count(), x.first(), x.last(), x.max_gap(), x.data(), x.last_data(), x.len(), x.last_idx()))
                         .collect::<Vec<_>>()
                 };
                 prop_assert_eq!(view(&fast), view(&slow));
                 let frames = |f: &Folds| {
                     f.frames()
                         .iter()
-                        .map(|x| (x.idx, x.id(), x.time(), x.data(), x.len()))
+                        .map(|x| (x.idx(), x.id(), x.time(), x.data(), x.len()))
                         .collect::<Vec<_>>()
                 };
                 prop_assert_eq!(frames(&fast), frames(&slow));

@@ -323,7 +323,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                 len: f.len(),
                 data: Payload::inline(f.data().to_le_bytes(), f.len()),
             };
-            self.frame(idx + f.idx, &frame, None)?;
+            self.frame(idx + f.idx(), &frame, None)?;
         }
         self.time(run.last);
         Ok(())
@@ -345,7 +345,7 @@ impl<E: Write> Consumer<'_, '_, E> {
             for (f, taken) in run.folds.iter().zip(&taken_as) {
                 let at = At {
                     time: Some(taken.last),
-                    line: self.line_no(idx + f.last_idx),
+                    line: self.line_no(idx + f.last_idx()),
                 };
                 match (taken.node, taken.deadline) {
                     (Some((node, i)), Some(deadline)) => {
@@ -354,7 +354,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                             .timeline_of(c, i, node)
                             .and_then(|timeline| timeline.health_if_any())
                         {
-                            h.heartbeat.fold(f.count, at, deadline);
+                            h.heartbeat.fold(f.count(), at, deadline);
                         }
                     }
                     _ => self.fold_pdos(f, at),
