@@ -405,11 +405,15 @@ impl Folds {
         self.latest.map(Ticks::timestamp)
     }
 
-    /// Whether `time` may follow the frames folded so far.
+    /// Line `idx` as kept, if a frame at `time` may follow the frames
+    /// folded so far (times only go forward, with the same digits; a
+    /// block's lines are far fewer than 2^32).
     #[inline]
-    fn in_order(&self, time: Ticks) -> bool {
-        self.latest
-            .is_none_or(|l| time.value >= l.value && time.digits == l.digits)
+    fn admits(&self, time: Ticks, idx: u64) -> Option<u32> {
+        let in_order = self
+            .latest
+            .is_none_or(|l| time.value >= l.value && time.digits == l.digits);
+        u32::try_from(idx).ok().filter(|_| in_order)
     }
 
     /// Folds a frame on standard `id` when its digits alone say it may:
@@ -427,8 +431,7 @@ impl Folds {
         idx: u64,
         rule: impl FnOnce() -> FoldRule,
     ) -> bool {
-        // Lines of a block: far fewer than 2^32.
-        let (true, Ok(idx)) = (self.in_order(time), u32::try_from(idx)) else {
+        let Some(idx) = self.admits(time, idx) else {
             return false;
         };
         let run = self.run;
@@ -483,8 +486,7 @@ impl Folds {
         idx: u64,
         rule: impl FnOnce() -> FoldRule,
     ) -> bool {
-        // Lines of a block: far fewer than 2^32.
-        let (true, Ok(idx)) = (self.in_order(time), u32::try_from(idx)) else {
+        let Some(idx) = self.admits(time, idx) else {
             return false;
         };
         let Some(slot) = self.slot.get_mut(id as usize) else {

@@ -327,6 +327,9 @@ pub struct Interest {
     /// The bits that must repeat for a fold, by id (sorted; ids not here:
     /// every bit).
     fold_masks: Vec<(u32, u64)>,
+    /// Wanted standard ids whose frames do not move the input's time (a
+    /// drive's PDOs before their mapping is known, [`Interest::untime`]).
+    untimed: [u64; 32],
 }
 
 /// Whether a frame's data matters (see [`Interest`]), from its head.
@@ -418,6 +421,7 @@ impl Interest {
             content: ContentFilter(ContentFilter::any),
             foldable: [0; 32],
             fold_masks: Vec::new(),
+            untimed: [0; 32],
         }
     }
 
@@ -430,6 +434,7 @@ impl Interest {
             content: ContentFilter(ContentFilter::any),
             foldable: [0; 32],
             fold_masks: Vec::new(),
+            untimed: [0; 32],
         }
     }
 
@@ -492,6 +497,22 @@ impl Interest {
             mask: self.fold_mask(id),
             filter: self.filters(id).then_some(self.content),
         }
+    }
+
+    /// Frames on standard `id` are wanted but move no time: a reader that
+    /// spares converting a run's last time because the frame ending the
+    /// run moves it again must not count on one of these.
+    pub fn untime(&mut self, id: u32) {
+        if let Some(word) = self.untimed.get_mut((id >> 6) as usize) {
+            *word |= 1 << (id & 63);
+        }
+    }
+
+    /// Whether a frame on `id` moves the input's first and last time when
+    /// the caller gets it.
+    #[inline]
+    pub fn times(&self, id: u32, extended: bool) -> bool {
+        extended || !bit(&self.untimed, id)
     }
 
     /// Whether a reader may fold repeated frames on a standard id.

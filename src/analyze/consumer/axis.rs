@@ -178,6 +178,8 @@ impl Drives {
         for &id in self.watched.keys() {
             interest.add_standard(id);
             interest.unfilter(id);
+            // Their frames are only noted (`Consumer::watched`).
+            interest.untime(id);
         }
     }
 
