@@ -635,7 +635,33 @@ mod tests {
         assert!(ts("10") > ts("9.999999"));
     }
 
+    #[test]
+    fn ticks_that_do_not_fit_are_none() {
+        assert_eq!(Ticks::new(5, 19), None, "past 18 digits");
+        assert_eq!(Timestamp::from_parts(u64::MAX / 10, 0, 6).ticks(), None);
+        let t = Timestamp::from_parts(1_700_000_000, 123_456, 6);
+        assert_eq!(t.ticks(), Ticks::new(1_700_000_000_123_456, 6));
+    }
+
     proptest::proptest! {
+        /// A time as ticks and back is the same time; ticks of one
+        /// precision subtract as the times do (in attoseconds).
+        #[test]
+        fn ticks_are_the_time(
+            secs in 0u64..4_000_000_000,
+            frac in 0u64..1_000_000_000,
+            later in 0u64..1_000_000_000,
+            digits in 0u8..=9,
+        ) {
+            let unit = 10u64.pow(u32::from(digits));
+            let t = Timestamp::from_parts(secs, frac % unit, digits);
+            let ticks = t.ticks().expect("fits");
+            proptest::prop_assert_eq!(ticks.digits, digits);
+            proptest::prop_assert_eq!(ticks.timestamp(), t);
+            let u = Ticks { value: ticks.value + later, digits };
+            proptest::prop_assert_eq!(u.timestamp().since(t).attos(), ticks.attos(later));
+        }
+
         /// Adding a span's step is adding the span: exact, carries into
         /// the seconds, keeps the finer precision.
         #[test]
