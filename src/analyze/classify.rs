@@ -121,9 +121,9 @@ pub(super) fn classify_block(
                 channel: run.fold_channel,
                 folds: folds.as_slice(),
                 frames: folds.frames(),
-                at: RunAt {
-                    folds: folds.run_start().0,
-                    frames: folds.run_start().1,
+                at: {
+                    let (folds, frames) = folds.run_start();
+                    RunAt { folds, frames }
                 },
             }),
             _ => None,

@@ -127,7 +127,7 @@ impl LineParser for CandumpLogParser {
             }
             run.bytes += len + 1;
         }
-        if folds.latest().is_some()
+        if folds.any()
             && let Some(line) = last_timed
         {
             // Every line of the run has the layout, and so the channel.

@@ -458,14 +458,9 @@ impl Folds {
             if (state.rule.filter.is_some() && state.passed != Some(text)) || rule() != state.rule {
                 return false;
             }
-            state.run = run;
-            state.fold = self.list.len() as u32;
-            state.text = text.words;
-            self.list.push(Fold::new(id, text, time, idx));
+            state.start(run, &mut self.list, id, text, time, idx);
         }
-        self.latest = Some(time);
-        self.frames.push(Folded::new(id, text, time, idx));
-        true
+        self.kept(id, text, time, idx)
     }
 
     /// Folds a frame on standard `id` with `data` (its [`Payload::word`](super::Payload::word))
@@ -531,17 +526,46 @@ impl Folds {
                 state.rule = rule;
                 state.len = text.len;
             }
-            state.run = self.run;
-            state.fold = self.list.len() as u32;
-            state.text = text.words;
-            self.list.push(Fold::new(id, text, time, idx));
+            state.start(self.run, &mut self.list, id, text, time, idx);
         }
         if state.rule.filter.is_some() {
             state.passed = Some(text);
         }
+        self.kept(id, text, time, idx)
+    }
+
+    /// A frame folded: it is the latest, and kept.
+    #[inline]
+    fn kept(&mut self, id: u32, text: HexText, time: Ticks, idx: u32) -> bool {
         self.latest = Some(time);
         self.frames.push(Folded::new(id, text, time, idx));
         true
+    }
+
+    /// Whether a frame was folded in the current run.
+    #[inline]
+    pub fn any(&self) -> bool {
+        self.latest.is_some()
+    }
+}
+
+impl IdState {
+    /// The id's fold in `run` starts with a frame of `text` at `time`, on
+    /// line `idx`, as the next of `list`.
+    #[inline]
+    fn start(
+        &mut self,
+        run: u32,
+        list: &mut Vec<Fold>,
+        id: u32,
+        text: HexText,
+        time: Ticks,
+        idx: u32,
+    ) {
+        self.run = run;
+        self.fold = list.len() as u32;
+        self.text = text.words;
+        list.push(Fold::new(id, text, time, idx));
     }
 }
 
