@@ -7,8 +7,8 @@ use crate::trace::candump_log;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{self, Block, RawLine};
 use crate::trace::{
-    Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, Interest, Parsed, Reason, Scan,
-    Timestamp,
+    Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, Inner, Interest, Parsed, Reason,
+    Scan, Timestamp,
 };
 
 /// A frame read in another format than the file's: (its format, the file's).
@@ -57,21 +57,26 @@ pub(super) fn too_long(n: u64, max_line: usize) -> Reason {
     format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
 }
 
-/// A run of lines of one layout with frames folded ([`Folds`]), without
-/// the frame that ended it.
+/// A run of lines of one layout with frames folded ([`Folds`]), and frames
+/// kept inside it ([`Folds::keep_inside`]), without the frame that ended it.
 pub(super) struct FoldedRun<'a> {
     pub plain: u64,
     /// Timed frames, the folded ones included.
     pub timed: u64,
     pub first: Timestamp,
     pub last: Timestamp,
-    /// The last frame folded (the latest time: folds only go forward).
+    /// The last frame folded or kept inside (the latest time: a run's
+    /// times only go forward).
     pub latest: Timestamp,
     pub channel: &'a [u8],
     pub folds: &'a [Fold],
     /// Their frames one by one, for a sink that cannot take them whole.
     pub frames: &'a [Folded],
-    /// Where `folds` and `frames` begin in the block's.
+    /// Frames that did not end the run (counted in neither `plain` nor
+    /// `timed`), on `channel`: taken after the folds when those are taken
+    /// whole, else in line order among their frames.
+    pub inner: &'a [Inner],
+    /// Where `folds`, `frames` and `inner` begin in the block's.
     pub at: RunAt,
 }
 
@@ -81,6 +86,7 @@ pub(super) struct FoldedRun<'a> {
 pub(super) struct RunAt {
     pub folds: usize,
     pub frames: usize,
+    pub inner: usize,
 }
 
 /// The one loop that classifies lines, sequentially or on a worker: runs
@@ -104,41 +110,73 @@ pub(super) fn classify_block(
     loop {
         // Started here: in the reader's hot loop it made every line slower.
         folds.next_run();
-        let run = detector.run(
+        let mut run = detector.run(
             bytes.get(pos..).unwrap_or_default(),
             max_line,
             sink.interest(),
             &mut folds,
         );
         pos += run.bytes;
-        let folded = match (folds.latest(), run.first_time, run.last_time) {
+        // A frame the interest lets stay inside a run with folds does not
+        // end it: the reader goes on (with the same layout, so the same
+        // channel), the stretches' counts and times adding up.
+        let (mut plain, mut timed, mut inner) = (run.plain, run.timed, 0u64);
+        let (first, mut last, channel) = (run.first_time, run.last_time, run.fold_channel);
+        while let Some(frame) = run.frame.as_ref()
+            && !frame.extended
+            && sink.interest().keeps_inside(frame.id)
+            && folds.keep_inside(frame, run.plain + run.timed)
+        {
+            inner += 1;
+            // The frame's time, unless lines after it have one.
+            last = frame.time;
+            run = detector.run(
+                bytes.get(pos..).unwrap_or_default(),
+                max_line,
+                sink.interest(),
+                &mut folds,
+            );
+            pos += run.bytes;
+            plain += run.plain;
+            timed += run.timed;
+            if run.last_time.is_some() {
+                last = run.last_time;
+            }
+        }
+        let folded = match (folds.latest(), first, last) {
             (Some(latest), Some(first), Some(last)) => Some(FoldedRun {
-                plain: run.plain,
-                timed: run.timed,
+                plain,
+                timed,
                 first,
                 last,
                 latest,
-                channel: run.fold_channel,
+                channel,
                 folds: folds.as_slice(),
                 frames: folds.frames(),
+                inner: folds.inner(),
                 at: {
-                    let (folds, frames) = folds.run_start();
-                    RunAt { folds, frames }
+                    let (folds, frames, inner) = folds.run_start();
+                    RunAt {
+                        folds,
+                        frames,
+                        inner,
+                    }
                 },
             }),
             _ => None,
         };
         if let Some(folded) = folded {
             sink.folded(idx, &folded)?;
-            idx += run.plain + run.timed;
+            idx += plain + timed + inner;
         } else {
-            if run.plain > 0 {
-                sink.plain_frames(run.plain);
-                idx += run.plain;
+            // No folds, so one stretch.
+            if plain > 0 {
+                sink.plain_frames(plain);
+                idx += plain;
             }
-            if let (Some(first), Some(last)) = (run.first_time, run.last_time) {
-                sink.timed_frames(run.timed, first, last);
-                idx += run.timed;
+            if let (Some(first), Some(last)) = (first, last) {
+                sink.timed_frames(timed, first, last);
+                idx += timed;
             }
         }
         if let Some(frame) = run.frame {

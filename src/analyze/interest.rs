@@ -28,9 +28,12 @@ pub(crate) fn interest(opts: &Options) -> Interest {
         i.filter_content(ids, filter);
     }
     // Steady heartbeats are taken a run at a time (the consumer's
-    // `take_folded_run`).
+    // `take_folded_run`), and EMCYs, which change no node's heartbeat or
+    // NMT state, do not end the run (they come every few hundred lines on
+    // a busy bus).
     if folding() {
         i.fold(nmt);
+        i.keep_inside(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     }
     for e in &opts.emcy_ids {
         add_emcy_id(&mut i, e.id, e.extended);

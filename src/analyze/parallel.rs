@@ -17,7 +17,7 @@ use super::interest::may_widen;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
 use crate::trace::{
-    Fold, FoldBuffers, Folded, Frame, FrameKind, Interest, Payload, Reason, Timestamp,
+    Fold, FoldBuffers, Folded, Frame, FrameKind, Inner, Interest, Payload, Reason, Timestamp,
 };
 
 /// The current interest and its generation, shared with workers: a block
@@ -61,6 +61,7 @@ enum BlockRecord {
         channel: Range<usize>,
         folds: Range<usize>,
         frames: Range<usize>,
+        inner: Range<usize>,
     },
 }
 
@@ -91,9 +92,11 @@ struct BlockResult {
     records: Vec<BlockRecord>,
     /// Channel names of the frame records, back to back.
     channels: Vec<u8>,
-    /// The folds of the folded runs, back to back, and their frames.
+    /// The folds of the folded runs, back to back, their frames and the
+    /// frames kept inside the runs.
     folds: Vec<Fold>,
     folded: Vec<Folded>,
+    inner: Vec<Inner>,
 }
 
 /// A consumed block's buffers, back to the worker that filled them: it
@@ -106,6 +109,7 @@ struct Spare {
     channels: Vec<u8>,
     folds: Vec<Fold>,
     folded: Vec<Folded>,
+    inner: Vec<Inner>,
 }
 
 impl BlockResult {
@@ -117,18 +121,21 @@ impl BlockResult {
             mut channels,
             mut folds,
             mut folded,
+            mut inner,
             ..
         } = self;
         records.clear();
         channels.clear();
         folds.clear();
         folded.clear();
+        inner.clear();
         Spare {
             bytes: block.bytes,
             records,
             channels,
             folds,
             folded,
+            inner,
         }
     }
 }
@@ -167,7 +174,11 @@ impl LineSink for Recorder {
         self.flush_time();
         let channel = self.result.channels.len();
         self.result.channels.extend_from_slice(run.channel);
-        let RunAt { folds, frames } = run.at;
+        let RunAt {
+            folds,
+            frames,
+            inner,
+        } = run.at;
         self.result.records.push(BlockRecord::Folded {
             idx,
             plain: run.plain,
@@ -178,6 +189,7 @@ impl LineSink for Recorder {
             channel: channel..self.result.channels.len(),
             folds: folds..folds + run.folds.len(),
             frames: frames..frames + run.frames.len(),
+            inner: inner..inner + run.inner.len(),
         });
         Ok(())
     }
@@ -186,6 +198,7 @@ impl LineSink for Recorder {
         FoldBuffers {
             folds: std::mem::take(&mut self.result.folds),
             frames: std::mem::take(&mut self.result.folded),
+            inner: std::mem::take(&mut self.result.inner),
         }
     }
 
@@ -196,6 +209,7 @@ impl LineSink for Recorder {
     fn block_folds(&mut self, folds: FoldBuffers) {
         self.result.folds = folds.folds;
         self.result.folded = folds.frames;
+        self.result.inner = folds.inner;
     }
 
     fn lines(&mut self, n: u64) {
@@ -303,6 +317,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                     channel,
                     folds,
                     frames,
+                    inner,
                 } => {
                     let run = FoldedRun {
                         plain,
@@ -313,9 +328,11 @@ impl<E: Write> Consumer<'_, '_, E> {
                         channel: r.channels.get(channel).unwrap_or_default(),
                         folds: r.folds.get(folds.clone()).unwrap_or_default(),
                         frames: r.folded.get(frames.clone()).unwrap_or_default(),
+                        inner: r.inner.get(inner.clone()).unwrap_or_default(),
                         at: RunAt {
                             folds: folds.start,
                             frames: frames.start,
+                            inner: inner.start,
                         },
                     };
                     self.folded(idx, &run)?;
@@ -424,6 +441,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             channels: spare.channels,
                             folds: spare.folds,
                             folded: spare.folded,
+                            inner: spare.inner,
                         },
                     };
                     // A recorder never fails: it only collects.

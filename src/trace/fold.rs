@@ -12,7 +12,7 @@
 //! each frame, for when it cannot: then it takes them one by one, so the
 //! result never depends on folding.
 
-use super::{ContentFilter, Ticks, Timestamp, hex};
+use super::{ContentFilter, Frame, FrameKind, Payload, Ticks, Timestamp, hex};
 
 /// A frame's data as the hex digits its line wrote, up to 16 of them read
 /// as one little-endian number (first digit lowest, in two words): a
@@ -262,6 +262,46 @@ impl Folded {
     }
 }
 
+/// A frame that did not end its run of folds ([`Folds::keep_inside`]): a
+/// caller that takes the folds whole takes it after them, one that cannot
+/// takes it in line order among their frames. On a busy bus EMCYs come
+/// every few hundred lines; ending a run at each made a heartbeat's fold
+/// hold two frames, and the consumer's work per fold was a fifth of the
+/// critical path on two threads (docs/performance.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Inner {
+    /// The frame's line, as an index into the run's lines.
+    idx: u32,
+    len: u8,
+    id: u32,
+    data: [u8; 8],
+    time: Timestamp,
+}
+
+impl Inner {
+    /// The frame's line, as an index into the run's lines.
+    pub fn idx(&self) -> u64 {
+        u64::from(self.idx)
+    }
+
+    pub fn id(&self) -> u32 {
+        self.id
+    }
+
+    /// The frame again, on `channel` (the run's: a run has one).
+    pub fn frame<'a>(&self, channel: &'a [u8]) -> Frame<'a> {
+        Frame {
+            time: Some(self.time),
+            channel,
+            id: self.id,
+            extended: false,
+            kind: FrameKind::Data,
+            len: self.len,
+            data: Payload::inline(self.data, self.len),
+        }
+    }
+}
+
 /// What folds an id's frames: the bits that must repeat, and the content
 /// filter when the id is under it (then a frame folds only with data the
 /// filter lets through).
@@ -299,9 +339,16 @@ pub struct Folds {
     list: Vec<Fold>,
     /// Every frame folded, in line order.
     frames: Vec<Folded>,
-    /// Where the current run's begin in `list` and `frames`.
+    /// Frames kept inside the runs ([`Folds::keep_inside`]), in line order.
+    inner: Vec<Inner>,
+    /// Where the current run's begin in `list`, `frames` and `inner`.
     run_list: usize,
     run_frames: usize,
+    run_inner: usize,
+    /// The lines of the current run before the reader's present stretch
+    /// of it (a run goes on past a frame kept inside): added to the lines
+    /// the reader counts.
+    base: u64,
     /// Whether the runs before are kept (for a sink that takes the
     /// block's whole, [`Folds::into_buffers`]); if not, each run's are
     /// dropped at the next, and their memory stays in the cache.
@@ -312,9 +359,9 @@ pub struct Folds {
     slot: Box<[u16; 2048]>,
     /// The run the folds are of (counted by [`Folds::next_run`]).
     run: u32,
-    /// The time of the last frame folded: times only go forward in a fold
-    /// (the consumer's checks of the folds rely on it), and all have the
-    /// same digits.
+    /// The time of the last frame folded or kept inside: times only go
+    /// forward in a run (the consumer's checks of the folds rely on it),
+    /// and all have the same digits.
     latest: Option<Ticks>,
 }
 
@@ -323,6 +370,7 @@ pub struct Folds {
 pub struct FoldBuffers {
     pub folds: Vec<Fold>,
     pub frames: Vec<Folded>,
+    pub inner: Vec<Inner>,
 }
 
 impl Default for Folds {
@@ -338,14 +386,19 @@ impl Folds {
         let FoldBuffers {
             folds: mut list,
             mut frames,
+            mut inner,
         } = buffers;
         list.clear();
         frames.clear();
+        inner.clear();
         Folds {
             list,
             frames,
+            inner,
             run_list: 0,
             run_frames: 0,
+            run_inner: 0,
+            base: 0,
             keep,
             ids: Vec::new(),
             slot: Box::new([0; 2048]),
@@ -359,12 +412,14 @@ impl Folds {
         FoldBuffers {
             folds: self.list,
             frames: self.frames,
+            inner: self.inner,
         }
     }
 
     /// Starts the next run (the folds of the last stay in the buffers).
     #[inline]
     pub fn next_run(&mut self) {
+        self.base = 0;
         if self.latest.is_none() {
             return;
         }
@@ -376,9 +431,11 @@ impl Folds {
         if self.keep {
             self.run_list = self.list.len();
             self.run_frames = self.frames.len();
+            self.run_inner = self.inner.len();
         } else {
             self.list.clear();
             self.frames.clear();
+            self.inner.clear();
         }
         self.latest = None;
     }
@@ -393,14 +450,58 @@ impl Folds {
         self.frames.get(self.run_frames..).unwrap_or_default()
     }
 
-    /// Where the current run's folds and frames begin in the buffers
-    /// ([`Folds::into_buffers`]).
-    pub fn run_start(&self) -> (usize, usize) {
-        (self.run_list, self.run_frames)
+    /// The frames kept inside the current run, in line order.
+    pub fn inner(&self) -> &[Inner] {
+        self.inner.get(self.run_inner..).unwrap_or_default()
     }
 
-    /// The time of the last frame folded (the latest: times only go
-    /// forward).
+    /// Where the current run's folds, frames and frames kept inside begin
+    /// in the buffers ([`Folds::into_buffers`]).
+    pub fn run_start(&self) -> (usize, usize, usize) {
+        (self.run_list, self.run_frames, self.run_inner)
+    }
+
+    /// Keeps `frame`, on line `idx` of the reader's present stretch of the
+    /// run, inside the run instead of ending it, if it can be: a classic
+    /// standard data frame, timed in order with the frames folded so far
+    /// (so that the run's times only go forward, and its latest time is
+    /// its last: a caller checking the folds at that time checks them at
+    /// the frame too). The reader's next stretch goes on after it; the
+    /// caller says which frames may stay ([`Interest::keeps_inside`]).
+    ///
+    /// [`Interest::keeps_inside`]: super::Interest::keeps_inside
+    pub fn keep_inside(&mut self, frame: &Frame<'_>, idx: u64) -> bool {
+        if self.latest.is_none() || frame.kind != FrameKind::Data || frame.extended {
+            return false;
+        }
+        let (Some(time), Some(ticks)) = (frame.time, frame.time.and_then(Timestamp::ticks)) else {
+            return false;
+        };
+        let Some(at) = self.admits(ticks, idx) else {
+            return false;
+        };
+        let mut data = [0u8; 8];
+        let bytes = frame.data.as_slice();
+        match (data.get_mut(..bytes.len()), u8::try_from(bytes.len())) {
+            (Some(d), Ok(len)) if len == frame.len => {
+                d.copy_from_slice(bytes);
+                self.inner.push(Inner {
+                    idx: at,
+                    len,
+                    id: frame.id,
+                    data,
+                    time,
+                });
+            }
+            _ => return false,
+        }
+        self.latest = Some(ticks);
+        self.base += idx + 1;
+        true
+    }
+
+    /// The time of the last frame folded or kept inside the run (the
+    /// latest: times only go forward).
     pub fn latest(&self) -> Option<Timestamp> {
         self.latest.map(Ticks::timestamp)
     }
@@ -413,7 +514,7 @@ impl Folds {
         let in_order = self
             .latest
             .is_none_or(|l| time.value >= l.value && time.digits == l.digits);
-        u32::try_from(idx).ok().filter(|_| in_order)
+        u32::try_from(self.base + idx).ok().filter(|_| in_order)
     }
 
     /// Folds a frame on standard `id` when its digits alone say it may:
@@ -682,6 +783,62 @@ mod tests {
                 (9, 0x705, ts(450), 5, 1)
             ]
         );
+    }
+
+    /// An EMCY-like frame at `ms` on `id` with `data`.
+    fn frame(id: u32, ms: u64, data: &[u8]) -> Frame<'static> {
+        let mut bytes = [0u8; 8];
+        bytes[..data.len()].copy_from_slice(data);
+        Frame {
+            time: Some(ts(ms)),
+            channel: b"can0",
+            id,
+            extended: false,
+            kind: FrameKind::Data,
+            len: data.len() as u8,
+            data: Payload::inline(bytes, data.len() as u8),
+        }
+    }
+
+    #[test]
+    fn frames_kept_inside_a_run_keep_its_times_and_lines_in_order() {
+        let mut f = Folds::default();
+        let emcy = frame(0x85, 120, &[0x10, 0x43, 0x09]);
+        assert!(!f.keep_inside(&emcy, 0), "no folds: the frame ends the run");
+        assert!(fold(&mut f, 0x705, "05", 100, 2, all));
+        assert!(f.keep_inside(&emcy, 4), "line 4 of the run, at 120 ms");
+        // The reader's next stretch counts its lines from 0 again.
+        assert!(!fold(&mut f, 0x705, "05", 110, 1, all), "before the frame");
+        assert!(fold(&mut f, 0x705, "05", 200, 1, all));
+        assert_eq!(f.latest(), Some(ts(200)));
+        assert!(
+            !f.keep_inside(&frame(0x85, 150, &[0; 8]), 3),
+            "before the fold"
+        );
+        let mut remote = frame(0x85, 250, &[]);
+        remote.kind = FrameKind::Remote;
+        assert!(!f.keep_inside(&remote, 3), "not a data frame");
+        let mut extended = frame(0x85, 250, &[]);
+        extended.extended = true;
+        assert!(!f.keep_inside(&extended, 3), "an extended id");
+        assert!(f.keep_inside(&frame(0x86, 250, &[]), 3), "no data: kept");
+        assert_eq!(f.latest(), Some(ts(250)));
+        let inner: Vec<_> = f
+            .inner()
+            .iter()
+            .map(|i| (i.idx(), i.id(), i.frame(b"can0")))
+            .collect();
+        assert_eq!(
+            inner,
+            [(4, 0x85, emcy), (8, 0x86, frame(0x86, 250, &[]))],
+            "lines 4 and 5 + 3 of the run"
+        );
+        assert_eq!(f.as_slice()[0].last_idx(), 6, "5 + 1");
+        // The next run starts counting anew, its kept frames alone.
+        f.next_run();
+        assert!(f.inner().is_empty());
+        assert!(fold(&mut f, 0x705, "05", 300, 2, all));
+        assert_eq!(f.as_slice()[0].last_idx(), 2);
     }
 
     #[test]

@@ -31,7 +31,7 @@ pub mod trc;
 use std::borrow::Cow;
 use std::fmt;
 
-pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText};
+pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
 pub use time::{Span, Step, Ticks, Timestamp};
 
 /// The text formats we read.
@@ -330,6 +330,9 @@ pub struct Interest {
     /// Wanted standard ids whose frames do not move the input's time (a
     /// drive's PDOs before their mapping is known, [`Interest::untime`]).
     untimed: [u64; 32],
+    /// Standard ids whose frames need not end a run of folds
+    /// ([`Interest::keep_inside`]).
+    inside: [u64; 32],
 }
 
 /// Whether a frame's data matters (see [`Interest`]), from its head.
@@ -422,6 +425,7 @@ impl Interest {
             foldable: [0; 32],
             fold_masks: Vec::new(),
             untimed: [0; 32],
+            inside: [0; 32],
         }
     }
 
@@ -435,6 +439,7 @@ impl Interest {
             foldable: [0; 32],
             fold_masks: Vec::new(),
             untimed: [0; 32],
+            inside: [0; 32],
         }
     }
 
@@ -466,6 +471,30 @@ impl Interest {
                 *word |= 1 << (id & 63);
             }
         }
+    }
+
+    /// Lets frames on the standard ids in `ids` stay inside a run of folds
+    /// ([`Folds::keep_inside`]) rather than end it: the caller takes them
+    /// after the run's folds when it takes those whole, so what they do
+    /// must not depend on what the folds change, nor change the interest.
+    pub fn keep_inside(&mut self, ids: std::ops::RangeInclusive<u32>) {
+        for id in ids {
+            if let Some(word) = self.inside.get_mut((id >> 6) as usize) {
+                *word |= 1 << (id & 63);
+            }
+        }
+    }
+
+    /// Every frame ends a run of folds again (what the frames kept inside
+    /// do came to depend on the folds).
+    pub fn end_runs_at_frames(&mut self) {
+        self.inside = [0; 32];
+    }
+
+    /// Whether a frame on a standard id may stay inside a run of folds.
+    #[inline]
+    pub fn keeps_inside(&self, id: u32) -> bool {
+        bit(&self.inside, id)
     }
 
     /// Lets readers fold frames on standard `id` whose data (the first 8

@@ -158,9 +158,23 @@ impl Drives {
         Some(slot.fields.read(bytes.get(..usize::from(len))?))
     }
 
+    /// Whether frames on standard `id` are a drive's PDOs of unknown
+    /// mapping, only noted.
+    pub(in crate::analyze) fn watches(&self, id: u32) -> bool {
+        self.watched.contains_key(&id)
+    }
+
     /// Adds the ids worth reading to `interest`: decoded PDOs, watched ones.
     /// On ids under the SDO/NMT content filter every frame matters.
     pub(in crate::analyze) fn add_to(&self, interest: &mut Interest) {
+        if !(self.by_id.iter().all(Option::is_none)
+            && self.extended.is_empty()
+            && self.watched.is_empty())
+        {
+            // An EMCY changes a drive's axis state, as its PDOs do: the
+            // order of the two matters, so EMCYs end the runs again.
+            interest.end_runs_at_frames();
+        }
         for (id, slot) in self.by_id.iter().enumerate() {
             if let Some(slot) = slot {
                 interest.add_standard(id as u32);

@@ -291,29 +291,64 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// Heartbeats and PDOs the reader folded ([`FoldedRun`]), with the
     /// rest of their run: taken whole when reading the lines one by one
     /// would have sent each heartbeat down [`Consumer::steady_heartbeat`],
-    /// made each PDO a repeat and found no node lost at any of them; else
-    /// the folded frames are taken one by one, as if their lines had been
-    /// read (the others of the run only count and move the input's first
-    /// and last time), so the result never depends on folding.
+    /// made each PDO a repeat and found no node lost at any of them, and
+    /// then the frames kept inside the run after them (EMCYs, which depend
+    /// on no heartbeat: see [`Consumer::inner_after_folds`]); else the
+    /// folded frames and those kept inside are taken one by one in line
+    /// order, as if their lines had been read (the others of the run only
+    /// count and move the input's first and last time), so the result
+    /// never depends on folding.
     pub(super) fn take_folded_run(
         &mut self,
         idx: u64,
         run: &FoldedRun<'_>,
     ) -> Result<(), OutputError> {
-        if !self.take_folds(idx, run) {
-            self.unfold(idx, run)?;
+        if (run.inner.is_empty() || self.inner_after_folds(run)) && self.take_folds(idx, run) {
+            for inner in run.inner {
+                self.frame(idx + inner.idx(), &inner.frame(run.channel), None)?;
+            }
+            if !run.inner.is_empty() {
+                // The run's last time, after theirs.
+                self.time(run.last);
+            }
+            #[cfg(test)]
+            fold_tally::inner(run.inner.len());
+            return Ok(());
         }
-        Ok(())
+        self.unfold(idx, run)
     }
 
-    /// The folded frames of `run` one by one; its other lines counted.
+    /// Whether the frames kept inside `run` may be taken after its folds:
+    /// they are EMCYs, which change no heartbeat or NMT state and read
+    /// none, and the folds are heartbeats (a drive's PDOs and its EMCYs
+    /// both change its axis state). The run's times only go forward, the
+    /// frames' too, so when the folds are taken whole no node was lost at
+    /// any frame of the run either.
+    fn inner_after_folds(&self, run: &FoldedRun<'_>) -> bool {
+        run.folds
+            .iter()
+            .all(|f| nmt::error_control_node(f.id).is_some())
+            && run.inner.iter().all(|i| {
+                self.interest.wants(i.id(), false)
+                    && self.emcy_node(i.id(), false).is_some()
+                    && self.drives.slot(i.id(), false).is_none()
+                    && !self.drives.watches(i.id())
+            })
+    }
+
+    /// The folded frames of `run` and those kept inside it one by one, in
+    /// line order; its other lines counted.
     fn unfold(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
         self.plain_frames(run.plain);
         let others = run.timed.saturating_sub(run.frames.len() as u64);
         self.counts.frames += others;
         // The run's first time before its frames', its last after.
         self.time(run.first);
+        let mut inner = run.inner.iter().peekable();
         for f in run.frames {
+            while let Some(i) = inner.next_if(|i| i.idx() < f.idx()) {
+                self.frame(idx + i.idx(), &i.frame(run.channel), None)?;
+            }
             let frame = Frame {
                 time: Some(f.time()),
                 channel: run.channel,
@@ -324,6 +359,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                 data: Payload::inline(f.data().to_le_bytes(), f.len()),
             };
             self.frame(idx + f.idx(), &frame, None)?;
+        }
+        for i in inner {
+            self.frame(idx + i.idx(), &i.frame(run.channel), None)?;
         }
         self.time(run.last);
         Ok(())
@@ -903,6 +941,17 @@ pub(crate) mod fold_tally {
 
     thread_local! {
         static TALLY: Cell<(u64, u64)> = const { Cell::new((0, 0)) };
+        static INNER: Cell<u64> = const { Cell::new(0) };
+    }
+
+    /// Frames kept inside a run taken after its folds.
+    pub(super) fn inner(n: usize) {
+        INNER.with(|t| t.set(t.get() + n as u64));
+    }
+
+    /// Frames taken after their run's folds since the last call.
+    pub(crate) fn take_inner() -> u64 {
+        INNER.with(|t| t.replace(0))
     }
 
     pub(super) fn count(taken: bool) {

@@ -44,9 +44,14 @@ struct Twists {
     clock_back: bool,
     /// A second channel with the same nodes.
     two_channels: bool,
-    /// One heartbeat slot in this many has an EMCY after it (EMCYs end
-    /// the reader's runs); 0: one in 60.
+    /// One heartbeat slot in this many has an EMCY after it (EMCYs stay
+    /// inside the reader's runs); 0: one in 60.
     emcy_every: u64,
+    /// The EMCYs' times are this many microseconds ahead of the lines
+    /// around them (a gateway stamping them with its own clock): at one,
+    /// reading line by line finds nodes lost that the heartbeats after it
+    /// show back.
+    emcy_ahead: u64,
 }
 
 /// `periods` heartbeat periods of 100 ms with jitter, `nodes` nodes, PDO and
@@ -112,7 +117,8 @@ fn trace(seed: u64, nodes: u32, periods: u64, twists: Twists) -> Vec<u8> {
                     twists.emcy_every
                 }) == 0
                 {
-                    line(&mut t, clock, channel, "085#1043090100000000");
+                    let at = clock + twists.emcy_ahead;
+                    line(&mut t, at, channel, "085#1043090100000000");
                 }
             }
         }
@@ -140,6 +146,7 @@ fn assert_fold_independent(name: &str, t: &[u8], opts: &Options) -> (u64, u64) {
         "{name}: no EMCY decoded"
     );
     fold_tally::take();
+    fold_tally::take_inner();
     let mut tally = (0, 0);
     for threads in [1, 2] {
         for block in [64, 4096, 16 << 10, 1 << 20] {
@@ -164,6 +171,52 @@ fn steady_heartbeats_are_folded_and_give_what_they_give_one_by_one() {
     let t = trace(1, 32, 40, Twists::default());
     let (taken, _) = assert_fold_independent("steady", &t, &base_options());
     assert!(taken > 50, "folded runs taken: {taken}");
+    // EMCYs inside the runs taken after their folds.
+    assert!(fold_tally::take_inner() > 20);
+}
+
+/// EMCYs stay inside the reader's runs; the consumer takes them after the
+/// run's folds only when that gives what line by line order gives. An
+/// EMCY stamped ahead of the lines after it ends its run (a run's times
+/// only go forward), and one a second ahead finds every node lost there.
+#[test]
+fn emcys_inside_runs_are_taken_as_in_line_order() {
+    for (seed, emcy_ahead, emcy_every) in [(13, 0, 5), (14, 1_000, 5), (15, 1_000_000, 20)] {
+        let twists = Twists {
+            emcy_ahead,
+            emcy_every,
+            ..Twists::default()
+        };
+        let mut t = trace(seed, 8, 60, twists);
+        // The last line an EMCY right after the last line, taken after
+        // the run's folds: its time is the input's last.
+        let text = String::from_utf8_lossy(&t).into_owned();
+        let last = text.lines().last().and_then(|l| l.get(1..18)).unwrap_or("");
+        let micros: u64 = last.replace('.', "").parse().unwrap_or(0) + 100;
+        let end = format!(
+            "({}.{:06}) can0 085#0000000000000000\n",
+            micros / 1_000_000,
+            micros % 1_000_000
+        );
+        t.extend_from_slice(end.as_bytes());
+        let (taken, _) = assert_fold_independent("EMCYs", &t, &base_options());
+        assert!(taken > 0, "{seed}");
+        // A second ahead, every run with an EMCY is refused: the nodes
+        // are lost at it.
+        let far_ahead = emcy_ahead == 1_000_000;
+        let inner = fold_tally::take_inner();
+        assert_eq!(
+            inner == 0,
+            far_ahead,
+            "{seed}: {inner} taken after the folds"
+        );
+        let (out, _) = run_with(&t, base_options());
+        assert_eq!(
+            out.contains("\"type\":\"heartbeat_lost\""),
+            far_ahead,
+            "{seed}"
+        );
+    }
 }
 
 #[test]
