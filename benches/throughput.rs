@@ -11,6 +11,11 @@
 //! `BUSMASTER`, `MF4` (both MF4 cases), `MF4 DZ`, `heartbeating` (32
 //! nodes' heartbeats every 100 ms), `drives` (32 CiA 402 drives' TPDO1 at
 //! 1 kHz, with and without `--assume-cia402-pdo`).
+//!
+//! `BENCH_COMPARE=/path/to/emcy-decode` holds another build against this
+//! one: each emcy-decode case runs both, their runs interleaved (so load
+//! from elsewhere falls on both alike), and a row gives the other's
+//! figures and this build's time as a multiple of its.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -77,6 +82,11 @@ fn warm(path: &str) {
 /// Best wall time of `runs` runs of `program` on `input` (warmed before
 /// each run) and the highest peak RSS (KiB) seen.
 fn measure(runs: u64, input: &str, program: &str, args: &[&str]) -> (Duration, u64) {
+    try_measure(runs, input, program, args).unwrap_or_else(|| panic!("{program} {args:?} failed"))
+}
+
+/// [`measure`], `None` when a run fails (`wc` never does: it only counts).
+fn try_measure(runs: u64, input: &str, program: &str, args: &[&str]) -> Option<(Duration, u64)> {
     let mut best = Duration::MAX;
     let mut peak = 0;
     for _ in 0..runs {
@@ -91,10 +101,9 @@ fn measure(runs: u64, input: &str, program: &str, args: &[&str]) -> (Duration, u
         let status_path = format!("/proc/{}/status", child.id());
         loop {
             if let Ok(Some(status)) = child.try_wait() {
-                assert!(
-                    status.success() || program == "wc",
-                    "{program} {args:?} failed"
-                );
+                if !(status.success() || program == "wc") {
+                    return None;
+                }
                 break;
             }
             if let Ok(s) = std::fs::read_to_string(&status_path)
@@ -110,7 +119,31 @@ fn measure(runs: u64, input: &str, program: &str, args: &[&str]) -> (Duration, u
         }
         best = best.min(start.elapsed());
     }
-    (best, peak)
+    Some((best, peak))
+}
+
+/// [`measure`] of `program` and, when given, of `other` with the same
+/// arguments, their runs interleaved (`None` for the other when it fails:
+/// an older build may not have the case's flags).
+fn measure_both(
+    runs: u64,
+    input: &str,
+    program: &str,
+    other: Option<&str>,
+    args: &[&str],
+) -> ((Duration, u64), Option<(Duration, u64)>) {
+    let Some(other) = other else {
+        return (measure(runs, input, program, args), None);
+    };
+    let (mut this, mut that) = ((Duration::MAX, 0), Some((Duration::MAX, 0)));
+    for _ in 0..runs {
+        let (t, peak) = measure(1, input, program, args);
+        this = (this.0.min(t), this.1.max(peak));
+        that = that
+            .zip(try_measure(1, input, other, args))
+            .map(|((best, most), (t, peak))| (best.min(t), most.max(peak)));
+    }
+    (this, that)
 }
 
 fn mb_per_s(bytes: u64, t: Duration) -> f64 {
@@ -142,6 +175,7 @@ fn main() {
     let gz_mb = env_u64("BENCH_GZ_MB", 256);
     let runs = env_u64("BENCH_RUNS", 3);
     let bin = env!("CARGO_BIN_EXE_emcy-decode");
+    let compare = std::env::var("BENCH_COMPARE").ok();
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-data");
     std::fs::create_dir_all(&dir).expect("bench dir");
 
@@ -307,7 +341,7 @@ fn main() {
             ));
         }
         for (case, args) in cases {
-            let (t, peak) = measure(runs, &f, bin, &args);
+            let ((t, peak), other) = measure_both(runs, &f, bin, compare.as_deref(), &args);
             row(
                 &format!("emcy-decode {case} ({label})"),
                 bytes,
@@ -315,6 +349,19 @@ fn main() {
                 Some(wc),
                 peak,
             );
+            if let Some((o, other_peak)) = other {
+                row(
+                    &format!("  BENCH_COMPARE {case} ({label})"),
+                    bytes,
+                    o,
+                    Some(wc),
+                    other_peak,
+                );
+                println!(
+                    "  this build's time: {:.3}x the other's",
+                    t.as_secs_f64() / o.as_secs_f64()
+                );
+            }
         }
         println!();
     }
