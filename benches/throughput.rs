@@ -186,15 +186,18 @@ fn main() {
         .collect();
     let chosen = |case: &str| words.is_empty() || words.iter().any(|w| case.contains(w.as_str()));
 
-    let log = dir.join(format!("candump-{mb}MB.log"));
-    let delta = dir.join(format!("candump-td-{mb}MB.log"));
-    let asc = dir.join(format!("asc-{mb}MB.asc"));
-    let emcy30 = dir.join(format!("candump-emcy30-{mb}MB.log"));
-    let gz = dir.join(format!("candump-{gz_mb}MB.log.gz"));
-    let pcapng = dir.join(format!("pcapng-{mb}MB.pcapng"));
-    let busmaster = dir.join(format!("busmaster-{mb}MB.log"));
-    let mf4 = dir.join(format!("canedge-{mb}MB.mf4"));
-    let mf4_dz = dir.join(format!("dz-{mb}MB.mf4"));
+    // `write_trace`'s files, named by the generator's version: a file
+    // cached by an older one must not be measured as if it were this one's
+    // (v2: nodes heartbeat every 100 ms, no longer at random).
+    let log = dir.join(format!("candump-{mb}MB.v2.log"));
+    let delta = dir.join(format!("candump-td-{mb}MB.v2.log"));
+    let asc = dir.join(format!("asc-{mb}MB.v2.asc"));
+    let emcy30 = dir.join(format!("candump-emcy30-{mb}MB.v2.log"));
+    let gz = dir.join(format!("candump-{gz_mb}MB.v2.log.gz"));
+    let pcapng = dir.join(format!("pcapng-{mb}MB.v2.pcapng"));
+    let busmaster = dir.join(format!("busmaster-{mb}MB.v2.log"));
+    let mf4 = dir.join(format!("canedge-{mb}MB.v2.mf4"));
+    let mf4_dz = dir.join(format!("dz-{mb}MB.v2.mf4"));
     let ethercat = dir.join(format!("ethercat-{mb}MB.pcapng"));
     let files = [
         ("candump log", &log, TraceFormat::CandumpLog, 2),
