@@ -365,3 +365,37 @@ fn nodes_found_lost_at_one_frame_come_in_deadline_order() {
         ]
     );
 }
+
+#[test]
+fn an_outage_ended_before_it_began_is_said_on_stderr() {
+    // Timeout 0.5 s. An EMCY stamped a second ahead of the bus (a gateway
+    // with its own clock) passes node 3's deadline, 0.6: lost there. Its
+    // next heartbeat, at 0.2 by the bus's clock, ends the outage 0.4 s
+    // before it began, which stderr says with the line.
+    let trace = "(1700000000.000000) can0 703#05\n\
+                 (1700000000.100000) can0 703#05\n\
+                 (1700000001.150000) can0 085#1043090100000000\n\
+                 (1700000000.200000) can0 703#05\n";
+    let (out, err, code) = crate::support::run(
+        &["--format", "ndjson", "--heartbeat-timeout", "0.5", "-"],
+        trace.as_bytes(),
+    );
+    assert_eq!(code, 0);
+    let objects: Vec<Value> = out
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect();
+    let outages = &node(&objects, 3)["heartbeat"]["outages"];
+    assert_eq!(outages[0]["duration"], json!(-0.4), "{outages}");
+    assert_eq!(
+        err.lines()
+            .filter(|l| l.contains("ends a heartbeat outage that began later"))
+            .collect::<Vec<_>>(),
+        [
+            "<stdin>:4: node 3: heartbeat at 1700000000.200000 ends a heartbeat outage \
+          that began later, at 1700000000.600000: the trace's clock went backwards (the \
+          outage's duration is negative)"
+        ],
+        "{err}"
+    );
+}

@@ -123,7 +123,16 @@ fn back_event(back: Back, at: At) -> (At, Health) {
 
 /// A sign of life (heartbeat or boot-up) for a node's monitor: the outage
 /// it ends, found now or before, as events.
-fn sign_of_life(h: &mut NodeHealth, at: At, boot: bool, events: &mut Vec<(At, Health)>) {
+/// A heartbeat or boot-up at `at`: the events it makes. `Some(start)` when
+/// it ends an outage that began after it (the trace's clock went back,
+/// or a frame stamped ahead of the bus declared the node lost): the
+/// outage's duration is negative, which the caller says in a diagnostic.
+fn sign_of_life(
+    h: &mut NodeHealth,
+    at: At,
+    boot: bool,
+    events: &mut Vec<(At, Health)>,
+) -> Option<Timestamp> {
     let timeout = h.heartbeat.timeout();
     let (newly, back) = if boot {
         h.heartbeat.boot(at)
@@ -133,9 +142,20 @@ fn sign_of_life(h: &mut NodeHealth, at: At, boot: bool, events: &mut Vec<(At, He
     if let Some(lost) = newly {
         events.push(lost_event(lost, at.line, timeout));
     }
-    if let Some(back) = back {
-        events.push(back_event(back, at));
-    }
+    let back = back?;
+    events.push(back_event(back, at));
+    at.time.filter(|&now| now < back.lost.deadline)?;
+    Some(back.lost.deadline)
+}
+
+/// The diagnostic for [`sign_of_life`]'s outage that began after the
+/// sign of life ending it.
+fn outage_after_its_end(node: NodeId, what: &str, at: At, start: Timestamp) -> String {
+    let now = at.time.map_or_else(String::new, |t| format!(" at {t}"));
+    format!(
+        "node {node}: {what}{now} ends a heartbeat outage that began later, at {start}: the \
+         trace's clock went backwards (the outage's duration is negative)"
+    )
 }
 
 fn nmt_event(change: Option<NmtChange>, at: At, events: &mut Vec<(At, Health)>) {
@@ -537,7 +557,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     ) -> Result<(), OutputError> {
         let slot = self.nodes.get(raw, node);
         let h = slot.timeline.health_mut(self.opts.heartbeat_timeout);
-        sign_of_life(h, at, true, &mut self.health.events);
+        let early = sign_of_life(h, at, true, &mut self.health.events);
         let change = h
             .nmt
             .heartbeat(NmtState::Initialising, &mut self.health.warnings);
@@ -551,6 +571,10 @@ impl<E: Write> Consumer<'_, '_, E> {
             node,
             &mut self.health.events,
         )?;
+        if let Some(start) = early {
+            let msg = outage_after_its_end(node, "boot-up", at, start);
+            self.diags.report(self.log, true, at.line, msg);
+        }
         self.nmt_warnings(node, at.line);
         Ok(())
     }
@@ -604,6 +628,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         let events = &mut self.health.events;
         let warnings = &mut self.health.warnings;
         let mut undefined = None;
+        let mut early = None;
         if h.nmt.guard_asked() {
             let byte = data.first().copied().unwrap_or_default();
             let reply = nmt::guard_reply(byte);
@@ -614,7 +639,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         } else {
             match ec {
                 ErrorControl::Heartbeat { state, .. } => {
-                    sign_of_life(h, at, false, events);
+                    early = sign_of_life(h, at, false, events);
                     nmt_event(h.nmt.heartbeat(state, warnings), at, events);
                 }
                 ErrorControl::Unknown { byte, .. } => undefined = Some(byte),
@@ -629,6 +654,10 @@ impl<E: Write> Consumer<'_, '_, E> {
             node,
             &mut self.health.events,
         )?;
+        if let Some(start) = early {
+            let msg = outage_after_its_end(node, "heartbeat", at, start);
+            self.diags.report(self.log, true, at.line, msg);
+        }
         if let Some(byte) = undefined {
             self.health.warnings.clear();
             self.diags.report(

@@ -210,11 +210,17 @@ fn emcys_inside_runs_are_taken_as_in_line_order() {
             far_ahead,
             "{seed}: {inner} taken after the folds"
         );
-        let (out, _) = run_with(&t, base_options());
+        let (out, err) = run_with(&t, base_options());
         assert_eq!(
             out.contains("\"type\":\"heartbeat_lost\""),
             far_ahead,
             "{seed}"
+        );
+        // The heartbeats after it end those outages before they began.
+        assert_eq!(
+            err.contains("ends a heartbeat outage that began later"),
+            far_ahead,
+            "{seed}: {err}"
         );
     }
 }
