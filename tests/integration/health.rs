@@ -336,6 +336,21 @@ fn check_reports_a_new_heartbeat_loss_as_a_regression() {
     assert_eq!(rig.check("heartbeat_lost_new"), (Some(0), vec![]));
 }
 
+/// `trace` from stdin with a heartbeat timeout of 0.5 s: its ndjson
+/// objects and stderr (the run must succeed).
+fn with_half_second_timeout(trace: &str) -> (Vec<Value>, String) {
+    let (out, err, code) = crate::support::run(
+        &["--format", "ndjson", "--heartbeat-timeout", "0.5", "-"],
+        trace.as_bytes(),
+    );
+    assert_eq!(code, 0, "{err}");
+    let objects = out
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect();
+    (objects, err)
+}
+
 #[test]
 fn nodes_found_lost_at_one_frame_come_in_deadline_order() {
     // Timeout 0.5 s. Node 3 beats at 0.0 and 0.3 (deadline 0.8), node 4 at
@@ -346,14 +361,9 @@ fn nodes_found_lost_at_one_frame_come_in_deadline_order() {
                  (1700000000.100000) can0 704#05\n\
                  (1700000000.300000) can0 703#05\n\
                  (1700000002.000000) can0 705#05\n";
-    let (out, _, code) = crate::support::run(
-        &["--format", "ndjson", "--heartbeat-timeout", "0.5", "-"],
-        trace.as_bytes(),
-    );
-    assert_eq!(code, 0);
-    let lost: Vec<(u64, String)> = out
-        .lines()
-        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+    let (objects, _) = with_half_second_timeout(trace);
+    let lost: Vec<(u64, String)> = objects
+        .iter()
         .filter(|o| o["type"] == "heartbeat_lost")
         .map(|o| (o["node"].as_u64().unwrap_or(0), o["time_text"].to_string()))
         .collect();
@@ -376,15 +386,7 @@ fn an_outage_ended_before_it_began_is_said_on_stderr() {
                  (1700000000.100000) can0 703#05\n\
                  (1700000001.150000) can0 085#1043090100000000\n\
                  (1700000000.200000) can0 703#05\n";
-    let (out, err, code) = crate::support::run(
-        &["--format", "ndjson", "--heartbeat-timeout", "0.5", "-"],
-        trace.as_bytes(),
-    );
-    assert_eq!(code, 0);
-    let objects: Vec<Value> = out
-        .lines()
-        .filter_map(|l| serde_json::from_str(l).ok())
-        .collect();
+    let (objects, err) = with_half_second_timeout(trace);
     let outages = &node(&objects, 3)["heartbeat"]["outages"];
     assert_eq!(outages[0]["duration"], json!(-0.4), "{outages}");
     assert_eq!(
