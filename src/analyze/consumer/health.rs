@@ -22,7 +22,7 @@ use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
 use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
 use crate::timeline::nmt::{NmtChange, NmtWarning};
-use crate::trace::{FoldBuffers, Frame, FrameKind, Payload, Span, Timestamp};
+use crate::trace::{FoldBuffers, Frame, FrameKind, Inner, Payload, Span, Timestamp};
 
 /// What the consumer keeps for every node's health.
 #[derive(Default)]
@@ -122,11 +122,10 @@ fn back_event(back: Back, at: At) -> (At, Health) {
 }
 
 /// A sign of life (heartbeat or boot-up) for a node's monitor: the outage
-/// it ends, found now or before, as events.
-/// A heartbeat or boot-up at `at`: the events it makes. `Some(start)` when
-/// it ends an outage that began after it (the trace's clock went back,
-/// or a frame stamped ahead of the bus declared the node lost): the
-/// outage's duration is negative, which the caller says in a diagnostic.
+/// it ends, found now or before, as events. `Some(start)` when it ends an
+/// outage that began after it (the trace's clock went back, or a frame
+/// stamped ahead of the bus declared the node lost): the outage's duration
+/// is negative, which [`Consumer::outage_after_its_end`] says.
 fn sign_of_life(
     h: &mut NodeHealth,
     at: At,
@@ -146,16 +145,6 @@ fn sign_of_life(
     events.push(back_event(back, at));
     at.time.filter(|&now| now < back.lost.deadline)?;
     Some(back.lost.deadline)
-}
-
-/// The diagnostic for [`sign_of_life`]'s outage that began after the
-/// sign of life ending it.
-fn outage_after_its_end(node: NodeId, what: &str, at: At, start: Timestamp) -> String {
-    let now = at.time.map_or_else(String::new, |t| format!(" at {t}"));
-    format!(
-        "node {node}: {what}{now} ends a heartbeat outage that began later, at {start}: the \
-         trace's clock went backwards (the outage's duration is negative)"
-    )
 }
 
 fn nmt_event(change: Option<NmtChange>, at: At, events: &mut Vec<(At, Health)>) {
@@ -325,7 +314,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     ) -> Result<(), OutputError> {
         if (run.inner.is_empty() || self.inner_after_folds(run)) && self.take_folds(idx, run) {
             for inner in run.inner {
-                self.frame(idx + inner.idx(), &inner.frame(run.channel), None)?;
+                self.inner_frame(idx, run, inner)?;
             }
             if !run.inner.is_empty() {
                 // The run's last time, after theirs.
@@ -367,7 +356,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         let mut inner = run.inner.iter().peekable();
         for f in run.frames {
             while let Some(i) = inner.next_if(|i| i.idx() < f.idx()) {
-                self.frame(idx + i.idx(), &i.frame(run.channel), None)?;
+                self.inner_frame(idx, run, i)?;
             }
             let frame = Frame {
                 time: Some(f.time()),
@@ -381,10 +370,16 @@ impl<E: Write> Consumer<'_, '_, E> {
             self.frame(idx + f.idx(), &frame, None)?;
         }
         for i in inner {
-            self.frame(idx + i.idx(), &i.frame(run.channel), None)?;
+            self.inner_frame(idx, run, i)?;
         }
         self.time(run.last);
         Ok(())
+    }
+
+    /// A frame kept inside `run` (of the block's lines from `idx`), as
+    /// its line would have given it.
+    fn inner_frame(&mut self, idx: u64, run: &FoldedRun<'_>, i: &Inner) -> Result<(), OutputError> {
+        self.frame(idx + i.idx(), &i.frame(run.channel), None)
     }
 
     /// [`Consumer::take_folded_run`] when the folds can be taken whole:
@@ -571,12 +566,21 @@ impl<E: Write> Consumer<'_, '_, E> {
             node,
             &mut self.health.events,
         )?;
-        if let Some(start) = early {
-            let msg = outage_after_its_end(node, "boot-up", at, start);
-            self.diags.report(self.log, true, at.line, msg);
-        }
+        self.outage_after_its_end(node, "boot-up", at, early);
         self.nmt_warnings(node, at.line);
         Ok(())
+    }
+
+    /// The diagnostic for a sign of life (`what`, at `at`) that ended an
+    /// outage starting later, at `start` ([`sign_of_life`]).
+    fn outage_after_its_end(&mut self, node: NodeId, what: &str, at: At, start: Option<Timestamp>) {
+        let Some(start) = start else { return };
+        let now = at.time.map_or_else(String::new, |t| format!(" at {t}"));
+        let msg = format!(
+            "node {node}: {what}{now} ends a heartbeat outage that began later, at {start}: the \
+             trace's clock went backwards (the outage's duration is negative)"
+        );
+        self.diags.report(self.log, true, at.line, msg);
     }
 
     /// NMT warnings as diagnostics at `line`.
@@ -654,10 +658,7 @@ impl<E: Write> Consumer<'_, '_, E> {
             node,
             &mut self.health.events,
         )?;
-        if let Some(start) = early {
-            let msg = outage_after_its_end(node, "heartbeat", at, start);
-            self.diags.report(self.log, true, at.line, msg);
-        }
+        self.outage_after_its_end(node, "heartbeat", at, early);
         if let Some(byte) = undefined {
             self.health.warnings.clear();
             self.diags.report(
