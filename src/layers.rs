@@ -1,7 +1,6 @@
 //! The rule the folders show, checked: every import points down.
 //!
 //! ```text
-//! app        the program: clap, one file per command, exit codes, signals
 //! baseline   CI baseline model and comparison
 //! report     renderers (implement analyze's Sink)
 //! analyze    the pipeline: events, reports, the Sink trait
@@ -9,6 +8,11 @@
 //! canopen    EMCY, code tables, SDO, profiles
 //! trace      bytes -> frames (imports nothing of ours)
 //! ```
+//!
+//! The program (`src/bin/emcy-decode`, clap, one file per command, exit
+//! codes, signals) stands on top, outside the library: Cargo lets it use
+//! only what the library makes public and lets the library import nothing
+//! of it, so it is not checked here.
 //!
 //! `cache` and `text` are utilities below everything (they import nothing
 //! of ours);
@@ -22,8 +26,8 @@
 use std::path::{Path, PathBuf};
 
 /// Bottom first.
-const LAYERS: [&str; 7] = [
-    "trace", "canopen", "timeline", "analyze", "report", "baseline", "app",
+const LAYERS: [&str; 6] = [
+    "trace", "canopen", "timeline", "analyze", "report", "baseline",
 ];
 
 /// The rank of a top-level module; `None` for ones outside the stack.
@@ -199,11 +203,11 @@ fn upward_imports(src: &Path) -> Vec<String> {
             continue;
         };
         let module = module_path(rel);
-        // The crate root and the binary wire the layers together; this
-        // file names modules in its own tests.
+        // The crate root wires the layers together; the program is a crate
+        // of its own; this file names modules in its own tests.
         let Some(from) = module
             .first()
-            .filter(|m| !matches!(m.as_str(), "lib" | "main" | "layers"))
+            .filter(|m| !matches!(m.as_str(), "lib" | "bin" | "layers"))
         else {
             continue;
         };
@@ -272,24 +276,24 @@ fn the_check_sees_what_it_must() {
     );
     // A test module may name anything; code after it is still checked,
     // on its own line.
-    let code = "use crate::trace::Frame;\n#[cfg(test)]\nmod tests {\n    use crate::report::x;\n}\nuse crate::app::y;\n";
+    let code = "use crate::trace::Frame;\n#[cfg(test)]\nmod tests {\n    use crate::report::x;\n}\nuse crate::baseline::y;\n";
     let checked = without_test_module(code);
     assert_eq!(
         checked,
-        "use crate::trace::Frame;\n\n\n\n\nuse crate::app::y;\n"
+        "use crate::trace::Frame;\n\n\n\n\nuse crate::baseline::y;\n"
     );
     assert_eq!(
         named_modules(&module("report/x.rs"), &checked),
-        [(1, "trace".to_string()), (6, "app".to_string())]
+        [(1, "trace".to_string()), (6, "baseline".to_string())]
     );
     assert!(violation("analyze", "report").is_some());
     assert!(violation("trace", "canopen").is_some());
-    assert!(violation("report", "app").is_some());
+    assert!(violation("report", "baseline").is_some());
     assert!(violation("cache", "trace").is_some());
-    assert!(violation("app", "fuzzing").is_some());
+    assert!(violation("baseline", "fuzzing").is_some());
     assert!(violation("report", "analyze").is_none());
-    assert!(violation("app", "trace").is_none());
-    assert!(violation("fuzzing", "app").is_none());
+    assert!(violation("baseline", "trace").is_none());
+    assert!(violation("fuzzing", "baseline").is_none());
     assert!(violation("timeline", "cache").is_none());
     assert!(violation("analyze", "newthing").is_some());
 }

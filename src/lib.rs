@@ -48,20 +48,30 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub(crate) mod analyze;
-mod app;
-pub(crate) mod baseline;
+// The layers below are public for the `emcy-decode` program
+// (src/bin/emcy-decode), which uses the library as any other program would,
+// but they are not API: hidden from the documentation and free to change.
+// The API is the items re-exported below.
+#[doc(hidden)]
+pub mod analyze;
+#[doc(hidden)]
+pub mod baseline;
 pub(crate) mod cache;
-pub(crate) mod canopen;
+#[doc(hidden)]
+pub mod canopen;
 #[cfg(feature = "fuzzing")]
 #[doc(hidden)]
 pub mod fuzzing;
 #[cfg(test)]
 mod layers;
-pub(crate) mod report;
-pub(crate) mod text;
-pub(crate) mod timeline;
-pub(crate) mod trace;
+#[doc(hidden)]
+pub mod report;
+#[doc(hidden)]
+pub mod text;
+#[doc(hidden)]
+pub mod timeline;
+#[doc(hidden)]
+pub mod trace;
 
 pub use canopen::codes::{Class, CodeInfo, Description, Tables};
 pub use canopen::emcy::{Emcy, TooShort, Warning};
@@ -71,9 +81,3 @@ pub use timeline::{At, ClearedBy, Interval, NodeTimeline, State, Step};
 pub use trace::deltas::TimeMode;
 pub use trace::reader::{CanFrame, Record, TraceReader};
 pub use trace::{Format, FrameKind, Span, Timestamp};
-
-/// The `emcy-decode` program; `src/main.rs` only calls this. Not API.
-#[doc(hidden)]
-pub fn cli_main() -> std::process::ExitCode {
-    app::main()
-}

@@ -13,15 +13,15 @@
 //! event and report types ([`event`]) and the output trait ([`Sink`]); it
 //! never knows which sink it feeds.
 
-pub(crate) mod batch;
+pub mod batch;
 mod classify;
 mod consumer;
-mod diagnostics;
-pub(crate) mod event;
-pub(crate) mod fail_on;
-pub(crate) mod interest;
+pub mod diagnostics;
+pub mod event;
+pub mod fail_on;
+pub mod interest;
 mod parallel;
-pub(crate) mod sink;
+pub mod sink;
 #[cfg(test)]
 mod tests;
 
@@ -46,12 +46,12 @@ use crate::trace::pcap;
 
 use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
-pub(crate) use diagnostics::DiagnosticLog;
-pub(crate) use event::{
+pub use diagnostics::DiagnosticLog;
+pub use event::{
     AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
     HistoryReport, InputReport, NodeReport,
 };
-pub(crate) use sink::{Discard, Sink, WithoutEvents};
+pub use sink::{Discard, Sink, WithoutEvents};
 
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
@@ -135,7 +135,7 @@ impl Options {
 
 impl Analysis {
     /// An input that could not be opened: nothing read, the reason.
-    pub(crate) fn unopened(file: String, error: String) -> Analysis {
+    pub fn unopened(file: String, error: String) -> Analysis {
         Analysis {
             report: InputReport {
                 file,

@@ -7,9 +7,9 @@
 //! implementation. No command line and no process I/O here: the
 //! application reads the traces and writes the files.
 
-pub(crate) mod compare;
-pub(crate) mod key;
-pub(crate) mod text;
+pub mod compare;
+pub mod key;
+pub mod text;
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;

@@ -4,14 +4,14 @@
 //!
 //! [`Sink`]: crate::analyze::Sink
 
-pub(crate) mod chart;
-pub(crate) mod csv;
-pub(crate) mod explain;
-pub(crate) mod html;
-pub(crate) mod json;
-pub(crate) mod jsonw;
-pub(crate) mod ndjson;
-pub(crate) mod ordered;
-pub(crate) mod svg;
-pub(crate) mod table;
-pub(crate) mod timefmt;
+pub mod chart;
+pub mod csv;
+pub mod explain;
+pub mod html;
+pub mod json;
+pub mod jsonw;
+pub mod ndjson;
+pub mod ordered;
+pub mod svg;
+pub mod table;
+pub mod timefmt;

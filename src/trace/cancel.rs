@@ -48,7 +48,7 @@ impl Cancel {
 
     /// The flag itself, for a signal handler to set (an atomic store is all
     /// a handler may do).
-    pub(crate) fn flag(&self) -> Arc<AtomicBool> {
+    pub fn flag(&self) -> Arc<AtomicBool> {
         Arc::clone(&self.0)
     }
 }

@@ -382,6 +382,9 @@ impl DataHead {
     }
 
     /// The data's length.
+    // A frame's data length (its DLC in bytes), not a container's size:
+    // nothing asks whether it is empty.
+    #[allow(clippy::len_without_is_empty)]
     pub fn len(self) -> usize {
         usize::from(self.len)
     }

@@ -114,3 +114,45 @@ fn a_node_timeline_ends_where_the_program_says() {
         .collect();
     assert_eq!(node["active"], serde_json::json!(active));
 }
+
+/// The program's crates come only with the `application` feature: a Rust
+/// program that depends on the library with `default-features = false`
+/// compiles none of them. Asked of Cargo's own resolution of the manifest,
+/// so a dependency made non-optional again, or a feature that pulls one
+/// in, fails here.
+#[test]
+fn the_library_alone_depends_on_none_of_the_programs_crates() {
+    let tree = |features: &[&str]| -> String {
+        let out = std::process::Command::new(env!("CARGO"))
+            .args(["tree", "--offline", "--edges", "normal", "--prefix", "none"])
+            .args(["--format", "{p}", "--package", "emcy-decode"])
+            .args(features)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .expect("cargo tree runs");
+        assert!(
+            out.status.success(),
+            "cargo tree: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).expect("cargo tree prints UTF-8")
+    };
+    let program_crates = [
+        "clap ",
+        "clap_complete ",
+        "clap_mangen ",
+        "globset ",
+        "indicatif ",
+        "same-file ",
+        "signal-hook ",
+        "terminal_size ",
+        "walkdir ",
+    ];
+    let library = tree(&["--no-default-features"]);
+    let program = tree(&[]);
+    for name in program_crates {
+        let listed = |tree: &str| tree.lines().any(|l| l.starts_with(name));
+        assert!(!listed(&library), "the library alone depends on {name}");
+        assert!(listed(&program), "the program no longer depends on {name}");
+    }
+}

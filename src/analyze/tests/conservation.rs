@@ -513,7 +513,7 @@ fn check(case: &Case) -> Result<(), TestCaseError> {
         .into_iter()
         .filter(|d| !is_nmt(&d.message))
         .collect();
-    // Node and input objects come at the end of the run, as in src/app/decode.rs.
+    // Node and input objects come at the end of the run, as in src/bin/emcy-decode/decode.rs.
     renderer
         .finish(std::slice::from_ref(&analysis.report), &collected)
         .unwrap();

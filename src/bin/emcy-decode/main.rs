@@ -1,6 +1,10 @@
-//! The application: the command line, one file per command, exit codes,
-//! signals, progress bars, stdout and the threads policy. Only this layer
-//! knows about the process; the library below never imports it.
+//! The `emcy-decode` program: the command line, one file per command, exit
+//! codes, signals, progress bars, stdout and the threads policy. Only the
+//! program knows about the process; it uses the library as any other Rust
+//! program could, and the library never imports it. Its crates (clap,
+//! indicatif, signal-hook, ...) come with the `application` feature, so a
+//! program that depends on the library without it compiles none of them.
+#![forbid(unsafe_code)]
 
 mod baseline;
 mod cli;
@@ -16,8 +20,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Parser;
 
-use crate::text::printable;
 use cli::{Cli, Command};
+use emcy_decode::text::printable;
 
 /// The exit codes of the contract in `--help`.
 const EXIT_OK: u8 = 0;
@@ -26,7 +30,7 @@ const EXIT_ERROR: u8 = 2;
 
 /// The whole program: parse the command line, run the command, map errors
 /// to one `error:` line and exit 2.
-pub fn main() -> ExitCode {
+fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return usage(&e),

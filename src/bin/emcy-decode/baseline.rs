@@ -1,7 +1,7 @@
 //! `emcy-decode baseline` and `emcy-decode check`: read the traces, then
 //! write the baseline (never over anything but a regular file, and that
 //! atomically) or compare with it and print the differences. The model and
-//! the comparison are library code ([`crate::baseline`]); this file is their
+//! the comparison are library code ([`emcy_decode::baseline`]); this file is their
 //! process side.
 //!
 //! A signal (a CI timeout, Ctrl-C) while the traces are read stops reading:
@@ -20,11 +20,11 @@ use anyhow::{Context, Result, anyhow, bail};
 use super::cli::{BaselineArgs, CheckArgs, CheckFormat, TraceArgs};
 use super::decode::{Input, Walk, auto_threads};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
-use crate::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
-use crate::baseline::Baseline;
-use crate::baseline::compare::{Allow, compare};
-use crate::baseline::key::trace_key_under;
-use crate::trace::input::{self, ReadMode, Source};
+use emcy_decode::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
+use emcy_decode::baseline::Baseline;
+use emcy_decode::baseline::compare::{Allow, compare};
+use emcy_decode::baseline::key::trace_key_under;
+use emcy_decode::trace::input::{self, ReadMode, Source};
 
 /// Reads every trace through the decode pipeline. `Ok(Err(status))` when a
 /// trace could not be read (2) or a signal stopped reading (its status):
@@ -448,8 +448,8 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
             "check: no trace matched the baseline: it records traces by their path relative \
              to where it was made ('{}'), this run gave '{}'; run check from that directory or \
              give both the same --root DIR",
-            crate::text::printable(recorded),
-            crate::text::printable(given)
+            emcy_decode::text::printable(recorded),
+            emcy_decode::text::printable(given)
         );
     }
     if args.update {

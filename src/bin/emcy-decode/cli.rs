@@ -6,15 +6,15 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use crate::analyze::fail_on::FailOn;
-use crate::analyze::{EmcyId, Options};
-use crate::baseline::ReadOptions;
-use crate::canopen::NodeId;
-use crate::canopen::profile::Profile;
-use crate::canopen::profile_choice::{self, ProfileRequest};
-use crate::report::timefmt::TimeStyle;
-use crate::trace::deltas::TimeMode;
-use crate::trace::{Format, Span, Timestamp, hex};
+use emcy_decode::analyze::fail_on::FailOn;
+use emcy_decode::analyze::{EmcyId, Options};
+use emcy_decode::baseline::ReadOptions;
+use emcy_decode::canopen::NodeId;
+use emcy_decode::canopen::profile::Profile;
+use emcy_decode::canopen::profile_choice::{self, ProfileRequest};
+use emcy_decode::report::timefmt::TimeStyle;
+use emcy_decode::trace::deltas::TimeMode;
+use emcy_decode::trace::{Format, Span, Timestamp, hex};
 
 /// What `-h` ends with: the exit codes in one line, and where the rest is.
 const SHORT_AFTER_HELP: &str = "\
@@ -454,11 +454,11 @@ pub struct DriveArgs {
 #[derive(Clone, Debug)]
 pub struct PdoSpec {
     pub text: String,
-    pub mappings: Vec<crate::canopen::pdo::Mapping>,
+    pub mappings: Vec<emcy_decode::canopen::pdo::Mapping>,
 }
 
 fn parse_pdo(s: &str) -> Result<PdoSpec, String> {
-    let mappings = crate::canopen::pdo::parse_spec(s)?;
+    let mappings = emcy_decode::canopen::pdo::parse_spec(s)?;
     if let Some(m) = mappings.iter().find(|m| m.node.is_none()) {
         return Err(format!(
             "COB-ID {:#x} is no predefined PDO id (0x181-0x57F): its node is unknown",
@@ -472,7 +472,7 @@ fn parse_pdo(s: &str) -> Result<PdoSpec, String> {
 }
 
 fn parse_dcf(s: &str) -> Result<(NodeId, PathBuf), String> {
-    crate::canopen::dcf::parse_option(s)
+    emcy_decode::canopen::dcf::parse_option(s)
 }
 
 impl DriveArgs {
@@ -483,8 +483,8 @@ impl DriveArgs {
             opts.pdo.extend(spec.mappings.iter().cloned());
         }
         for (node, path) in &self.dcf {
-            let dcf =
-                crate::canopen::dcf::load(path, *node).map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
+            let dcf = emcy_decode::canopen::dcf::load(path, *node)
+                .map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
             if dcf.mappings.is_empty() && dcf.vendor_id.is_none() {
                 bail!(
                     "--dcf {}: no PDO mapping and no identity in it: not a DCF or EDS file{}",
@@ -822,7 +822,7 @@ fn parse_seconds(s: &str) -> Result<Span, String> {
 
 /// An error code in hex, with or without 0x.
 fn fail_on_code(s: &str) -> Result<u16, String> {
-    crate::trace::hex::parse_code(s)
+    emcy_decode::trace::hex::parse_code(s)
         .ok_or_else(|| format!("'{s}' is not an error code (1-4 hex digits)"))
 }
 

@@ -6,9 +6,9 @@ use anyhow::Result;
 
 use super::cli::{ExplainArgs, ExplainFormat, parse_code, parse_payload};
 use super::write_stdout;
-use crate::canopen::profile::Profile;
-use crate::canopen::profile_choice;
-use crate::report::explain;
+use emcy_decode::canopen::profile::Profile;
+use emcy_decode::canopen::profile_choice;
+use emcy_decode::report::explain;
 
 /// Reads the code or payload with the chosen profile, as text or JSON.
 pub(super) fn run(args: &ExplainArgs) -> Result<ExitCode> {

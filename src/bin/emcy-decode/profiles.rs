@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 
 use super::cli::ProfilesArgs;
 use super::write_stdout;
-use crate::canopen::profile::{self, Profile};
+use emcy_decode::canopen::profile::{self, Profile};
 
 /// Lists the built-ins, the default marked; or prints one's TOML.
 pub(super) fn run(args: &ProfilesArgs) -> Result<ExitCode> {

@@ -12,19 +12,19 @@ use globset::{Glob, GlobSet, GlobSetBuilder};
 
 use super::cli::{ColorChoice, DecodeArgs, OutputFormat, View};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
-use crate::analyze::fail_on::{self, FailOn, Tally};
-use crate::analyze::{
+use emcy_decode::analyze::fail_on::{self, FailOn, Tally};
+use emcy_decode::analyze::{
     self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Sink, WithoutEvents, batch,
 };
-use crate::report::csv::Csv;
-use crate::report::html::HtmlReport;
-use crate::report::json::JsonDocument;
-use crate::report::ndjson::Ndjson;
-use crate::report::svg::SvgReport;
-use crate::report::table::TableReport;
-use crate::trace::cancel::Cancel;
-use crate::trace::detect;
-use crate::trace::input::{self, ReadMode, Source};
+use emcy_decode::report::csv::Csv;
+use emcy_decode::report::html::HtmlReport;
+use emcy_decode::report::json::JsonDocument;
+use emcy_decode::report::ndjson::Ndjson;
+use emcy_decode::report::svg::SvgReport;
+use emcy_decode::report::table::TableReport;
+use emcy_decode::trace::cancel::Cancel;
+use emcy_decode::trace::detect;
+use emcy_decode::trace::input::{self, ReadMode, Source};
 
 /// Reads every input into the chosen renderer; the exit code is the worst
 /// of all inputs.

@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use signal_hook::consts::signal::{SIGINT, SIGTERM};
 use signal_hook::flag;
 
-use crate::trace::cancel::Cancel;
+use emcy_decode::trace::cancel::Cancel;
 
 #[cfg(unix)]
 use signal_hook::consts::signal::SIGHUP;
