@@ -297,3 +297,320 @@ fn the_check_sees_what_it_must() {
     assert!(violation("timeline", "cache").is_none());
     assert!(violation("analyze", "newthing").is_some());
 }
+
+// ---- circles between files ----------------------------------------------
+
+/// The module a path names, resolved from the module `module` it is written
+/// in: `crate::a::b::Item`, `super::x::Item`, `self::x::Item`, or
+/// `child::Item` for a child module of the current one. The segments after
+/// the prefix, longest first, are cut back to a module some file holds.
+fn named_file(
+    module: &[String],
+    path: &[&str],
+    files: &std::collections::BTreeMap<Vec<String>, PathBuf>,
+) -> Option<PathBuf> {
+    let (mut base, rest): (Vec<String>, &[&str]) = match path.first()? {
+        &"crate" => (Vec::new(), &path[1..]),
+        &"self" => (module.to_vec(), &path[1..]),
+        &"super" => {
+            let climbs = path.iter().take_while(|s| **s == "super").count();
+            let keep = module.len().checked_sub(climbs)?;
+            (module[..keep].to_vec(), &path[climbs..])
+        }
+        first => {
+            let mut child = module.to_vec();
+            child.push((*first).to_string());
+            if !files.contains_key(&child) {
+                return None;
+            }
+            (module.to_vec(), path)
+        }
+    };
+    for segment in rest {
+        base.push((*segment).to_string());
+        if !files.contains_key(&base) {
+            base.pop();
+            break;
+        }
+    }
+    files.get(&base).cloned()
+}
+
+/// The paths a file's code names, each as its segments, with `{a, b::c}`
+/// groups expanded one level deep (`use super::{a::X, b}` names `super::a`
+/// and `super::b`).
+fn named_paths(code: &str) -> Vec<Vec<&str>> {
+    let is_ident = |c: char| c.is_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    let bytes = code.as_bytes();
+    let mut i = 0;
+    while i < code.len() {
+        // A path starts at a word not preceded by a word or by `::`.
+        let after = i.checked_sub(1).map(|k| bytes[k] as char);
+        let starts_word =
+            after.is_none_or(|c| !is_ident(c) && c != ':') && is_ident(bytes[i] as char);
+        if !starts_word {
+            i += 1;
+            continue;
+        }
+        let mut segments = Vec::new();
+        let mut j = i;
+        loop {
+            let end = code[j..]
+                .find(|c: char| !is_ident(c))
+                .map_or(code.len(), |k| j + k);
+            segments.push(&code[j..end]);
+            j = end;
+            if !code[j..].starts_with("::") {
+                break;
+            }
+            j += 2;
+            if code[j..].starts_with('{') {
+                let close = code[j..].find('}').map_or(code.len(), |k| j + k);
+                for item in code[j + 1..close].split(',') {
+                    let item = item.trim();
+                    let head: Vec<&str> = item
+                        .split("::")
+                        .map(str::trim)
+                        .take_while(|s| !s.is_empty() && s.chars().all(is_ident))
+                        .collect();
+                    if !head.is_empty() {
+                        out.push(segments.iter().copied().chain(head).collect());
+                    }
+                }
+                j = close;
+                segments.clear();
+                break;
+            }
+            if !code[j..].starts_with(is_ident) {
+                break;
+            }
+        }
+        if segments.len() > 1 {
+            out.push(segments);
+        }
+        i = j.max(i + 1);
+    }
+    out
+}
+
+/// The code with `super::` inside an inline `mod name { ... }` written as
+/// `self::`: there it names the file's own module, not its parent.
+fn inline_modules_own_supers(code: &str) -> String {
+    let mut out = String::with_capacity(code.len());
+    let mut rest = code;
+    while let Some(at) = rest.find("mod ") {
+        let starts_word = rest[..at]
+            .chars()
+            .next_back()
+            .is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+        let after = &rest[at + 4..];
+        let name_end = after
+            .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .unwrap_or(after.len());
+        let opens = after[name_end..].trim_start().starts_with('{');
+        if !starts_word || name_end == 0 || !opens {
+            out.push_str(&rest[..at + 4]);
+            rest = after;
+            continue;
+        }
+        let open = at + 4 + name_end + after[name_end..].find('{').unwrap_or(0);
+        let mut depth = 0usize;
+        let mut close = rest.len();
+        for (i, c) in rest[open..].char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        close = open + i + 1;
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        out.push_str(&rest[..open]);
+        out.push_str(&rest[open..close].replace("super::", "self::"));
+        rest = &rest[close..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Every set of library files that import each other round a circle (a
+/// file naming another, directly or through others, that names it back),
+/// each as its files' paths below src/, sorted.
+fn import_circles(src: &Path) -> Vec<Vec<String>> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let mut paths = Vec::new();
+    sources(src, &mut paths);
+    let mut files = BTreeMap::new();
+    for path in &paths {
+        let Ok(rel) = path.strip_prefix(src) else {
+            continue;
+        };
+        let module = module_path(rel);
+        if module.first().is_some_and(|m| m == "bin") || module.iter().any(|m| m == "tests") {
+            continue;
+        }
+        let module = if module == ["lib"] {
+            Vec::new()
+        } else {
+            module
+        };
+        files.insert(module, path.clone());
+    }
+    let mut edges: BTreeMap<PathBuf, BTreeSet<PathBuf>> = BTreeMap::new();
+    for (module, path) in &files {
+        let text = std::fs::read_to_string(path).unwrap_or_default();
+        let code: String = without_test_module(&text)
+            .lines()
+            .map(|l| l.split("//").next().unwrap_or_default())
+            .collect::<Vec<_>>()
+            .join("\n");
+        let code = inline_modules_own_supers(&code);
+        let named = edges.entry(path.clone()).or_default();
+        for segments in named_paths(&code) {
+            if let Some(to) = named_file(module, &segments, &files)
+                && &to != path
+                && !to.ends_with("lib.rs")
+            {
+                named.insert(to);
+            }
+        }
+    }
+    // Tarjan's strongly connected components, by an explicit stack.
+    let nodes: Vec<&PathBuf> = edges.keys().collect();
+    let index_of: BTreeMap<&PathBuf, usize> =
+        nodes.iter().enumerate().map(|(i, p)| (*p, i)).collect();
+    let next: Vec<Vec<usize>> = nodes
+        .iter()
+        .map(|p| {
+            edges[*p]
+                .iter()
+                .filter_map(|to| index_of.get(to).copied())
+                .collect()
+        })
+        .collect();
+    let n = nodes.len();
+    let (mut index, mut low) = (vec![usize::MAX; n], vec![0; n]);
+    let (mut on_stack, mut stack, mut counter) = (vec![false; n], Vec::new(), 0);
+    let mut circles = Vec::new();
+    for root in 0..n {
+        if index[root] != usize::MAX {
+            continue;
+        }
+        let mut work = vec![(root, 0usize)];
+        while let Some(&mut (v, ref mut k)) = work.last_mut() {
+            if *k == 0 && index[v] == usize::MAX {
+                index[v] = counter;
+                low[v] = counter;
+                counter += 1;
+                stack.push(v);
+                on_stack[v] = true;
+            }
+            if let Some(&w) = next[v].get(*k) {
+                *k += 1;
+                if index[w] == usize::MAX {
+                    work.push((w, 0));
+                } else if on_stack[w] {
+                    low[v] = low[v].min(index[w]);
+                }
+                continue;
+            }
+            work.pop();
+            if let Some(&(parent, _)) = work.last() {
+                low[parent] = low[parent].min(low[v]);
+            }
+            if low[v] == index[v] {
+                let mut circle = Vec::new();
+                while let Some(w) = stack.pop() {
+                    on_stack[w] = false;
+                    circle.push(w);
+                    if w == v {
+                        break;
+                    }
+                }
+                if circle.len() > 1 {
+                    let mut names: Vec<String> = circle
+                        .iter()
+                        .map(|&w| {
+                            let rel = nodes[w].strip_prefix(src).unwrap_or(nodes[w]);
+                            rel.display().to_string()
+                        })
+                        .collect();
+                    names.sort();
+                    circles.push(names);
+                }
+            }
+        }
+    }
+    circles.sort();
+    circles
+}
+
+/// Folders whose files still import each other round a circle, being
+/// taken apart: a circle elsewhere fails, and so does a folder listed here
+/// that has none left (take it off the list).
+const CIRCLES_LEFT_IN: [&str; 3] = ["analyze/", "report/chart/", "trace/"];
+
+#[test]
+fn no_files_import_each_other_round_a_circle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let circles = import_circles(&src);
+    let listed = |circle: &Vec<String>| {
+        CIRCLES_LEFT_IN
+            .iter()
+            .any(|dir| circle.iter().all(|f| f.starts_with(dir)))
+    };
+    let shown: Vec<String> = circles
+        .iter()
+        .filter(|c| !listed(c))
+        .map(|c| c.join(" <-> "))
+        .collect();
+    assert!(
+        shown.is_empty(),
+        "files that import each other:\n{}",
+        shown.join("\n")
+    );
+    for dir in CIRCLES_LEFT_IN {
+        assert!(
+            circles.iter().any(|c| c.iter().all(|f| f.starts_with(dir))),
+            "{dir} has no circle left: take it off CIRCLES_LEFT_IN"
+        );
+    }
+}
+
+#[test]
+fn the_circle_check_sees_what_it_must() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let write = |rel: &str, text: &str| {
+        let path = dir.path().join(rel);
+        std::fs::create_dir_all(path.parent().expect("a parent")).expect("a folder");
+        std::fs::write(path, text).expect("a source file");
+    };
+    write("lib.rs", "mod a;\nmod b;\nmod c;\nmod d;\n");
+    write("d/e.rs", "use crate::d::inner;\n");
+    // a <-> a/child through `super` and a child path; b -> c -> b through
+    // a `crate::{...}` group; test modules and comments name nothing.
+    write("a/mod.rs", "mod child;\nfn f() { child::g(); }\n");
+    write("a/child.rs", "use super::f;\n");
+    write("b.rs", "use crate::{c::X, a};\n// crate::c is a comment\n");
+    write("c.rs", "pub struct X;\nfn g() { crate::b::h(); }\n");
+    // An inline module's `super` is its own file.
+    write(
+        "d.rs",
+        "const N: u8 = 1;\nmod inner {\n    fn n() -> u8 { super::N }\n}\n",
+    );
+    write(
+        "lone.rs",
+        "#[cfg(test)]\nmod tests {\n    use crate::b::x;\n}\n",
+    );
+    assert_eq!(
+        import_circles(dir.path()),
+        [vec!["a/child.rs", "a/mod.rs"], vec!["b.rs", "c.rs"]]
+    );
+    write("c.rs", "pub struct X;\n");
+    assert_eq!(import_circles(dir.path()), [vec!["a/child.rs", "a/mod.rs"]]);
+}

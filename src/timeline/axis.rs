@@ -8,7 +8,7 @@
 //! back to the caller, as [`super::NodeTimeline`] hands back intervals: the
 //! axis keeps only the open one, so its memory is constant.
 
-use super::At;
+use super::interval::At;
 use crate::canopen::cia402::{self, Command, State};
 use crate::trace::{Span, Timestamp};
 

@@ -8,7 +8,7 @@
 //! complete, empty read-out. A confirmed write of 0 to sub 0 clears the
 //! history.
 
-use super::At;
+use super::interval::At;
 
 /// The subs a read-out may hold (sub 0 is UNSIGNED8, 255 is reserved).
 pub const MAX_ENTRIES: u8 = 254;

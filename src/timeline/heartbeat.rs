@@ -8,7 +8,7 @@
 //! from the deadline (last heartbeat + timeout) to the next sign of life
 //! (a heartbeat or boot-up); monitoring begins with the first one.
 
-use super::At;
+use super::interval::At;
 use crate::trace::{Span, Step, Timestamp};
 
 /// Intervals seen before a timeout is learnt.

@@ -15,7 +15,7 @@ use std::fs::File;
 use std::io::{self, Write};
 use std::sync::Arc;
 
-use super::{At, ClearedBy, Interval};
+use super::interval::{At, ClearedBy, Interval};
 use crate::canopen::NodeId;
 use crate::canopen::register::Register;
 use crate::trace::Timestamp;
