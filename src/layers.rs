@@ -347,8 +347,9 @@ fn named_paths(code: &str) -> Vec<Vec<&str>> {
     while i < code.len() {
         // A path starts at a word not preceded by a word or by `::`.
         let after = i.checked_sub(1).map(|k| bytes[k] as char);
-        let starts_word =
-            after.is_none_or(|c| !is_ident(c) && c != ':') && is_ident(bytes[i] as char);
+        // Only at an ASCII byte: a slice never starts inside a character.
+        let starts_word = after.is_none_or(|c| !is_ident(c) && c != ':')
+            && (bytes[i].is_ascii_alphabetic() || bytes[i] == b'_');
         if !starts_word {
             i += 1;
             continue;
