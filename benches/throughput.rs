@@ -33,7 +33,7 @@ use tracegen::{
 
 /// The heartbeat case's label (and the word that picks it).
 const HEARTBEATS: &str = "candump log, 32 nodes heartbeating";
-/// Issue 19's case: 32 CiA 402 drives' TPDO1 at 1 kHz.
+/// The drives case: 32 CiA 402 drives' TPDO1 at 1 kHz.
 const DRIVES: &str = "candump log, 32 drives TPDO1 1 kHz";
 
 fn env_u64(name: &str, default: u64) -> u64 {
@@ -237,7 +237,7 @@ fn main() {
         drop(w);
         std::fs::rename(&tmp, &ethercat).expect("rename");
     }
-    // Issue 24: 32 nodes heartbeating every 100 ms (about a tenth of the
+    // 32 nodes heartbeating every 100 ms (about a tenth of the
     // frames), every heartbeat decoded.
     let heartbeats = dir.join(format!("candump-hb32-{mb}MB.log"));
     if chosen(HEARTBEATS) && !heartbeats.exists() {
@@ -250,7 +250,7 @@ fn main() {
         drop(w);
         std::fs::rename(&tmp, &heartbeats).expect("rename");
     }
-    // Issue 19: 32 drives sending TPDO1 every millisecond (nearly every
+    // 32 drives sending TPDO1 every millisecond (nearly every
     // frame), measured with --assume-cia402-pdo (every PDO decoded) and
     // without (the EMCY-only path, the PDOs only counted).
     let drives = dir.join(format!("candump-drives32-{mb}MB.log"));

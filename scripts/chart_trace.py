@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes a candump log for looking at the timeline chart of a long, busy
-trace (issue 20: "a one-hour 12-node trace with 1,776 errors is a
+trace (a user's words: "a one-hour 12-node trace with 1,776 errors is a
 barcode"). Deterministic (fixed seed); nothing in it comes from a real
 trace.
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the CiA 402 drive fixtures of issue 19 (our own frames, candump -L
+"""Writes the CiA 402 drive fixtures (our own frames, candump -L
 text; no third-party trace is copied):
 
 - fixtures/cia402-commissioning.log: node 5, a servo drive, commissioned by

@@ -217,27 +217,27 @@ impl NodeTimeline {
     }
 
     /// The node's NMT, heartbeat and error history side, if it has one.
-    pub fn health(&self) -> Option<&health::NodeHealth> {
+    pub(crate) fn health(&self) -> Option<&health::NodeHealth> {
         self.health.as_deref()
     }
 
     /// The node's NMT, heartbeat and error history side to change, if it
     /// has one.
     #[inline]
-    pub fn health_if_any(&mut self) -> Option<&mut health::NodeHealth> {
+    pub(crate) fn health_if_any(&mut self) -> Option<&mut health::NodeHealth> {
         self.health.as_deref_mut()
     }
 
     /// The node's NMT, heartbeat and error history side, made on first use
     /// with `timeout` (`--heartbeat-timeout`).
-    pub fn health_mut(&mut self, timeout: Option<Span>) -> &mut health::NodeHealth {
+    pub(crate) fn health_mut(&mut self, timeout: Option<Span>) -> &mut health::NodeHealth {
         self.health
             .get_or_insert_with(|| Box::new(health::NodeHealth::new(timeout)))
     }
 
     /// The node's CiA 402 axis, if a word of it was decoded.
     #[inline]
-    pub fn axis_mut(&mut self) -> Option<&mut axis::AxisRecord> {
+    pub(crate) fn axis_mut(&mut self) -> Option<&mut axis::AxisRecord> {
         self.health.as_deref_mut()?.axis.as_deref_mut()
     }
 

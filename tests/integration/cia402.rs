@@ -1,4 +1,4 @@
-//! Issue 19: a CiA 402 drive's own state, through the command line, on the
+//! A CiA 402 drive's own state, through the command line, on the
 //! fixtures of scripts/make_cia402_fixtures.py: states and faults from
 //! PDOs, where each mapping came from (sdo, dcf, option, assumed), the
 //! fault's EMCY and reset, `--fail-on fault`, `check`'s `axis_fault_new`,

@@ -890,7 +890,7 @@ fn emcy_id_flag_decodes_a_moved_id_from_the_first_line() {
     assert_eq!(lines, [(2, 5), (7, 5), (10, 6), (11, 5), (12, 5)]);
 }
 
-/// Issue 4: frames on the heartbeat and SDO ids are only timed unless they
+/// Frames on the heartbeat and SDO ids are only timed unless they
 /// can matter; an EMCY id given there makes every frame on it matter.
 #[test]
 fn emcy_id_on_a_heartbeat_id_decodes_every_frame_on_it() {
@@ -1138,7 +1138,7 @@ fn a_node_with_many_errors_is_one_valid_object_in_both_json_formats() {
 
 // ---- threads (-j) ----------------------------------------------------------------
 
-/// Issue 18: `-j 40000` ended in a panic when a thread could not be
+/// `-j 40000` once ended in a panic when a thread could not be
 /// started, `-j 18446744073709551615` grew for minutes. Absurd counts are a
 /// usage error; large plausible ones are cut to 4 per core (the report is
 /// the same whatever the count).

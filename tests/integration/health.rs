@@ -1,4 +1,4 @@
-//! Issue 24: a node's whole error state, through the command line, on the
+//! A node's whole error state, through the command line, on the
 //! commissioning fixture (fixtures/make_fixtures.py, `commissioning()`):
 //! NMT states, lost heartbeats, the 1003h error history, SDO aborts, and
 //! `--heartbeat-timeout`, `--fail-on lost`, `check`'s `heartbeat_lost_new`.

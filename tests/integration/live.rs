@@ -586,7 +586,7 @@ fn wait_until_caught(child: &Child, signo: u32) {
     }
 }
 
-/// Issue 18: a CI timeout killed `baseline` and `check` with no word, and
+/// A CI timeout once killed `baseline` and `check` with no word, and
 /// could leave a temporary file beside the baseline. A signal while the
 /// traces are read writes and compares nothing: an `error:` line, the
 /// signal's status, the old baseline byte for byte, no file left behind.

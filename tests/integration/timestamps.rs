@@ -1,4 +1,4 @@
-//! candump `-td` delta times (issue 22): detected from the first lines or
+//! candump `-td` delta times: detected from the first lines or
 //! said with `--timestamps`, summed exactly, across blocks and threads, in
 //! the program and in the library's reader.
 

@@ -417,7 +417,7 @@ impl DecodeArgs {
     }
 }
 
-/// CiA 402 drive decoding (issue 19): where PDO mappings come from besides
+/// CiA 402 drive decoding: where PDO mappings come from besides
 /// the trace's own SDO writes. The same for decoding, `baseline` and
 /// `check`.
 #[derive(Args, Debug, Default)]

@@ -55,7 +55,7 @@ const HEX: &[u8; 16] = b"0123456789ABCDEF";
 
 /// The nodes of [`write_trace`]'s bus (1 to this), each heartbeating every
 /// 100 ms. Until 2026-11-26 their heartbeats came at random (a tenth of
-/// the other frames): since issue 24 decodes heartbeats, that made an
+/// the other frames): once heartbeats were decoded, that made an
 /// outage every few beats, over a million events per GiB that no real bus
 /// sends, and the bench measured rendering them (docs/performance.md).
 const BUS_NODES: u32 = 8;
@@ -75,7 +75,7 @@ pub fn write_trace<W: Write>(
 
 /// [`write_trace`] on a bus where nodes 1..=`heartbeat_nodes` send their
 /// heartbeat (operational) every 100 ms, as a commissioned machine does
-/// (issue 24's benchmark: 32 of them).
+/// (the heartbeat benchmark: 32 of them).
 pub fn write_heartbeat_trace<W: Write>(
     out: &mut W,
     format: TraceFormat,
@@ -633,7 +633,7 @@ pub fn write_ethercat<W: Write>(
 
 /// A candump log of `drives` CiA 402 drives (nodes 1..=drives) each sending
 /// TPDO1 (0x180 + node: statusword, 32-bit position) every millisecond, as
-/// a motion controller's cyclic bus does (issue 19's benchmark). About
+/// a motion controller's cyclic bus does (the drives benchmark). About
 /// `emcy_per_mille` of the frames are EMCYs, each raise with the drive's
 /// statusword in fault until the reset 20 ms later; the statusword's
 /// bits 10 and 12 (target reached, set-point acknowledge) toggle as a
