@@ -47,6 +47,9 @@
 //! Everything else is the program's own and not API.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// The hidden layers' notes link to their private items: they are read with
+// `cargo doc --document-private-items`, where those links resolve.
+#![allow(rustdoc::private_intra_doc_links)]
 
 // The layers below are public for the `emcy-decode` program
 // (src/bin/emcy-decode), which uses the library as any other program would,

@@ -36,7 +36,7 @@ pub struct Baseline {
     /// a check with other ones is refused, not compared.
     #[serde(default, skip_serializing_if = "ReadOptions::is_none")]
     pub options: ReadOptions,
-    /// By trace key (see [`trace_key`]).
+    /// By trace key (see [`key::trace_key`]).
     pub traces: BTreeMap<String, TraceEntry>,
 }
 

@@ -218,7 +218,7 @@ impl History {
 
 /// Report order (channel name, node, raise order) as integers: channels
 /// ranked by name (equal names rank equal; a channel the names do not know
-/// reads as `""`, like [`ErrorHistory::channel_name`]).
+/// reads as `""`, like `ErrorHistory::channel_name`).
 #[derive(Debug, Default)]
 struct Ranks {
     /// (channel, rank), sorted by channel.
