@@ -152,22 +152,7 @@ fn without_test_module(text: &str) -> String {
         let Some(open) = after.find('{') else {
             return out;
         };
-        let mut depth = 0usize;
-        let mut end = None;
-        for (i, c) in after[open..].char_indices() {
-            match c {
-                '{' => depth += 1,
-                '}' => {
-                    depth -= 1;
-                    if depth == 0 {
-                        end = Some(open + i + 1);
-                        break;
-                    }
-                }
-                _ => {}
-            }
-        }
-        let Some(end) = end else {
+        let Some(end) = block_end(after, open) else {
             return out;
         };
         // Keep the lines counted: the block's newlines stay.
@@ -176,6 +161,25 @@ fn without_test_module(text: &str) -> String {
     }
     out.push_str(rest);
     out
+}
+
+/// Where the block opened by the `{` at `open` ends (just past its `}`),
+/// by brace depth; `None` when it is not closed.
+fn block_end(text: &str, open: usize) -> Option<usize> {
+    let mut depth = 0usize;
+    for (i, c) in text.get(open..)?.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => {
+                depth = depth.checked_sub(1)?;
+                if depth == 0 {
+                    return Some(open + i + 1);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -416,21 +420,7 @@ fn inline_modules_own_supers(code: &str) -> String {
             continue;
         }
         let open = at + 4 + name_end + after[name_end..].find('{').unwrap_or(0);
-        let mut depth = 0usize;
-        let mut close = rest.len();
-        for (i, c) in rest[open..].char_indices() {
-            match c {
-                '{' => depth += 1,
-                '}' => {
-                    depth -= 1;
-                    if depth == 0 {
-                        close = open + i + 1;
-                        break;
-                    }
-                }
-                _ => {}
-            }
-        }
+        let close = block_end(rest, open).unwrap_or(rest.len());
         out.push_str(&rest[..open]);
         out.push_str(&rest[open..close].replace("super::", "self::"));
         rest = &rest[close..];
