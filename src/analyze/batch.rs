@@ -11,9 +11,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::thread::Scope;
 
+use super::analysis::{Analysis, OutputError};
+use super::diagnostics::DiagnosticLog;
 use super::event::{BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport};
+use super::options::Options;
 use super::sink::Sink;
-use super::{Analysis, DiagnosticLog, Options, OutputError};
 use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};

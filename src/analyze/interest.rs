@@ -2,7 +2,7 @@
 //! busy NMT and SDO ids, which contents matter. Everything else is only
 //! counted, so most lines of a trace never get past the reader.
 
-use super::Options;
+use super::options::Options;
 use crate::canopen::cia402;
 use crate::canopen::emcy;
 use crate::canopen::nmt;

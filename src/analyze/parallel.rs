@@ -9,7 +9,7 @@ use std::ops::Range;
 use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex, RwLock};
 
-use super::OutputError;
+use super::analysis::OutputError;
 use super::batch::spawn_scoped;
 use super::classify::{FoldedRun, Foreign, LineSink, RunAt, classify_block};
 use super::consumer::Consumer;
