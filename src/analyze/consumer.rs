@@ -36,10 +36,10 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// Set when candump times are summed as deltas: said in the report.
     pub(super) timestamps: Option<TimeMode>,
     /// Lines before the current block.
-    pub(super) line_base: u64,
+    line_base: u64,
     /// First and last time of a decoded frame.
     first_time: Option<Timestamp>,
-    pub(super) last_time: Option<Timestamp>,
+    last_time: Option<Timestamp>,
     /// The ids decoded now, and where the workers read them.
     pub(super) wanted: Wanted,
     pub(super) nodes: Nodes,

@@ -507,7 +507,9 @@ impl DriveMonitor {
     }
 
     /// A frame on a watched id: a drive's PDO whose mapping is unknown.
-    #[inline]
+    /// Asked of every decoded frame, and nearly always `false` at the
+    /// first test: always inlined (a call cost 20 instructions a frame).
+    #[inline(always)]
     pub(in crate::analyze) fn watched(&mut self, id: u32, extended: bool) -> bool {
         if extended || self.watched.is_empty() {
             return false;
