@@ -5,7 +5,9 @@
 //! dispatcher as a [`Fact`] or the shared [`Facts`], never by one monitor
 //! importing another.
 //!
-//! Adding a service is a file here and a line in the list below.
+//! Adding a service is a file here implementing [`Monitor`], its `mod`
+//! line, and a line in the list below: where it stands in the list says
+//! which frames it sees before the others.
 //!
 //! [`Consumer`]: crate::analyze::consumer::Consumer
 //! [`Nodes`]: crate::analyze::nodes::Nodes
