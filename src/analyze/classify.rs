@@ -2,7 +2,7 @@
 //! consumer itself when reading sequentially, a worker's recorder in
 //! parallel.
 
-use super::OutputError;
+use super::analysis::OutputError;
 use crate::trace::candump_log;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{self, Block, RawLine};

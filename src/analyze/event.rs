@@ -112,7 +112,7 @@ pub enum Health {
     ErrorHistory(HistoryReport),
     /// A confirmed write of 0 to 0x1003 sub 0.
     ErrorHistoryCleared,
-    /// A CiA 402 statusword showed another state (issue 19).
+    /// A CiA 402 drive's statusword showed another state.
     AxisState {
         state: AxisState,
         /// The state before; `None` for the axis's first statusword.

@@ -1,7 +1,8 @@
 //! `--fail-on`: conditions over what the inputs contained that fail a run
 //! (exit 1 in the application), each met one named with what met it.
 
-use super::{Analysis, InputReport};
+use super::analysis::Analysis;
+use super::event::InputReport;
 
 /// The `--fail-on` conditions of one or more flags, combined: any met fails.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -2,7 +2,9 @@
 //! busy NMT and SDO ids, which contents matter. Everything else is only
 //! counted, so most lines of a trace never get past the reader.
 
-use super::Options;
+use std::sync::{Arc, RwLock};
+
+use super::options::Options;
 use crate::canopen::cia402;
 use crate::canopen::emcy;
 use crate::canopen::nmt;
@@ -27,10 +29,10 @@ pub(crate) fn interest(opts: &Options) -> Interest {
         i.add_standard_range(ids.clone());
         i.filter_content(ids, filter);
     }
-    // Steady heartbeats are taken a run at a time (the consumer's
-    // `take_folded_run`), and EMCYs, which change no node's heartbeat or
-    // NMT state, do not end the run (they come every few hundred lines on
-    // a busy bus).
+    // Steady heartbeats are taken a run at a time (the fold fast path,
+    // `Consumer::take_folded_run`), and EMCYs, which change no node's
+    // heartbeat or NMT state, do not end the run (they come every few
+    // hundred lines on a busy bus).
     if folding() {
         i.fold(nmt);
         i.keep_inside(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
@@ -67,7 +69,7 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     }
 }
 
-/// Whether an SDO frame can matter to CiA 402 decoding (issue 19): it
+/// Whether an SDO frame can matter to a CiA 402 drive's decoding: it
 /// names a PDO parameter (0x1400-0x1BFF) or one of 0x6040/0x6041/0x603F,
 /// or it is a download segment or its confirmation (segments name no
 /// object; the PDO assembler keeps only those of a transfer it follows).
@@ -104,6 +106,56 @@ pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
     sdo::names_object(frame.id, data, sdo::COB_ID_EMCY)
         || sdo::names_object(frame.id, data, sdo::DEVICE_TYPE)
         || concerns_axis(frame.id, data)
+}
+
+/// The current interest and its generation, shared with workers: a block
+/// parsed with an older generation is parsed again in order.
+pub(super) type SharedInterest = Arc<RwLock<(u64, Interest)>>;
+
+/// The ids the analysis decodes now. They only grow (an EMCY id moved, a
+/// PDO mapping learnt, a drive to watch); each widening is a new
+/// generation, published to the workers while they run.
+pub(super) struct Wanted {
+    pub(super) interest: Interest,
+    pub(super) generation: u64,
+    /// Set while workers run: where they read the interest from.
+    pub(super) shared: Option<SharedInterest>,
+}
+
+impl Wanted {
+    pub(super) fn new(interest: Interest) -> Self {
+        Wanted {
+            interest,
+            generation: 0,
+            shared: None,
+        }
+    }
+
+    /// `add` may add ids: if it did, workers parse with the new interest
+    /// and blocks parsed before are read again.
+    pub(super) fn widen(&mut self, add: impl FnOnce(&mut Interest)) {
+        let before = self.interest.clone();
+        add(&mut self.interest);
+        if self.interest != before {
+            self.publish();
+        }
+    }
+
+    /// A node's EMCY id moved (object 0x1014 seen in the trace): frames on
+    /// it are decoded from here on.
+    pub(super) fn add_emcy_id(&mut self, id: u32, extended: bool) {
+        add_emcy_id(&mut self.interest, id, extended);
+        self.publish();
+    }
+
+    fn publish(&mut self) {
+        self.generation += 1;
+        if let Some(shared) = &self.shared
+            && let Ok(mut w) = shared.write()
+        {
+            *w = (self.generation, self.interest.clone());
+        }
+    }
 }
 
 /// An EMCY id besides 0x80 + node (`--emcy-id`, or moved by object

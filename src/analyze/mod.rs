@@ -13,37 +13,37 @@
 //! event and report types ([`event`]) and the output trait ([`Sink`]); it
 //! never knows which sink it feeds.
 
+mod analysis;
 pub mod batch;
 mod classify;
 mod consumer;
 pub mod diagnostics;
 pub mod event;
 pub mod fail_on;
+mod fold;
 pub mod interest;
+mod monitor;
+mod nodes;
+mod options;
 mod parallel;
 pub mod sink;
 #[cfg(test)]
 mod tests;
+pub(crate) mod threads;
 
 use std::io::{self, Read, Write};
 
-use crate::canopen::NodeId;
-use crate::canopen::dcf::Dcf;
-use crate::canopen::pdo::Mapping;
-use crate::canopen::profile_choice::ProfileChoice;
-use crate::timeline::history::{DEFAULT_SPILL_AT, ErrorHistory};
 use crate::trace::Format;
 use crate::trace::Parsed;
-use crate::trace::Span;
 use crate::trace::blf;
-use crate::trace::cancel::Cancel;
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::detect::{self, Detector};
 use crate::trace::input::{self, Opened, ReadMode, Source};
-use crate::trace::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE};
+use crate::trace::lines::BlockReader;
 use crate::trace::mf4;
 use crate::trace::pcap;
 
+pub use analysis::{Analysis, OutputError};
 use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub use diagnostics::DiagnosticLog;
@@ -51,126 +51,8 @@ pub use event::{
     AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
     HistoryReport, InputReport, NodeReport,
 };
+pub use options::{EmcyId, Options};
 pub use sink::{Discard, Sink, WithoutEvents};
-
-/// What the user asked for that shapes reading and selection.
-#[derive(Clone, Debug)]
-pub struct Options {
-    /// `--input-format`: skip detection.
-    pub input_format: Option<Format>,
-    /// `--timestamps`: what candump times are; `None` detects `-td` deltas.
-    pub timestamps: Option<TimeMode>,
-    /// The input is a live stream or a followed file: nothing is read ahead
-    /// (it would wait for lines), so `-td` deltas are not detected.
-    pub live: bool,
-    /// `--node`: report only these nodes (empty = all).
-    pub nodes: Vec<NodeId>,
-    /// `--channel`: report only these channels (empty = all).
-    pub channels: Vec<String>,
-    /// Diagnostics printed per input; the counts stay exact beyond it.
-    pub max_diagnostics: usize,
-    /// Lines longer than this are reported and skipped.
-    pub max_line: usize,
-    /// Threads classifying lines; 1 = all on the calling thread.
-    pub threads: usize,
-    /// Bytes per read / per block handed to a thread.
-    pub block_size: usize,
-    /// Closed error intervals kept in memory before they go to a temporary file.
-    pub spill_at: usize,
-    /// `--emcy-id`: EMCY COB-IDs moved by object 0x1014, to the node they belong to.
-    pub emcy_ids: Vec<EmcyId>,
-    /// `--profile`, `--profile-file`: which profile decodes which node.
-    pub profiles: ProfileChoice,
-    /// Ends reading when cancelled (Ctrl-C): what was read is reported.
-    pub cancel: Cancel,
-    /// `--heartbeat-timeout`: every node's heartbeat timeout.
-    pub heartbeat_timeout: Option<Span>,
-    /// `--pdo`: PDO mappings the user gives (source `option`).
-    pub pdo: Vec<Mapping>,
-    /// `--dcf NODE=FILE`, read: mappings (source `dcf`) and identities.
-    pub dcf: Vec<(NodeId, Dcf)>,
-    /// `--assume-cia402-pdo`: the predefined CiA 402 mapping for PDOs no
-    /// other source maps (source `assumed`).
-    pub assume_cia402_pdo: bool,
-}
-
-/// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct EmcyId {
-    pub id: u32,
-    pub extended: bool,
-    pub node: NodeId,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            input_format: None,
-            timestamps: None,
-            live: false,
-            nodes: Vec::new(),
-            channels: Vec::new(),
-            max_diagnostics: 20,
-            max_line: DEFAULT_MAX_LINE,
-            threads: 1,
-            block_size: DEFAULT_BLOCK,
-            spill_at: DEFAULT_SPILL_AT,
-            emcy_ids: Vec::new(),
-            profiles: ProfileChoice::default(),
-            cancel: Cancel::new(),
-            heartbeat_timeout: None,
-            pdo: Vec::new(),
-            dcf: Vec::new(),
-            assume_cia402_pdo: false,
-        }
-    }
-}
-
-impl Options {
-    pub(crate) fn selects(&self, channel: &str, node: NodeId) -> bool {
-        (self.nodes.is_empty() || self.nodes.contains(&node))
-            && (self.channels.is_empty() || self.channels.iter().any(|c| c == channel))
-    }
-}
-
-impl Analysis {
-    /// An input that could not be opened: nothing read, the reason.
-    pub fn unopened(file: String, error: String) -> Analysis {
-        Analysis {
-            report: InputReport {
-                file,
-                format: None,
-                gzip: false,
-                counts: Counts::default(),
-                nodes: Vec::new(),
-                history: ErrorHistory::default(),
-                first_time: None,
-                last_time: None,
-                timestamps: None,
-                error: Some(error),
-            },
-            errors_raised: 0,
-            frames_with_warnings: 0,
-            worst_category: None,
-        }
-    }
-}
-
-/// Writing the report failed (typically a closed pipe): stop everything.
-#[derive(Debug)]
-pub struct OutputError(pub io::Error);
-
-/// The result of one input: its report plus what `--fail-on` needs.
-#[derive(Debug)]
-pub struct Analysis {
-    pub report: InputReport,
-    /// Selected EMCY frames with an error code (not a reset).
-    pub errors_raised: u64,
-    /// Selected EMCY frames that carried a protocol warning.
-    pub frames_with_warnings: u64,
-    /// The lowest (most severe) profile category of a selected error EMCY.
-    pub worst_category: Option<u8>,
-}
 
 /// Opens one source and reads it to the end ([`analyze`]); what stops it
 /// (it cannot be opened, or reading failed part way) goes to the log as

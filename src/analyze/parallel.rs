@@ -9,20 +9,16 @@ use std::ops::Range;
 use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex, RwLock};
 
-use super::OutputError;
-use super::batch::spawn_scoped;
+use super::analysis::OutputError;
 use super::classify::{FoldedRun, Foreign, LineSink, RunAt, classify_block};
 use super::consumer::Consumer;
-use super::interest::may_widen;
+use super::interest::{SharedInterest, may_widen};
+use super::threads::spawn_scoped;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
 use crate::trace::{
     Fold, FoldBuffers, Folded, Frame, FrameKind, Inner, Interest, Payload, Reason, Timestamp,
 };
-
-/// The current interest and its generation, shared with workers: a block
-/// parsed with an older generation is parsed again in order.
-pub(super) type SharedInterest = Arc<RwLock<(u64, Interest)>>;
 
 /// What a worker keeps of a line for the consumer.
 enum BlockRecord {
@@ -390,10 +386,10 @@ pub(super) fn run<R: Read + Send, E: Write>(
     let limit = consumer.opts.max_diagnostics;
     let mut current = detector;
     let shared: SharedInterest = Arc::new(RwLock::new((
-        consumer.interest_gen,
-        consumer.interest.clone(),
+        consumer.wanted.generation,
+        consumer.wanted.interest.clone(),
     )));
-    consumer.shared_interest = Some(Arc::clone(&shared));
+    consumer.wanted.shared = Some(Arc::clone(&shared));
     let feed_lock = Mutex::new(Feed {
         blocks,
         seq: 0,
@@ -480,7 +476,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
             read_here(feed.blocks, &mut current, consumer, max_line)
         }
     };
-    consumer.shared_interest = None;
+    consumer.wanted.shared = None;
     outcome.map(|error| (error, current))
 }
 
@@ -587,7 +583,7 @@ fn consume_in_order<E: Write>(
             let r_worker = r.worker;
             let valid = r.start_context.is_some()
                 && r.start_context == current.context()
-                && r.interest_gen == consumer.interest_gen
+                && r.interest_gen == consumer.wanted.generation
                 && !r.moves_emcy_id;
             let spare = if valid {
                 let mut r = r;

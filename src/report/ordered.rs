@@ -14,7 +14,7 @@ use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Mutex};
 use std::thread::Scope;
 
-use crate::analyze::batch::spawn_scoped;
+use crate::analyze::threads::spawn_scoped;
 
 /// A job with its number and the buffer its text goes to (reused).
 type Job<J> = (u64, J, Vec<u8>);
@@ -172,7 +172,7 @@ fn stopped() -> io::Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analyze::batch::spawn_limit;
+    use crate::analyze::threads::spawn_limit;
 
     /// Jobs that take longer the earlier they come still come out in
     /// order, between the plain texts.

@@ -9,7 +9,7 @@
 
 use super::parallel::{base_options, run_with};
 use crate::analyze::Options;
-use crate::analyze::consumer::health::fold_tally;
+use crate::analyze::fold::fold_tally;
 use crate::analyze::interest::set_folding;
 use crate::trace::Span;
 

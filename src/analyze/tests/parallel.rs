@@ -326,9 +326,8 @@ fn emcy_id_moved_by_sdo_mid_trace() {
 
 /// SDO traffic for objects the decoder does not follow only moves the
 /// input's first and last time (workers collapse it); heartbeats are
-/// decoded (issue 24) and the SDO upload of a vendor id still chooses the
-/// profile. Here they come first and last, and in runs across block
-/// boundaries (issue 4).
+/// decoded and the SDO upload of a vendor id still chooses the profile.
+/// Here they come first and last, and in runs across block boundaries.
 #[test]
 fn heartbeats_and_other_sdo_traffic_only_move_the_time_span() {
     let mut t = Vec::new();
@@ -361,7 +360,7 @@ fn heartbeats_and_other_sdo_traffic_only_move_the_time_span() {
     assert!(out.contains("\"type\":\"boot\""));
 }
 
-/// Issue 24's commissioning fixture: heartbeats, guarding requests and
+/// The NMT and heartbeat commissioning fixture: heartbeats, guarding requests and
 /// replies, NMT commands, 1003h read-outs, aborts and a read-out the input
 /// ends in, split anywhere: deadlines, guarding and read-outs carry across
 /// blocks, and the events are the same.
@@ -417,7 +416,7 @@ fn a_segmented_download_completing_a_mapping_across_blocks() {
     assert_eq!(out.matches("\"type\":\"axis_state\"").count(), 4, "{out}");
 }
 
-/// Issue 19's commissioning fixture: PDO mappings learnt mid-trace (one
+/// The drive commissioning fixture: PDO mappings learnt mid-trace (one
 /// COB-ID by a segmented download) widen the interest; split anywhere, the
 /// drive's states, fault and fault reset are the same. The unknown-mapping
 /// trace's watched ids too.

@@ -1,12 +1,13 @@
 //! Threads the system will not start: every spawn of the pipeline falls
 //! back to fewer threads, at least the calling one, and the output is what
 //! the threads asked for would have given. (Spawns are refused with the
-//! test hook `batch::spawn_limit`; the renderers' helpers are tested in
+//! test hook `threads::spawn_limit`; the renderers' helpers are tested in
 //! `report::ordered`.)
 
 use std::fs;
 
-use crate::analyze::batch::{self, spawn_limit};
+use crate::analyze::batch;
+use crate::analyze::threads::spawn_limit;
 use crate::analyze::{DiagnosticLog, Options, Sink, analyze, analyze_source};
 use crate::report::ndjson::Ndjson;
 use crate::trace::input::{ReadMode, Source};

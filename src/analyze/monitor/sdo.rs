@@ -1,0 +1,278 @@
+//! The SDO monitor: SDO transfers followed to the values nodes hold (the
+//! facts other monitors need: device type, identity, the EMCY id, the
+//! heartbeat times), aborts, and the error history (0x1003) read-outs.
+
+use std::io::Write;
+
+use super::context::{Emit, Fact, Facts, Learnt, Monitor, Seen, Step};
+use crate::analyze::analysis::OutputError;
+use crate::analyze::event::{Health, HistoryItem, HistoryReport, NodeReport};
+use crate::analyze::nodes::Nodes;
+use crate::analyze::options::Options;
+use crate::canopen::NodeId;
+use crate::canopen::sdo::{self, Sdo};
+use crate::canopen::sdo_abort;
+use crate::timeline::At;
+use crate::timeline::error_history::ReadOut;
+use crate::timeline::health::NodeHealth;
+
+#[derive(Default)]
+pub(in crate::analyze) struct SdoMonitor {
+    /// Transfers going on, to the values they carry.
+    tracker: sdo::Tracker,
+    /// Buffers reused from frame to frame.
+    events: Vec<(At, Health)>,
+    read_outs: Vec<ReadOut>,
+}
+
+impl Monitor for SdoMonitor {
+    fn new(_opts: &Options) -> Self {
+        SdoMonitor::default()
+    }
+
+    /// A frame on a CAN SDO id.
+    fn frame<E: Write>(
+        &mut self,
+        frame: &Seen<'_>,
+        nodes: &mut Nodes,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<Step, OutputError> {
+        if frame.extended || !sdo::is_sdo_id(frame.id) {
+            return Ok(Step::Pass);
+        }
+        match sdo::parse(frame.id, frame.data) {
+            Some(access) => {
+                let learnt = self.access(frame.channel, frame.at, access, nodes, facts, emit)?;
+                Ok(Step::Learnt(learnt))
+            }
+            None => Ok(Step::Done),
+        }
+    }
+
+    /// A value of the error history (0x1003) a node holds.
+    fn learn<E: Write>(
+        &mut self,
+        raw: &[u8],
+        at: At,
+        fact: Fact,
+        nodes: &mut Nodes,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<(), OutputError> {
+        let Fact::Holds {
+            node,
+            object,
+            value,
+            written,
+        } = fact
+        else {
+            return Ok(());
+        };
+        if object.index != sdo::ERROR_HISTORY {
+            return Ok(());
+        }
+        let timeout = emit.opts.heartbeat_timeout;
+        let slot = nodes.get(raw, node);
+        let h = slot.timeline.health_mut(timeout);
+        let done = &mut self.read_outs;
+        match (object.sub, written) {
+            (0, true) if value == 0 => {
+                h.history.cleared(done);
+                self.events.push((at, Health::ErrorHistoryCleared));
+            }
+            (0, true) => {}
+            (0, false) => h.history.count(value, at, done),
+            (sub, false) => h.history.entry(sub, value, at, done),
+            (_, true) => {}
+        }
+        let cleared = written && object.sub == 0 && value == 0;
+        let id = slot.channel_id;
+        self.read_outs_out(id, node, at, nodes, facts, emit);
+        if cleared {
+            // Known empty from here.
+            nodes
+                .get(raw, node)
+                .timeline
+                .health_mut(timeout)
+                .last_read_out = Some(ReadOut {
+                entries: Vec::new(),
+                count: Some(0),
+                complete: true,
+                at,
+            });
+        }
+        let slot = nodes.get(raw, node);
+        emit.health(slot.channel, node, &mut self.events)
+    }
+
+    /// Read-outs going on end as partial (their events at the last line,
+    /// after every event before; the node keeps the read-out's own line).
+    fn finish<E: Write>(
+        &mut self,
+        end: At,
+        nodes: &mut Nodes,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<(), OutputError> {
+        let reading = nodes.picked(|tl| tl.health().is_some_and(|h| h.history.is_reading()));
+        for (id, node) in reading {
+            let Some(slot) = nodes.slot_by_id(id, node) else {
+                continue;
+            };
+            slot.timeline
+                .health_mut(emit.opts.heartbeat_timeout)
+                .history
+                .flush(&mut self.read_outs);
+            self.read_outs_out(id, node, end, nodes, facts, emit);
+            let Some(slot) = nodes.slot_by_id(id, node) else {
+                continue;
+            };
+            emit.health(slot.channel, node, &mut self.events)?;
+        }
+        Ok(())
+    }
+
+    /// The last read-out; its codes are described with the node's profile
+    /// once the report has it.
+    fn report(&self, report: &mut NodeReport, health: Option<&NodeHealth>) {
+        report.error_history = health
+            .and_then(|h| h.last_read_out.as_ref())
+            .map(|r| history_report(r, |_| String::new()));
+    }
+}
+
+impl SdoMonitor {
+    /// An SDO access (on a CAN SDO id, or parsed from another transport by
+    /// [`sdo::parse_payload`]) on channel `raw` at `at`: an abort, and
+    /// what the access showed of the node.
+    pub(in crate::analyze) fn access<E: Write>(
+        &mut self,
+        raw: &[u8],
+        at: At,
+        access: Sdo,
+        nodes: &mut Nodes,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<Learnt, OutputError> {
+        let mut learnt = Learnt::default();
+        match access {
+            Sdo::Uploaded {
+                node,
+                object,
+                value,
+            } => {
+                learnt.read = Some(Fact::Read {
+                    node,
+                    object,
+                    value,
+                });
+            }
+            Sdo::Aborted {
+                node,
+                object,
+                code,
+                by_server,
+            } => self.abort(raw, node, object, code, by_server, at, nodes, facts, emit)?,
+            _ => {}
+        }
+        let written = matches!(access, Sdo::Written { .. });
+        if let Some((node, object, value)) = self.tracker.feed(access) {
+            learnt.holds = Some(Fact::Holds {
+                node,
+                object,
+                value,
+                written,
+            });
+        }
+        Ok(learnt)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn abort<E: Write>(
+        &mut self,
+        raw: &[u8],
+        node: NodeId,
+        object: sdo::Object,
+        code: u32,
+        by_server: bool,
+        at: At,
+        nodes: &mut Nodes,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<(), OutputError> {
+        let slot = nodes.get(raw, node);
+        self.events.push((
+            at,
+            Health::SdoAbort {
+                index: object.index,
+                subindex: object.sub,
+                abort_code: code,
+                text: sdo_abort::describe(code),
+                by_server,
+            },
+        ));
+        if object.index == sdo::ERROR_HISTORY {
+            // The read-out going on will not finish.
+            let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
+            h.history.flush(&mut self.read_outs);
+        }
+        let id = slot.channel_id;
+        self.read_outs_out(id, node, at, nodes, facts, emit);
+        let slot = nodes.get(raw, node);
+        emit.health(slot.channel, node, &mut self.events)
+    }
+
+    /// Read-outs finished by the frame at `now` become events at it (one
+    /// it interrupted ended there, after the events before: events stay in
+    /// line order) and the node's last read-out (which keeps its own
+    /// line): codes the node never raised in the trace are marked as older
+    /// than it.
+    fn read_outs_out<E: Write>(
+        &mut self,
+        channel_id: u32,
+        node: NodeId,
+        now: At,
+        nodes: &mut Nodes,
+        facts: &Facts<'_>,
+        emit: &Emit<'_, E>,
+    ) {
+        if self.read_outs.is_empty() {
+            return;
+        }
+        let profile = facts.profiles.get(node).profile;
+        let Some(slot) = nodes.slot_by_id(channel_id, node) else {
+            return;
+        };
+        for mut r in self.read_outs.drain(..) {
+            for e in &mut r.entries {
+                e.before_trace = !slot.timeline.has_raised(e.code);
+            }
+            let report = history_report(&r, |code| profile.describe(code));
+            self.events.push((now, Health::ErrorHistory(report)));
+            slot.timeline
+                .health_mut(emit.opts.heartbeat_timeout)
+                .last_read_out = Some(r);
+        }
+    }
+}
+
+/// A read-out as reported, each code described by `describe`.
+fn history_report(r: &ReadOut, describe: impl Fn(u16) -> String) -> HistoryReport {
+    HistoryReport {
+        entries: r
+            .entries
+            .iter()
+            .map(|e| HistoryItem {
+                code: e.code,
+                info: e.info,
+                description: describe(e.code),
+                before_trace: e.before_trace,
+            })
+            .collect(),
+        count: r.count,
+        complete: r.complete,
+        time: r.at.time,
+        line: r.at.line,
+    }
+}
