@@ -11,7 +11,10 @@ pub mod profile;
 pub mod profile_choice;
 pub mod register;
 pub mod sdo;
-pub mod sdo_abort;
+
+/// The abort code table kept its name when it moved into `sdo/`, so its
+/// users outside `canopen` did not change.
+pub use sdo::abort as sdo_abort;
 
 /// A node: a CANopen node id (1 to 127, from the COB-ID), or an EtherCAT
 /// slave's station address for CANopen over EtherCAT (e.g. 1001), which
