@@ -7,7 +7,7 @@
 //! listed and a note says how many more were left out (the chart still
 //! draws all of them; `--format table` or `ndjson` list every event).
 
-use super::table::codes_list;
+use super::format::codes_list;
 use std::fmt::Write as _;
 use std::io::{self, Write};
 

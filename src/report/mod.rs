@@ -7,6 +7,7 @@
 pub(crate) mod chart;
 pub(crate) mod csv;
 pub(crate) mod explain;
+pub(crate) mod format;
 pub(crate) mod html;
 pub(crate) mod json;
 pub(crate) mod jsonw;

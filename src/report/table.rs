@@ -9,6 +9,9 @@ use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
 
+use super::format::{
+    TABLE_LIST, code_text, codes_list, push_code, push_code_counts, push_codes, push_hex,
+};
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
     AxisReport, BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, HistoryReport, InputReport,
@@ -893,29 +896,6 @@ fn display_width(s: &str) -> usize {
     }
 }
 
-fn code_text(code: u16) -> String {
-    let mut s = String::with_capacity(6);
-    push_code(&mut s, code);
-    s
-}
-
-/// `0x4310`
-fn push_code(s: &mut String, code: u16) {
-    s.push_str("0x");
-    for shift in [12, 8, 4, 0] {
-        s.push(hex_digit((code >> shift) as u8));
-    }
-}
-
-fn hex_digit(nibble: u8) -> char {
-    char::from(b"0123456789ABCDEF"[usize::from(nibble & 0xF)])
-}
-
-fn push_hex_byte(s: &mut String, b: u8) {
-    s.push(hex_digit(b >> 4));
-    s.push(hex_digit(b));
-}
-
 /// `YYYY-MM-DDT`: the date of an ISO-8601 time, which a narrow table shows
 /// once on a line of its own.
 const DATE_PREFIX: usize = 11;
@@ -975,22 +955,6 @@ fn push_cut(line: &mut String, text: &str, width: usize) -> usize {
 fn pad_to(s: &mut String, width: usize) {
     while s.len() < width {
         s.push(' ');
-    }
-}
-
-pub(crate) fn codes_list(codes: &[u16]) -> String {
-    let mut s = String::with_capacity(codes.len() * 8);
-    push_codes(&mut s, codes);
-    s
-}
-
-/// `0x4310, 0x2310`
-fn push_codes(s: &mut String, codes: &[u16]) {
-    for (i, &code) in codes.iter().enumerate() {
-        if i > 0 {
-            s.push_str(", ");
-        }
-        push_code(s, code);
     }
 }
 
@@ -1058,7 +1022,7 @@ impl<W: Write> Sink for TableReport<W> {
             }
             Some(w) => {
                 let start = line.len();
-                push_hex_byte(&mut line, reg);
+                push_hex(&mut line, &[reg]);
                 pad_to(&mut line, start + w + 2);
             }
             None => {}
@@ -1069,7 +1033,7 @@ impl<W: Write> Sink for TableReport<W> {
                 if i > 0 {
                     line.push(' ');
                 }
-                push_hex_byte(&mut line, *b);
+                push_hex(&mut line, std::slice::from_ref(b));
             }
             pad_to(&mut line, start + MANUFACTURER_WIDTH);
             line.push_str("  ");
@@ -1081,13 +1045,13 @@ impl<W: Write> Sink for TableReport<W> {
             // Full lines (a pipe): straight into the line, no text to cut.
             line.push_str(&description);
             line.push_str(" (cleared ");
-            push_codes(&mut line, ev.cleared);
+            push_codes(&mut line, ev.cleared.iter().copied(), &TABLE_LIST);
             line.push(')');
         } else {
             let mut text = String::with_capacity(description.len() + 16);
             text.push_str(&description);
             text.push_str(" (cleared ");
-            push_codes(&mut text, ev.cleared);
+            push_codes(&mut text, ev.cleared.iter().copied(), &TABLE_LIST);
             text.push(')');
             self.push_description(&mut line, l, &text);
         }
@@ -1365,18 +1329,15 @@ fn node_cells(
     if n.active.is_empty() {
         active.push('-');
     }
-    push_codes(active, &n.active);
+    push_codes(active, n.active.iter().copied(), &TABLE_LIST);
     if n.stats.raised.is_empty() {
         seen.push('-');
     }
-    for (i, (&code, count)) in n.stats.raised.iter().enumerate() {
-        if i > 0 {
-            seen.push_str(", ");
-        }
-        push_code(seen, code);
-        seen.push_str(" x");
-        seen.push_str(itoa::Buffer::new().format(*count));
-    }
+    push_code_counts(
+        seen,
+        n.stats.raised.iter().map(|(&code, &count)| (code, count)),
+        &TABLE_LIST,
+    );
     let _ = write!(
         profile,
         "{} ({})",

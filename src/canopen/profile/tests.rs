@@ -1,4 +1,3 @@
-
 use super::*;
 
 fn frame(data: &[u8]) -> Emcy {
