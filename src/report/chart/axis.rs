@@ -5,11 +5,10 @@
 
 use std::fmt::{self, Write as _};
 
-use time::OffsetDateTime;
-
 use super::Scale;
 use super::style::{LANES_TOP, PLOT_W, X0, X1};
 use super::text::N;
+use crate::report::timefmt::utc_date;
 use crate::timeline::At;
 use crate::trace::Timestamp;
 
@@ -130,24 +129,22 @@ struct Utc {
 }
 
 impl Utc {
-    /// The calendar is `time`'s, which counts years up to 9999; a trace's
-    /// times can be any `u64` (nothing stops a candump log from saying
+    /// The calendar counts years up to 9999; a trace's times can be any
+    /// `u64` (nothing stops a candump log from saying
     /// `(99999999999999.5)`), so whole 400-year cycles come off before and
     /// go back onto the year after.
     fn of(secs: u64) -> Utc {
         let cycles = secs / CYCLE_SECS;
-        // Below 400 years after 1970: always in `time`'s range.
-        let t = i64::try_from(secs % CYCLE_SECS)
-            .ok()
-            .and_then(|s| OffsetDateTime::from_unix_timestamp(s).ok())
-            .unwrap_or(OffsetDateTime::UNIX_EPOCH);
+        // Below 400 years after 1970: always in the calendar's range.
+        let (date, second) =
+            utc_date(secs % CYCLE_SECS).unwrap_or((jiff::civil::date(1970, 1, 1), 0));
         Utc {
-            year: u64::from(t.year().unsigned_abs()) + 400 * cycles,
-            month: t.month().into(),
-            day: t.day(),
-            hour: t.hour(),
-            minute: t.minute(),
-            second: t.second(),
+            year: u64::from(date.year().unsigned_abs()) + 400 * cycles,
+            month: date.month().unsigned_abs(),
+            day: date.day().unsigned_abs(),
+            hour: (second / 3600) as u8,
+            minute: (second / 60 % 60) as u8,
+            second: (second % 60) as u8,
         }
     }
 }
