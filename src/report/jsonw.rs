@@ -656,7 +656,7 @@ impl JsonWriter {
         o.key("errors").push(b'[');
     }
 
-    /// A node's `axis` object (CiA 402, issue 19).
+    /// A node's `axis` object: its CiA 402 drive.
     fn axis(&mut self, out: &mut Vec<u8>, axis: &AxisReport) {
         let mut o = Obj::new(out);
         match axis.state {
