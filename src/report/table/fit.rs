@@ -17,11 +17,17 @@ pub(super) const CHANNEL_MAX: usize = 16;
 /// How a table gives way to a terminal's width: columns are dropped, least
 /// useful first, then the flexible ones cut (an ellipsis marks a cut cell).
 pub(super) struct Fit {
+    /// Columns dropped while the table is too wide, least useful first.
     pub(super) drop: &'static [usize],
     /// Column, width kept before any column is dropped, narrowest width.
     pub(super) flex: &'static [(usize, usize, usize)],
 }
 
+/// Fits a table's column `widths` to `width`: each flexible column is
+/// first capped at the width it keeps, then columns are dropped in order
+/// (`shown` false) while the table is too wide, then the widest flexible
+/// column gives up a column at a time, never below its minimum or its
+/// header. A table that cannot fit is left as narrow as that allows.
 pub(super) fn fit_columns(
     widths: &mut [usize],
     shown: &mut [bool],

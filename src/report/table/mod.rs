@@ -29,6 +29,7 @@ const YELLOW: Style = AnsiColor::Yellow.on_default();
 const GREEN: Style = AnsiColor::Green.on_default();
 const BOLD: Style = Style::new().bold();
 
+/// The table report (`--format table`, the default), written to `out`.
 pub struct TableReport<W: Write> {
     out: W,
     color: bool,
