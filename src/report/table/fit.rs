@@ -8,11 +8,30 @@ use std::io::{self, Write};
 
 use unicode_width::UnicodeWidthStr;
 
+use super::TableReport;
+
 /// The narrowest width fitted: below it columns cannot give way enough.
 pub const MIN_WIDTH: usize = 40;
 
 /// A channel column longer than this is cut when fitting.
 pub(super) const CHANNEL_MAX: usize = 16;
+
+impl<W: Write> TableReport<W> {
+    /// The columns shown of a table with these widths, fitted to the
+    /// terminal (all of them in a pipe).
+    pub(super) fn fit<const N: usize>(
+        &self,
+        widths: &mut [usize; N],
+        header: &[&str; N],
+        fit: &Fit,
+    ) -> [bool; N] {
+        let mut shown = [true; N];
+        if let Some(width) = self.width {
+            fit_columns(widths, &mut shown, header, fit, width);
+        }
+        shown
+    }
+}
 
 /// How a table gives way to a terminal's width: columns are dropped, least
 /// useful first, then the flexible ones cut (an ellipsis marks a cut cell).

@@ -1,9 +1,10 @@
-//! The human report, in three parts: per input, the events as they are
-//! decoded ([`events`]: one row each, streamed with columns fixed by the
-//! first, so a trace with a million events prints without holding them);
-//! at the end of an input the node states and error timeline, and at the
-//! end of the run the input counts ([`end_tables`]); and how both give way
-//! to a terminal's width ([`fit`]).
+//! The human report. Per input, the events as they are decoded
+//! ([`events`]: one row each, streamed with columns fixed by the first, so
+//! a trace with a million events prints without holding them), then the
+//! node tables ([`end_tables`]) and the error timeline ([`timeline`]); at
+//! the end of the run, the input counts ([`end_tables`]). [`fit`] is how
+//! all of them give way to a terminal's width. This file holds the report's
+//! state and the [`Sink`] methods, which only dispatch.
 
 use std::collections::HashMap;
 use std::io::{self, Write};
@@ -19,6 +20,7 @@ use crate::text::printable;
 mod end_tables;
 mod events;
 mod fit;
+mod timeline;
 
 use events::Layout;
 pub(crate) use events::health_description;
