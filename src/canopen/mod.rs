@@ -11,7 +11,6 @@ pub mod profile;
 pub mod profile_choice;
 pub mod register;
 pub mod sdo;
-pub mod sdo_abort;
 
 /// A node: a CANopen node id (1 to 127, from the COB-ID), or an EtherCAT
 /// slave's station address for CANopen over EtherCAT (e.g. 1001), which

@@ -9,6 +9,7 @@
 
 use std::io::{self, Write};
 
+use super::format::{CSV_LIST, push_code, push_code_counts, push_codes, push_hex};
 use super::jsonw::{JsonWriter, push_decoded};
 use super::table::health_description;
 use super::timefmt::{TimeFormat, TimeStyle};
@@ -94,31 +95,6 @@ struct PayloadKey {
     bytes: [u8; 8],
     len: u8,
     profile: usize,
-}
-
-const HEX: &[u8; 16] = b"0123456789ABCDEF";
-
-fn push_code(out: &mut Vec<u8>, code: u16) {
-    out.extend_from_slice(b"0x");
-    for shift in [12, 8, 4, 0] {
-        out.push(HEX[usize::from(code >> shift & 0xF)]);
-    }
-}
-
-fn push_codes(out: &mut Vec<u8>, codes: impl IntoIterator<Item = u16>) {
-    for (i, code) in codes.into_iter().enumerate() {
-        if i > 0 {
-            out.push(b' ');
-        }
-        push_code(out, code);
-    }
-}
-
-fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
-    for b in bytes {
-        out.push(HEX[usize::from(b >> 4)]);
-        out.push(HEX[usize::from(b & 0xF)]);
-    }
 }
 
 fn push_u64(out: &mut Vec<u8>, v: u64) {
@@ -235,16 +211,13 @@ impl<W: Write> Csv<W> {
 
     fn node(&mut self, input: &InputReport, n: &NodeReport) -> io::Result<()> {
         let mut active = Vec::new();
-        push_codes(&mut active, n.active.iter().copied());
+        push_codes(&mut active, n.active.iter().copied(), &CSV_LIST);
         let mut seen = Vec::new();
-        for (i, (&code, count)) in n.stats.raised.iter().enumerate() {
-            if i > 0 {
-                seen.push(b' ');
-            }
-            push_code(&mut seen, code);
-            seen.push(b':');
-            push_u64(&mut seen, *count);
-        }
+        push_code_counts(
+            &mut seen,
+            n.stats.raised.iter().map(|(&code, &count)| (code, count)),
+            &CSV_LIST,
+        );
         let span = |s: Option<crate::trace::Span>| {
             let mut v = Vec::new();
             if let Some(s) = s {
@@ -367,7 +340,7 @@ impl<W: Write> Sink for Csv<W> {
         row.push(b',');
         row.extend_from_slice(ev.state.slug().as_bytes());
         row.push(b',');
-        push_codes(row, ev.cleared.iter().copied());
+        push_codes(row, ev.cleared.iter().copied(), &CSV_LIST);
         row.push(b',');
         for (i, w) in ev.warnings.iter().enumerate() {
             if i > 0 {
@@ -387,7 +360,7 @@ impl<W: Write> Sink for Csv<W> {
         self.head("boot", ev.file, ev.line, ev.time, ev.channel, ev.node);
         // cob_id .. state: nothing for a boot-up.
         self.row.extend_from_slice(&[b','; 12]);
-        push_codes(&mut self.row, ev.cleared.iter().copied());
+        push_codes(&mut self.row, ev.cleared.iter().copied(), &CSV_LIST);
         self.row.extend_from_slice(b",,");
         self.end_row()
     }

@@ -7,7 +7,7 @@
 //! listed and a note says how many more were left out (the chart still
 //! draws all of them; `--format table` or `ndjson` list every event).
 
-use super::table::codes_list;
+use super::format::codes_list;
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
@@ -176,6 +176,9 @@ p.zoom button{margin-right:4px;min-width:2em}
 ///   buttons go back; the events table then lists the rows in the visible
 ///   range only (`data-v`: each row's axis value);
 /// - filter by node (select, or a click on a lane) and sort by a column.
+///
+/// The script's comments are part of every page and of the golden files:
+/// its `axis.rs, tick_label` names what is now `chart/time_scale.rs`.
 const SCRIPT: &str = r#"document.querySelectorAll('section.input').forEach(function(sec){
 var box=sec.querySelector('.chart'),svg=box.querySelector('svg'),p=svg.querySelector('g.panel'),tb=sec.querySelector('tbody'),sel=sec.querySelector('select'),shown=sec.querySelector('.shown');
 var view=null,all=null,drag=null,moved=false,W=0,X0=0,X1=0,fit=null;

@@ -11,6 +11,7 @@ use std::io;
 use std::ops::Range;
 use std::sync::Arc;
 
+use super::format;
 use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::{
     AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
@@ -25,8 +26,6 @@ use crate::timeline::Interval;
 use crate::timeline::axis::Via as AxisVia;
 use crate::trace::time::SecondsText;
 use crate::trace::{Format, Span, Timestamp};
-
-const HEX: &[u8; 16] = b"0123456789ABCDEF";
 
 /// A JSON string literal with serde_json's escaping: `"` `\` and control
 /// characters; everything else (UTF-8 included) as is.
@@ -68,10 +67,20 @@ fn push_u64(out: &mut Vec<u8>, v: u64) {
 /// `"0x4310"`
 fn push_code(out: &mut Vec<u8>, code: u16) {
     let mut text = *b"\"0x0000\"";
-    for (d, shift) in text[3..7].iter_mut().zip([12, 8, 4, 0]) {
-        *d = HEX[usize::from((code >> shift) & 15)];
-    }
+    text[1..7].copy_from_slice(&format::code(code));
     out.extend_from_slice(&text);
+}
+
+/// `["0x4310","0x2310"]`
+fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
+    format::push_codes(out, codes.iter().copied(), &format::JSON_ARRAY);
+}
+
+/// `"1043080100000000"`
+fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
+    out.push(b'"');
+    format::push_hex(out, bytes);
+    out.push(b'"');
 }
 
 /// A mapped object as `--pdo` writes one: `0x6041:16`, `0x6041.2:8`.
@@ -80,52 +89,6 @@ pub(crate) fn mapped_text(m: &Mapped) -> String {
         0 => format!("0x{:04X}:{}", m.object.index, m.bits),
         sub => format!("0x{:04X}.{sub}:{}", m.object.index, m.bits),
     }
-}
-
-fn push_codes(out: &mut Vec<u8>, codes: &[u16]) {
-    out.push(b'[');
-    for (i, c) in codes.iter().enumerate() {
-        if i > 0 {
-            out.push(b',');
-        }
-        push_code(out, *c);
-    }
-    out.push(b']');
-}
-
-/// `"1043080100000000"`
-fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
-    if let Ok(classic) = <&[u8; 8]>::try_from(bytes) {
-        // The usual EMCY payload: one constant-size copy.
-        let mut text = [b'"'; 18];
-        text[1..17].copy_from_slice(&hex16(u64::from_be_bytes(*classic)));
-        out.extend_from_slice(&text);
-        return;
-    }
-    out.push(b'"');
-    for chunk in bytes.chunks(8) {
-        let mut word = [0u8; 8];
-        word[..chunk.len()].copy_from_slice(chunk);
-        let text = hex16(u64::from_be_bytes(word));
-        out.extend_from_slice(text.get(..2 * chunk.len()).unwrap_or_default());
-    }
-    out.push(b'"');
-}
-
-/// The 16 upper-case hex digits of `v`, all at once: each nibble moved into
-/// a byte of its own, then `0`..`9` and `A`..`F` chosen per byte.
-fn hex16(v: u64) -> [u8; 16] {
-    const LANES: u128 = 0x0101_0101_0101_0101_0101_0101_0101_0101;
-    let mut x = u128::from(v);
-    // Byte i of v into 16-bit lane i, then its nibbles into the lane's two bytes.
-    x = (x | x << 32) & 0x0000_0000_FFFF_FFFF_0000_0000_FFFF_FFFF;
-    x = (x | x << 16) & 0x0000_FFFF_0000_FFFF_0000_FFFF_0000_FFFF;
-    x = (x | x << 8) & 0x00FF_00FF_00FF_00FF_00FF_00FF_00FF_00FF;
-    const HI: u128 = 0x0F00_0F00_0F00_0F00_0F00_0F00_0F00_0F00;
-    x = ((x << 4) & HI) | (x & (HI >> 8));
-    // A nibble of 10 or more has bit 4 set after adding 6: 7 more for A..F.
-    let letters = ((x + LANES * 6) >> 4) & LANES;
-    (x + LANES * u128::from(b'0') + letters * 7).to_be_bytes()
 }
 
 /// `{"category":1,"category_text":"..."}` or `null`.
@@ -639,17 +602,14 @@ impl JsonWriter {
             Some(r) => o.str("profile_reason", r),
             None => o.key("profile_reason").extend_from_slice(b"null"),
         }
-        let seen = o.key("errors_seen");
-        seen.push(b'{');
-        for (i, (&code, &count)) in node.stats.raised.iter().enumerate() {
-            if i > 0 {
-                seen.push(b',');
-            }
-            push_code(seen, code);
-            seen.push(b':');
-            seen.extend_from_slice(itoa::Buffer::new().format(count).as_bytes());
-        }
-        seen.push(b'}');
+        format::push_code_counts(
+            o.key("errors_seen"),
+            node.stats
+                .raised
+                .iter()
+                .map(|(&code, &count)| (code, count)),
+            &format::JSON_COUNTS,
+        );
         push_span(o.key("time_in_error"), node.time_in_error(input.last_time));
         match node.stats.longest {
             Some((code, duration)) => {
@@ -696,7 +656,7 @@ impl JsonWriter {
         o.key("errors").push(b'[');
     }
 
-    /// A node's `axis` object (CiA 402, issue 19).
+    /// A node's `axis` object: its CiA 402 drive.
     fn axis(&mut self, out: &mut Vec<u8>, axis: &AxisReport) {
         let mut o = Obj::new(out);
         match axis.state {

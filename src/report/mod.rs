@@ -7,6 +7,7 @@
 pub mod chart;
 pub mod csv;
 pub mod explain;
+pub mod format;
 pub mod html;
 pub mod json;
 pub mod jsonw;

@@ -4,8 +4,6 @@
 use std::cell::{Cell, RefCell};
 use std::io::Write;
 
-use time::OffsetDateTime;
-
 use crate::trace::Timestamp;
 
 /// `--time`.
@@ -186,17 +184,39 @@ fn push_zoned(out: &mut Vec<u8>, t: Timestamp, zone: &jiff::tz::TimeZone) -> boo
 
 /// `YYYY-MM-DDTHH:MM:SS` of a Unix second; `None` beyond the calendar.
 pub(crate) fn calendar_second(secs: u64) -> Option<[u8; 19]> {
-    let d = OffsetDateTime::from_unix_timestamp(i64::try_from(secs).ok()?).ok()?;
-    let text = format!(
-        "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}",
-        d.year(),
-        u8::from(d.month()),
-        d.day(),
-        d.hour(),
-        d.minute(),
-        d.second()
-    );
-    text.as_bytes().try_into().ok()
+    let (date, second) = utc_date(secs)?;
+    let mut text = *b"0000-00-00T00:00:00";
+    // `utc_date` gives years 1970 to 9999: always four digits.
+    let year = u32::try_from(date.year()).ok()?;
+    for (at, value, width) in [
+        (0, year, 4),
+        (5, u32::from(date.month().unsigned_abs()), 2),
+        (8, u32::from(date.day().unsigned_abs()), 2),
+        (11, second / 3600, 2),
+        (14, second / 60 % 60, 2),
+        (17, second % 60, 2),
+    ] {
+        let mut rest = value;
+        for d in text[at..at + width].iter_mut().rev() {
+            *d = b'0' + (rest % 10) as u8;
+            rest /= 10;
+        }
+    }
+    Some(text)
+}
+
+/// Seconds in a UTC day: Unix time has no leap seconds.
+const SECS_PER_DAY: u64 = 86_400;
+
+/// The UTC date of a Unix second and the second of that day; `None` after
+/// 9999-12-31, where the calendar ends.
+pub(crate) fn utc_date(secs: u64) -> Option<(jiff::civil::Date, u32)> {
+    const UNIX_EPOCH: jiff::civil::Date = jiff::civil::date(1970, 1, 1);
+    let days = i64::try_from(secs / SECS_PER_DAY).ok()?;
+    let date = UNIX_EPOCH
+        .checked_add(jiff::Span::new().try_days(days).ok()?)
+        .ok()?;
+    Some((date, (secs % SECS_PER_DAY) as u32))
 }
 
 #[cfg(test)]

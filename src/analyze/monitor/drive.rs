@@ -15,9 +15,9 @@ use crate::analyze::options::Options;
 use crate::canopen::NodeId;
 use crate::canopen::cia402::{self, Command};
 use crate::canopen::pdo::{
-    self, Cia402Fields, Cia402Values, CobId, Downloads, Learner, Mapping, MappingTable, Source,
+    self, Cia402Fields, Cia402Values, CobId, Learner, Mapping, MappingTable, Source,
 };
-use crate::canopen::sdo;
+use crate::canopen::sdo::{self, Downloads};
 use crate::timeline::At;
 use crate::timeline::axis::{AxisRecord, Via};
 use crate::timeline::health::NodeHealth;

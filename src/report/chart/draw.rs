@@ -5,12 +5,12 @@
 
 use std::fmt::{self, Write as _};
 
-use super::axis::{Axis, Clock, wall_clock, write_axis};
 use super::bars::{Bar, CLEARED_SLUGS, SMALL_PX};
 use super::legend::{CodeKey, CodeKeys};
 use super::marks::{Clusters, MARKS, Mark, Streamed};
 use super::style::{BAR_H, CLASS_COLOURS, LANES_TOP, ROW_H, WIDTH, X0};
 use super::text::{N, clip, esc, plural, short_number};
+use super::time_scale::{Clock, Measure, wall_clock, write_time_scale};
 use super::{Lane, Scale, lane_key, lane_label};
 use crate::analyze::{InputReport, NodeReport};
 use crate::canopen::codes::{self, Class};
@@ -39,14 +39,14 @@ pub(super) fn label_fits(label: &str, width: f64) -> bool {
 
 /// Title line two: the time span, what the chart shows.
 fn subtitle(input: &InputReport, clock: &Clock, lanes: &[Lane<'_>], streamed: &Streamed) -> String {
-    let mut s = match (clock.axis, input.first_time, input.last_time) {
-        (Axis::Wall, Some(a), Some(b)) => {
+    let mut s = match (clock.measure, input.first_time, input.last_time) {
+        (Measure::Wall, Some(a), Some(b)) => {
             let (da, ca) = wall_clock(a);
             let (db, cb) = wall_clock(b);
             let to = if da == db { cb } else { format!("{db} {cb}") };
             format!("{da} {ca} – {to} UTC ({} s)", b.since(a))
         }
-        (Axis::Seconds, Some(a), Some(b)) => format!("{a} s – {b} s ({} s)", b.since(a)),
+        (Measure::Seconds, Some(a), Some(b)) => format!("{a} s – {b} s ({} s)", b.since(a)),
         _ => format!(
             "lines 1–{} (the trace has no timestamps)",
             input.counts.lines
@@ -128,7 +128,7 @@ pub(super) fn write_panel(
         return Ok(LANES_TOP + 32.0);
     }
     let lanes_h: f64 = lanes.iter().map(|l| l.height).sum();
-    let axis_y = LANES_TOP + lanes_h;
+    let time_scale_y = LANES_TOP + lanes_h;
 
     // Alternate lane backgrounds, then the grid over them, then the lanes.
     let mut y = LANES_TOP;
@@ -144,14 +144,14 @@ pub(super) fn write_panel(
         }
         y += lane.height;
     }
-    write_axis(out, clock, scale, axis_y)?;
+    write_time_scale(out, clock, scale, time_scale_y)?;
     let mut y = LANES_TOP;
     for lane in lanes {
         write_lane(out, clock, scale, lane, keys, y)?;
         y += lane.height;
     }
-    let legend_h = write_legend(out, lanes, keys, axis_y + 44.0)?;
-    Ok(axis_y + 44.0 + legend_h)
+    let legend_h = write_legend(out, lanes, keys, time_scale_y + 44.0)?;
+    Ok(time_scale_y + 44.0 + legend_h)
 }
 
 fn write_lane(
@@ -299,7 +299,9 @@ fn bar_title(clock: &Clock, scale: Scale, node: &NodeReport, bar: &Bar) -> Strin
             Some(e) => (
                 clock.at(&e),
                 match (e.time, iv.start.time) {
-                    (Some(b), Some(a)) if clock.axis != Axis::Lines => format!("{} s", b.since(a)),
+                    (Some(b), Some(a)) if clock.measure != Measure::Lines => {
+                        format!("{} s", b.since(a))
+                    }
                     _ => "-".to_string(),
                 },
                 iv.cleared_by.map_or("-", ClearedBy::slug),
@@ -326,8 +328,8 @@ fn bar_title(clock: &Clock, scale: Scale, node: &NodeReport, bar: &Bar) -> Strin
         bar.count,
         N(SMALL_PX),
         short_number(scale.per_px() * SMALL_PX),
-        match clock.axis {
-            Axis::Lines => "lines",
+        match clock.measure {
+            Measure::Lines => "lines",
             _ => "s",
         }
     );

@@ -1,4 +1,4 @@
-//! A CiA 402 drive's faults on its lane (issue 19): one band per fault,
+//! A CiA 402 drive's faults on its lane: one band per fault,
 //! from entering fault reaction active or fault to leaving it (the end of
 //! the trace for one still open), titled with its EMCY and reset. Kept in
 //! its own function: the lane's other bands are the NMT states and

@@ -21,13 +21,12 @@
 //! how many errors it merges.
 //!
 //! The parts, one concern each: [`style`] (geometry and CSS), [`text`]
-//! (escaping and number formatting), [`axis`] (the time axis and its
-//! calendar), [`marks`] (markers as they stream in), [`bars`] (intervals
+//! (escaping and number formatting), [`time_scale`] (the time axis,
+//! its ticks and calendar), [`marks`] (markers as they stream in), [`bars`] (intervals
 //! binned into bars), [`draw`] (the SVG elements). This file is the surface
 //! `svg.rs` and `html.rs` use: the [`Collector`] and the [`Panel`] it lays
 //! out, and the lanes and scale the parts share.
 
-mod axis;
 mod bars;
 mod draw;
 mod drive;
@@ -35,6 +34,7 @@ mod legend;
 mod marks;
 mod style;
 mod text;
+mod time_scale;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io;
@@ -46,16 +46,16 @@ use crate::timeline::At;
 use crate::timeline::axis::AxisState;
 use crate::trace::Format;
 
-use axis::Axis;
 use bars::Bars;
 use draw::write_panel;
 use legend::CodeKeys;
 use marks::{LaneMarks, Mark, Streamed};
 use style::{LANE_MIN_H, PLOT_W, ROW_H, X0, X1};
+use time_scale::Measure;
 
-pub(super) use axis::Clock;
 pub(super) use style::{WIDTH, style_sheet};
 pub(super) use text::{N, esc};
+pub(super) use time_scale::Clock;
 
 /// Room right of the last frame, as a fraction of the span.
 const END_ROOM: f64 = 0.03;
@@ -323,17 +323,17 @@ impl Panel {
                     | Format::Mf4
             )
         ) && origin.is_some_and(|t| t.secs() >= UNIX_FROM);
-        let axis = match (timed, wall) {
-            (false, _) => Axis::Lines,
-            (true, true) => Axis::Wall,
-            (true, false) => Axis::Seconds,
+        let measure = match (timed, wall) {
+            (false, _) => Measure::Lines,
+            (true, true) => Measure::Wall,
+            (true, false) => Measure::Seconds,
         };
         let one_day = match (input.first_time, input.last_time) {
             (Some(a), Some(b)) => a.secs() / 86_400 == b.secs() / 86_400,
             _ => true,
         };
         let clock = Clock {
-            axis,
+            measure,
             origin,
             one_day,
         };
@@ -351,8 +351,8 @@ impl Panel {
                 }
             }
         }
-        let (mut lo, mut hi): (f64, f64) = match axis {
-            Axis::Lines => (1.0, input.counts.lines.max(1) as f64),
+        let (mut lo, mut hi): (f64, f64) = match measure {
+            Measure::Lines => (1.0, input.counts.lines.max(1) as f64),
             _ => (
                 0.0,
                 match (input.last_time, origin) {
@@ -425,7 +425,7 @@ impl Panel {
             N(X1),
             scale.lo,
             scale.hi,
-            axis.slug(),
+            measure.slug(),
             clock.base(),
             u8::from(one_day)
         );

@@ -1,21 +1,22 @@
-//! The time axis: what it measures ([`Axis`]), how positions become axis
-//! values and readable times ([`Clock`]), the calendar of wall-clock times,
-//! tick spacing and labels, and drawing the axis line, grid and ticks. Kept
-//! together because tick labels and tooltip times must agree on the clock.
+//! The chart's time scale (its horizontal axis; "axis" alone means a CiA
+//! 402 drive elsewhere): what it measures ([`Measure`]), how positions
+//! become scale values and readable times ([`Clock`]), the calendar of
+//! wall-clock times, tick spacing and labels, and drawing the scale's line,
+//! grid and ticks. Kept together because tick labels and tooltip times must
+//! agree on the clock.
 
 use std::fmt::{self, Write as _};
-
-use time::OffsetDateTime;
 
 use super::Scale;
 use super::style::{LANES_TOP, PLOT_W, X0, X1};
 use super::text::N;
+use crate::report::timefmt::utc_date;
 use crate::timeline::At;
 use crate::trace::Timestamp;
 
-/// What the horizontal axis measures.
+/// What the time scale measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Axis {
+pub(super) enum Measure {
     /// candump times: Unix seconds, shown as UTC clock times.
     Wall,
     /// ASC times and relative candump times: seconds.
@@ -24,23 +25,23 @@ pub(super) enum Axis {
     Lines,
 }
 
-/// Converts trace positions to axis values and formats them.
+/// Converts trace positions to scale values and formats them.
 #[derive(Clone, Copy, Debug)]
 pub(in crate::report) struct Clock {
-    pub(super) axis: Axis,
-    /// Time of axis value 0 (timed axes).
+    pub(super) measure: Measure,
+    /// Time of scale value 0 (timed scales).
     pub(super) origin: Option<Timestamp>,
     /// All times of the input fall on one UTC day (wall clock only).
     pub(super) one_day: bool,
 }
 
-impl Axis {
+impl Measure {
     /// How the HTML page's script names it (`data-axis`).
     pub(super) fn slug(self) -> &'static str {
         match self {
-            Axis::Wall => "wall",
-            Axis::Seconds => "seconds",
-            Axis::Lines => "lines",
+            Measure::Wall => "wall",
+            Measure::Seconds => "seconds",
+            Measure::Lines => "lines",
         }
     }
 }
@@ -49,44 +50,44 @@ impl Clock {
     /// The absolute value of axis value 0: ticks fall on round absolute
     /// values (whole seconds of the clock).
     pub(super) fn base(&self) -> f64 {
-        match self.axis {
-            Axis::Lines => 0.0,
+        match self.measure {
+            Measure::Lines => 0.0,
             _ => self.origin.map_or(0.0, Timestamp::as_f64),
         }
     }
 
-    /// Axis value of a position: seconds after the origin, or the line.
+    /// Measure value of a position: seconds after the origin, or the line.
     pub(in crate::report) fn value(&self, at: &At) -> Option<f64> {
-        match self.axis {
-            Axis::Lines => Some(at.line as f64),
-            Axis::Wall | Axis::Seconds => Some(at.time?.since(self.origin?).as_f64()),
+        match self.measure {
+            Measure::Lines => Some(at.line as f64),
+            Measure::Wall | Measure::Seconds => Some(at.time?.since(self.origin?).as_f64()),
         }
     }
 
     /// A time as a reader wants it: `22:13:21.250000 UTC` (the date too when
     /// the trace spans days), `1.250000 s`, or `line 12` without times.
     pub(super) fn at(&self, at: &At) -> String {
-        match (self.axis, at.time) {
-            (Axis::Lines, _) | (_, None) => format!("line {}", at.line),
-            (Axis::Wall, Some(t)) => format!("{} UTC", self.wall(t)),
-            (Axis::Seconds, Some(t)) => format!("{t} s"),
+        match (self.measure, at.time) {
+            (Measure::Lines, _) | (_, None) => format!("line {}", at.line),
+            (Measure::Wall, Some(t)) => format!("{} UTC", self.wall(t)),
+            (Measure::Seconds, Some(t)) => format!("{t} s"),
         }
     }
 
     /// The heading of a time column.
     pub(in crate::report) fn heading(&self) -> &'static str {
-        match self.axis {
-            Axis::Wall => "time (UTC)",
-            Axis::Seconds => "time (s)",
-            Axis::Lines => "time",
+        match self.measure {
+            Measure::Wall => "time (UTC)",
+            Measure::Seconds => "time (s)",
+            Measure::Lines => "time",
         }
     }
 
     /// An event's time for the HTML table.
     pub(in crate::report) fn cell(&self, time: Option<Timestamp>) -> String {
-        match (self.axis, time) {
+        match (self.measure, time) {
             (_, None) => "-".to_string(),
-            (Axis::Wall, Some(t)) => self.wall(t),
+            (Measure::Wall, Some(t)) => self.wall(t),
             (_, Some(t)) => t.to_string(),
         }
     }
@@ -130,24 +131,22 @@ struct Utc {
 }
 
 impl Utc {
-    /// The calendar is `time`'s, which counts years up to 9999; a trace's
-    /// times can be any `u64` (nothing stops a candump log from saying
+    /// The calendar counts years up to 9999; a trace's times can be any
+    /// `u64` (nothing stops a candump log from saying
     /// `(99999999999999.5)`), so whole 400-year cycles come off before and
     /// go back onto the year after.
     fn of(secs: u64) -> Utc {
         let cycles = secs / CYCLE_SECS;
-        // Below 400 years after 1970: always in `time`'s range.
-        let t = i64::try_from(secs % CYCLE_SECS)
-            .ok()
-            .and_then(|s| OffsetDateTime::from_unix_timestamp(s).ok())
-            .unwrap_or(OffsetDateTime::UNIX_EPOCH);
+        // Below 400 years after 1970: always in the calendar's range.
+        let (date, second) =
+            utc_date(secs % CYCLE_SECS).unwrap_or((jiff::civil::date(1970, 1, 1), 0));
         Utc {
-            year: u64::from(t.year().unsigned_abs()) + 400 * cycles,
-            month: t.month().into(),
-            day: t.day(),
-            hour: t.hour(),
-            minute: t.minute(),
-            second: t.second(),
+            year: u64::from(date.year().unsigned_abs()) + 400 * cycles,
+            month: date.month().unsigned_abs(),
+            day: date.day().unsigned_abs(),
+            hour: (second / 3600) as u8,
+            minute: (second / 60 % 60) as u8,
+            second: (second % 60) as u8,
         }
     }
 }
@@ -175,13 +174,13 @@ fn nice_step(raw: f64) -> f64 {
     10.0 * mag
 }
 
-fn tick_step(axis: Axis, span: f64) -> f64 {
+fn tick_step(measure: Measure, span: f64) -> f64 {
     // A tick every 90 px or more: room for a label like 22:13:21.25.
     let raw = span / (PLOT_W / 90.0);
-    match axis {
-        Axis::Lines => nice_step(raw).max(1.0),
-        Axis::Seconds => nice_step(raw),
-        Axis::Wall => WALL_STEPS
+    match measure {
+        Measure::Lines => nice_step(raw).max(1.0),
+        Measure::Seconds => nice_step(raw),
+        Measure::Wall => WALL_STEPS
             .iter()
             .chain(&WALL_STEPS_LONG)
             .copied()
@@ -199,12 +198,12 @@ fn decimals(step: f64) -> usize {
     d
 }
 
-fn tick_label(axis: Axis, value: f64, step: f64, one_day: bool) -> String {
+fn tick_label(measure: Measure, value: f64, step: f64, one_day: bool) -> String {
     let d = decimals(step);
-    match axis {
-        Axis::Lines => format!("{value:.0}"),
-        Axis::Seconds => format!("{value:.d$}"),
-        Axis::Wall => {
+    match measure {
+        Measure::Lines => format!("{value:.0}"),
+        Measure::Seconds => format!("{value:.d$}"),
+        Measure::Wall => {
             let scale = 10f64.powi(d as i32);
             let units = (value * scale).round();
             if !(units.is_finite() && units >= 0.0) {
@@ -237,14 +236,14 @@ fn tick_label(axis: Axis, value: f64, step: f64, one_day: bool) -> String {
     }
 }
 
-pub(super) fn write_axis(
+pub(super) fn write_time_scale(
     out: &mut String,
     clock: &Clock,
     scale: Scale,
-    axis_y: f64,
+    line_y: f64,
 ) -> fmt::Result {
     let span = scale.hi - scale.lo;
-    let step = tick_step(clock.axis, span);
+    let step = tick_step(clock.measure, span);
     let base = clock.base();
     let first = ((base + scale.lo) / step).ceil() * step;
     // Classed so the HTML page's script can redraw the ticks it zooms.
@@ -253,9 +252,9 @@ pub(super) fn write_axis(
         out,
         "<line class=\"axis\" x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"/>",
         N(X0),
-        N(axis_y),
+        N(line_y),
         N(X1),
-        N(axis_y)
+        N(line_y)
     )?;
     out.push_str("<g class=\"ticks\">\n");
     for i in 0..200 {
@@ -270,9 +269,9 @@ pub(super) fn write_axis(
             "<line class=\"grid\" x1=\"{x}\" y1=\"{}\" x2=\"{x}\" y2=\"{}\"/>\
              <text class=\"tick\" x=\"{x}\" y=\"{}\">{}</text>",
             N(LANES_TOP),
-            N(axis_y + 4.0),
-            N(axis_y + 16.0),
-            tick_label(clock.axis, abs, step, clock.one_day),
+            N(line_y + 4.0),
+            N(line_y + 16.0),
+            tick_label(clock.measure, abs, step, clock.one_day),
             x = N(x),
         )?;
     }
@@ -282,18 +281,18 @@ pub(super) fn write_axis(
         out,
         "<line class=\"end\" x1=\"{x}\" y1=\"{}\" x2=\"{x}\" y2=\"{}\"><title>last frame of the trace</title></line>",
         N(LANES_TOP),
-        N(axis_y)
+        N(line_y)
     )?;
-    let caption = match clock.axis {
-        Axis::Wall => "time (UTC)",
-        Axis::Seconds => "time (s)",
-        Axis::Lines => "trace line",
+    let caption = match clock.measure {
+        Measure::Wall => "time (UTC)",
+        Measure::Seconds => "time (s)",
+        Measure::Lines => "trace line",
     };
     writeln!(
         out,
         "<text class=\"cap\" x=\"{}\" y=\"{}\">{caption}</text>",
         N(X1),
-        N(axis_y + 30.0)
+        N(line_y + 30.0)
     )?;
     out.push_str("</g>\n");
     Ok(())
@@ -366,20 +365,29 @@ mod tests {
     #[test]
     fn tick_labels_at_calendar_edges() {
         let day = 86_400.0;
-        assert_eq!(tick_label(Axis::Wall, 0.0, day, false), "01-01");
-        assert_eq!(tick_label(Axis::Wall, 951_782_400.0, day, false), "02-29");
-        assert_eq!(tick_label(Axis::Wall, 4_107_542_400.0, day, false), "03-01");
-        assert_eq!(tick_label(Axis::Wall, 946_684_799.0, 1.0, true), "23:59:59");
+        assert_eq!(tick_label(Measure::Wall, 0.0, day, false), "01-01");
         assert_eq!(
-            tick_label(Axis::Wall, 1_682_899_140.0, 600.0, false),
+            tick_label(Measure::Wall, 951_782_400.0, day, false),
+            "02-29"
+        );
+        assert_eq!(
+            tick_label(Measure::Wall, 4_107_542_400.0, day, false),
+            "03-01"
+        );
+        assert_eq!(
+            tick_label(Measure::Wall, 946_684_799.0, 1.0, true),
+            "23:59:59"
+        );
+        assert_eq!(
+            tick_label(Measure::Wall, 1_682_899_140.0, 600.0, false),
             "04-30 23:59"
         );
         assert_eq!(
-            tick_label(Axis::Wall, 253_402_300_799.5, 0.5, true),
+            tick_label(Measure::Wall, 253_402_300_799.5, 0.5, true),
             "23:59:59.5"
         );
         assert_eq!(
-            tick_label(Axis::Wall, 253_402_300_800.0, 3600.0, false),
+            tick_label(Measure::Wall, 253_402_300_800.0, 3600.0, false),
             "01-01 00:00"
         );
     }
@@ -389,19 +397,22 @@ mod tests {
         assert_eq!(nice_step(0.26), 0.5);
         assert_eq!(nice_step(3.0), 5.0);
         assert_eq!(nice_step(0.0), 1.0);
-        assert_eq!(tick_step(Axis::Wall, 7.0), 1.0);
-        assert_eq!(tick_step(Axis::Wall, 3000.0), 600.0);
-        assert_eq!(tick_step(Axis::Lines, 3.0), 1.0);
+        assert_eq!(tick_step(Measure::Wall, 7.0), 1.0);
+        assert_eq!(tick_step(Measure::Wall, 3000.0), 600.0);
+        assert_eq!(tick_step(Measure::Lines, 3.0), 1.0);
         assert_eq!(
-            tick_label(Axis::Wall, 1_700_000_001.5, 0.5, true),
+            tick_label(Measure::Wall, 1_700_000_001.5, 0.5, true),
             "22:13:21.5"
         );
-        assert_eq!(tick_label(Axis::Wall, 1_700_000_040.0, 60.0, true), "22:14");
         assert_eq!(
-            tick_label(Axis::Wall, 1_700_000_040.0, 600.0, false),
+            tick_label(Measure::Wall, 1_700_000_040.0, 60.0, true),
+            "22:14"
+        );
+        assert_eq!(
+            tick_label(Measure::Wall, 1_700_000_040.0, 600.0, false),
             "11-14 22:14"
         );
-        assert_eq!(tick_label(Axis::Seconds, 2.0, 0.5, true), "2.0");
-        assert_eq!(tick_label(Axis::Seconds, 12.0, 2.0, true), "12");
+        assert_eq!(tick_label(Measure::Seconds, 2.0, 0.5, true), "2.0");
+        assert_eq!(tick_label(Measure::Seconds, 12.0, 2.0, true), "12");
     }
 }

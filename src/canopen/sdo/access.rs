@@ -1,0 +1,154 @@
+//! What an SDO frame can say, shared by every part of the folder: the
+//! request and response ids, the command specifiers, the objects the
+//! decoder follows and the access (`Sdo`) a frame is read into.
+
+use crate::canopen::NodeId;
+
+/// Server-to-client (response) ids are 0x580 + node.
+pub const RESPONSE_BASE: u32 = 0x580;
+/// Client-to-server (request) ids are 0x600 + node.
+pub const REQUEST_BASE: u32 = 0x600;
+
+/// Object 0x1000: device type (profile number in the low 16 bits).
+pub const DEVICE_TYPE: u16 = 0x1000;
+/// Object 0x1014: COB-ID EMCY.
+pub const COB_ID_EMCY: u16 = 0x1014;
+/// Object 0x1018: identity (sub 1 = vendor id, sub 2 = product code).
+pub const IDENTITY: u16 = 0x1018;
+/// Object 0x1003: pre-defined error field (sub 0 = count, sub 1 = newest).
+pub const ERROR_HISTORY: u16 = 0x1003;
+/// Object 0x1016: consumer heartbeat times (sub n = producer node in bits
+/// 16-23, time in ms in bits 0-15).
+pub const CONSUMER_HEARTBEAT: u16 = 0x1016;
+/// Object 0x1017: producer heartbeat time (ms).
+pub const PRODUCER_HEARTBEAT: u16 = 0x1017;
+
+/// One SDO frame that matters to value tracking.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sdo {
+    /// Expedited upload response: the node reports `value`.
+    Uploaded {
+        node: NodeId,
+        object: Object,
+        value: u32,
+    },
+    /// Expedited download request: a client writes `value` (not yet confirmed).
+    Writing {
+        node: NodeId,
+        object: Object,
+        value: u32,
+    },
+    /// Download response: the node accepted the last write to `object`.
+    Written { node: NodeId, object: Object },
+    /// Abort (either direction): the transfer of `object` failed with
+    /// `code` (a pending write to it with it). `by_server`: the node
+    /// aborted (on 0x580 + node), else the client did.
+    Aborted {
+        node: NodeId,
+        object: Object,
+        code: u32,
+        by_server: bool,
+    },
+}
+
+/// An object dictionary entry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Object {
+    pub index: u16,
+    pub sub: u8,
+}
+
+/// Command specifiers (the top three bits of byte 0). Segment frames reuse
+/// the numbers of other commands, so which one a number means depends on
+/// the direction and on the transfer in progress.
+pub(super) const CCS_DOWNLOAD_SEGMENT: u8 = 0;
+pub(super) const CCS_DOWNLOAD_INITIATE: u8 = 1;
+pub(super) const SCS_DOWNLOAD_SEGMENT: u8 = 1;
+pub(super) const SCS_UPLOAD_INITIATE: u8 = 2;
+pub(super) const SCS_DOWNLOAD_INITIATE: u8 = 3;
+pub(super) const CS_ABORT: u8 = 4;
+
+/// Whether `index` is an object whose value the decoder follows: device type and vendor id
+/// choose a node's profile, COB-ID EMCY moves its EMCY id, the error
+/// history is read out, heartbeat times set the timeouts. Frames naming
+/// any other object change nothing (the [`Tracker`] ignores them) except
+/// aborts, which are reported whatever they name.
+///
+/// A `match`, not a search of a list: asked of every SDO frame, the search
+/// cost some 100 instructions a frame.
+#[inline]
+pub fn is_followed(index: u16) -> bool {
+    matches!(
+        index,
+        DEVICE_TYPE
+            | ERROR_HISTORY
+            | COB_ID_EMCY
+            | CONSUMER_HEARTBEAT
+            | PRODUCER_HEARTBEAT
+            | IDENTITY
+    )
+}
+
+/// Whether `id` is a node's SDO request or response id.
+pub fn is_sdo_id(id: u32) -> bool {
+    (RESPONSE_BASE + 1..=RESPONSE_BASE + 127).contains(&id)
+        || (REQUEST_BASE + 1..=REQUEST_BASE + 127).contains(&id)
+}
+
+/// Which side sent a frame on an SDO id, and for which node: `(request,
+/// node)`; `None` for an id that is not a node's SDO id.
+#[inline]
+pub(super) fn sender(id: u32) -> Option<(bool, u32)> {
+    if (RESPONSE_BASE + 1..=RESPONSE_BASE + 127).contains(&id) {
+        Some((false, id - RESPONSE_BASE))
+    } else if (REQUEST_BASE + 1..=REQUEST_BASE + 127).contains(&id) {
+        Some((true, id - REQUEST_BASE))
+    } else {
+        None
+    }
+}
+
+/// The EMCY id a COB-ID EMCY value (object 0x1014) selects: `(id, extended)`,
+/// or `None` when bit 31 says the node sends no EMCY.
+pub fn cob_id_emcy(value: u32) -> Option<(u32, bool)> {
+    if value & 0x8000_0000 != 0 {
+        return None;
+    }
+    if value & 0x2000_0000 != 0 {
+        Some((value & 0x1FFF_FFFF, true))
+    } else {
+        Some((value & 0x7FF, false))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_followed_objects_are_exactly_these() {
+        let followed = [
+            DEVICE_TYPE,
+            ERROR_HISTORY,
+            COB_ID_EMCY,
+            CONSUMER_HEARTBEAT,
+            PRODUCER_HEARTBEAT,
+            IDENTITY,
+        ];
+        for index in 0..=u16::MAX {
+            assert_eq!(
+                is_followed(index),
+                followed.contains(&index),
+                "{index:#06X}"
+            );
+        }
+    }
+
+    #[test]
+    fn cob_id_emcy_values() {
+        assert_eq!(cob_id_emcy(0x0000_0085), Some((0x85, false)));
+        assert_eq!(cob_id_emcy(0x8000_0085), None, "bit 31: no EMCY");
+        assert_eq!(cob_id_emcy(0x2000_1234), Some((0x1234, true)));
+        assert_eq!(cob_id_emcy(0x0000_F8A5), Some((0x0A5, false)), "11-bit id");
+    }
+}

@@ -1,0 +1,28 @@
+//! Just enough SDO (CiA 301 §7.2.4) to learn object values a trace shows.
+//! Each part of the protocol the decoder reads has its own file:
+//!
+//! - [`frame`]: reading one frame (expedited uploads and downloads, their
+//!   confirmations, aborts) and cheap tests of what a frame names;
+//! - [`tracker`]: following writes of the objects the decoder follows to
+//!   their confirmation;
+//! - [`segmented`]: assembling downloads of any object, expedited and
+//!   segmented, for PDO mapping learning;
+//! - [`abort`]: what abort codes mean.
+//!
+//! Block transfers carry nothing the decoder needs and are ignored.
+
+pub mod abort;
+mod access;
+mod frame;
+pub mod segmented;
+mod tracker;
+
+pub use access::{
+    COB_ID_EMCY, CONSUMER_HEARTBEAT, DEVICE_TYPE, ERROR_HISTORY, IDENTITY, Object,
+    PRODUCER_HEARTBEAT, REQUEST_BASE, RESPONSE_BASE, Sdo, cob_id_emcy, is_followed, is_sdo_id,
+};
+#[cfg(test)]
+pub use frame::names_followed_object;
+pub use frame::{is_abort, names_object, parse, parse_payload};
+pub use segmented::Downloads;
+pub use tracker::Tracker;

@@ -1,0 +1,699 @@
+//! The tables at the end of an input (nodes, errors seen, node health,
+//! drives, repeated warnings, the bus line; the error timeline has its own
+//! file) and of the run (inputs). Tables that can have a row per node are
+//! written in two passes, widths then rows, so none is held.
+
+use std::borrow::Cow;
+use std::io::{self, Write};
+
+use comfy_table::{CellAlignment, Table, presets};
+
+use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut, push_row, write_row};
+use super::{BOLD, TableReport};
+use crate::analyze::{AxisReport, HistoryReport, InputReport, NodeReport};
+use crate::canopen::NodeId;
+use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
+use crate::report::timefmt::TimeFormat;
+use crate::text::printable;
+
+impl<W: Write> TableReport<W> {
+    /// The end of an input: the events' legend, then the warnings said once,
+    /// the nodes, their health and drives, the error timeline and the bus
+    /// line; in the summary view only the nodes' tables and the bus line.
+    pub(super) fn write_end_of_input(&mut self, input: &InputReport) -> io::Result<()> {
+        if self.summary_only {
+            if !input.nodes.is_empty() {
+                self.write_nodes(input)?;
+                self.write_codes(input)?;
+                self.write_health(input)?;
+                self.write_axes(input)?;
+            }
+            self.write_bus_line(input)?;
+            return writeln!(self.out);
+        }
+        if self.layout.is_none() {
+            writeln!(self.out, "no EMCY frames")?;
+        } else {
+            // The legend of a column a narrow terminal went without is not said.
+            if self.layout.is_some_and(|l| l.transition) {
+                self.write_wrapped(
+                    "TR = transition: 1 first error, 2 one error reset, 3 further error, 4 all reset",
+                    5,
+                )?;
+            }
+        }
+        self.write_repeats()?;
+        if input.nodes.is_empty() {
+            self.write_bus_line(input)?;
+            return writeln!(self.out);
+        }
+        writeln!(self.out)?;
+        self.write_nodes(input)?;
+        self.write_health(input)?;
+        self.write_axes(input)?;
+
+        self.write_timeline(input)?;
+        writeln!(self.out)?;
+        self.write_bus_line(input)?;
+        writeln!(self.out)
+    }
+
+    /// The end of the run: one row per input with its counts.
+    pub(super) fn write_inputs(&mut self, inputs: &[InputReport]) -> io::Result<()> {
+        let rows: Vec<[String; 8]> = inputs
+            .iter()
+            .map(|i| {
+                let c = &i.counts;
+                [
+                    printable(&i.file).into_owned(),
+                    i.format.map_or("-", |f| f.name()).to_string(),
+                    c.lines.to_string(),
+                    c.frames.to_string(),
+                    c.emcy.to_string(),
+                    c.boot.to_string(),
+                    c.skipped.to_string(),
+                    c.malformed.to_string(),
+                ]
+            })
+            .collect();
+        let mut widths = INPUTS_HEADER.map(str::len);
+        for row in &rows {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = self.fit(&mut widths, &INPUTS_HEADER, &INPUTS_FIT);
+        writeln!(self.out, "{}", self.paint(BOLD, "Inputs"))?;
+        write_comfy_table(
+            &mut self.out,
+            &INPUTS_HEADER,
+            &rows,
+            &widths,
+            &shown,
+            &INPUTS_RIGHT,
+        )?;
+        self.out.flush()
+    }
+
+    /// An end table in two passes, widths then rows, so no table of a
+    /// million rows is held: `rows` gives the rows again for each pass and
+    /// `fill` puts a row's cells in `cells`, returning their display widths.
+    /// `title` is written first (after a blank line with `blank`); no rows:
+    /// nothing is written.
+    fn write_in_two_passes<T, I, const N: usize>(
+        &mut self,
+        (title, blank): (&str, bool),
+        (header, right, fit): (&[&str; N], &[bool; N], &Fit),
+        rows: impl Fn() -> I,
+        mut fill: impl FnMut(&mut [String; N], T) -> [usize; N],
+    ) -> io::Result<()>
+    where
+        I: Iterator<Item = T>,
+    {
+        let mut cells: [String; N] = std::array::from_fn(|_| String::new());
+        let mut widths = header.map(str::len);
+        let mut any = false;
+        for row in rows() {
+            any = true;
+            for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
+                *w = (*w).max(c);
+            }
+        }
+        if !any {
+            return Ok(());
+        }
+        let shown = self.fit(&mut widths, header, fit);
+        if blank {
+            writeln!(self.out)?;
+        }
+        writeln!(self.out, "{}", self.paint(BOLD, title))?;
+        write_row(&mut self.out, header, &widths, &shown, right)?;
+        let mut line = String::new();
+        for row in rows() {
+            let cell_widths = fill(&mut cells, row);
+            push_row(&mut line, &cells, &cell_widths, &widths, &shown, right);
+            self.out.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// One line per node: state, errors seen with counts, time in error,
+    /// longest error, first and last EMCY.
+    fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
+        // Two passes over the nodes, widths then rows, as for the timeline:
+        // a trace can name a million nodes, and a table holding them all
+        // took about 2.5 KB per node on top of the reports.
+        self.times.set_origin(input.first_time);
+        let times = self.times.clone();
+        self.write_in_two_passes(
+            ("Nodes", false),
+            (&NODES_HEADER, &NODES_RIGHT, &NODES_FIT),
+            || input.nodes.iter(),
+            |cells, n| node_cells(cells, &times, input, n),
+        )
+    }
+
+    /// The summary's codes: per node, each code it raised, how often, and
+    /// what the node's profile says it is (the nodes' row gives codes
+    /// only). Two passes, widths then rows, as for the nodes.
+    fn write_codes(&mut self, input: &InputReport) -> io::Result<()> {
+        let rows = || {
+            input.nodes.iter().flat_map(|n| {
+                let texts = NodeTexts::of(n);
+                n.stats.raised.iter().map(move |(&code, &count)| {
+                    let (text, width) = texts.get(code);
+                    let cells = [
+                        printable(&n.channel).into_owned(),
+                        n.node.to_string(),
+                        code_text(code),
+                        count.to_string(),
+                        text.to_owned(),
+                    ];
+                    let mut widths = cells.each_ref().map(|c| display_width(c));
+                    widths[4] = width;
+                    (cells, widths)
+                })
+            })
+        };
+        self.write_in_two_passes(
+            ("Errors seen", true),
+            (&CODES_HEADER, &CODES_RIGHT, &CODES_FIT),
+            rows,
+            |cells, (row, widths)| {
+                *cells = row;
+                widths
+            },
+        )
+    }
+
+    /// The nodes' NMT state, heartbeat and error history, for the nodes the
+    /// trace told any of (none: no section). Two passes, widths then rows,
+    /// as for the nodes: no table of a million rows is held.
+    fn write_health(&mut self, input: &InputReport) -> io::Result<()> {
+        let told = |n: &&NodeReport| {
+            n.nmt_state.is_some() || n.heartbeat.is_some() || n.error_history.is_some()
+        };
+        if !input.nodes.iter().any(|n| told(&n)) {
+            return Ok(());
+        }
+        let times = self.times.clone();
+        self.write_in_two_passes(
+            ("Node health", true),
+            (&HEALTH_HEADER, &HEALTH_RIGHT, &HEALTH_FIT),
+            || input.nodes.iter().filter(told),
+            |cells, n| health_cells(cells, &times, n),
+        )
+    }
+
+    /// The CiA 402 drives' axes (none: no section): state at the end,
+    /// faults, where the mapping came from, and the summary's sentence.
+    /// Drives are few: one comfy table.
+    fn write_axes(&mut self, input: &InputReport) -> io::Result<()> {
+        let axes: Vec<(&NodeReport, &AxisReport)> = input
+            .nodes
+            .iter()
+            .filter_map(|n| n.axis.as_deref().map(|a| (n, a)))
+            .collect();
+        if axes.is_empty() {
+            return Ok(());
+        }
+        let rows: Vec<[String; 7]> = axes
+            .iter()
+            .map(|(n, a)| {
+                let mapping: Vec<String> = a
+                    .mappings
+                    .iter()
+                    .map(|m| format!("0x{:03X} {}", m.cob_id.id, m.source.slug()))
+                    .collect();
+                [
+                    printable(&n.channel).into_owned(),
+                    n.node.to_string(),
+                    a.state.map_or("-", |s| s.slug()).to_string(),
+                    a.fault_count.to_string(),
+                    a.fault_resets.to_string(),
+                    if mapping.is_empty() {
+                        "-".to_string()
+                    } else {
+                        mapping.join(", ")
+                    },
+                    a.fault_summary()
+                        .unwrap_or_else(|| "never faulted".to_string()),
+                ]
+            })
+            .collect();
+        let mut widths = AXES_HEADER.map(str::len);
+        for row in &rows {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = self.fit(&mut widths, &AXES_HEADER, &AXES_FIT);
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Drive axes (CiA 402)"))?;
+        write_comfy_table(
+            &mut self.out,
+            &AXES_HEADER,
+            &rows,
+            &widths,
+            &shown,
+            &AXES_RIGHT,
+        )
+    }
+
+    /// The bus-level line: frames, EMCY rate, nodes with errors.
+    fn write_bus_line(&mut self, input: &InputReport) -> io::Result<()> {
+        let c = &input.counts;
+        let span = match (input.first_time, input.last_time) {
+            (Some(first), Some(last)) => format!(" over {} s", last.since(first)),
+            _ => String::new(),
+        };
+        let rate = input
+            .emcy_rate()
+            .map_or_else(String::new, |r| format!(" ({r:.2}/s)"));
+        // Said only when it happened: traces without outages read as before.
+        let lost = input
+            .nodes
+            .iter()
+            .filter(|n| n.heartbeat.as_ref().is_some_and(|h| h.lost > 0))
+            .count();
+        let lost = match lost {
+            0 => String::new(),
+            1 => ", 1 node lost its heartbeat".to_string(),
+            n => format!(", {n} nodes lost their heartbeat"),
+        };
+        // An EtherCAT capture's frames are EtherCAT's, its EMCYs came by mailbox.
+        let frames = match c.ethercat_frames {
+            0 => format!("{} frames", c.frames),
+            n => format!(
+                "{n} EtherCAT frames ({} mailbox messages, {} {}, {} empty polls){}",
+                c.mailbox_messages,
+                c.mailbox_retries,
+                if c.mailbox_retries == 1 {
+                    "retry"
+                } else {
+                    "retries"
+                },
+                c.mailbox_empty_polls,
+                match c.frames {
+                    0 => String::new(),
+                    n => format!(", {n} CAN frames"),
+                }
+            ),
+        };
+        // Lost frames may have been EMCYs: said where the counts are read.
+        let dropped = match c.dropped {
+            0 => String::new(),
+            1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),
+            n => format!(", {n} frames dropped (DROPCOUNT): EMCYs may be missing"),
+        };
+        let line = format!(
+            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed{dropped}",
+            c.emcy,
+            input.nodes_with_errors(),
+            input.nodes.len(),
+            c.malformed,
+        );
+        self.write_wrapped(&line, 5)
+    }
+
+    /// The warnings said once per node above, with how often each came.
+    fn write_repeats(&mut self) -> io::Result<()> {
+        let mut rows: Vec<(&str, NodeId, &'static str, u64)> = self
+            .repeats
+            .iter()
+            .flat_map(|(channel, nodes)| {
+                nodes
+                    .iter()
+                    .filter(|(_, n)| **n > 1)
+                    .map(move |((node, w), n)| (channel.as_str(), *node, w.tag(), *n))
+            })
+            .collect();
+        if rows.is_empty() {
+            return Ok(());
+        }
+        rows.sort_unstable();
+        let cells: Vec<[String; 4]> = rows
+            .iter()
+            .map(|(channel, node, tag, n)| {
+                [
+                    printable(channel).into_owned(),
+                    node.to_string(),
+                    (*tag).to_string(),
+                    n.to_string(),
+                ]
+            })
+            .collect();
+        let mut widths = REPEATS_HEADER.map(str::len);
+        for row in &cells {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = self.fit(&mut widths, &REPEATS_HEADER, &REPEATS_FIT);
+        writeln!(self.out)?;
+        let title = self.paint(BOLD, "Repeated warnings");
+        self.write_wrapped(&format!("{title} (said once per node above)"), 0)?;
+        write_row(
+            &mut self.out,
+            &REPEATS_HEADER,
+            &widths,
+            &shown,
+            &REPEATS_RIGHT,
+        )?;
+        for row in &cells {
+            write_row(&mut self.out, row, &widths, &shown, &REPEATS_RIGHT)?;
+        }
+        Ok(())
+    }
+}
+
+const HEALTH_HEADER: [&str; 6] = [
+    "CHANNEL",
+    "NODE",
+    "NMT AT END",
+    "HEARTBEAT",
+    "OUTAGES",
+    "ERROR HISTORY (1003h)",
+];
+
+const HEALTH_RIGHT: [bool; 6] = [false, true, false, false, false, false];
+
+const HEALTH_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(3, 40, 12), (4, 40, 10), (5, 40, 12), (0, CHANNEL_MAX, 7)],
+};
+
+/// Fills the cells of one node health row; returns their display widths.
+fn health_cells(cells: &mut [String; 6], times: &TimeFormat, n: &NodeReport) -> [usize; 6] {
+    let [channel, node, nmt, heartbeat, outages, history] = cells;
+    *channel = printable(&n.channel).into_owned();
+    *node = n.node.to_string();
+    *nmt = n.nmt_state.map_or("-", |s| s.slug()).to_string();
+    *heartbeat = heartbeat_text(n);
+    *outages = outages_text(times, n);
+    *history = n
+        .error_history
+        .as_ref()
+        .map_or_else(|| "-".to_string(), history_cell);
+    let mut widths = [0; 6];
+    for (w, c) in widths.iter_mut().zip(cells.iter()) {
+        *w = display_width(c);
+    }
+    widths
+}
+
+/// A node's last read-out in one cell: `0x4310*, 0x3120* (complete; * before the trace)`.
+fn history_cell(h: &HistoryReport) -> String {
+    let mut s = String::new();
+    if h.entries.is_empty() {
+        s.push_str("empty");
+    }
+    for (i, e) in h.entries.iter().enumerate() {
+        if i > 0 {
+            s.push_str(", ");
+        }
+        push_code(&mut s, e.code);
+        if e.before_trace {
+            s.push('*');
+        }
+    }
+    s.push_str(if h.complete {
+        " (complete"
+    } else {
+        " (partial"
+    });
+    if h.entries.iter().any(|e| e.before_trace) {
+        s.push_str("; * before the trace");
+    }
+    s.push(')');
+    s
+}
+
+/// `period 0.100 s, timeout 0.300 s (learnt), lost 1x, silent at end`.
+fn heartbeat_text(n: &NodeReport) -> String {
+    let Some(h) = &n.heartbeat else {
+        return "-".to_string();
+    };
+    let mut parts = Vec::new();
+    if let Some(p) = h.period {
+        parts.push(format!("period {p} s"));
+    }
+    match h.timeout {
+        Some((t, source)) => parts.push(format!("timeout {t} s ({})", source.slug())),
+        None => parts.push("no timeout known".to_string()),
+    }
+    parts.push(if h.lost == 0 {
+        "never lost".to_string()
+    } else {
+        format!("lost {}x", h.lost)
+    });
+    if h.silent_at_end {
+        parts.push("silent at end".to_string());
+    }
+    parts.join(", ")
+}
+
+const CODES_HEADER: [&str; 5] = ["CHANNEL", "NODE", "CODE", "TIMES", "DESCRIPTION"];
+
+const CODES_RIGHT: [bool; 5] = [false, true, false, true, false];
+
+const CODES_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(4, usize::MAX, 12), (0, CHANNEL_MAX, 7)],
+};
+
+const REPEATS_HEADER: [&str; 4] = ["CHANNEL", "NODE", "WARNING", "FRAMES"];
+
+const REPEATS_RIGHT: [bool; 4] = [false, true, false, true];
+
+const REPEATS_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(0, CHANNEL_MAX, 7)],
+};
+
+/// The first outages: `start-end (duration s)`, then how many more.
+fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
+    const SHOWN: usize = 3;
+    let Some(h) = &n.heartbeat else {
+        return "-".to_string();
+    };
+    if h.outages.is_empty() {
+        return "-".to_string();
+    }
+    let mut items: Vec<String> = h
+        .outages
+        .iter()
+        .take(SHOWN)
+        .map(|o| match (o.end, o.duration()) {
+            (Some(end), Some(d)) => {
+                format!("{}-{} ({d} s)", times.show(o.start), times.show(end))
+            }
+            _ => format!("{}-end", times.show(o.start)),
+        })
+        .collect();
+    let more = h.lost.saturating_sub(SHOWN as u64);
+    if more > 0 {
+        items.push(format!("+{more} more"));
+    }
+    items.join(", ")
+}
+
+/// A node's code descriptions with their display widths, measured once per
+/// node (its timeline can have millions of rows; descriptions are rarely
+/// ASCII, so measuring is not free).
+pub(super) struct NodeTexts<'n>(Vec<(u16, Cow<'n, str>, usize)>);
+
+impl<'n> NodeTexts<'n> {
+    pub(super) fn of(node: &'n NodeReport) -> Self {
+        NodeTexts(
+            node.descriptions
+                .iter()
+                .map(|(code, text)| {
+                    let text = printable(text);
+                    let width = display_width(&text);
+                    (code, text, width)
+                })
+                .collect(),
+        )
+    }
+
+    /// `code`'s description and width; empty for a code the node never
+    /// raised (its errors are all raised by it, so never).
+    pub(super) fn get(&self, code: u16) -> (&str, usize) {
+        match self.0.binary_search_by_key(&code, |(c, _, _)| *c) {
+            Ok(i) => self.0.get(i).map_or(("", 0), |(_, t, w)| (&**t, *w)),
+            Err(_) => ("", 0),
+        }
+    }
+}
+
+const NODES_HEADER: [&str; 11] = [
+    "CHANNEL",
+    "NODE",
+    "EMCY",
+    "STATE AT END",
+    "ACTIVE",
+    "ERRORS SEEN",
+    "PROFILE",
+    "IN ERROR",
+    "LONGEST",
+    "FIRST EMCY",
+    "LAST EMCY",
+];
+
+const NODES_RIGHT: [bool; 11] = [
+    false, true, true, false, false, false, false, true, false, false, false,
+];
+
+/// First and last EMCY are in the events above, the profile is the
+/// description's; the errors seen and the active ones are what the row is for.
+const NODES_FIT: Fit = Fit {
+    drop: &[9, 10, 6, 8, 7, 2],
+    flex: &[(5, 40, 14), (4, 24, 8), (0, CHANNEL_MAX, 7)],
+};
+
+/// Fills the cells of one node row; returns their display widths.
+fn node_cells(
+    cells: &mut [String; 11],
+    times: &TimeFormat,
+    input: &InputReport,
+    n: &NodeReport,
+) -> [usize; 11] {
+    use std::fmt::Write as _;
+    for c in cells.iter_mut() {
+        c.clear();
+    }
+    let [
+        channel,
+        node,
+        emcy,
+        state,
+        active,
+        seen,
+        profile,
+        in_error,
+        longest,
+        first,
+        last,
+    ] = cells;
+    channel.push_str(&printable(&n.channel));
+    node.push_str(itoa::Buffer::new().format(n.node));
+    emcy.push_str(itoa::Buffer::new().format(n.emcy_count));
+    state.push_str(n.state.slug());
+    if n.active.is_empty() {
+        active.push('-');
+    }
+    push_codes(active, n.active.iter().copied(), &TABLE_LIST);
+    if n.stats.raised.is_empty() {
+        seen.push('-');
+    }
+    push_code_counts(
+        seen,
+        n.stats.raised.iter().map(|(&code, &count)| (code, count)),
+        &TABLE_LIST,
+    );
+    let _ = write!(
+        profile,
+        "{} ({})",
+        n.profile.name(),
+        n.profile_source.slug()
+    );
+    match n.time_in_error(input.last_time) {
+        Some(span) => {
+            let _ = write!(in_error, "{span}");
+        }
+        None => in_error.push('-'),
+    }
+    match n.stats.longest {
+        Some((code, span)) => {
+            push_code(longest, code);
+            let _ = write!(longest, " {span}");
+        }
+        None => longest.push('-'),
+    }
+    first.push_str(&times.show_opt(n.stats.first_emcy.and_then(|a| a.time)));
+    last.push_str(&times.show_opt(n.stats.last_emcy.and_then(|a| a.time)));
+    let mut widths = [0; 11];
+    for (w, c) in widths.iter_mut().zip(cells.iter()) {
+        *w = display_width(c);
+    }
+    widths
+}
+
+const AXES_HEADER: [&str; 7] = [
+    "CHANNEL",
+    "NODE",
+    "AXIS AT END",
+    "FAULTS",
+    "RESETS",
+    "MAPPING",
+    "SUMMARY",
+];
+
+const AXES_RIGHT: [bool; 7] = [false, true, false, true, true, false, false];
+
+/// The summary sentence says the faults and the state at the end again.
+const AXES_FIT: Fit = Fit {
+    drop: &[5, 4, 3],
+    flex: &[(6, 60, 20), (0, CHANNEL_MAX, 7)],
+};
+
+const INPUTS_HEADER: [&str; 8] = [
+    "FILE",
+    "FORMAT",
+    "LINES",
+    "FRAMES",
+    "EMCY",
+    "BOOT",
+    "SKIPPED",
+    "MALFORMED",
+];
+
+const INPUTS_RIGHT: [bool; 8] = [false, false, true, true, true, true, true, true];
+
+const INPUTS_FIT: Fit = Fit {
+    drop: &[5, 6, 2],
+    flex: &[(0, 60, 12)],
+};
+
+/// A small table (one row per input) laid out by comfy-table, the
+/// project's table crate: the shown columns, cells cut to the widths a
+/// terminal left them (see [`fit_columns`]), two blanks between columns and
+/// no trailing blanks. The per-event rows are written by hand instead: they
+/// stream, and a table crate would hold them all.
+fn write_comfy_table<const N: usize>(
+    out: &mut impl Write,
+    header: &[&str; N],
+    rows: &[[String; N]],
+    widths: &[usize; N],
+    shown: &[bool; N],
+    right: &[bool; N],
+) -> io::Result<()> {
+    let columns: Vec<usize> = (0..N).filter(|&i| shown[i]).collect();
+    let mut table = Table::new();
+    table.load_style(presets::NOTHING);
+    table.set_header(columns.iter().map(|&i| header[i]).collect::<Vec<_>>());
+    for row in rows {
+        table.add_row(columns.iter().map(|&i| {
+            let cell = &row[i];
+            if display_width(cell) > widths[i] {
+                let mut cut = String::new();
+                push_cut(&mut cut, cell, widths[i]);
+                cut
+            } else {
+                cell.clone()
+            }
+        }));
+    }
+    for (column, &i) in table.column_iter_mut().zip(&columns) {
+        column.set_padding((0, 2));
+        if right[i] {
+            column.set_cell_alignment(CellAlignment::Right);
+        }
+    }
+    // comfy-table pads every cell; trailing blanks make golden files noisy.
+    for line in table.lines() {
+        writeln!(out, "{}", line.trim_end())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,565 @@
+//! The events of an input, one row each as they are decoded: the columns
+//! are fixed by the first event (a narrow terminal's least useful ones
+//! given up then), so no row waits for the ones after it. Lines under an
+//! event (the profile's reading, warnings) follow it.
+
+use std::borrow::Cow;
+use std::io::{self, Write};
+
+use anstyle::Style;
+
+use super::fit::{CHANNEL_MAX, blanks, pad_to, push_cut, push_padded};
+use super::{BOLD, GREEN, RED, TableReport, YELLOW};
+use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, HistoryReport};
+use crate::canopen::NodeId;
+use crate::canopen::emcy::Warning;
+use crate::canopen::profile::{Decoded, FieldValue};
+use crate::report::format::{TABLE_LIST, code_text, codes_list, push_code, push_codes, push_hex};
+use crate::report::timefmt::TimeFormat;
+use crate::text::printable;
+use crate::timeline::axis::Via as AxisVia;
+use crate::trace::Timestamp;
+
+/// The event columns, fixed by the first event of an input. At a terminal
+/// narrower than the full columns, the least useful give way first (see
+/// [`TableReport::layout_for`]); in a pipe every column is there.
+#[derive(Clone, Copy)]
+pub(super) struct Layout {
+    pub(super) time: usize,
+    pub(super) channel: usize,
+    /// Times of day, the date on a line of its own when it changes.
+    pub(super) time_of_day: bool,
+    pub(super) transition: bool,
+    /// The register's width: the hex and its bits, the hex alone, or none.
+    pub(super) register: Option<usize>,
+    pub(super) manufacturer: bool,
+    /// Room for the description on the event's row (`None`: unlimited).
+    pub(super) description: Option<usize>,
+}
+
+impl Layout {
+    /// Where the description starts: the columns before it.
+    fn description_indent(&self) -> usize {
+        self.code_column()
+            + 8
+            + if self.transition { 4 } else { 0 }
+            + self.register.map_or(0, |w| w + 2)
+            + if self.manufacturer {
+                MANUFACTURER_WIDTH + 2
+            } else {
+                0
+            }
+    }
+
+    /// Where the code (or an NMT event's tag) starts.
+    fn code_column(&self) -> usize {
+        self.time + 2 + self.channel + 2 + 6
+    }
+}
+
+/// What the description is given before columns give way to it.
+const DESCRIPTION_ROOM: usize = 50;
+
+/// The register column in full (its hex and its bits' short names) and the
+/// manufacturer bytes (five, in hex).
+const REGISTER_WIDTH: usize = 16;
+const MANUFACTURER_WIDTH: usize = 14;
+
+/// `YYYY-MM-DDT`: the date of an ISO-8601 time, which a narrow table shows
+/// once on a line of its own.
+const DATE_PREFIX: usize = 11;
+
+impl<W: Write> TableReport<W> {
+    /// An EMCY's row, and under it the profile's reading and the warnings
+    /// not said for the node before.
+    pub(super) fn write_emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
+        self.times.set_origin(ev.time);
+        let l = self.layout_for(ev.time, ev.channel)?;
+        let style = match ev.transition {
+            Some(1 | 3) => RED,
+            Some(2) => YELLOW,
+            Some(4) => GREEN,
+            _ => Style::new(),
+        };
+        // One reused buffer and cached texts: the table is the default
+        // output, and traces with many EMCY print a line per frame.
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        self.push_prefix(&mut line, l, ev.time, ev.channel, ev.node);
+        if self.color {
+            line.push_str(&self.paint(style, &code_text(ev.emcy.code)));
+        } else {
+            push_code(&mut line, ev.emcy.code);
+        }
+        line.push_str("  ");
+        if l.transition {
+            match ev.transition {
+                Some(t) => {
+                    line.push(' ');
+                    line.push(char::from(b'0' + t % 10));
+                }
+                None => line.push_str(" -"),
+            }
+            line.push_str("  ");
+        }
+        let reg = ev.emcy.register.0;
+        match l.register {
+            Some(REGISTER_WIDTH) => {
+                let register = self.registers[usize::from(reg)].get_or_insert_with(|| {
+                    format!(
+                        "{:<rw$}",
+                        format!("{reg:02X} {}", ev.emcy.register.short()),
+                        rw = REGISTER_WIDTH
+                    )
+                });
+                line.push_str(register);
+                line.push_str("  ");
+            }
+            Some(w) => {
+                let start = line.len();
+                push_hex(&mut line, &[reg]);
+                pad_to(&mut line, start + w + 2);
+            }
+            None => {}
+        }
+        if l.manufacturer {
+            let start = line.len();
+            for (i, b) in ev.emcy.manufacturer().iter().enumerate() {
+                if i > 0 {
+                    line.push(' ');
+                }
+                push_hex(&mut line, std::slice::from_ref(b));
+            }
+            pad_to(&mut line, start + MANUFACTURER_WIDTH);
+            line.push_str("  ");
+        }
+        let description = printable(ev.description);
+        if ev.cleared.is_empty() {
+            self.push_description(&mut line, l, &description);
+        } else if l.description.is_none() {
+            // Full lines (a pipe): straight into the line, no text to cut.
+            line.push_str(&description);
+            line.push_str(" (cleared ");
+            push_codes(&mut line, ev.cleared.iter().copied(), &TABLE_LIST);
+            line.push(')');
+        } else {
+            let mut text = String::with_capacity(description.len() + 16);
+            text.push_str(&description);
+            text.push_str(" (cleared ");
+            push_codes(&mut text, ev.cleared.iter().copied(), &TABLE_LIST);
+            text.push(')');
+            self.push_description(&mut line, l, &text);
+        }
+        let trimmed = line.trim_end().len();
+        line.truncate(trimmed);
+        line.push('\n');
+        self.out.write_all(line.as_bytes())?;
+        self.line = line;
+        let indent = l.description_indent();
+        // A reset with bytes 3-7 zero, as the manuals say resets are: its
+        // reading (`category: 0`) adds nothing.
+        let plain_reset = ev.emcy.is_reset() && ev.emcy.manufacturer().iter().all(|b| *b == 0);
+        if let Some(decoded) = ev.decoded.filter(|_| !plain_reset) {
+            self.write_detail(indent, &decoded_text(decoded), None)?;
+        }
+        for w in ev.warnings {
+            if self.repeated(ev.channel, ev.node, w) {
+                continue;
+            }
+            self.write_detail(indent, &format!("warning: {w}"), Some(YELLOW))?;
+        }
+        self.end_event()
+    }
+
+    /// A boot-up's row.
+    pub(super) fn write_boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
+        self.times.set_origin(ev.time);
+        let l = self.layout_for(ev.time, ev.channel)?;
+        let what = if ev.cleared.is_empty() {
+            "NMT boot-up".to_string()
+        } else {
+            format!("NMT boot-up (cleared {})", codes_list(ev.cleared))
+        };
+        self.write_tagged(l, ev.time, ev.channel, ev.node, "boot", Some(GREEN), &what)?;
+        self.end_event()
+    }
+
+    /// A health event's row (NMT, heartbeat, SDO abort, error history read
+    /// out, drive state), and an error history's entries under it.
+    pub(super) fn write_health_event(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
+        self.times.set_origin(ev.time);
+        let l = self.layout_for(ev.time, ev.channel)?;
+        let what = health_description(ev.health, &self.times);
+        let (tag, style) = match ev.health {
+            Health::Nmt { .. } => ("nmt", None),
+            Health::HeartbeatLost { .. } => ("lost", Some(RED)),
+            Health::HeartbeatBack { .. } => ("back", Some(GREEN)),
+            Health::SdoAbort { .. } => ("abort", Some(YELLOW)),
+            Health::ErrorHistory(_) | Health::ErrorHistoryCleared => ("1003h", None),
+            Health::AxisState { state, .. } if state.is_fault() => ("axis", Some(RED)),
+            Health::AxisState { .. } => ("axis", None),
+            Health::FaultReset { .. } => ("reset", Some(GREEN)),
+        };
+        self.write_tagged(
+            l,
+            ev.time,
+            ev.channel,
+            ev.node,
+            tag,
+            style,
+            &printable(&what),
+        )?;
+        if let Health::ErrorHistory(h) = ev.health {
+            let indent = l.description_indent() + 2;
+            for e in &h.entries {
+                let text = format!(
+                    "0x{:04X} (info 0x{:04X}) {}{}",
+                    e.code,
+                    e.info,
+                    printable(&e.description),
+                    if e.before_trace {
+                        " [before the trace]"
+                    } else {
+                        ""
+                    }
+                );
+                self.write_detail(indent, &text, None)?;
+            }
+        }
+        self.end_event()
+    }
+
+    pub(super) fn layout_for(
+        &mut self,
+        time: Option<Timestamp>,
+        channel: &str,
+    ) -> io::Result<Layout> {
+        if let Some(l) = self.layout {
+            return Ok(l);
+        }
+        let time_text = time.map(|t| self.times.show(t));
+        let time_width = time_text.as_ref().map_or(1, |t| t.len()).max(4);
+        let mut l = Layout {
+            time: time_width,
+            channel: printable(channel).chars().count().max(7),
+            time_of_day: false,
+            transition: true,
+            register: Some(REGISTER_WIDTH),
+            manufacturer: true,
+            description: None,
+        };
+        if let Some(width) = self.width {
+            // The least useful columns give way first, until the description
+            // has room: the register's bit names (its hex stays), the raw
+            // manufacturer bytes (the profile's reading stays, as its line),
+            // the date (on a line of its own), the transition (the colour
+            // says it), the register.
+            l.channel = l.channel.min(CHANNEL_MAX);
+            let dated = time_text.as_deref().is_some_and(|t| iso_date(t).is_some());
+            let mut step = 0;
+            while l.description_indent() + DESCRIPTION_ROOM > width {
+                match step {
+                    0 => l.register = Some(3),
+                    1 => l.manufacturer = false,
+                    2 if dated => {
+                        l.time_of_day = true;
+                        l.time = (time_width - DATE_PREFIX).max(4);
+                    }
+                    3 => l.transition = false,
+                    4 => l.register = None,
+                    5 => break,
+                    _ => {}
+                }
+                step += 1;
+            }
+            l.description = Some(width.saturating_sub(l.description_indent()).max(8));
+        }
+        self.layout = Some(l);
+        let mut header = String::new();
+        push_padded(&mut header, "TIME", l.time);
+        push_padded(&mut header, "CHANNEL", l.channel);
+        header.push_str("NODE  CODE    ");
+        if l.transition {
+            header.push_str("TR  ");
+        }
+        match l.register {
+            Some(REGISTER_WIDTH) => push_padded(&mut header, "REGISTER", REGISTER_WIDTH),
+            Some(w) => push_padded(&mut header, "REG", w),
+            None => {}
+        }
+        if l.manufacturer {
+            push_padded(&mut header, "MANUFACTURER", MANUFACTURER_WIDTH);
+        }
+        header.push_str("DESCRIPTION");
+        writeln!(self.out, "{}", self.paint(BOLD, &header))?;
+        Ok(l)
+    }
+
+    /// `TIME  CHANNEL  NODE  ` padded to the layout, appended to `line`;
+    /// before it, for times of day, the date when it changed.
+    fn push_prefix(
+        &mut self,
+        line: &mut String,
+        l: Layout,
+        time: Option<Timestamp>,
+        channel: &str,
+        node: NodeId,
+    ) {
+        let start = line.len();
+        let mut row_start = start;
+        self.times.push_opt(line, time);
+        // `iso_date` checked the 11 ASCII bytes the ranges below remove.
+        if l.time_of_day
+            && let Some(date) = line.get(start..).and_then(iso_date)
+        {
+            if date != self.date {
+                self.date.clear();
+                self.date.push_str(date);
+                let mut head = String::with_capacity(16);
+                head.push_str(&self.paint(BOLD, date));
+                head.push('\n');
+                line.insert_str(start, &head);
+                row_start = start + head.len();
+                line.replace_range(row_start..row_start + DATE_PREFIX, "");
+            } else {
+                line.replace_range(start..start + DATE_PREFIX, "");
+            }
+        }
+        pad_to(line, row_start + l.time);
+        line.push_str("  ");
+        let channel = printable(channel);
+        match self.width {
+            Some(_) => {
+                let shown = push_cut(line, &channel, l.channel);
+                line.push_str(&blanks(l.channel.saturating_sub(shown)));
+            }
+            None => {
+                line.push_str(&channel);
+                for _ in channel.chars().count()..l.channel {
+                    line.push(' ');
+                }
+            }
+        }
+        line.push_str("  ");
+        let mut digits = itoa::Buffer::new();
+        let node = digits.format(node);
+        for _ in node.len()..4 {
+            line.push(' ');
+        }
+        line.push_str(node);
+        line.push_str("  ");
+    }
+
+    /// `text` in the description column: cut to the room there is (one row
+    /// per event) when fitting.
+    fn push_description(&self, line: &mut String, l: Layout, text: &str) {
+        match l.description {
+            Some(room) => {
+                push_cut(line, text, room);
+            }
+            None => line.push_str(text),
+        }
+    }
+
+    /// A line of detail under an event (the profile's reading, a warning),
+    /// indented to `indent`; wrapped to the width when fitting.
+    fn write_detail(&mut self, indent: usize, text: &str, style: Option<Style>) -> io::Result<()> {
+        let lines = match self.width {
+            Some(width) => textwrap::wrap(text, width.saturating_sub(indent).max(8)),
+            None => vec![Cow::Borrowed(text)],
+        };
+        for piece in lines {
+            self.out.write_all(blanks(indent).as_bytes())?;
+            match style {
+                Some(style) if self.color => write!(
+                    self.out,
+                    "{}{piece}{}",
+                    style.render(),
+                    style.render_reset()
+                )?,
+                _ => self.out.write_all(piece.as_bytes())?,
+            }
+            self.out.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+
+    /// An NMT event's row: its tag in the code column, its text as the
+    /// description.
+    #[allow(clippy::too_many_arguments)]
+    fn write_tagged(
+        &mut self,
+        l: Layout,
+        time: Option<Timestamp>,
+        channel: &str,
+        node: NodeId,
+        tag: &str,
+        style: Option<Style>,
+        what: &str,
+    ) -> io::Result<()> {
+        // The event line's buffer: NMT and heartbeat rows are many too.
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        self.push_prefix(&mut line, l, time, channel, node);
+        match style {
+            Some(style) if self.color => {
+                line.push_str(&self.paint(style, tag));
+            }
+            _ => line.push_str(tag),
+        }
+        let column = l.description_indent();
+        line.push_str(&blanks(column.saturating_sub(l.code_column() + tag.len())));
+        self.push_description(&mut line, l, what);
+        line.push('\n');
+        let written = self.out.write_all(line.as_bytes());
+        self.line = line;
+        written
+    }
+
+    /// Counts `w` for the node; true when it was said for the node before
+    /// and saying it again adds nothing: the form of a node's frames
+    /// (register bits, byte counts, bytes that should be zero) is the same
+    /// on every frame. What the state machine says of one frame (a reset
+    /// that cleared nothing) is always said.
+    fn repeated(&mut self, channel: &str, node: NodeId, w: &Warning) -> bool {
+        let Some(key) = repeat_key(w) else {
+            return false;
+        };
+        let nodes = match self.repeats.get_mut(channel) {
+            Some(nodes) => nodes,
+            None => self.repeats.entry(channel.to_owned()).or_default(),
+        };
+        let count = nodes.entry((node, key)).or_insert(0);
+        *count += 1;
+        *count > 1
+    }
+}
+
+/// What makes a warning a repeat of one said before for the node (`None`:
+/// never one). The register, the bytes, the length may differ from frame
+/// to frame; what the warning says of the node does not.
+fn repeat_key(w: &Warning) -> Option<Warning> {
+    Some(match *w {
+        Warning::ShortFrame { .. } => Warning::ShortFrame { len: 0 },
+        Warning::NoGenericBit { .. } => Warning::NoGenericBit { register: 0 },
+        Warning::ManufacturerBytesNonZero { .. } => {
+            Warning::ManufacturerBytesNonZero { first: 0, last: 0 }
+        }
+        Warning::ReservedBit
+        | Warning::EmptyRegister
+        | Warning::ProfileReservedBit { .. }
+        | Warning::ClassRegisterMismatch { .. }
+        | Warning::OddResetCode { .. }
+        | Warning::UndefinedCode { .. } => *w,
+        Warning::ResetWhileErrorFree
+        | Warning::PartialResetWhileErrorFree
+        | Warning::PartialResetUnattributed { .. } => return None,
+    })
+}
+
+/// The manufacturer bytes as the profile reads them: `key: value; ...`.
+fn decoded_text(d: &Decoded) -> String {
+    let fields: Vec<String> = d
+        .fields
+        .iter()
+        .map(|(k, v)| match v {
+            FieldValue::Int(n) => format!("{k}: {n}"),
+            FieldValue::Text(t) => format!("{k}: {}", printable(t)),
+        })
+        .collect();
+    format!("manufacturer: {}", fields.join("; "))
+}
+
+/// The date of an ISO-8601 time text (`2023-11-14` of `2023-11-14T22:13:20Z`).
+fn iso_date(time: &str) -> Option<&str> {
+    let b = time.as_bytes();
+    let shape = b.len() > DATE_PREFIX
+        && b.iter().take(10).enumerate().all(|(i, c)| match i {
+            4 | 7 => *c == b'-',
+            _ => c.is_ascii_digit(),
+        })
+        && b.get(10) == Some(&b'T');
+    if shape { time.get(..10) } else { None }
+}
+
+/// `error history complete, 2 entries` (the event line).
+fn history_head(h: &HistoryReport) -> String {
+    let n = h.entries.len();
+    format!(
+        "error history {}, {n} entr{}",
+        if h.complete { "complete" } else { "partial" },
+        if n == 1 { "y" } else { "ies" }
+    )
+}
+
+/// A health event's text, as the table's description column and the CSV
+/// `description` column give it.
+pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String {
+    match health {
+        Health::Nmt { state, via } => format!("NMT {} (via {})", state.slug(), via.slug()),
+        Health::HeartbeatLost {
+            last_seen,
+            timeout,
+            timeout_source,
+            ..
+        } => format!(
+            "heartbeat lost: silent since {} (timeout {timeout} s, {})",
+            times.show_opt(*last_seen),
+            timeout_source.slug()
+        ),
+        Health::HeartbeatBack { silent, restarted } => format!(
+            "heartbeat back after {silent} s{}",
+            if *restarted {
+                ", restarted (boot-up)"
+            } else {
+                ""
+            }
+        ),
+        Health::SdoAbort {
+            index,
+            subindex,
+            abort_code,
+            text,
+            by_server,
+        } => format!(
+            "SDO abort 0x{index:04X} sub {subindex} by {}: 0x{abort_code:08X} {text}",
+            if *by_server { "server" } else { "client" }
+        ),
+        Health::ErrorHistory(h) => history_head(h),
+        Health::ErrorHistoryCleared => "error history cleared".to_string(),
+        Health::AxisState {
+            state,
+            from,
+            statusword,
+            via,
+        } => {
+            let source = match via {
+                AxisVia::Pdo { cob_id } => format!("PDO 0x{cob_id:03X}"),
+                AxisVia::Sdo => "SDO".to_string(),
+            };
+            match from {
+                Some(f) => format!(
+                    "axis {} -> {} (statusword 0x{statusword:04X}, {source})",
+                    f.slug(),
+                    state.slug()
+                ),
+                None => format!(
+                    "axis {} (statusword 0x{statusword:04X}, {source})",
+                    state.slug()
+                ),
+            }
+        }
+        Health::FaultReset { controlword } => {
+            format!("fault reset (controlword 0x{controlword:04X})")
+        }
+    }
+}

@@ -1,0 +1,199 @@
+//! The error timeline at the end of an input: one row per error of every
+//! node, start to end. A trace can hold millions of errors, so the table
+//! is written in two passes over the history (widths, then rows) and no
+//! row is kept; the first pass measures without writing.
+
+use std::io::{self, Write};
+
+use super::end_tables::NodeTexts;
+use super::fit::{CHANNEL_MAX, Fit, display_width, push_row, write_row};
+use super::{BOLD, TableReport};
+use crate::analyze::{InputReport, NodeReport};
+use crate::report::format::push_code;
+use crate::report::timefmt::TimeFormat;
+use crate::text::printable;
+use crate::timeline::Interval;
+
+impl<W: Write> TableReport<W> {
+    /// The error timeline under its title; nothing when no node erred.
+    pub(super) fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
+        let times = self.times.clone();
+        let Some(mut widths) = timeline_widths(input, &times)? else {
+            return Ok(());
+        };
+        let shown = self.fit(&mut widths, &TIMELINE_HEADER, &TIMELINE_FIT);
+        writeln!(self.out)?;
+        writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
+        write_row(
+            &mut self.out,
+            &TIMELINE_HEADER,
+            &widths,
+            &shown,
+            &TIMELINE_RIGHT,
+        )?;
+        let out = &mut self.out;
+        let mut line = String::new();
+        for_each_timeline_row(input, &times, |cells, cell_widths| {
+            push_row(
+                &mut line,
+                cells,
+                cell_widths,
+                &widths,
+                &shown,
+                &TIMELINE_RIGHT,
+            );
+            out.write_all(line.as_bytes())
+        })
+    }
+}
+
+const TIMELINE_HEADER: [&str; 8] = [
+    "CHANNEL",
+    "NODE",
+    "CODE",
+    "DESCRIPTION",
+    "START",
+    "END",
+    "DURATION",
+    "CLEARED BY",
+];
+
+const TIMELINE_RIGHT: [bool; 8] = [false, true, false, false, false, false, true, false];
+
+/// The end is the start plus the duration.
+const TIMELINE_FIT: Fit = Fit {
+    drop: &[7, 5],
+    flex: &[(3, 40, 12), (0, CHANNEL_MAX, 7)],
+};
+
+/// Fills the cells of one error timeline row; returns their display widths.
+fn timeline_cells(
+    cells: &mut [String; 8],
+    times: &TimeFormat,
+    texts: &NodeTexts<'_>,
+    n: &NodeReport,
+    iv: &Interval,
+) -> [usize; 8] {
+    let (channel, node) = (n.channel.as_str(), n.node);
+    for c in cells.iter_mut() {
+        c.clear();
+    }
+    let [
+        channel_cell,
+        node_cell,
+        code,
+        description,
+        start,
+        end,
+        duration,
+        cleared_by,
+    ] = cells;
+    let end_time = iv.end.and_then(|e| e.time);
+    channel_cell.push_str(&printable(channel));
+    node_cell.push_str(itoa::Buffer::new().format(node));
+    push_code(code, iv.code);
+    let (text, description_width) = texts.get(iv.code);
+    description.push_str(text);
+    match iv.start.time {
+        Some(t) => times.push(start, t),
+        None => {
+            start.push_str("line ");
+            start.push_str(itoa::Buffer::new().format(iv.start.line));
+        }
+    }
+    match (iv.end, iv.start.time, end_time) {
+        (None, _, _) => {
+            end.push_str("active");
+            duration.push('-');
+        }
+        (Some(_), Some(s), Some(e)) => {
+            times.push(end, e);
+            let mut text = Vec::with_capacity(32);
+            e.push_since(s, &mut text);
+            duration.push_str(std::str::from_utf8(&text).unwrap_or_default());
+        }
+        (Some(e), _, _) => {
+            end.push_str("line ");
+            end.push_str(itoa::Buffer::new().format(e.line));
+            duration.push('-');
+        }
+    }
+    cleared_by.push_str(iv.cleared_by.map_or("-", |c| c.slug()));
+    let mut widths = [0; 8];
+    for (i, (w, c)) in widths.iter_mut().zip(cells.iter()).enumerate() {
+        // The description's width is cached with it (it is rarely ASCII).
+        *w = if i == 3 {
+            description_width
+        } else {
+            display_width(c)
+        };
+    }
+    widths
+}
+
+/// The timeline's column widths (`None`: no rows), measured without
+/// writing the rows: the first of two passes over millions of errors, it
+/// cost as much as writing them.
+fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option<[usize; 8]>> {
+    let mut widths = TIMELINE_HEADER.map(str::len);
+    let mut any = false;
+    let mut merge = input.history.merge();
+    let mut scratch = Vec::with_capacity(32);
+    for n in &input.nodes {
+        let texts = NodeTexts::of(n);
+        let channel = display_width(&printable(&n.channel));
+        let node = itoa::Buffer::new().format(n.node).len();
+        for iv in merge.node_errors(&n.channel, n.node) {
+            any = true;
+            let end_time = iv.end.and_then(|e| e.time);
+            let line_width = |line: u64| 5 + itoa::Buffer::new().format(line).len();
+            let start = match iv.start.time {
+                Some(t) => times.width(t),
+                None => line_width(iv.start.line),
+            };
+            let (end, duration) = match (iv.end, iv.start.time, end_time) {
+                (None, _, _) => ("active".len(), 1),
+                (Some(_), Some(s), Some(e)) => {
+                    scratch.clear();
+                    e.push_since(s, &mut scratch);
+                    (times.width(e), scratch.len())
+                }
+                (Some(e), _, _) => (line_width(e.line), 1),
+            };
+            let cleared_by = iv.cleared_by.map_or(1, |c| c.slug().len());
+            let row = [
+                channel,
+                node,
+                6,
+                texts.get(iv.code).1,
+                start,
+                end,
+                duration,
+                cleared_by,
+            ];
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(c);
+            }
+        }
+    }
+    merge.take_error().map_or(Ok(any.then_some(widths)), Err)
+}
+
+/// Calls `row` for every error of the selected nodes, in report order,
+/// with the cells' display widths.
+fn for_each_timeline_row(
+    input: &InputReport,
+    times: &TimeFormat,
+    mut row: impl FnMut(&[String; 8], &[usize; 8]) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut cells: [String; 8] = Default::default();
+    let mut merge = input.history.merge();
+    for n in &input.nodes {
+        let texts = NodeTexts::of(n);
+        for iv in merge.node_errors(&n.channel, n.node) {
+            let widths = timeline_cells(&mut cells, times, &texts, n, &iv);
+            row(&cells, &widths)?;
+        }
+    }
+    merge.take_error().map_or(Ok(()), Err)
+}
