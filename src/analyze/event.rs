@@ -13,7 +13,7 @@ use crate::canopen::nmt::NmtState;
 use crate::canopen::pdo::Mapping;
 use crate::canopen::profile::{Decoded, Profile};
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
-use crate::timeline::axis::{self, AxisState, Fault};
+use crate::timeline::drive::{self, DriveState, Fault};
 use crate::timeline::heartbeat::{Outage, TimeoutSource};
 use crate::timeline::history::ErrorHistory;
 use crate::timeline::nmt::Via;
@@ -113,13 +113,13 @@ pub enum Health {
     /// A confirmed write of 0 to 0x1003 sub 0.
     ErrorHistoryCleared,
     /// A CiA 402 drive's statusword showed another state.
-    AxisState {
-        state: AxisState,
-        /// The state before; `None` for the axis's first statusword.
-        from: Option<AxisState>,
+    DriveState {
+        state: DriveState,
+        /// The state before; `None` for the drive's first statusword.
+        from: Option<DriveState>,
         statusword: u16,
         /// A PDO (with its COB-ID) or an SDO upload.
-        via: axis::Via,
+        via: drive::Via,
     },
     /// A controlword's bit 7 rose: the master reset the drive's fault.
     FaultReset { controlword: u16 },
@@ -135,7 +135,7 @@ impl Health {
             Health::SdoAbort { .. } => "sdo_abort",
             Health::ErrorHistory(_) => "error_history",
             Health::ErrorHistoryCleared => "error_history_cleared",
-            Health::AxisState { .. } => "axis_state",
+            Health::DriveState { .. } => "axis_state",
             Health::FaultReset { .. } => "fault_reset",
         }
     }
@@ -204,33 +204,33 @@ pub struct NodeReport {
     pub heartbeat: Option<HeartbeatReport>,
     /// The last read-out of 0x1003.
     pub error_history: Option<HistoryReport>,
-    /// Its CiA 402 axis; `None` for a node no statusword, controlword or
+    /// Its CiA 402 drive; `None` for a node no statusword, controlword or
     /// PDO mapping was seen of.
-    pub axis: Option<Box<AxisReport>>,
+    pub drive: Option<Box<DriveReport>>,
 }
 
-/// A node's CiA 402 axis at the end of an input (the `axis` object).
+/// A node's CiA 402 drive at the end of an input (the `drive` object).
 #[derive(Clone, Debug, PartialEq)]
-pub struct AxisReport {
+pub struct DriveReport {
     /// The state the last statusword showed; `None` before any.
-    pub state: Option<AxisState>,
+    pub state: Option<DriveState>,
     pub statusword: Option<u16>,
     /// Faults, oldest first, the open one last (at most
-    /// [`axis::MAX_FAULTS_KEPT`] closed ones).
+    /// [`drive::MAX_FAULTS_KEPT`] closed ones).
     pub faults: Vec<Fault>,
     /// Every fault entered, kept or not.
     pub fault_count: u64,
     /// Fault resets the master sent.
     pub fault_resets: u64,
     /// The states it was in, with the time in each (standard's order).
-    pub time_in_state: Vec<(AxisState, Span)>,
+    pub time_in_state: Vec<(DriveState, Span)>,
     /// The node's PDO mappings in force at the end, transmit then receive.
     pub mappings: Vec<Mapping>,
 }
 
-impl AxisReport {
+impl DriveReport {
     /// "faulted 2 times, recovered to operation enabled": the summary's
-    /// sentence; `None` for an axis that never faulted.
+    /// sentence; `None` for a drive that never faulted.
     pub fn fault_summary(&self) -> Option<String> {
         let n = self.fault_count;
         if n == 0 {
@@ -243,7 +243,7 @@ impl AxisReport {
         };
         let end = match self.state {
             Some(s) if s.is_fault() => "still in fault at the end".to_string(),
-            Some(AxisState::State(s)) => format!("recovered to {}", s.words()),
+            Some(DriveState::State(s)) => format!("recovered to {}", s.words()),
             _ => "state unknown at the end".to_string(),
         };
         Some(format!("faulted {times}, {end}"))

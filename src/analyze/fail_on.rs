@@ -19,7 +19,7 @@ pub struct FailOn {
     pub category_at_most: Option<u8>,
     /// A node lost its heartbeat (an outage, or silent at the end).
     pub lost: bool,
-    /// A node's CiA 402 axis entered fault.
+    /// A node's CiA 402 drive entered fault.
     pub fault: bool,
 }
 
@@ -109,16 +109,16 @@ pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<Stri
     }
     if fail_on.fault {
         let faults: u64 = nodes()
-            .filter_map(|n| n.axis.as_ref())
+            .filter_map(|n| n.drive.as_ref())
             .map(|a| a.fault_count)
             .sum();
-        let axes = nodes()
-            .filter(|n| n.axis.as_ref().is_some_and(|a| a.fault_count > 0))
+        let drives = nodes()
+            .filter(|n| n.drive.as_ref().is_some_and(|a| a.fault_count > 0))
             .count() as u64;
         if faults > 0 {
             met.push(format!(
-                "fault: {axes} drive{} faulted {faults} time{}",
-                plural(axes),
+                "fault: {drives} drive{} faulted {faults} time{}",
+                plural(drives),
                 plural(faults)
             ));
         }

@@ -53,14 +53,14 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     if emcy::is_nmt_error_control(id) {
         data.len() <= 1
     } else if sdo::is_sdo_id(id) {
-        // What `names_followed_object || is_abort || concerns_axis` say
+        // What `names_followed_object || is_abort || concerns_drive` say
         // (a test holds them equal), reading the command and index once:
         // asked of every SDO frame of a trace.
         let head = data.head();
         match *head {
             [cmd, lo, hi] => {
                 let index = index_of(lo, hi);
-                sdo::is_abort(head) || sdo::is_followed(index) || names_axis_object(id, cmd, index)
+                sdo::is_abort(head) || sdo::is_followed(index) || names_drive_object(id, cmd, index)
             }
             _ => sdo::is_abort(head),
         }
@@ -73,9 +73,9 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
 /// names a PDO parameter (0x1400-0x1BFF) or one of 0x6040/0x6041/0x603F,
 /// or it is a download segment or its confirmation (segments name no
 /// object; the PDO assembler keeps only those of a transfer it follows).
-pub(super) fn concerns_axis(id: u32, data: &[u8]) -> bool {
+pub(super) fn concerns_drive(id: u32, data: &[u8]) -> bool {
     match *data {
-        [cmd, lo, hi, ..] => names_axis_object(id, cmd, index_of(lo, hi)),
+        [cmd, lo, hi, ..] => names_drive_object(id, cmd, index_of(lo, hi)),
         _ => false,
     }
 }
@@ -84,9 +84,9 @@ fn index_of(lo: u8, hi: u8) -> u16 {
     u16::from_le_bytes([lo, hi])
 }
 
-/// [`concerns_axis`] of a frame with command byte `cmd` naming `index`.
+/// [`concerns_drive`] of a frame with command byte `cmd` naming `index`.
 #[inline]
-fn names_axis_object(id: u32, cmd: u8, index: u16) -> bool {
+fn names_drive_object(id: u32, cmd: u8, index: u16) -> bool {
     let request = id >= sdo::REQUEST_BASE;
     pdo::PdoId::is_pdo_parameter(index)
         || cia402::is_decoded(index)
@@ -105,7 +105,7 @@ pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
     let data = frame.data.as_slice();
     sdo::names_object(frame.id, data, sdo::COB_ID_EMCY)
         || sdo::names_object(frame.id, data, sdo::DEVICE_TYPE)
-        || concerns_axis(frame.id, data)
+        || concerns_drive(frame.id, data)
 }
 
 /// The current interest and its generation, shared with workers: a block
@@ -232,7 +232,7 @@ mod tests {
             } else if sdo::is_sdo_id(id) {
                 sdo::names_followed_object(id, &data)
                     || sdo::is_abort(&data)
-                    || concerns_axis(id, &data)
+                    || concerns_drive(id, &data)
             } else {
                 true
             };

@@ -48,7 +48,7 @@ use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub use diagnostics::DiagnosticLog;
 pub use event::{
-    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
+    BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, Health, HealthEvent, HeartbeatReport,
     HistoryReport, InputReport, NodeReport,
 };
 pub use options::{EmcyId, Options};

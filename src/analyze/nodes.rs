@@ -336,7 +336,7 @@ impl Nodes {
                     nmt_state: None,
                     heartbeat: None,
                     error_history: None,
-                    axis: None,
+                    drive: None,
                 };
                 fill(&mut report, end.health.as_deref());
                 out.push(report);

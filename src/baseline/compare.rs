@@ -49,10 +49,12 @@ pub enum Kind {
     HeartbeatLostNew,
     /// The baseline's node lost its heartbeat; now it does not.
     HeartbeatLostGone,
-    /// The node's CiA 402 axis faulted more often than in the baseline.
-    AxisFaultNew,
-    /// The baseline's axis faulted; now it does not.
-    AxisFaultGone,
+    /// The node's CiA 402 drive faulted more often than in the baseline.
+    #[serde(rename = "axis_fault_new")]
+    DriveFaultNew,
+    /// The baseline's drive faulted; now it does not.
+    #[serde(rename = "axis_fault_gone")]
+    DriveFaultGone,
 }
 
 impl Kind {
@@ -66,13 +68,13 @@ impl Kind {
             | Kind::NewError
             | Kind::NowActive
             | Kind::HeartbeatLostNew
-            | Kind::AxisFaultNew => Severity::Regression,
+            | Kind::DriveFaultNew => Severity::Regression,
             Kind::MalformedFell
             | Kind::EmcyInvalidFell
             | Kind::ErrorGone
             | Kind::NowCleared
             | Kind::HeartbeatLostGone
-            | Kind::AxisFaultGone => Severity::Improvement,
+            | Kind::DriveFaultGone => Severity::Improvement,
             Kind::FormatChanged
             | Kind::NewNodeWithoutErrors
             | Kind::NodeGone
@@ -326,13 +328,13 @@ fn compare_node(
             msg,
         );
     }
-    let faults = |e: Option<&NodeEntry>| e.map_or(0, |e| e.axis_faults);
+    let faults = |e: Option<&NodeEntry>| e.map_or(0, |e| e.drive_faults);
     let (was, now) = (faults(old), faults(new));
     if now > was {
         let msg = format!("axis faulted {now}x, baseline {was}x");
         c.add(
             at,
-            Kind::AxisFaultNew,
+            Kind::DriveFaultNew,
             None,
             (Some(now), Some(was)),
             false,
@@ -342,7 +344,7 @@ fn compare_node(
         let msg = format!("axis no longer faults (baseline {was}x)");
         c.add(
             at,
-            Kind::AxisFaultGone,
+            Kind::DriveFaultGone,
             None,
             (Some(now), Some(was)),
             false,
@@ -452,19 +454,19 @@ mod tests {
                 })
                 .collect(),
             heartbeat_lost: 0,
-            axis_faults: 0,
+            drive_faults: 0,
         }
     }
 
     fn faulted(n: u64) -> NodeEntry {
         NodeEntry {
-            axis_faults: n,
+            drive_faults: n,
             ..node(&[])
         }
     }
 
     #[test]
-    fn more_axis_faults_than_the_baseline_regress_none_improve() {
+    fn more_drive_faults_than_the_baseline_regress_none_improve() {
         let old = one(&[
             (1, node(&[])),
             (2, faulted(1)),
@@ -481,19 +483,19 @@ mod tests {
         let found: Vec<(Option<NodeId>, Kind)> = diff
             .findings
             .iter()
-            .filter(|f| matches!(f.kind, Kind::AxisFaultNew | Kind::AxisFaultGone))
+            .filter(|f| matches!(f.kind, Kind::DriveFaultNew | Kind::DriveFaultGone))
             .map(|f| (f.node, f.kind))
             .collect();
         assert_eq!(
             found,
             [
-                (Some(1), Kind::AxisFaultNew),
-                (Some(2), Kind::AxisFaultGone),
-                (Some(5), Kind::AxisFaultNew),
+                (Some(1), Kind::DriveFaultNew),
+                (Some(2), Kind::DriveFaultGone),
+                (Some(5), Kind::DriveFaultNew),
             ]
         );
         assert_eq!(
-            serde_json::to_value(Kind::AxisFaultNew).ok(),
+            serde_json::to_value(Kind::DriveFaultNew).ok(),
             Some(serde_json::json!("axis_fault_new"))
         );
     }

@@ -141,9 +141,10 @@ pub struct NodeEntry {
     /// so baselines of traces without outages read and write as before.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub heartbeat_lost: u64,
-    /// CiA 402 faults its axis entered; left out when none.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub axis_faults: u64,
+    /// CiA 402 faults its drive entered; left out when none. The key keeps
+    /// the name baselines were written with.
+    #[serde(default, skip_serializing_if = "is_zero", rename = "axis_faults")]
+    pub drive_faults: u64,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -262,7 +263,7 @@ impl TraceEntry {
                 emcy: n.emcy_count,
                 errors,
                 heartbeat_lost: n.heartbeat.as_ref().map_or(0, |h| h.lost),
-                axis_faults: n.axis.as_ref().map_or(0, |a| a.fault_count),
+                drive_faults: n.drive.as_ref().map_or(0, |a| a.fault_count),
             };
             nodes
                 .entry(n.channel.clone())

@@ -266,7 +266,7 @@ pub struct Cia402Values {
 impl Cia402Values {
     /// The bits anything decoded depends on ([`cia402::STATUSWORD_BITS`],
     /// [`cia402::CONTROLWORD_BITS`], all of the error code): two PDOs
-    /// equal here tell an axis the same.
+    /// equal here tell a drive the same.
     pub fn relevant(self) -> Cia402Values {
         Cia402Values {
             statusword: self.statusword.map(|w| w & cia402::STATUSWORD_BITS),
@@ -1119,7 +1119,7 @@ mod tests {
             ..Cia402Fields::default()
         };
         assert_eq!(empty.relevant_bits(), Some(0), "no bits, no panic");
-        // Words differing only in other bits are the same to an axis.
+        // Words differing only in other bits are the same to a drive.
         let a = Cia402Values {
             statusword: Some(0x0637),
             controlword: Some(0x000F),

@@ -1060,7 +1060,7 @@ pub fn decode_timeline(data: &[u8]) {
             nmt_state: None,
             heartbeat: None,
             error_history: None,
-            axis: None,
+            drive: None,
         })
         .collect();
     let report = InputReport {

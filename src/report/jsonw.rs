@@ -14,7 +14,7 @@ use std::sync::Arc;
 use super::format;
 use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::{
-    AxisReport, BootEvent, Counts, Diagnostic, EmcyEvent, Health, HealthEvent, HeartbeatReport,
+    BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, Health, HealthEvent, HeartbeatReport,
     HistoryReport, InputReport, NodeReport,
 };
 use crate::cache::{Cache, profile_key, slot};
@@ -23,7 +23,7 @@ use crate::canopen::pdo::{Direction, Mapped};
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
-use crate::timeline::axis::Via as AxisVia;
+use crate::timeline::drive::Via as DriveVia;
 use crate::trace::time::SecondsText;
 use crate::trace::{Format, Span, Timestamp};
 
@@ -531,7 +531,7 @@ impl JsonWriter {
             }
             Health::ErrorHistory(h) => history_members(&mut o, h),
             Health::ErrorHistoryCleared => {}
-            Health::AxisState {
+            Health::DriveState {
                 state,
                 from,
                 statusword,
@@ -545,8 +545,8 @@ impl JsonWriter {
                 o.str("statusword", &format!("0x{statusword:04X}"));
                 o.str("via", via.slug());
                 match via {
-                    AxisVia::Pdo { cob_id } => o.u64("cob_id", u64::from(*cob_id)),
-                    AxisVia::Sdo => o.null("cob_id"),
+                    DriveVia::Pdo { cob_id } => o.u64("cob_id", u64::from(*cob_id)),
+                    DriveVia::Sdo => o.null("cob_id"),
                 }
             }
             Health::FaultReset { controlword } => {
@@ -649,29 +649,29 @@ impl JsonWriter {
             }
             None => o.null("error_history"),
         }
-        // Only nodes with an axis: other nodes' objects stay as they were.
-        if let Some(axis) = &node.axis {
-            self.axis(o.key("axis"), axis);
+        // Only nodes with a drive: other nodes' objects stay as they were.
+        if let Some(drive) = &node.drive {
+            self.drive(o.key("axis"), drive);
         }
         o.key("errors").push(b'[');
     }
 
-    /// A node's `axis` object: its CiA 402 drive.
-    fn axis(&mut self, out: &mut Vec<u8>, axis: &AxisReport) {
+    /// A node's `drive` object: its CiA 402 drive.
+    fn drive(&mut self, out: &mut Vec<u8>, drive: &DriveReport) {
         let mut o = Obj::new(out);
-        match axis.state {
+        match drive.state {
             Some(s) => o.str("state", s.slug()),
             None => o.null("state"),
         }
-        match axis.statusword {
+        match drive.statusword {
             Some(w) => o.str("statusword", &format!("0x{w:04X}")),
             None => o.null("statusword"),
         }
-        o.u64("fault_count", axis.fault_count);
-        o.u64("fault_resets", axis.fault_resets);
+        o.u64("fault_count", drive.fault_count);
+        o.u64("fault_resets", drive.fault_resets);
         let list = o.key("faults");
         list.push(b'[');
-        for (i, f) in axis.faults.iter().enumerate() {
+        for (i, f) in drive.faults.iter().enumerate() {
             if i > 0 {
                 list.push(b',');
             }
@@ -702,7 +702,7 @@ impl JsonWriter {
         list.push(b']');
         let times = o.key("time_in_state");
         times.push(b'{');
-        for (i, (state, span)) in axis.time_in_state.iter().enumerate() {
+        for (i, (state, span)) in drive.time_in_state.iter().enumerate() {
             if i > 0 {
                 times.push(b',');
             }
@@ -715,7 +715,7 @@ impl JsonWriter {
         for direction in [Direction::Tpdo, Direction::Rpdo] {
             let list = mo.key(direction.slug());
             list.push(b'[');
-            let of = axis
+            let of = drive
                 .mappings
                 .iter()
                 .filter(|m| m.direction == Some(direction));

@@ -86,7 +86,7 @@ pub(super) fn style_sheet(panels: &[&Panel]) -> String {
         .iter()
         .flat_map(|p| p.shades.iter().copied())
         .collect();
-    chart::style_sheet(&shades, panels.iter().any(|p| p.axes))
+    chart::style_sheet(&shades, panels.iter().any(|p| p.drives))
 }
 
 /// `EMCY timeline: a.log, b.asc`.

@@ -1,7 +1,7 @@
 //! A node's health besides its EMCYs: NMT state, heartbeat outages and the
 //! read-outs of its error history, kept with its error timeline.
 
-use super::axis::AxisRecord;
+use super::drive::DriveRecord;
 use super::error_history::{HistoryReader, ReadOut};
 use super::heartbeat::HeartbeatMonitor;
 use super::nmt::NodeNmt;
@@ -18,9 +18,9 @@ pub struct NodeHealth {
     /// Where the caller's deadline schedule keeps the node, once it has
     /// had a deadline.
     pub schedule_slot: Option<u32>,
-    /// Its CiA 402 drive axis, once a statusword or controlword of it was
+    /// Its CiA 402 drive drive, once a statusword or controlword of it was
     /// decoded.
-    pub axis: Option<Box<AxisRecord>>,
+    pub drive: Option<Box<DriveRecord>>,
 }
 
 impl NodeHealth {

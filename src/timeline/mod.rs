@@ -15,7 +15,7 @@
 //!
 //! [`history`] keeps the closed intervals of every node of an input.
 
-pub mod axis;
+pub mod drive;
 pub mod error_history;
 pub mod health;
 pub mod heartbeat;

@@ -1,7 +1,7 @@
 //! One node's error state machine (the rules are in the folder's notes).
 
 use super::interval::{At, ClearedBy, Interval};
-use super::{axis, health};
+use super::{drive, health};
 use crate::canopen::codes;
 use crate::canopen::emcy::{Emcy, Warning};
 use crate::canopen::register::Register;
@@ -235,10 +235,10 @@ impl NodeTimeline {
             .get_or_insert_with(|| Box::new(health::NodeHealth::new(timeout)))
     }
 
-    /// The node's CiA 402 axis, if a word of it was decoded.
+    /// The node's CiA 402 drive, if a word of it was decoded.
     #[inline]
-    pub(crate) fn axis_mut(&mut self) -> Option<&mut axis::AxisRecord> {
-        self.health.as_deref_mut()?.axis.as_deref_mut()
+    pub(crate) fn drive_mut(&mut self) -> Option<&mut drive::DriveRecord> {
+        self.health.as_deref_mut()?.drive.as_deref_mut()
     }
 
     /// Whether the node raised `code` in the trace.

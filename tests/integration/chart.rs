@@ -735,7 +735,7 @@ fn chromium_runs_the_page_script_on_every_kind_of_input() {
     let dom = browser_dom(browser, &html, "", 1100, 800);
     let sections: Vec<&str> = dom.split("<section class=\"input\"").skip(1).collect();
     assert_eq!(sections.len(), 5);
-    // No lanes, no axis to lay out; each of the others laid out and zoomable.
+    // No lanes, no drive to lay out; each of the others laid out and zoomable.
     assert!(!sections[0].contains("data-view="));
     let names = inputs.iter().copied().chain(["far.log"]);
     for (input, section) in names.zip(&sections).skip(1) {
@@ -749,7 +749,7 @@ fn chromium_runs_the_page_script_on_every_kind_of_input() {
             "{input}: not laid out to the window"
         );
     }
-    // The axis without times counts lines.
+    // The drive without times counts lines.
     assert!(sections[1].contains("trace line"));
 }
 

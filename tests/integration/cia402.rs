@@ -1,7 +1,7 @@
 //! A CiA 402 drive's own state, through the command line, on the
 //! fixtures of scripts/make_cia402_fixtures.py: states and faults from
 //! PDOs, where each mapping came from (sdo, dcf, option, assumed), the
-//! fault's EMCY and reset, `--fail-on fault`, `check`'s `axis_fault_new`,
+//! fault's EMCY and reset, `--fail-on fault`, `check`'s `drive_fault_new`,
 //! and the note for a drive whose mapping is unknown.
 
 use std::fs;
@@ -19,7 +19,7 @@ fn of_type<'a>(objects: &'a [Value], t: &str) -> Vec<&'a Value> {
     objects.iter().filter(|o| o["type"] == t).collect()
 }
 
-fn axis(objects: &[Value], n: u64) -> Value {
+fn drive(objects: &[Value], n: u64) -> Value {
     objects
         .iter()
         .find(|o| o["type"] == "node" && o["node"] == n)
@@ -71,7 +71,7 @@ fn the_commissioning_trace_gives_the_drive_states_from_its_learnt_tpdo() {
 #[test]
 fn the_fault_interval_has_its_emcy_its_reset_and_its_duration() {
     let objects = ndjson([COMMISSIONING]);
-    let a = axis(&objects, 5);
+    let a = drive(&objects, 5);
     assert_eq!(a["state"], "operation_enabled");
     assert_eq!(a["fault_count"], 1);
     let faults = a["faults"].as_array().expect("faults");
@@ -118,14 +118,14 @@ fn each_mapping_source_is_recorded_and_the_first_one_wins() {
     let both = || vec!["0x6041:16".to_string(), "0x603F:16".to_string()];
     // The trace's SDO writes (the COB-ID by a segmented download).
     let objects = ndjson([COMMISSIONING]);
-    assert_eq!(tpdo(&axis(&objects, 5)), (0x185, both(), "sdo".into()));
-    assert_eq!(axis(&objects, 5)["mapping"]["rpdo"][0]["source"], "sdo");
+    assert_eq!(tpdo(&drive(&objects, 5)), (0x185, both(), "sdo".into()));
+    assert_eq!(drive(&objects, 5)["mapping"]["rpdo"][0]["source"], "sdo");
     // The trace's own writes win over a DCF and --pdo.
     let objects = ndjson(["--dcf", DCF, "--pdo", "0x185=0x6041", COMMISSIONING]);
-    assert_eq!(tpdo(&axis(&objects, 5)), (0x185, both(), "sdo".into()));
+    assert_eq!(tpdo(&drive(&objects, 5)), (0x185, both(), "sdo".into()));
     // Only the DCF.
     let objects = ndjson(["--dcf", DCF, DCF_TRACE]);
-    assert_eq!(tpdo(&axis(&objects, 5)), (0x185, both(), "dcf".into()));
+    assert_eq!(tpdo(&drive(&objects, 5)), (0x185, both(), "dcf".into()));
     assert_eq!(states(&objects), LIFE);
     // The DCF's vendor id chose the profile, as a 0x1018 upload would.
     let node = objects.iter().find(|o| o["type"] == "node").expect("node");
@@ -133,21 +133,24 @@ fn each_mapping_source_is_recorded_and_the_first_one_wins() {
     // --pdo, and the DCF wins over it.
     let objects = ndjson(["--pdo", "0x185=0x6041", DCF_TRACE]);
     assert_eq!(
-        tpdo(&axis(&objects, 5)),
+        tpdo(&drive(&objects, 5)),
         (0x185, vec!["0x6041:16".to_string()], "option".into())
     );
     assert_eq!(states(&objects), LIFE);
     // No controlword mapped: no reset seen, the fault still cleared.
     assert!(of_type(&objects, "fault_reset").is_empty());
     let objects = ndjson(["--pdo", "0x185=0x6041", "--dcf", DCF, DCF_TRACE]);
-    assert_eq!(tpdo(&axis(&objects, 5)).2, "dcf");
+    assert_eq!(tpdo(&drive(&objects, 5)).2, "dcf");
     // The assumption: the statusword first in TPDO1, as it is here.
     let objects = ndjson(["--assume-cia402-pdo", DCF_TRACE]);
     assert_eq!(
-        tpdo(&axis(&objects, 5)),
+        tpdo(&drive(&objects, 5)),
         (0x185, vec!["0x6041:16".to_string()], "assumed".into())
     );
-    assert_eq!(axis(&objects, 5)["mapping"]["rpdo"][0]["source"], "assumed");
+    assert_eq!(
+        drive(&objects, 5)["mapping"]["rpdo"][0]["source"],
+        "assumed"
+    );
     assert_eq!(states(&objects), LIFE);
     assert_eq!(of_type(&objects, "fault_reset").len(), 1);
 }
@@ -252,7 +255,7 @@ fn a_missing_or_bad_dcf_is_one_error_line_and_exit_2() {
 }
 
 #[test]
-fn check_reports_a_new_axis_fault_as_a_regression() {
+fn check_reports_a_new_drive_fault_as_a_regression() {
     // The baseline: the drive enabled, never faulted (the trace up to the fault).
     let healthy: String = fs::read_to_string(COMMISSIONING)
         .expect("fixture")
@@ -304,7 +307,7 @@ fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
         svg.contains("EMCY 0x7305, cleared by a fault reset at"),
         "{svg}"
     );
-    // The axis states as a strip along the lane's foot, in trace order,
+    // The drive states as a strip along the lane's foot, in trace order,
     // and their fills in the style sheet.
     let strips: Vec<&str> = svg
         .match_indices("<title>axis state ")
@@ -312,7 +315,7 @@ fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
         .collect();
     assert_eq!(strips, LIFE, "{svg}");
     assert!(svg.contains(".ec .a-operation_enabled{fill:"));
-    // A trace without an axis has no such band.
+    // A trace without a drive has no such band.
     let out = emcy_decode()
         .args(["--format", "svg", UNKNOWN])
         .output()

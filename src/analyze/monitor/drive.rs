@@ -1,7 +1,7 @@
 //! The drive monitor: CiA 402 drives. PDO mappings learnt from the
 //! trace's SDO writes or given (DCF, `--pdo`, `--assume-cia402-pdo`), the
 //! statuswords and controlwords read out of PDOs and SDO uploads, and the
-//! `axis_state` / `fault_reset` events. Kept apart from the EMCY path: a
+//! `drive_state` / `fault_reset` events. Kept apart from the EMCY path: a
 //! PDO on an id no mapping decodes costs one array lookup there.
 
 use std::collections::BTreeMap;
@@ -9,7 +9,7 @@ use std::io::Write;
 
 use super::context::{Emit, Fact, Facts, Monitor, Seen, Step};
 use crate::analyze::analysis::OutputError;
-use crate::analyze::event::{AxisReport, Health, NodeReport};
+use crate::analyze::event::{DriveReport, Health, NodeReport};
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::NodeId;
@@ -19,7 +19,7 @@ use crate::canopen::pdo::{
 };
 use crate::canopen::sdo::{self, Downloads};
 use crate::timeline::At;
-use crate::timeline::axis::{AxisRecord, Via};
+use crate::timeline::drive::{DriveRecord, Via};
 use crate::timeline::health::NodeHealth;
 use crate::trace::{Fold, Interest};
 
@@ -345,10 +345,10 @@ impl Monitor for DriveMonitor {
     /// or `--pdo` gave (not for the blanket assumption).
     fn report(&self, report: &mut NodeReport, health: Option<&NodeHealth>) {
         let mappings = self.mappings_of(report.node);
-        match health.and_then(|h| h.axis.as_deref()) {
-            Some(rec) => report.axis = Some(Box::new(drive_report(rec, mappings))),
+        match health.and_then(|h| h.drive.as_deref()) {
+            Some(rec) => report.drive = Some(Box::new(drive_report(rec, mappings))),
             None if mappings.iter().any(|m| m.source != Source::Assumed) => {
-                report.axis = Some(Box::new(AxisReport {
+                report.drive = Some(Box::new(DriveReport {
                     state: None,
                     statusword: None,
                     faults: Vec::new(),
@@ -489,11 +489,11 @@ impl DriveMonitor {
             return;
         };
         let slot = nodes.get(&last.channel, node);
-        let Some(rec) = slot.timeline.axis_mut() else {
+        let Some(rec) = slot.timeline.drive_mut() else {
             return;
         };
-        if at.time > rec.axis.last_time() {
-            rec.axis.statusword(at, word, Via::Pdo { cob_id });
+        if at.time > rec.drive.last_time() {
+            rec.drive.statusword(at, word, Via::Pdo { cob_id });
         }
     }
 
@@ -535,14 +535,14 @@ impl DriveMonitor {
     ) -> Result<(), OutputError> {
         let slot = nodes.get(raw, node);
         let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
-        let rec = h.axis.get_or_insert_with(|| Box::new(AxisRecord::new()));
+        let rec = h.drive.get_or_insert_with(|| Box::new(DriveRecord::new()));
         let events = &mut self.events;
         if let Some(word) = words.statusword
             && let Some(change) = rec.statusword(at, word, words.via)
         {
             events.push((
                 at,
-                Health::AxisState {
+                Health::DriveState {
                     state: change.to,
                     from: change.from,
                     statusword: change.statusword,
@@ -551,10 +551,10 @@ impl DriveMonitor {
             ));
         }
         if let Some(code) = words.error_code {
-            rec.axis.error_code(code);
+            rec.drive.error_code(code);
         }
         if let Some(word) = words.controlword
-            && let Some(c) = rec.axis.controlword(at, word)
+            && let Some(c) = rec.drive.controlword(at, word)
             && c.command == Command::FaultReset
         {
             events.push((at, Health::FaultReset { controlword: word }));
@@ -567,14 +567,14 @@ impl DriveMonitor {
 }
 
 /// A drive's report, with its mappings in force.
-fn drive_report(rec: &AxisRecord, mappings: Vec<Mapping>) -> AxisReport {
-    AxisReport {
-        state: rec.axis.state(),
-        statusword: rec.axis.last_statusword(),
+fn drive_report(rec: &DriveRecord, mappings: Vec<Mapping>) -> DriveReport {
+    DriveReport {
+        state: rec.drive.state(),
+        statusword: rec.drive.last_statusword(),
         faults: rec.all_faults().cloned().collect(),
-        fault_count: rec.axis.fault_count(),
-        fault_resets: rec.axis.fault_reset_count(),
-        time_in_state: rec.axis.time_in_state().collect(),
+        fault_count: rec.drive.fault_count(),
+        fault_resets: rec.drive.fault_reset_count(),
+        time_in_state: rec.drive.time_in_state().collect(),
         mappings,
     }
 }

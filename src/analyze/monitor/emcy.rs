@@ -163,7 +163,7 @@ impl EmcyMonitor {
         }
         // An error EMCY of a drive: the fault it came with.
         if !emcy.is_reset()
-            && let Some(rec) = timeline.axis_mut()
+            && let Some(rec) = timeline.drive_mut()
         {
             rec.emcy(at, emcy.code);
         }

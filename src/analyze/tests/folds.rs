@@ -301,7 +301,7 @@ fn a_timeout_shorter_than_the_period_refuses_every_fold() {
 /// Drives sending TPDO1 (statusword and position) every millisecond, the
 /// statusword's bits 10 and 12 toggling, a fault with its EMCY and a
 /// reset on RPDO1, heartbeats between: PDO repeats are folded with the
-/// heartbeats, and the axis ends on the last statusword sent.
+/// heartbeats, and the drive ends on the last statusword sent.
 fn drive_trace(seed: u64, drives: u32, millis: u64, emcy_every: u64) -> Vec<u8> {
     let mut rng = Lcg(seed);
     let mut t = Vec::new();

@@ -403,7 +403,7 @@ fn the_example_user_profile_extends_kollmorgen() {
     );
     // Inherited row.
     assert_eq!(p.vendor_code(0x3110), base.vendor_code(0x3110));
-    // The category field is inherited; the axis field takes byte 4 out
+    // The category field is inherited; the drive field takes byte 4 out
     // of the base's zero bytes.
     let e = frame(&[0x10, 0x43, 0x89, 0x01, 0x02, 0, 0, 0]);
     assert_eq!(

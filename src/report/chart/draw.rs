@@ -191,7 +191,7 @@ fn write_lane(
     for shade in &lane.shades {
         // An axis state is a strip along the lane's foot, under the bars.
         let (y, height) = if shade.strip {
-            (lane.height - AXIS_STRIP_H, AXIS_STRIP_H)
+            (lane.height - DRIVE_STRIP_H, DRIVE_STRIP_H)
         } else {
             (0.0, lane.height)
         };
@@ -442,7 +442,7 @@ const SHADES: [(&str, &str); 15] = [
 ];
 
 /// The height of the axis state strip along a lane's foot.
-const AXIS_STRIP_H: f64 = 4.0;
+const DRIVE_STRIP_H: f64 = 4.0;
 
 fn write_legend(
     out: &mut String,

@@ -8,16 +8,16 @@ use super::{Clock, Scale, Shade};
 use crate::analyze::NodeReport;
 use crate::canopen::cia402::State;
 use crate::timeline::At;
-use crate::timeline::axis::AxisState;
+use crate::timeline::drive::DriveState;
 
 /// The fault bands of a node with an axis; none for other nodes.
 pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Vec<Shade> {
-    let Some(axis) = &node.axis else {
+    let Some(drive) = &node.drive else {
         return Vec::new();
     };
     let end = scale.x(scale.end);
     let mut out = Vec::new();
-    for f in &axis.faults {
+    for f in &drive.faults {
         let Some(v0) = clock.value(&f.start) else {
             continue;
         };
@@ -59,8 +59,8 @@ pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Ve
 }
 
 /// The CSS class of an axis state's strip.
-pub(super) fn axis_class(state: AxisState) -> &'static str {
-    let AxisState::State(state) = state else {
+pub(super) fn drive_class(state: DriveState) -> &'static str {
+    let DriveState::State(state) = state else {
         return "a-unknown";
     };
     match state {
@@ -77,7 +77,11 @@ pub(super) fn axis_class(state: AxisState) -> &'static str {
 
 /// The axis states along the lane's foot: each from its change to the
 /// next (the last to the end of the trace).
-pub(super) fn axis_shades(clock: &Clock, scale: Scale, changes: &[(At, AxisState)]) -> Vec<Shade> {
+pub(super) fn drive_shades(
+    clock: &Clock,
+    scale: Scale,
+    changes: &[(At, DriveState)],
+) -> Vec<Shade> {
     let end = scale.x(scale.end);
     let mut out = Vec::new();
     for (i, (at, state)) in changes.iter().enumerate() {
@@ -91,7 +95,7 @@ pub(super) fn axis_shades(clock: &Clock, scale: Scale, changes: &[(At, AxisState
             out.push(Shade {
                 x0,
                 x1,
-                class: axis_class(*state),
+                class: drive_class(*state),
                 title: format!("axis state {} from {}", state.slug(), clock.at(at)),
                 strip: true,
             });

@@ -43,7 +43,7 @@ use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport, Nod
 use crate::canopen::NodeId;
 use crate::canopen::nmt::NmtState;
 use crate::timeline::At;
-use crate::timeline::axis::AxisState;
+use crate::timeline::drive::DriveState;
 use crate::trace::Format;
 
 use bars::Bars;
@@ -73,14 +73,14 @@ pub(super) struct Collector {
     /// Per lane, the NMT state changes in trace order.
     nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
     /// Per lane, the CiA 402 axis state changes in trace order.
-    axis: BTreeMap<(String, NodeId), Vec<(At, AxisState)>>,
+    drive: BTreeMap<(String, NodeId), Vec<(At, DriveState)>>,
 }
 
 impl Collector {
     pub(super) fn begin_input(&mut self) {
         self.current = Streamed::default();
         self.nmt.clear();
-        self.axis.clear();
+        self.drive.clear();
     }
 
     /// NMT and axis state changes shade the lane; outages and faults
@@ -95,8 +95,8 @@ impl Collector {
             Health::Nmt { state, .. } => {
                 push_change(self.nmt.entry(lane()).or_default(), at, *state)
             }
-            Health::AxisState { state, .. } => {
-                push_change(self.axis.entry(lane()).or_default(), at, *state)
+            Health::DriveState { state, .. } => {
+                push_change(self.drive.entry(lane()).or_default(), at, *state)
             }
             _ => {}
         }
@@ -131,7 +131,7 @@ impl Collector {
         let streamed = std::mem::take(&mut self.current);
         let changes = Changes {
             nmt: std::mem::take(&mut self.nmt),
-            axis: std::mem::take(&mut self.axis),
+            drive: std::mem::take(&mut self.drive),
         };
         Panel::build(input, streamed, changes)
     }
@@ -147,7 +147,7 @@ fn push_change<S>(changes: &mut Vec<(At, S)>, at: At, state: S) {
 /// The state changes an input's lanes are shaded by.
 struct Changes {
     nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
-    axis: BTreeMap<(String, NodeId), Vec<(At, AxisState)>>,
+    drive: BTreeMap<(String, NodeId), Vec<(At, DriveState)>>,
 }
 
 /// The label of a lane: `can0 · node 5`, and a second line.
@@ -188,7 +188,7 @@ pub(in crate::report) struct Panel {
     pub(super) shades: BTreeSet<(usize, usize)>,
     /// A lane has a CiA 402 axis state strip (the style sheet then has
     /// their fills).
-    pub(super) axes: bool,
+    pub(super) drives: bool,
     /// The attributes of the panel's `<g>` that let the HTML page re-lay
     /// the time axis (fill the window, zoom, pan): the plot's edges in px,
     /// the axis values at them, what the axis measures and its origin.
@@ -401,7 +401,7 @@ impl Panel {
             let rows = bars.rows.len().max(1) as f64;
             let lane = (node.channel.clone(), node.node);
             let nmt = changes.nmt.remove(&lane).unwrap_or_default();
-            let axis = changes.axis.remove(&lane).unwrap_or_default();
+            let drive = changes.drive.remove(&lane).unwrap_or_default();
             lanes.push(Lane {
                 node,
                 bars,
@@ -409,7 +409,7 @@ impl Panel {
                 shades: {
                     let mut s = shades(&clock, scale, node, &nmt);
                     s.extend(drive::fault_shades(&clock, scale, node));
-                    s.extend(drive::axis_shades(&clock, scale, &axis));
+                    s.extend(drive::drive_shades(&clock, scale, &drive));
                     s
                 },
                 height: (rows * ROW_H + 10.0).max(LANE_MIN_H),
@@ -432,7 +432,7 @@ impl Panel {
         let mut svg = String::new();
         let height = write_panel(&mut svg, input, &clock, scale, &lanes, &keys, &streamed)
             .map_err(|_| io::Error::other("formatting the chart failed"))?;
-        let axes = lanes
+        let drives = lanes
             .iter()
             .any(|l| l.shades.iter().any(|s| s.strip || s.class == "fault"));
         let lanes = lanes
@@ -450,7 +450,7 @@ impl Panel {
             clock,
             lanes,
             shades: keys.shades(),
-            axes,
+            drives,
             view,
         })
     }

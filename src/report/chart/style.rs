@@ -63,7 +63,7 @@ pub(in crate::report) const STYLE: &str = "\
 /// drive (every other chart's style sheet stays as it was): disabled
 /// states grey, ready and switched on light green, operation enabled
 /// green, quick stop amber, fault reaction and fault red.
-const AXIS_STYLE: &str = "\
+const DRIVE_STYLE: &str = "\
 .ec .a-not_ready_to_switch_on{fill:#bbb}
 .ec .a-switch_on_disabled{fill:#888}
 .ec .a-ready_to_switch_on{fill:#a6dba0}
@@ -178,13 +178,13 @@ fn rgb(h: f64, s: f64, l: f64) -> u32 {
 /// With `axes`, the axis state strips' fills too.
 pub(in crate::report) fn style_sheet(
     shades: &std::collections::BTreeSet<(usize, usize)>,
-    axes: bool,
+    drives: bool,
 ) -> String {
     use std::fmt::Write as _;
     let mut s = String::with_capacity(STYLE.len() + 1024);
     s.push_str(STYLE);
-    if axes {
-        s.push_str(AXIS_STYLE);
+    if drives {
+        s.push_str(DRIVE_STYLE);
     }
     for (class, colour) in CLASS_COLOURS {
         let _ = writeln!(s, ".ec .c-{}{{fill:#{colour:06x}}}", class.slug());

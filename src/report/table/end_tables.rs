@@ -10,7 +10,7 @@ use comfy_table::{CellAlignment, Table, presets};
 
 use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut, push_row, write_row};
 use super::{BOLD, TableReport};
-use crate::analyze::{AxisReport, HistoryReport, InputReport, NodeReport};
+use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport};
 use crate::canopen::NodeId;
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
 use crate::report::timefmt::TimeFormat;
@@ -26,7 +26,7 @@ impl<W: Write> TableReport<W> {
                 self.write_nodes(input)?;
                 self.write_codes(input)?;
                 self.write_health(input)?;
-                self.write_axes(input)?;
+                self.write_drives(input)?;
             }
             self.write_bus_line(input)?;
             return writeln!(self.out);
@@ -50,7 +50,7 @@ impl<W: Write> TableReport<W> {
         writeln!(self.out)?;
         self.write_nodes(input)?;
         self.write_health(input)?;
-        self.write_axes(input)?;
+        self.write_drives(input)?;
 
         self.write_timeline(input)?;
         writeln!(self.out)?;
@@ -205,19 +205,19 @@ impl<W: Write> TableReport<W> {
         )
     }
 
-    /// The CiA 402 drives' axes (none: no section): state at the end,
+    /// The CiA 402 drives' drives (none: no section): state at the end,
     /// faults, where the mapping came from, and the summary's sentence.
     /// Drives are few: one comfy table.
-    fn write_axes(&mut self, input: &InputReport) -> io::Result<()> {
-        let axes: Vec<(&NodeReport, &AxisReport)> = input
+    fn write_drives(&mut self, input: &InputReport) -> io::Result<()> {
+        let drives: Vec<(&NodeReport, &DriveReport)> = input
             .nodes
             .iter()
-            .filter_map(|n| n.axis.as_deref().map(|a| (n, a)))
+            .filter_map(|n| n.drive.as_deref().map(|a| (n, a)))
             .collect();
-        if axes.is_empty() {
+        if drives.is_empty() {
             return Ok(());
         }
-        let rows: Vec<[String; 7]> = axes
+        let rows: Vec<[String; 7]> = drives
             .iter()
             .map(|(n, a)| {
                 let mapping: Vec<String> = a
@@ -241,22 +241,22 @@ impl<W: Write> TableReport<W> {
                 ]
             })
             .collect();
-        let mut widths = AXES_HEADER.map(str::len);
+        let mut widths = DRIVES_HEADER.map(str::len);
         for row in &rows {
             for (w, c) in widths.iter_mut().zip(row) {
                 *w = (*w).max(display_width(c));
             }
         }
-        let shown = self.fit(&mut widths, &AXES_HEADER, &AXES_FIT);
+        let shown = self.fit(&mut widths, &DRIVES_HEADER, &DRIVES_FIT);
         writeln!(self.out)?;
         writeln!(self.out, "{}", self.paint(BOLD, "Drive axes (CiA 402)"))?;
         write_comfy_table(
             &mut self.out,
-            &AXES_HEADER,
+            &DRIVES_HEADER,
             &rows,
             &widths,
             &shown,
-            &AXES_RIGHT,
+            &DRIVES_RIGHT,
         )
     }
 
@@ -620,7 +620,7 @@ fn node_cells(
     widths
 }
 
-const AXES_HEADER: [&str; 7] = [
+const DRIVES_HEADER: [&str; 7] = [
     "CHANNEL",
     "NODE",
     "AXIS AT END",
@@ -630,10 +630,10 @@ const AXES_HEADER: [&str; 7] = [
     "SUMMARY",
 ];
 
-const AXES_RIGHT: [bool; 7] = [false, true, false, true, true, false, false];
+const DRIVES_RIGHT: [bool; 7] = [false, true, false, true, true, false, false];
 
 /// The summary sentence says the faults and the state at the end again.
-const AXES_FIT: Fit = Fit {
+const DRIVES_FIT: Fit = Fit {
     drop: &[5, 4, 3],
     flex: &[(6, 60, 20), (0, CHANNEL_MAX, 7)],
 };

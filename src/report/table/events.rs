@@ -17,7 +17,7 @@ use crate::canopen::profile::{Decoded, FieldValue};
 use crate::report::format::{TABLE_LIST, code_text, codes_list, push_code, push_codes, push_hex};
 use crate::report::timefmt::TimeFormat;
 use crate::text::printable;
-use crate::timeline::axis::Via as AxisVia;
+use crate::timeline::drive::Via as DriveVia;
 use crate::trace::Timestamp;
 
 /// The event columns, fixed by the first event of an input. At a terminal
@@ -205,8 +205,8 @@ impl<W: Write> TableReport<W> {
             Health::HeartbeatBack { .. } => ("back", Some(GREEN)),
             Health::SdoAbort { .. } => ("abort", Some(YELLOW)),
             Health::ErrorHistory(_) | Health::ErrorHistoryCleared => ("1003h", None),
-            Health::AxisState { state, .. } if state.is_fault() => ("axis", Some(RED)),
-            Health::AxisState { .. } => ("axis", None),
+            Health::DriveState { state, .. } if state.is_fault() => ("axis", Some(RED)),
+            Health::DriveState { .. } => ("axis", None),
             Health::FaultReset { .. } => ("reset", Some(GREEN)),
         };
         self.write_tagged(
@@ -536,15 +536,15 @@ pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String 
         ),
         Health::ErrorHistory(h) => history_head(h),
         Health::ErrorHistoryCleared => "error history cleared".to_string(),
-        Health::AxisState {
+        Health::DriveState {
             state,
             from,
             statusword,
             via,
         } => {
             let source = match via {
-                AxisVia::Pdo { cob_id } => format!("PDO 0x{cob_id:03X}"),
-                AxisVia::Sdo => "SDO".to_string(),
+                DriveVia::Pdo { cob_id } => format!("PDO 0x{cob_id:03X}"),
+                DriveVia::Sdo => "SDO".to_string(),
             };
             match from {
                 Some(f) => format!(

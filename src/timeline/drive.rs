@@ -1,4 +1,4 @@
-//! One CiA 402 drive axis over a trace: the states its statusword showed,
+//! One CiA 402 drive drive over a trace: the states its statusword showed,
 //! its faults (from entering fault reaction or fault to leaving them), the
 //! fault resets its master sent, and the time it spent in each state.
 //!
@@ -6,7 +6,7 @@
 //! PDO, thousands a second), so a call that changes nothing only compares a
 //! word and stores a time: no allocation, no event. Closed faults are handed
 //! back to the caller, as [`super::NodeTimeline`] hands back intervals: the
-//! axis keeps only the open one, so its memory is constant.
+//! drive keeps only the open one, so its memory is constant.
 
 use super::interval::At;
 use crate::canopen::cia402::{self, Command, State};
@@ -15,7 +15,7 @@ use crate::trace::{Span, Timestamp};
 /// What a statusword showed: a state of the standard's table, or a bit
 /// pattern matching none of its rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum AxisState {
+pub enum DriveState {
     State(State),
     /// No row of the table matches (the drive booting, or broken).
     Unknown,
@@ -24,39 +24,39 @@ pub enum AxisState {
 /// States plus unknown: the length of per-state arrays.
 const SLOTS: usize = State::ALL.len() + 1;
 
-impl AxisState {
+impl DriveState {
     /// The state a statusword shows.
-    pub fn of_statusword(statusword: u16) -> AxisState {
-        State::of_statusword(statusword).map_or(AxisState::Unknown, AxisState::State)
+    pub fn of_statusword(statusword: u16) -> DriveState {
+        State::of_statusword(statusword).map_or(DriveState::Unknown, DriveState::State)
     }
 
     /// The stable name in JSON: the state's (`operation_enabled`), or
     /// `unknown`.
     pub fn slug(self) -> &'static str {
         match self {
-            AxisState::State(s) => s.slug(),
-            AxisState::Unknown => "unknown",
+            DriveState::State(s) => s.slug(),
+            DriveState::Unknown => "unknown",
         }
     }
 
     /// Whether the drive is in fault reaction active or fault.
     pub fn is_fault(self) -> bool {
-        matches!(self, AxisState::State(s) if s.is_fault())
+        matches!(self, DriveState::State(s) if s.is_fault())
     }
 
     /// Its slot in per-state arrays: the state's index, unknown last.
     fn slot(self) -> usize {
         match self {
-            AxisState::State(s) => s.index(),
-            AxisState::Unknown => State::ALL.len(),
+            DriveState::State(s) => s.index(),
+            DriveState::Unknown => State::ALL.len(),
         }
     }
 
-    fn of_slot(slot: usize) -> AxisState {
+    fn of_slot(slot: usize) -> DriveState {
         State::ALL
             .get(slot)
             .copied()
-            .map_or(AxisState::Unknown, AxisState::State)
+            .map_or(DriveState::Unknown, DriveState::State)
     }
 }
 
@@ -93,7 +93,7 @@ pub struct Fault {
     /// left fault without one (a restart, a digital input).
     pub cleared_by: Option<At>,
     /// The EMCY code that came with the fault, when the caller attached one
-    /// ([`Axis::attach_emcy`]): the pipeline knows which EMCY that is.
+    /// ([`Drive::attach_emcy`]): the pipeline knows which EMCY that is.
     pub emcy_code: Option<u16>,
     /// The first nonzero error code (0x603F) the drive reported in it.
     pub error_code: Option<u16>,
@@ -107,20 +107,20 @@ impl Fault {
     }
 }
 
-/// A statusword that changed the axis's state.
+/// A statusword that changed the drive's state.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Change {
     pub at: At,
-    /// The state before; `None` for the axis's first statusword.
-    pub from: Option<AxisState>,
-    pub to: AxisState,
+    /// The state before; `None` for the drive's first statusword.
+    pub from: Option<DriveState>,
+    pub to: DriveState,
     /// The word as sent (reports print it: `0x0637`).
     pub statusword: u16,
     pub via: Via,
     /// The fault this change ended, handed over to the caller to keep.
     pub closed_fault: Option<Fault>,
     /// Whether it began a fault (not one going on through an unknown
-    /// pattern): the fault is then [`Axis::open_fault`].
+    /// pattern): the fault is then [`Drive::open_fault`].
     pub opened_fault: bool,
 }
 
@@ -133,19 +133,19 @@ pub struct Commanded {
     pub command: Command,
 }
 
-/// The state of one axis (one node's drive).
+/// The state of one drive (one node's drive).
 #[derive(Clone, Debug, Default)]
-pub struct Axis {
-    state: Option<AxisState>,
+pub struct Drive {
+    state: Option<DriveState>,
     /// The last statusword, so a repeat costs one comparison.
     statusword: Option<u16>,
     controlword: Option<u16>,
     open_fault: Option<Fault>,
     faults: u64,
     fault_resets: u64,
-    /// Time spent in each state ([`AxisState::slot`]) over stays that ended.
+    /// Time spent in each state ([`DriveState::slot`]) over stays that ended.
     time: [Span; SLOTS],
-    /// Which slots the axis has been in.
+    /// Which slots the drive has been in.
     visited: u16,
     /// The time of the first timed statusword.
     first_time: Option<Timestamp>,
@@ -156,8 +156,8 @@ pub struct Axis {
     since: Option<Timestamp>,
 }
 
-impl Axis {
-    /// An axis nothing has been seen of.
+impl Drive {
+    /// A drive nothing has been seen of.
     pub fn new() -> Self {
         Self::default()
     }
@@ -180,7 +180,7 @@ impl Axis {
             return None;
         }
         self.statusword = Some(statusword);
-        let to = AxisState::of_statusword(statusword);
+        let to = DriveState::of_statusword(statusword);
         let from = self.state;
         if from == Some(to) {
             return None;
@@ -206,7 +206,7 @@ impl Axis {
                     error_code: None,
                 });
             }
-        } else if to != AxisState::Unknown {
+        } else if to != DriveState::Unknown {
             // An unknown pattern inside a fault is not a way out of it (a
             // glitch would split one fault in two): a known state is.
             closed_fault = self.open_fault.take().map(|mut f| {
@@ -234,7 +234,7 @@ impl Axis {
         }
         self.controlword = Some(controlword);
         let state = match self.state {
-            Some(AxisState::State(s)) => Some(s),
+            Some(DriveState::State(s)) => Some(s),
             _ => None,
         };
         let command = Command::of_controlword(controlword, previous, state)?;
@@ -276,7 +276,7 @@ impl Axis {
     }
 
     /// The state the last statusword showed; `None` before any.
-    pub fn state(&self) -> Option<AxisState> {
+    pub fn state(&self) -> Option<DriveState> {
         self.state
     }
 
@@ -307,7 +307,7 @@ impl Axis {
 
     /// The time spent in `state`, the stay in the current state counted to
     /// the last statusword.
-    pub fn time_in(&self, state: AxisState) -> Span {
+    pub fn time_in(&self, state: DriveState) -> Span {
         let ended = self.time.get(state.slot()).copied().unwrap_or_default();
         match (self.state, self.since, self.last_time) {
             (Some(now), Some(since), Some(last)) if now == state => {
@@ -317,13 +317,13 @@ impl Axis {
         }
     }
 
-    /// The states the axis was in, in the standard's order (unknown last),
+    /// The states the drive was in, in the standard's order (unknown last),
     /// with the time spent in each: `time_in_state` of the report.
-    pub fn time_in_state(&self) -> impl Iterator<Item = (AxisState, Span)> + '_ {
+    pub fn time_in_state(&self) -> impl Iterator<Item = (DriveState, Span)> + '_ {
         (0..SLOTS)
             .filter(|slot| self.visited & (1 << slot) != 0)
             .map(|slot| {
-                let state = AxisState::of_slot(slot);
+                let state = DriveState::of_slot(slot);
                 (state, self.time_in(state))
             })
     }
@@ -341,7 +341,7 @@ impl Axis {
 }
 
 /// Closed faults a node keeps for its report; later ones are only counted
-/// ([`Axis::fault_count`]): a drive flapping in and out of fault for hours
+/// ([`Drive::fault_count`]): a drive flapping in and out of fault for hours
 /// must not grow memory without bound.
 pub const MAX_FAULTS_KEPT: usize = 1000;
 
@@ -351,11 +351,11 @@ pub const MAX_FAULTS_KEPT: usize = 1000;
 /// and busy buses without pairing unrelated events.
 const EMCY_NEAR_MILLIS: u64 = 1000;
 
-/// One node's axis with what the report needs of it: the closed faults and
+/// One node's drive with what the report needs of it: the closed faults and
 /// the last EMCY (to pair with a fault entered just after it).
 #[derive(Clone, Debug, Default)]
-pub struct AxisRecord {
-    pub axis: Axis,
+pub struct DriveRecord {
+    pub drive: Drive,
     /// Closed faults, oldest first (the first [`MAX_FAULTS_KEPT`]).
     pub faults: Vec<Fault>,
     /// The node's last error EMCY: when, and its code.
@@ -368,15 +368,15 @@ fn near(a: Timestamp, b: Timestamp) -> bool {
     gap.as_f64() * 1000.0 <= EMCY_NEAR_MILLIS as f64
 }
 
-impl AxisRecord {
+impl DriveRecord {
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// Feeds a statusword (see [`Axis::statusword`]); a fault it closes is
+    /// Feeds a statusword (see [`Drive::statusword`]); a fault it closes is
     /// kept, a fault it opens gets the EMCY sent just before it.
     pub fn statusword(&mut self, at: At, statusword: u16, via: Via) -> Option<Change> {
-        let mut change = self.axis.statusword(at, statusword, via)?;
+        let mut change = self.drive.statusword(at, statusword, via)?;
         if let Some(f) = change.closed_fault.take() {
             self.keep(f.clone());
             change.closed_fault = Some(f);
@@ -385,7 +385,7 @@ impl AxisRecord {
             && let (Some((t, code)), Some(now)) = (self.last_emcy, at.time)
             && near(t, now)
         {
-            self.axis.attach_emcy(code);
+            self.drive.attach_emcy(code);
         }
         Some(change)
     }
@@ -396,11 +396,11 @@ impl AxisRecord {
         if let Some(t) = at.time {
             self.last_emcy = Some((t, code));
         }
-        let start = self.axis.open_fault().and_then(|f| f.start.time);
+        let start = self.drive.open_fault().and_then(|f| f.start.time);
         if let (Some(start), Some(now)) = (start, at.time)
             && near(start, now)
         {
-            self.axis.attach_emcy(code);
+            self.drive.attach_emcy(code);
         }
     }
 
@@ -412,7 +412,7 @@ impl AxisRecord {
 
     /// Every fault, closed ones then the open one.
     pub fn all_faults(&self) -> impl Iterator<Item = &Fault> + '_ {
-        self.faults.iter().chain(self.axis.open_fault())
+        self.faults.iter().chain(self.drive.open_fault())
     }
 }
 
@@ -429,8 +429,8 @@ mod tests {
         }
     }
 
-    fn st(s: State) -> AxisState {
-        AxisState::State(s)
+    fn st(s: State) -> DriveState {
+        DriveState::State(s)
     }
 
     fn secs(s: Span) -> f64 {
@@ -439,7 +439,7 @@ mod tests {
 
     #[test]
     fn only_changes_of_state_are_reported() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         let first = a.statusword(at(1), 0x0250, PDO).expect("first statusword");
         assert_eq!(first.from, None);
         assert_eq!(first.to, st(State::SwitchOnDisabled));
@@ -485,21 +485,21 @@ mod tests {
             (0x0008, Fault),               // 14
             (0x0040, SwitchOnDisabled),    // 15
         ];
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         let mut seen = Vec::new();
         for (i, (word, _)) in path.iter().enumerate() {
             if let Some(c) = a.statusword(at(i as u64), *word, PDO) {
                 seen.push(c.to);
             }
         }
-        let expected: Vec<AxisState> = path.iter().map(|&(_, s)| st(s)).collect();
+        let expected: Vec<DriveState> = path.iter().map(|&(_, s)| st(s)).collect();
         assert_eq!(seen, expected);
         assert_eq!(a.fault_count(), 1);
     }
 
     #[test]
     fn a_fault_from_reaction_to_reset() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.statusword(at(10), 0x0637, PDO);
         a.controlword(at(10), 0x000F);
         let entered = a.statusword(at(12), 0x061F, PDO).expect("fault reaction");
@@ -537,7 +537,7 @@ mod tests {
 
     #[test]
     fn a_fault_left_without_a_reset_has_no_clearer() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.error_code(0x3210);
         a.statusword(at(1), 0x0008, PDO);
         assert!(a.open_fault().is_some(), "first word a fault");
@@ -558,10 +558,10 @@ mod tests {
 
     #[test]
     fn an_unknown_pattern_is_a_state_but_does_not_end_a_fault() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.statusword(at(1), 0x0008, PDO);
         let odd = a.statusword(at(2), 0x0041, PDO).expect("unknown");
-        assert_eq!(odd.to, AxisState::Unknown);
+        assert_eq!(odd.to, DriveState::Unknown);
         assert_eq!(odd.closed_fault, None);
         assert!(a.open_fault().is_some());
         // Back into fault from unknown: the same fault.
@@ -570,12 +570,12 @@ mod tests {
         assert_eq!(a.fault_count(), 1);
         let out = a.statusword(at(4), 0x0040, PDO).expect("cleared");
         assert_eq!(out.closed_fault.map(|f| f.start), Some(at(1)));
-        assert_eq!(AxisState::Unknown.slug(), "unknown");
+        assert_eq!(DriveState::Unknown.slug(), "unknown");
     }
 
     #[test]
     fn commands_are_reported_once_per_new_word() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.statusword(at(0), 0x0021, PDO);
         let c = a.controlword(at(1), 0x000F).expect("a command");
         assert_eq!(c.command, Command::SwitchOnEnableOperation);
@@ -589,7 +589,7 @@ mod tests {
 
     #[test]
     fn time_in_each_state() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.statusword(at(10), 0x0040, PDO);
         a.statusword(at(11), 0x0040, PDO);
         a.statusword(at(12), 0x0021, PDO);
@@ -619,7 +619,7 @@ mod tests {
     #[test]
     fn untimed_statuswords_move_no_time() {
         let untimed = |line| At { time: None, line };
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.statusword(untimed(1), 0x0040, PDO);
         a.statusword(at(5), 0x0040, PDO);
         a.statusword(untimed(6), 0x0021, PDO);
@@ -633,7 +633,7 @@ mod tests {
 
     #[test]
     fn nothing_seen_is_nothing() {
-        let a = Axis::new();
+        let a = Drive::new();
         assert_eq!(a.state(), None);
         assert_eq!(a.span(), None);
         assert_eq!(a.time_in_state().count(), 0);
@@ -642,7 +642,7 @@ mod tests {
 
     #[test]
     fn warning_follows_the_last_statusword() {
-        let mut a = Axis::new();
+        let mut a = Drive::new();
         a.statusword(at(1), 0x00A7, PDO);
         assert!(a.warning());
         assert_eq!(a.statusword(at(2), 0x0027, PDO), None, "same state");
@@ -671,7 +671,7 @@ mod tests {
                  proptest::bool::ANY),
                 0..60),
         ) {
-            let mut a = Axis::new();
+            let mut a = Drive::new();
             for (line, (time, word, reset)) in frames.into_iter().enumerate() {
                 let at = At {
                     time: time.map(|(s, f)| Timestamp::from_parts(s, f, digits)),
@@ -712,18 +712,18 @@ mod record_tests {
     #[test]
     fn an_emcy_just_before_or_after_the_fault_is_its_emcy() {
         // Before: the EMCY 2 ms ahead of the statusword.
-        let mut r = AxisRecord::new();
+        let mut r = DriveRecord::new();
         r.statusword(at_ms(0), 0x0237, PDO);
         r.emcy(at_ms(998), 0x7305);
         r.statusword(at_ms(1000), 0x0238, PDO);
-        assert_eq!(r.axis.open_fault().and_then(|f| f.emcy_code), Some(0x7305));
+        assert_eq!(r.drive.open_fault().and_then(|f| f.emcy_code), Some(0x7305));
         // After: the first one attached stays.
-        let mut r = AxisRecord::new();
+        let mut r = DriveRecord::new();
         r.statusword(at_ms(0), 0x0237, PDO);
         r.statusword(at_ms(1000), 0x0238, PDO);
         r.emcy(at_ms(1001), 0x2310);
         r.emcy(at_ms(1002), 0x7305);
-        assert_eq!(r.axis.open_fault().and_then(|f| f.emcy_code), Some(0x2310));
+        assert_eq!(r.drive.open_fault().and_then(|f| f.emcy_code), Some(0x2310));
         // Closed, it is kept with its EMCY.
         let c = r.statusword(at_ms(1500), 0x0250, PDO).expect("change");
         assert_eq!(c.closed_fault.and_then(|f| f.emcy_code), Some(0x2310));
@@ -732,23 +732,23 @@ mod record_tests {
 
     #[test]
     fn an_emcy_far_from_the_fault_is_not_its_emcy() {
-        let mut r = AxisRecord::new();
+        let mut r = DriveRecord::new();
         r.statusword(at_ms(0), 0x0237, PDO);
         r.emcy(at_ms(100), 0x7305);
         r.statusword(at_ms(5000), 0x0238, PDO);
         r.emcy(at_ms(9000), 0x2310);
-        assert_eq!(r.axis.open_fault().map(|f| f.emcy_code), Some(None));
+        assert_eq!(r.drive.open_fault().map(|f| f.emcy_code), Some(None));
         assert_eq!(r.all_faults().count(), 1);
     }
 
     #[test]
     fn closed_faults_kept_are_bounded_and_all_counted() {
-        let mut r = AxisRecord::new();
+        let mut r = DriveRecord::new();
         for i in 0..(MAX_FAULTS_KEPT as u64 + 5) {
             r.statusword(at_ms(i * 10), 0x0238, PDO);
             r.statusword(at_ms(i * 10 + 5), 0x0250, PDO);
         }
         assert_eq!(r.faults.len(), MAX_FAULTS_KEPT);
-        assert_eq!(r.axis.fault_count(), MAX_FAULTS_KEPT as u64 + 5);
+        assert_eq!(r.drive.fault_count(), MAX_FAULTS_KEPT as u64 + 5);
     }
 }
