@@ -15,10 +15,10 @@
 
 use std::io::{self, Read};
 
-use super::blf::{self, read_full};
 use super::deltas::{self, DeltaClock};
-use super::mf4;
-use super::pcap;
+use super::format::blf;
+use super::format::{mf4, pcap};
+use super::read::read_full;
 use super::{AnyParser, Folds, Format, Interest, LineParser, Parsed, Run, Scan, Timestamp};
 
 /// The input with the bytes [`sniff_binary`] read put back in front.

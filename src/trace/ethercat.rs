@@ -29,7 +29,7 @@
 
 use std::collections::HashMap;
 
-use super::Reason;
+use super::{Reason, Timestamp};
 
 /// LINKTYPE_ETHERNET.
 pub const LINKTYPE_ETHERNET: u16 = 1;
@@ -408,6 +408,40 @@ pub(crate) fn fuzz_walk(frame: &[u8]) {
     if let Ok(w) = walked {
         assert_eq!(w.mailboxes, seen);
         assert!(w.mailboxes + w.empty_polls <= w.datagrams);
+    }
+}
+
+/// What an EtherCAT frame held: its counts, the CoE messages the caller
+/// reads, and why its walk stopped early, if it did.
+#[derive(Debug, Default)]
+pub struct EthercatPacket {
+    pub time: Option<Timestamp>,
+    pub walked: Walked,
+    pub messages: Vec<CoeMessage>,
+    pub error: Option<Reason>,
+}
+
+impl EthercatPacket {
+    /// No mailbox message and no damage: only counted where the caller
+    /// has an interest (the hot loop's EtherCAT frames).
+    pub(crate) fn quiet(&self) -> bool {
+        self.walked.mailboxes == 0 && self.error.is_none()
+    }
+}
+
+/// EtherCAT seen in an input so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EthercatCounts {
+    pub frames: u64,
+    pub mailbox_messages: u64,
+    pub empty_polls: u64,
+}
+
+impl EthercatCounts {
+    pub(crate) fn add(&mut self, w: Walked) {
+        self.frames += 1;
+        self.mailbox_messages += u64::from(w.mailboxes);
+        self.empty_polls += u64::from(w.empty_polls);
     }
 }
 

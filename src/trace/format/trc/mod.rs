@@ -27,11 +27,11 @@
 //! error frames; `RTR` rows and `RR` are remote frames; `FD`, `FB`, `FE`,
 //! `BI` are CAN FD frames (never an EMCY).
 
-use super::{
+use crate::trace::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
     show_token as show,
 };
-use super::{hex, is_blank, trim_start};
+use crate::trace::{hex, is_blank, trim_start};
 
 /// The TRC file versions (`;$FILEVERSION=`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -112,7 +112,7 @@ impl Columns {
         let mut count = 0u8;
         for (i, name) in text.split(|b| *b == b',').enumerate() {
             let i = u8::try_from(i).map_err(|_| "too many columns in ;$COLUMNS")?;
-            let name = super::trim_end(trim_start(name));
+            let name = crate::trace::trim_end(trim_start(name));
             let slot = match name {
                 b"N" | b"R" => None,
                 b"O" => Some(&mut offset),
@@ -259,7 +259,7 @@ impl TrcParser {
         };
         let (key, value) = (&rest[..eq], &rest[eq + 1..]);
         // `;$STARTTIME=39878.6772258947;` occurs (PEAK's own example).
-        let value = super::trim_end(trim_start(value));
+        let value = crate::trace::trim_end(trim_start(value));
         let value = value.strip_suffix(b";").unwrap_or(value);
         match key {
             b"FILEVERSION" => {
@@ -444,10 +444,10 @@ impl TrcParser {
         {
             return Err(format!("'{}' is not a time offset in ms", show(offset)).into());
         }
-        let ms = u128::from(super::scan::decimal_u64(int));
+        let ms = u128::from(crate::trace::scan::decimal_u64(int));
         let frac_digits = frac.len() as u32;
         let atto = ms * 1_000_000_000_000_000
-            + u128::from(super::scan::decimal_u64(frac)) * 10u128.pow(15 - frac_digits);
+            + u128::from(crate::trace::scan::decimal_u64(frac)) * 10u128.pow(15 - frac_digits);
         let (start, start_digits) = self.start.unwrap_or((0, 0));
         let total = start + atto;
         let digits = (frac_digits as u8 + 3).max(start_digits);
@@ -551,13 +551,14 @@ fn start_time(value: &[u8]) -> Result<Option<(u128, u8)>, Reason> {
     if !frac.iter().all(u8::is_ascii_digit) {
         return Err(bad());
     }
-    let days = super::scan::decimal_u64(int);
+    let days = crate::trace::scan::decimal_u64(int);
     if days < UNIX_EPOCH_DAY {
         return Ok(None);
     }
     // frac < 10^18, so frac * 86400 * 10^(18 - n) < 86400 * 10^18: fits.
-    let frac_atto =
-        u128::from(super::scan::decimal_u64(frac)) * 86_400 * 10u128.pow(18 - frac.len() as u32);
+    let frac_atto = u128::from(crate::trace::scan::decimal_u64(frac))
+        * 86_400
+        * 10u128.pow(18 - frac.len() as u32);
     let total = u128::from(days - UNIX_EPOCH_DAY) * 86_400 * ATTO + frac_atto;
     // The digits the exact value needs (trailing zeros dropped).
     let mut digits = 18u8;

@@ -53,9 +53,9 @@ use std::sync::{Arc, Mutex, PoisonError};
 use pcap_parser::traits::{PcapNGPacketBlock, PcapReaderIterator};
 use pcap_parser::{Block, LegacyPcapReader, PcapBlockOwned, PcapError, PcapNGReader};
 
-use super::blf::read_full;
-use super::ethercat::{self, CoeMessage};
-use super::{Format, Frame, Interest, Parsed, Reason, Timestamp};
+use crate::trace::ethercat::{self, CoeMessage, EthercatCounts, EthercatPacket};
+use crate::trace::read::read_full;
+use crate::trace::{Format, Frame, FrameSource, Interest, Next, Parsed, Reason, Timestamp};
 use clock::Clock;
 use packet::{CAN_SOCKETCAN, Can, Order, Packet, Shape};
 
@@ -276,37 +276,52 @@ enum Item {
     Malformed(Reason),
 }
 
-/// What an EtherCAT frame held: its counts, the CoE messages the caller
-/// reads, and why its walk stopped early, if it did.
-#[derive(Debug, Default)]
-pub struct EthercatPacket {
-    pub time: Option<Timestamp>,
-    pub walked: ethercat::Walked,
-    pub messages: Vec<CoeMessage>,
-    pub error: Option<Reason>,
-}
-
-impl EthercatPacket {
-    /// No mailbox message and no damage: only counted where the caller
-    /// has an interest (the hot loop's EtherCAT frames).
-    fn quiet(&self) -> bool {
-        self.walked.mailboxes == 0 && self.error.is_none()
+impl<R: Read> FrameSource for PcapReader<R> {
+    /// [`Format::Pcap`] or [`Format::Pcapng`].
+    fn format(&self) -> Option<Format> {
+        Some(self.format)
     }
-}
 
-/// EtherCAT seen in an input so far.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct EthercatCounts {
-    pub frames: u64,
-    pub mailbox_messages: u64,
-    pub empty_polls: u64,
-}
+    /// What [`PcapReader::advance`] read, in the order the caller must
+    /// learn it: the notes it led to, then the frames it only counted
+    /// (they came before the packet), then the packet, or the error or
+    /// end it met.
+    fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
+        loop {
+            if self.advanced.is_none() {
+                self.advanced = Some(self.advance(interest));
+            }
+            if let Some(note) = self.take_note() {
+                return Ok(Some(Next::Note(note)));
+            }
+            let skipped = self.take_quiet();
+            let (counted, timed) = self.take_counted();
+            if counted + skipped > 0 {
+                let timed_n = timed.map_or(0, |(n, _, _)| n);
+                return Ok(Some(Next::Counted(crate::trace::Counted {
+                    plain: counted.saturating_sub(timed_n),
+                    timed,
+                    skipped,
+                })));
+            }
+            match self.advanced.take() {
+                Some(Ok(true)) => {
+                    if self.ready.is_some() {
+                        return Ok(self.take().map(Next::Record));
+                    }
+                }
+                Some(Err(e)) => return Err(e),
+                Some(Ok(false)) | None => return Ok(None),
+            }
+        }
+    }
 
-impl EthercatCounts {
-    fn add(&mut self, w: ethercat::Walked) {
-        self.frames += 1;
-        self.mailbox_messages += u64::from(w.mailboxes);
-        self.empty_polls += u64::from(w.empty_polls);
+    fn take_ethercat(&mut self) -> Option<(Box<EthercatPacket>, &[u8])> {
+        PcapReader::take_ethercat(self)
+    }
+
+    fn ethercat_counts(&self) -> Option<EthercatCounts> {
+        Some(PcapReader::ethercat_counts(self))
     }
 }
 
@@ -733,6 +748,9 @@ pub struct PcapReader<R: Read> {
     /// The EtherCAT frame [`PcapReader::take`] returned, for
     /// [`PcapReader::take_ethercat`].
     taken_ethercat: Option<Box<EthercatPacket>>,
+    /// What the last [`PcapReader::advance`] returned, while the notes and
+    /// counts it led to go out first ([`FrameSource::next_item`]).
+    advanced: Option<io::Result<bool>>,
     /// The input ended (or failed: the error, returned after the held items).
     ended: bool,
     failed: Option<io::Error>,
@@ -861,14 +879,10 @@ impl<R: Read> PcapReader<R> {
             channel: Box::default(),
             counted: Counted::default(),
             taken_ethercat: None,
+            advanced: None,
             ended: false,
             failed: None,
         }
-    }
-
-    /// [`Format::Pcap`] or [`Format::Pcapng`].
-    pub fn format(&self) -> Format {
-        self.format
     }
 
     /// Something about the input worth telling the user, once each (a
@@ -1551,7 +1565,7 @@ pub(crate) fn capture_of(linktype: u16, packet: &[u8], copies: u32) -> Vec<u8> {
 /// endless loop, every frame well-formed, the buffers bounded.
 #[cfg(feature = "fuzzing")]
 pub(crate) fn fuzz_pcap(data: &[u8]) {
-    use super::{FrameKind, Payload};
+    use crate::trace::{FrameKind, Payload};
     let Ok(mut r) = PcapReader::new(data) else {
         return;
     };

@@ -50,7 +50,7 @@
 //! [`VLSD_WINDOW`] VLSD records of each VLSD group; the disk by the input
 //! (measured: a 200 MB CANedge-like file in 8 MiB peak RSS).
 //!
-//! Speed: with the caller's interest ([`Mf4Reader::next_item`]), data
+//! Speed: with the caller's interest ([`FrameSource::next_item`]), data
 //! frames on ids nobody wants are only counted, by a loop that reads just
 //! ID, IDE, DataLength and EDL where a group stores them as they are; a
 //! DZ block is decoded where it was inflated, and spooled DZ blocks are
@@ -69,8 +69,11 @@ use std::collections::{HashMap, VecDeque};
 use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
-use super::blf::read_full;
-use super::{Frame, FrameKind, Interest, NumberedChannel, Parsed, Payload, Reason, Timestamp};
+use crate::trace::read::read_full;
+use crate::trace::{
+    Counted, Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed,
+    Payload, Reason, Timestamp,
+};
 use block::{Block, HEADER, Header, ID_LEN, Id};
 use layout::{Blocks, Channel, Layout, Raw};
 
@@ -105,14 +108,23 @@ enum Out {
     Plain(u64),
 }
 
-/// What [`Mf4Reader::next_item`] read.
-#[derive(Debug)]
-pub enum Next<'a> {
-    /// A record: a frame, a skipped or a malformed one.
-    Record(Parsed<'a>),
-    /// So many records in a row that are data frames on ids the caller's
-    /// interest does not want: only to count.
-    Plain(u64),
+impl<R: Read> FrameSource for Mf4Reader<R> {
+    fn format(&self) -> Option<Format> {
+        Some(Format::Mf4)
+    }
+
+    /// Notes go out before the next record is decoded: one found while
+    /// decoding a record is told after that record, and those found at the
+    /// end of the file before the end.
+    fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
+        if let Some(note) = self.take_note() {
+            return Ok(Some(Next::Note(note)));
+        }
+        match self.pop_out(interest)? {
+            Some(out) => Ok(Some(self.next_of(out))),
+            None => Ok(self.take_note().map(Next::Note)),
+        }
+    }
 }
 
 /// A VLSD record: data group, channel group, offset in the group's data.
@@ -442,9 +454,9 @@ impl<R: Read> Mf4Reader<R> {
     /// I/O error of the input (or of the temporary file): reading stops.
     pub fn next_record(&mut self) -> io::Result<Option<Parsed<'_>>> {
         // Without an interest every frame is a record (never `Plain`).
-        Ok(self.next_item(None)?.map(|next| match next {
+        Ok(self.decode_next(None)?.map(|next| match next {
             Next::Record(parsed) => parsed,
-            Next::Plain(_) => Parsed::Skipped,
+            Next::Counted(_) | Next::Note(_) => Parsed::Skipped,
         }))
     }
 
@@ -452,7 +464,30 @@ impl<R: Read> Mf4Reader<R> {
     /// want (only counted: their time and data are not decoded); decoding
     /// stops after each wanted frame, so an interest that changes with it
     /// applies from the next record on.
-    pub fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
+    fn decode_next(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
+        Ok(self.pop_out(interest)?.map(|out| self.next_of(out)))
+    }
+
+    /// What a record taken from the queue is to the caller.
+    fn next_of(&mut self, out: Out) -> Next<'_> {
+        match out {
+            Out::Frame(d) => Next::Record(Parsed::Frame(self.frame(d))),
+            Out::Skipped => Next::Record(Parsed::Skipped),
+            Out::Malformed(r) => Next::Record(Parsed::Malformed(r)),
+            Out::Plain(n) => Next::Counted(Counted {
+                plain: n,
+                ..Counted::default()
+            }),
+            Out::Waiting(..) => {
+                Next::Record(Parsed::Malformed("frame without its data bytes".into()))
+            }
+        }
+    }
+
+    /// The next record of the queue, decoding until there is one;
+    /// `Ok(None)` at the end. It is owned, so that a caller can still look
+    /// at the reader (its notes) when there is none.
+    fn pop_out(&mut self, interest: Option<&Interest>) -> io::Result<Option<Out>> {
         loop {
             if let Some(Out::Waiting(_, key, _)) = self.queue.front() {
                 let key = *key;
@@ -480,15 +515,7 @@ impl<R: Read> Mf4Reader<R> {
             }
             if let Some(out) = self.queue.pop_front() {
                 self.popped += 1;
-                return Ok(Some(match out {
-                    Out::Frame(d) => Next::Record(Parsed::Frame(self.frame(d))),
-                    Out::Skipped => Next::Record(Parsed::Skipped),
-                    Out::Malformed(r) => Next::Record(Parsed::Malformed(r)),
-                    Out::Plain(n) => Next::Plain(n),
-                    Out::Waiting(..) => {
-                        Next::Record(Parsed::Malformed("frame without its data bytes".into()))
-                    }
-                }));
+                return Ok(Some(out));
             }
             if self.finished {
                 return Ok(None);
@@ -1674,16 +1701,17 @@ pub(crate) fn fuzz_mf4(data: &[u8]) {
         without.push(summary(&p));
     }
     let mut with = Vec::new();
-    while let Ok(Some(next)) = some.next_item(Some(&interest)) {
+    while let Ok(Some(next)) = some.decode_next(Some(&interest)) {
         match next {
-            Next::Plain(n) => {
-                with.extend((0..n).map(|_| "plain".to_string()));
+            Next::Counted(c) => {
+                with.extend((0..c.plain).map(|_| "plain".to_string()));
                 assert!(
                     with.len() <= without.len(),
                     "more plain frames than records"
                 );
             }
             Next::Record(p) => with.push(summary(&p)),
+            Next::Note(_) => {}
         }
     }
     assert_eq!(with, without, "the interest changes what is read");

@@ -17,12 +17,12 @@
 //! statistics, other buses, variables, markers) are skipped; anything else
 //! that does not parse is malformed with a reason.
 
-use super::time::MAX_FRACTION_DIGITS;
-use super::{
+use crate::trace::time::MAX_FRACTION_DIGITS;
+use crate::trace::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
     split_token, trim_end, trim_start,
 };
-use super::{hex, scan};
+use crate::trace::{hex, scan};
 
 const STANDARD_MAX: u32 = 0x7FF;
 const EXTENDED_MAX: u32 = 0x1FFF_FFFF;

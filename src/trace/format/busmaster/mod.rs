@@ -50,12 +50,12 @@
 //! `s-fd` and `x-fd` (CAN FD, the length a byte count), and `ERR...` (error
 //! frames). Rx and Tx are both frames; the channel is kept as written.
 
-use super::time::{SECS_PER_DAY, unix_midnight};
-use super::{
+use crate::trace::time::{SECS_PER_DAY, unix_midnight};
+use crate::trace::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
     show_token as show,
 };
-use super::{hex, is_blank, trim_start};
+use crate::trace::{hex, is_blank, trim_start};
 
 const STANDARD_MAX: u32 = 0x7FF;
 const EXTENDED_MAX: u32 = 0x1FFF_FFFF;
@@ -416,7 +416,7 @@ impl BusmasterParser {
     /// A `***` line (the `***` removed): session boundaries and settings.
     fn header(&mut self, header: &[u8]) {
         let text = header.strip_suffix(b"\r").unwrap_or(header);
-        let text = super::trim_end(text);
+        let text = crate::trace::trim_end(text);
         let text = text.strip_suffix(b"***").unwrap_or(text);
         if text.starts_with(b"BUSMASTER") {
             self.identified = true;
@@ -759,7 +759,7 @@ fn written_time(text: &[u8]) -> Result<Written, Reason> {
         if p.is_empty() || p.len() > max_len || !p.iter().all(u8::is_ascii_digit) {
             return Err(bad());
         }
-        Ok(super::scan::decimal_u64(p))
+        Ok(crate::trace::scan::decimal_u64(p))
     };
     // Hours may pass 24 in absolute and relative sessions.
     let (h, m, s) = (field(9)?, field(2)?, field(2)?);
@@ -770,7 +770,7 @@ fn written_time(text: &[u8]) -> Result<Written, Reason> {
     if f_text.is_empty() || f_text.len() > 4 || !f_text.iter().all(u8::is_ascii_digit) {
         return Err(bad());
     }
-    let frac = super::scan::decimal_u64(f_text);
+    let frac = crate::trace::scan::decimal_u64(f_text);
     let digits = if f_text.len() == 4 { 4 } else { 3 };
     Ok(Written {
         secs: h * 3600 + m * 60 + s,
@@ -794,7 +794,7 @@ fn start_date(text: &[u8]) -> Option<Start> {
     let time = words.next()?;
     let num = |p: &[u8]| -> Option<u64> {
         (!p.is_empty() && p.len() <= 4 && p.iter().all(u8::is_ascii_digit))
-            .then(|| super::scan::decimal_u64(p))
+            .then(|| crate::trace::scan::decimal_u64(p))
     };
     let mut d = date.split(|b| *b == b':');
     let (day, month, year) = (num(d.next()?)?, num(d.next()?)?, num(d.next()?)?);

@@ -286,7 +286,10 @@ fn pcap_in_both_byte_orders_and_both_units() {
                 "{o:?} nanos {nanos}"
             );
             assert!(notes.is_empty(), "{notes:?}");
-            assert_eq!(PcapReader::new(&f[..]).unwrap().format(), Format::Pcap);
+            assert_eq!(
+                PcapReader::new(&f[..]).unwrap().format(),
+                Some(Format::Pcap)
+            );
         }
     }
 }

@@ -32,7 +32,11 @@ use std::io::{self, Read};
 
 use time::{Date, Month, PrimitiveDateTime, Time};
 
-use super::{Frame, FrameKind, NumberedChannel, Parsed, Payload, Reason, Timestamp};
+use crate::trace::read::read_full;
+use crate::trace::{
+    Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed, Payload,
+    Reason, Timestamp,
+};
 
 /// The file's magic bytes.
 pub const MAGIC: &[u8; 4] = b"LOGG";
@@ -207,14 +211,6 @@ impl<R: Read> BlfReader<R> {
     /// Something about the header worth telling the user, once.
     pub fn take_note(&mut self) -> Option<String> {
         self.note.take()
-    }
-
-    /// What the reader made good in the last frame [`BlfReader::next_object`]
-    /// returned (data bytes the object lacks, read as zeros); a diagnostic
-    /// for that object, which is still a frame. Cleared by the call and by
-    /// the next object.
-    pub fn take_warning(&mut self) -> Option<Reason> {
-        self.warning.take()
     }
 
     /// The next object, classified; `Ok(None)` at the end. An error is an
@@ -514,18 +510,27 @@ impl<R: Read> BlfReader<R> {
     }
 }
 
-/// Reads until `buf` is full or the input ends; returns the bytes read.
-pub(crate) fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match input.read(buf.get_mut(n..).unwrap_or_default()) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
+impl<R: Read> FrameSource for BlfReader<R> {
+    fn format(&self) -> Option<Format> {
+        Some(Format::Blf)
     }
-    Ok(n)
+
+    /// The header's note first, then object by object: BLF has no index
+    /// to skip by, so the interest is not needed.
+    fn next_item(&mut self, _interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
+        if let Some(note) = self.take_note() {
+            return Ok(Some(Next::Note(note)));
+        }
+        Ok(self.next_object()?.map(Next::Record))
+    }
+
+    /// What the reader made good in the last frame [`BlfReader::next_object`]
+    /// returned (data bytes the object lacks, read as zeros); a diagnostic
+    /// for that object, which is still a frame. Cleared by the call and by
+    /// the next object.
+    fn take_warning(&mut self) -> Option<Reason> {
+        self.warning.take()
+    }
 }
 
 /// Decodes one object that is not a log container.

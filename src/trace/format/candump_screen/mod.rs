@@ -17,7 +17,7 @@
 //! What candump's options add, all accepted:
 //! - `-t a|z|d|A`: a leading `(...)` time. This parser takes numeric times
 //!   as printed; `-td` deltas are summed above it, by the detector, when
-//!   the first lines prove them or the user says so ([`super::deltas`]).
+//!   the first lines prove them or the user says so ([`crate::trace::deltas`]).
 //!   `-tA` local dates carry no zone; they are read as UTC.
 //! - `-x`: `RX`/`TX` and a BRS/ESI pair (`- -`, `B -`, `- E`, `B E`) before the id.
 //! - `-8`: the classic length as a raw DLC in braces, `{0}`..`{F}`; candump
@@ -32,10 +32,10 @@
 //! CAN XL frames (`[nnnn]` lengths) are reported as malformed: a [`Frame`]
 //! cannot hold them and dropping them silently would hide data.
 
-use super::candump_log::{ERROR_FLAG, is_candump_non_frame};
-use super::hex;
-use super::time::{MAX_FRACTION_DIGITS, unix_midnight};
-use super::{
+use crate::trace::format::candump_log::{ERROR_FLAG, is_candump_non_frame};
+use crate::trace::hex;
+use crate::trace::time::{MAX_FRACTION_DIGITS, unix_midnight};
+use crate::trace::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Timestamp, trim_start,
 };
 

@@ -9,13 +9,13 @@
 //! The number of id digits decides the frame type (3 = standard, 8 =
 //! extended), not the value: `00000081#...` is an extended frame.
 
-use super::time::MAX_FRACTION_DIGITS;
-use super::{
+use crate::trace::Format;
+use crate::trace::time::MAX_FRACTION_DIGITS;
+use crate::trace::{
     DataHead, Folds, Frame, FrameKind, HexText, Interest, LineParser, Parsed, Payload, Reason, Run,
     Scan, Ticks, Timestamp, is_blank, split_token, trim_end, trim_start,
 };
-use super::{hex, scan};
-use crate::trace::Format;
+use crate::trace::{hex, scan};
 
 /// candump sets this bit in an 8-digit id to mark an error frame.
 pub const ERROR_FLAG: u32 = 0x2000_0000;
