@@ -35,6 +35,7 @@ use crate::timeline::history::{DEFAULT_SPILL_AT, ErrorHistory};
 use crate::trace::Format;
 use crate::trace::Parsed;
 use crate::trace::Span;
+use crate::trace::any::Visit;
 use crate::trace::cancel::Cancel;
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::detect::{self, Detector};
@@ -255,13 +256,7 @@ pub fn analyze<R: Read + Send, E: Write>(
             other => other,
         };
         let error = match AnyReader::binary(format, reader) {
-            Ok(mut source) => {
-                let result = read_records(&mut source, &mut consumer);
-                if let Some(e) = source.ethercat_counts() {
-                    consumer.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
-                }
-                result?
-            }
+            Ok(mut source) => source.visit(ReadRecords(&mut consumer))?,
             Err(e) => read_error(&e),
         };
         return consumer.finish(Some(format), gzip, error);
@@ -317,6 +312,21 @@ pub fn analyze<R: Read + Send, E: Write>(
         }
     };
     consumer.finish(format, gzip, error)
+}
+
+/// [`read_records`] compiled for each reader, then the EtherCAT counts.
+struct ReadRecords<'c, 'a, 'b, E: Write>(&'c mut Consumer<'a, 'b, E>);
+
+impl<E: Write> Visit for ReadRecords<'_, '_, '_, E> {
+    type Output = Result<Option<String>, OutputError>;
+
+    fn visit<S: FrameSource>(self, source: &mut S) -> Self::Output {
+        let result = read_records(source, self.0);
+        if let Some(e) = source.ethercat_counts() {
+            self.0.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
+        }
+        result
+    }
 }
 
 /// A record-by-record source (BLF, pcap, pcapng, MF4) into the consumer:

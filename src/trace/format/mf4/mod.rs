@@ -116,6 +116,7 @@ impl<R: Read> FrameSource for Mf4Reader<R> {
     /// Notes go out before the next record is decoded: one found while
     /// decoding a record is told after that record, and those found at the
     /// end of the file before the end.
+    #[inline]
     fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
         if let Some(note) = self.take_note() {
             return Ok(Some(Next::Note(note)));
@@ -469,6 +470,7 @@ impl<R: Read> Mf4Reader<R> {
     }
 
     /// What a record taken from the queue is to the caller.
+    #[inline]
     fn next_of(&mut self, out: Out) -> Next<'_> {
         match out {
             Out::Frame(d) => Next::Record(Parsed::Frame(self.frame(d))),
