@@ -13,19 +13,50 @@ pub const SECS_PER_DAY: u64 = 86_400;
 
 /// Seconds from the Unix epoch to the UTC midnight that starts a civil
 /// (proleptic Gregorian) date; `None` for impossible dates (month 0 or 13,
-/// February 29th of a common year, ...) and dates before 1970. For traces
-/// that write dates (candump `-tA`, BUSMASTER session starts).
+/// February 29th of a common year, ...), dates before 1970 and years past
+/// 9999, which no trace that writes dates (candump `-tA`, BUSMASTER
+/// session starts) can mean.
 pub(crate) fn unix_midnight(year: u64, month: u64, day: u64) -> Option<u64> {
-    if year < 1970 {
+    if !(1970..=9999).contains(&year) {
         return None;
     }
-    let month = ::time::Month::try_from(u8::try_from(month).ok()?).ok()?;
-    let date =
-        ::time::Date::from_calendar_date(i32::try_from(year).ok()?, month, u8::try_from(day).ok()?)
-            .ok()?;
-    // Julian day 2440588 is 1970-01-01.
-    let days = date.to_julian_day() - 2_440_588;
-    u64::try_from(days).ok()?.checked_mul(SECS_PER_DAY)
+    u64::try_from(days_from_civil(year, month, day)?)
+        .ok()?
+        .checked_mul(SECS_PER_DAY)
+}
+
+/// Days from 1970-01-01 to a civil (proleptic Gregorian) date, negative
+/// before it; `None` for a month or a day of the month that does not
+/// exist, or a year past 1 000 000 (no trace writes one, and the sums
+/// below stay far from overflow).
+///
+/// The calendar is plain arithmetic (Howard Hinnant's `days_from_civil`):
+/// a year counted from March puts the leap day last, so the days before a
+/// month follow one formula, and 400 years are always 146 097 days.
+pub(crate) fn days_from_civil(year: u64, month: u64, day: u64) -> Option<i64> {
+    if year > 1_000_000 {
+        return None;
+    }
+    let leap = year.is_multiple_of(4) && (!year.is_multiple_of(100) || year.is_multiple_of(400));
+    let month_days = match month {
+        1 | 3 | 5 | 7 | 8 | 10 | 12 => 31,
+        4 | 6 | 9 | 11 => 30,
+        2 if leap => 29,
+        2 => 28,
+        _ => return None,
+    };
+    if day == 0 || day > month_days {
+        return None;
+    }
+    // Both checked above: small enough for any sum below.
+    let (year, month, day) = (year as i64, month as i64, day as i64);
+    let y = if month <= 2 { year - 1 } else { year };
+    let era = y.div_euclid(400);
+    let year_of_era = y - era * 400;
+    let day_of_year = (153 * ((month + 9) % 12) + 2) / 5 + day - 1;
+    let day_of_era = year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
+    // 719 468 days from 0000-03-01 to 1970-01-01.
+    Some(era * 146_097 + day_of_era - 719_468)
 }
 
 /// Most fraction digits a timestamp may carry (attosecond resolution).
@@ -524,6 +555,13 @@ mod tests {
         assert_eq!(unix_midnight(2024, 2, 29), Some(1_709_164_800));
         assert_eq!(unix_midnight(2023, 2, 29), None);
         assert_eq!(unix_midnight(1969, 12, 31), None);
+        assert_eq!(unix_midnight(9999, 12, 31), Some(253_402_214_400));
+        assert_eq!(unix_midnight(10000, 1, 1), None);
+        assert_eq!(unix_midnight(2000, 2, 29), Some(951_782_400));
+        assert_eq!(unix_midnight(2100, 2, 29), None);
+        assert_eq!(unix_midnight(2023, 4, 31), None);
+        assert_eq!(days_from_civil(1969, 12, 31), Some(-1));
+        assert_eq!(days_from_civil(0, 3, 1), Some(-719_468));
         assert_eq!(unix_midnight(2023, 13, 1), None);
         assert_eq!(unix_midnight(2023, 0, 1), None);
         assert_eq!(unix_midnight(u64::MAX, 1, 1), None);

@@ -30,9 +30,8 @@
 
 use std::io::{self, Read};
 
-use time::{Date, Month, PrimitiveDateTime, Time};
-
 use crate::trace::read::read_full;
+use crate::trace::time::{SECS_PER_DAY, days_from_civil};
 use crate::trace::{
     Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed, Payload,
     Reason, Timestamp,
@@ -758,36 +757,23 @@ fn build(
 /// to attoseconds since the Unix epoch; `Ok(None)` when all zero, `Err`
 /// with the date as written when it is not one.
 fn system_time(b: &[u8]) -> Result<Option<(u128, u8)>, String> {
-    /// Seconds in 400 Gregorian years (146 097 days), after which the
-    /// calendar repeats itself exactly.
-    const CYCLE_SECS: i64 = 146_097 * 86_400;
     let f = |i: usize| u16_at(b, i * 2).unwrap_or(0);
     let (y, mo, d, h, mi, s, ms) = (f(0), f(1), f(3), f(4), f(5), f(6), f(7));
     if (y, mo, d, h, mi, s, ms) == (0, 0, 0, 0, 0, 0, 0) {
         return Ok(None);
     }
     let text = format!("{y:04}-{mo:02}-{d:02} {h:02}:{mi:02}:{s:02}.{ms:03}");
-    if y < 1970 {
+    if y < 1970 || h > 23 || mi > 59 || s > 59 || ms > 999 {
         return Err(text);
     }
-    // `time`'s calendar ends with 9999 and a SYSTEMTIME's with 65535: whole
-    // 400-year cycles come off the year here and go back on as seconds.
-    let cycles = y.saturating_sub(9999).div_ceil(400);
-    let byte = |v: u16| u8::try_from(v).ok();
-    let date_time = || {
-        let month = Month::try_from(byte(mo)?).ok()?;
-        let date = Date::from_calendar_date(i32::from(y - 400 * cycles), month, byte(d)?).ok()?;
-        let clock = Time::from_hms_milli(byte(h)?, byte(mi)?, byte(s)?, ms).ok()?;
-        Some(PrimitiveDateTime::new(date, clock))
-    };
-    let Some(date_time) = date_time() else {
-        return Err(text);
-    };
-    let secs = date_time.assume_utc().unix_timestamp() + i64::from(cycles) * CYCLE_SECS;
-    let secs = u128::try_from(secs).map_err(|_| text)?;
+    // A SYSTEMTIME's year goes to 65535, which the calendar takes whole.
+    let days = days_from_civil(u64::from(y), u64::from(mo), u64::from(d)).ok_or(text)?;
+    // From 1970 on: not negative.
+    let days = days.unsigned_abs();
+    let secs = days * SECS_PER_DAY + u64::from(h) * 3600 + u64::from(mi) * 60 + u64::from(s);
     let digits = if ms == 0 { 0 } else { 3 };
     Ok(Some((
-        secs * ATTO + u128::from(ms) * 1_000_000_000_000_000,
+        u128::from(secs) * ATTO + u128::from(ms) * 1_000_000_000_000_000,
         digits,
     )))
 }
