@@ -672,8 +672,10 @@ fn decode_can(base: Base, body: &[u8], start: (u128, u8)) -> Result<Option<Decod
                      zero-padded: it could be an EMCY)"
                 ));
             }
-            // TSMaster writes 64 valid bytes and stores fewer (python-can
-            // #1905); CANoe shows the frame, the bytes not stored as zeros.
+            // TSMaster declares 64 valid bytes and stores fewer. CANoe shows
+            // such a frame with the bytes not stored as zeros, and python-can
+            // reads it so too: a reader that refused it would lose frames
+            // both tools show.
             let mut data = [0u8; Payload::MAX];
             if let (Some(dst), Some(src)) = (data.get_mut(..n), stored.get(..n)) {
                 dst.copy_from_slice(src);

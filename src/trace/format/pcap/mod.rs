@@ -1072,9 +1072,9 @@ impl<R: Read> PcapReader<R> {
         self.held_bytes += held_size(&item, &channel);
         self.held.push_back((item, channel));
         let [big, little] = self.evidence;
-        // Clear evidence decides at once, so a live capture or a followed
-        // file is not held for 32 packets: one order with no impossible
-        // packet, the other with two.
+        // Clear evidence decides at once, so that a live capture or a
+        // followed file is not held for 32 packets: no impossible packet in
+        // one order and at least two in the other.
         let clear = (big == 0 && little >= 2) || (little == 0 && big >= 2);
         if clear
             || self.sampled >= SAMPLE
@@ -1086,8 +1086,10 @@ impl<R: Read> PcapReader<R> {
     }
 
     /// Fixes the byte order of link type 227 from the evidence: little-endian
-    /// when fewer packets are impossible so than big-endian, and at least
-    /// two are impossible big-endian (one odd extended id proves nothing).
+    /// when fewer packets are impossible read little-endian than read
+    /// big-endian and at least two are impossible read big-endian (one odd
+    /// extended id proves nothing); big-endian, as the link type defines,
+    /// otherwise.
     fn decide(&mut self) {
         let [big, little] = self.evidence;
         let order = if little < big && big >= 2 {
