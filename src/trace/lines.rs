@@ -55,13 +55,17 @@ impl Block {
         self.bytes.get(self.start..).unwrap_or_default()
     }
 
-    /// The lines of this block, in order.
+    /// The lines of this block, in order. The readers jump from line to
+    /// line with [`line_at`]; this is what the tests and the fuzzer read
+    /// blocks with to check them.
+    #[cfg(any(test, feature = "fuzzing"))]
     pub fn lines(&self, max_line: usize) -> BlockLines<'_> {
         BlockLines::new(self.text(), self.too_long_before, max_line)
     }
 }
 
 /// One vectorised newline search over the whole block, not one call per line.
+#[cfg(any(test, feature = "fuzzing"))]
 pub struct BlockLines<'a> {
     bytes: &'a [u8],
     newlines: memchr::Memchr<'a>,
@@ -70,6 +74,7 @@ pub struct BlockLines<'a> {
     max_line: usize,
 }
 
+#[cfg(any(test, feature = "fuzzing"))]
 impl<'a> BlockLines<'a> {
     fn new(bytes: &'a [u8], too_long: Option<u64>, max_line: usize) -> Self {
         BlockLines {
@@ -88,6 +93,7 @@ impl<'a> BlockLines<'a> {
     }
 }
 
+#[cfg(any(test, feature = "fuzzing"))]
 impl<'a> Iterator for BlockLines<'a> {
     type Item = RawLine<'a>;
 
