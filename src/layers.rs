@@ -10,6 +10,13 @@
 //! trace      bytes -> frames (imports nothing of ours)
 //! ```
 //!
+//! The trace readers are their own crate, `emcy-trace` in
+//! `crates/emcy-trace`, which does not depend on this one: Cargo keeps them
+//! from importing anything above them (a dependency back would be a cycle).
+//! `src/trace` is what this crate adds in that layer (the owned-record
+//! reader) and is checked here like the rest of `src`; the last test below
+//! checks that the trace crate stays without this one.
+//!
 //! `cache` and `text` are utilities below everything (they import nothing
 //! of ours);
 //! `fuzzing` is the fuzz harness, which may use anything and which nothing
@@ -292,4 +299,31 @@ fn the_check_sees_what_it_must() {
     assert!(violation("fuzzing", "app").is_none());
     assert!(violation("timeline", "cache").is_none());
     assert!(violation("analyze", "newthing").is_some());
+}
+
+#[test]
+fn the_trace_crate_stays_below_everything() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/emcy-trace");
+    let manifest = std::fs::read_to_string(root.join("Cargo.toml")).expect("the trace crate");
+    // A dependency on this crate, in any of the ways a manifest says one.
+    let depends = manifest.lines().map(str::trim).any(|l| {
+        l.starts_with("emcy-decode")
+            || l.starts_with("[dependencies.emcy-decode")
+            || l.contains("\"emcy-decode\"")
+    });
+    assert!(
+        !depends,
+        "crates/emcy-trace/Cargo.toml depends on emcy-decode"
+    );
+    let mut files = Vec::new();
+    sources(&root.join("src"), &mut files);
+    assert!(files.len() > 20, "{} trace sources found", files.len());
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap_or_default();
+        assert!(
+            !text.contains("emcy_decode"),
+            "{} names emcy_decode",
+            file.display()
+        );
+    }
 }

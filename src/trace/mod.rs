@@ -1,44 +1,10 @@
-//! Trace readers: one line parser per text format, one reader per binary
-//! format (BLF, pcap/pcapng, MF4), all yielding [`Frame`].
-//!
-//! Every line is classified as exactly one of: a frame, a known non-frame line
-//! (header, comment, status, blank: "skipped"), or a malformed line with a
-//! reason. Parsers never panic and never stop: the caller counts and reports.
-//! (A binary format's "line" is its record: a BLF object, a pcap packet,
-//! an MF4 record.)
-//!
-//! This file is the table of contents. The shared types live in their own
-//! files ([`frame`], [`interest`], [`traits`], [`time`]); each format has a
-//! folder under [`format`]; [`any`] dispatches to them; [`reader`] reads a
-//! whole trace into owned records through one loop over [`AnyReader`].
+//! The trace readers: the `emcy-trace` crate (`crates/emcy-trace`), whose
+//! paths this keeps under `crate::trace`, and [`reader`], which reads a
+//! whole trace into owned records for a Rust program. The reader stays in
+//! this crate because what its frames are to CANopen
+//! ([`CanFrame::emcy_node`](reader::CanFrame::emcy_node)) is said in
+//! `canopen`, and only the crate that defines a type can add methods to it.
 
-pub mod any;
-pub mod cancel;
-pub mod deltas;
-pub mod detect;
-pub mod ethercat;
-pub mod fold;
-pub mod follow;
-pub mod format;
-pub mod frame;
-pub mod hex;
-pub mod input;
-pub mod interest;
-pub mod lines;
-pub mod read;
+pub use emcy_trace::*;
+
 pub mod reader;
-pub mod scan;
-pub mod text;
-pub mod time;
-pub mod token;
-pub mod traits;
-
-pub use any::{AnyParser, AnyReader};
-pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
-pub use format::Format;
-pub(crate) use frame::NumberedChannel;
-pub use frame::{Frame, FrameKind, HexBytes, Payload};
-pub use interest::{ContentFilter, DataHead, Interest};
-pub use time::{Span, Step, Ticks, Timestamp};
-pub(crate) use token::{is_blank, show_token, split_token, trim_end, trim_start};
-pub use traits::{Counted, FrameSource, LineParser, Next, Parsed, Reason, Run, Scan};
