@@ -41,7 +41,7 @@ impl Cancel {
         self.0.store(true, Ordering::SeqCst);
     }
 
-    /// Whether [`Cancel::cancel`] was called.
+    /// Whether the token was cancelled (its [`flag`](Self::flag) set).
     pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::SeqCst)
     }

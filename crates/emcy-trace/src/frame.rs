@@ -158,7 +158,7 @@ pub struct Frame<'a> {
     pub kind: FrameKind,
     /// Number of data bytes the frame carries (0 for remote frames).
     pub len: u8,
-    /// The data bytes; filled only for frames the caller's [`Interest`]
+    /// The data bytes; filled only for frames the caller's [`Interest`](crate::Interest)
     /// covers (id-first filtering: other frames are validated, not decoded).
     pub data: Payload,
 }

@@ -9,7 +9,7 @@ use crate::FoldRule;
 /// skip decoding time and data for everything else.
 ///
 /// Some wanted standard ids can be given a content filter: a frame on them
-/// whose data the filter rejects is only timed ([`Scan::Timed`]): the caller
+/// whose data the filter rejects is only timed ([`Scan::Timed`](crate::Scan::Timed)): the caller
 /// needs its time but nothing else (a heartbeat, when only boot-ups matter).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Interest {
@@ -177,7 +177,7 @@ impl Interest {
     }
 
     /// Lets frames on the standard ids in `ids` stay inside a run of folds
-    /// ([`Folds::keep_inside`]) rather than end it: the caller takes them
+    /// ([`Folds::keep_inside`](crate::Folds::keep_inside)) rather than end it: the caller takes them
     /// after the run's folds when it takes those whole, so what they do
     /// must not depend on what the folds change, nor change the interest.
     pub fn keep_inside(&mut self, ids: std::ops::RangeInclusive<u32>) {

@@ -134,7 +134,7 @@ fn raw_line(line: &[u8], max_line: usize) -> RawLine<'_> {
 
 /// The line of a block's `bytes` that starts at `begin`, and where the next
 /// one starts; `None` past the end. For callers that jump ahead (a
-/// parser's run of lines) rather than iterate with [`Block::lines`].
+/// parser's run of lines) rather than iterate with `Block::lines`.
 #[inline]
 pub fn line_at(bytes: &[u8], begin: usize, max_line: usize) -> Option<(RawLine<'_>, usize)> {
     let rest = bytes.get(begin..).filter(|r| !r.is_empty())?;

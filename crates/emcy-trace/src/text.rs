@@ -3,10 +3,10 @@
 //! forced one).
 //!
 //! This is the record-by-record way in, for callers that want every line
-//! ([`TraceReader`](crate::reader::TraceReader)). The analysis reads
-//! text block by block instead, through [`LineParser::run`]
-//! (crate::LineParser::run) and on several threads: its hot loop
-//! folds repeated frames and counts unwanted ones without a call per line.
+//! (emcy-decode's `TraceReader`). The analysis reads text block by block
+//! instead, through [`LineParser::run`](crate::LineParser::run) and on
+//! several threads: its hot loop folds repeated frames and counts unwanted
+//! ones without a call per line.
 
 use std::io::{self, Read};
 

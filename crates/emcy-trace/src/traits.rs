@@ -191,9 +191,10 @@ impl Counted {
 
 /// Any source of records, one call per record: a binary format's reader
 /// directly, the text formats through their line parser
-/// ([`TextReader`](crate::text::TextReader)). [`AnyReader`]
-/// (crate::AnyReader) holds any of them; a caller writes its read
-/// loop once, over this trait.
+/// ([`TextReader`](crate::text::TextReader)). An
+/// [`AnyReader`](crate::AnyReader) holds any of them; a caller writes its
+/// read loop once, over this trait, and runs it with
+/// [`AnyReader::visit`](crate::AnyReader::visit).
 pub trait FrameSource {
     /// The format read: `None` for text whose format is not known yet.
     fn format(&self) -> Option<Format>;

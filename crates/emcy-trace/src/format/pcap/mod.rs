@@ -907,7 +907,7 @@ impl<R: Read> PcapReader<R> {
     /// returns; `Ok(false)` at the end. Notes it leads to are ready for
     /// [`PcapReader::take_note`] before the packet is taken. With
     /// `interest`, valid frames it does not want are only counted, for
-    /// [`PcapReader::take_plain`], up to the next other packet (or a
+    /// [`PcapReader::take_counted`], up to the next other packet (or a
     /// long run of them: then there is no packet to take).
     pub fn advance(&mut self, interest: Option<&Interest>) -> io::Result<bool> {
         loop {
