@@ -3,8 +3,8 @@
 //! parallel.
 
 use super::analysis::OutputError;
-use crate::trace::candump_log;
 use crate::trace::detect::Detector;
+use crate::trace::format::candump_log;
 use crate::trace::lines::{self, Block, RawLine};
 use crate::trace::{
     Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, Inner, Interest, Parsed, Reason,

@@ -35,13 +35,12 @@ use std::io::{self, Read, Write};
 
 use crate::trace::Format;
 use crate::trace::Parsed;
-use crate::trace::blf;
+use crate::trace::any::Visit;
 use crate::trace::deltas::{self, TimeMode};
 use crate::trace::detect::{self, Detector};
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::BlockReader;
-use crate::trace::mf4;
-use crate::trace::pcap;
+use crate::trace::{AnyReader, FrameSource, Next};
 
 pub use analysis::{Analysis, OutputError};
 use classify::{LineSink, classify_block, deliver};
@@ -129,25 +128,20 @@ pub fn analyze<R: Read + Send, E: Write>(
         Some(forced) => forced.is_binary().then_some(forced),
         None => magic,
     };
-    match binary {
-        Some(Format::Blf) => {
-            consumer.decided = true;
-            let error = read_blf(reader, &mut consumer)?;
-            return consumer.finish(Some(Format::Blf), gzip, error);
-        }
-        Some(forced @ (Format::Pcap | Format::Pcapng)) => {
-            consumer.decided = true;
-            // pcap or pcapng as the magic says; forced on neither, as forced.
-            let flavour = magic.filter(|m| matches!(m, Format::Pcap | Format::Pcapng));
-            let error = read_pcap(reader, &mut consumer)?;
-            return consumer.finish(Some(flavour.unwrap_or(forced)), gzip, error);
-        }
-        Some(Format::Mf4) => {
-            consumer.decided = true;
-            let error = read_mf4(reader, &mut consumer)?;
-            return consumer.finish(Some(Format::Mf4), gzip, error);
-        }
-        _ => {}
+    if let Some(format) = binary {
+        consumer.decided = true;
+        // pcap or pcapng as the magic says; forced on neither, as forced.
+        let format = match format {
+            Format::Pcap | Format::Pcapng => magic
+                .filter(|m| matches!(m, Format::Pcap | Format::Pcapng))
+                .unwrap_or(format),
+            other => other,
+        };
+        let error = match AnyReader::binary(format, reader) {
+            Ok(mut source) => source.visit(ReadRecords(&mut consumer))?,
+            Err(e) => read_error(&e),
+        };
+        return consumer.finish(Some(format), gzip, error);
     }
     // What candump times mean is decided before any frame is read: said by
     // the user, or seen in the first lines of a (possibly) candump input.
@@ -202,144 +196,87 @@ pub fn analyze<R: Read + Send, E: Write>(
     consumer.finish(format, gzip, error)
 }
 
-/// Vector BLF into the same consumer: each object counts as a line, its
-/// index in reading order is its line number.
-fn read_blf<R: Read, E: Write>(
-    reader: R,
-    consumer: &mut Consumer<'_, '_, E>,
-) -> Result<Option<String>, OutputError> {
-    let mut reader = match blf::BlfReader::new(reader) {
-        Ok(r) => r,
-        Err(e) => return Ok(read_error(&e)),
-    };
-    if let Some(note) = reader.take_note() {
-        consumer.log.note(&format!("{}: {note}", consumer.file));
-    }
-    loop {
-        match reader.next_object() {
-            Ok(Some(Parsed::Frame(f))) => {
-                deliver(consumer, 0, &f, None)?;
-            }
-            Ok(Some(Parsed::Skipped)) => consumer.skipped(),
-            Ok(Some(Parsed::Malformed(reason))) => consumer.malformed(0, reason),
-            Ok(None) => return Ok(None),
-            Err(e) => return Ok(read_error(&e)),
+/// [`read_records`] compiled for each reader, then the EtherCAT counts.
+struct ReadRecords<'c, 'a, 'b, E: Write>(&'c mut Consumer<'a, 'b, E>);
+
+impl<E: Write> Visit for ReadRecords<'_, '_, '_, E> {
+    type Output = Result<Option<String>, OutputError>;
+
+    fn visit<S: FrameSource>(self, source: &mut S) -> Self::Output {
+        let result = read_records(source, self.0);
+        if let Some(e) = source.ethercat_counts() {
+            self.0.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
         }
-        if let Some(warning) = reader.take_warning() {
-            consumer.warning(0, warning);
-        }
-        consumer.lines(1);
+        result
     }
 }
 
-/// pcap and pcapng into the same consumer: each packet counts as a line,
-/// its number in the file is its line number (as Wireshark numbers frames).
-fn read_pcap<R: Read, E: Write>(
-    reader: R,
-    consumer: &mut Consumer<'_, '_, E>,
-) -> Result<Option<String>, OutputError> {
-    let mut reader = match pcap::PcapReader::new(reader) {
-        Ok(r) => r,
-        Err(e) => return Ok(read_error(&e)),
-    };
-    let result = read_packets(&mut reader, consumer);
-    let e = reader.ethercat_counts();
-    consumer.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
-    result
-}
-
-fn read_packets<R: Read, E: Write>(
-    reader: &mut pcap::PcapReader<R>,
+/// A record-by-record source (BLF, pcap, pcapng, MF4) into the consumer:
+/// each record counts as a line, its number in the file is its line
+/// number (a BLF object's index in reading order, a pcap packet's as
+/// Wireshark numbers frames, an MF4 record's in file order).
+fn read_records<S: FrameSource, E: Write>(
+    source: &mut S,
     consumer: &mut Consumer<'_, '_, E>,
 ) -> Result<Option<String>, OutputError> {
     loop {
-        let more = reader.advance(Some(consumer.interest()));
-        while let Some(note) = reader.take_note() {
-            consumer.log.note(&format!("{}: {note}", consumer.file));
-        }
-        // EtherCAT frames without a mailbox message: skipped lines.
-        let quiet = reader.take_quiet();
-        if quiet > 0 {
-            consumer.decide();
-            consumer.skipped_lines(quiet);
-            consumer.lines(quiet);
-        }
-        // Frames before the packet read that are only counted (ids nobody
-        // wants) or timed (the content filter rejects their data).
-        let (counted, timed) = reader.take_counted();
-        if counted > 0 {
-            let timed_n = timed.map_or(0, |(n, _, _)| n);
-            if counted > timed_n {
-                consumer.plain_frames(counted - timed_n);
+        let why = match source.next_item(Some(consumer.interest())) {
+            Ok(Some(Next::Note(note))) => {
+                consumer.log.note(&format!("{}: {note}", consumer.file));
+                continue;
             }
-            if let Some((n, first, last)) = timed {
-                consumer.timed_frames(n, first, last);
+            Ok(Some(Next::Counted(counted))) => {
+                // Known non-frames only counted (EtherCAT frames without a
+                // mailbox message): skipped lines.
+                if counted.skipped > 0 {
+                    consumer.decide();
+                    consumer.skipped_lines(counted.skipped);
+                    consumer.lines(counted.skipped);
+                }
+                // Frames only counted (ids nobody wants) or only timed
+                // (the content filter rejects their data).
+                if counted.plain > 0 {
+                    consumer.plain_frames(counted.plain);
+                }
+                if let Some((n, first, last)) = counted.timed {
+                    consumer.timed_frames(n, first, last);
+                }
+                let frames = counted.lines() - counted.skipped;
+                if frames > 0 {
+                    consumer.lines(frames);
+                }
+                continue;
             }
-            consumer.lines(counted);
-        }
-        match more {
-            Ok(true) => {}
-            Ok(false) => return Ok(None),
-            Err(e) => return Ok(read_error(&e)),
-        }
-        let taken = match reader.take() {
-            Some(Parsed::Frame(f)) => {
+            Ok(Some(Next::Record(Parsed::Frame(f)))) => {
                 deliver(consumer, 0, &f, None)?;
                 None
             }
-            Some(Parsed::Skipped) => Some(None),
-            Some(Parsed::Malformed(reason)) => Some(Some(reason)),
-            None => continue,
-        };
-        if let Some(why) = taken {
-            // An EtherCAT frame's CoE messages, all on this line, even
-            // those before damage that makes the line malformed.
-            if let Some((packet, channel)) = reader.take_ethercat() {
-                consumer.decide();
-                for m in &packet.messages {
-                    consumer.coe(0, packet.time, channel, m)?;
-                }
-            }
-            match why {
-                None => consumer.skipped(),
-                Some(why) => consumer.malformed(0, why),
-            }
-        }
-        consumer.lines(1);
-    }
-}
-
-/// MDF 4 into the same consumer: each record counts as a line, numbered
-/// in file order.
-fn read_mf4<R: Read, E: Write>(
-    reader: R,
-    consumer: &mut Consumer<'_, '_, E>,
-) -> Result<Option<String>, OutputError> {
-    let mut reader = match mf4::Mf4Reader::new(reader) {
-        Ok(r) => r,
-        Err(e) => return Ok(read_error(&e)),
-    };
-    loop {
-        while let Some(note) = reader.take_note() {
-            consumer.log.note(&format!("{}: {note}", consumer.file));
-        }
-        match reader.next_item(Some(consumer.interest())) {
-            Ok(Some(mf4::Next::Plain(n))) => {
-                // Frames on ids nobody wants: only counted.
-                consumer.plain_frames(n);
-                consumer.lines(n);
-                continue;
-            }
-            Ok(Some(mf4::Next::Record(Parsed::Frame(f)))) => deliver(consumer, 0, &f, None)?,
-            Ok(Some(mf4::Next::Record(Parsed::Skipped))) => consumer.skipped(),
-            Ok(Some(mf4::Next::Record(Parsed::Malformed(reason)))) => consumer.malformed(0, reason),
-            Ok(None) => {
-                while let Some(note) = reader.take_note() {
-                    consumer.log.note(&format!("{}: {note}", consumer.file));
-                }
-                return Ok(None);
-            }
+            Ok(Some(Next::Record(Parsed::Skipped))) => Some(None),
+            Ok(Some(Next::Record(Parsed::Malformed(reason)))) => Some(Some(reason)),
+            Ok(None) => return Ok(None),
             Err(e) => return Ok(read_error(&e)),
+        };
+        match why {
+            // A warning is about the frame just delivered.
+            None => {
+                if let Some(warning) = source.take_warning() {
+                    consumer.warning(0, warning);
+                }
+            }
+            Some(why) => {
+                // An EtherCAT frame's CoE messages, all on this line, even
+                // those before damage that makes the line malformed.
+                if let Some((packet, channel)) = source.take_ethercat() {
+                    consumer.decide();
+                    for m in &packet.messages {
+                        consumer.coe(0, packet.time, channel, m)?;
+                    }
+                }
+                match why {
+                    None => consumer.skipped(),
+                    Some(why) => consumer.malformed(0, why),
+                }
+            }
         }
         consumer.lines(1);
     }

@@ -54,7 +54,7 @@ pub fn asc(data: &[u8]) {
 /// The `trc` target: the reader's own checks (well-formed frames, no endless
 /// loop), then [`reader`] with the format forced.
 pub fn trc(data: &[u8]) {
-    crate::trace::trc::fuzz_trc(data);
+    crate::trace::format::trc::fuzz_trc(data);
     reader(Some(Format::Trc), data);
 }
 
@@ -62,14 +62,14 @@ pub fn trc(data: &[u8]) {
 /// scan shortcut leaves the state `parse` does), then [`reader`] with the
 /// format forced.
 pub fn busmaster(data: &[u8]) {
-    crate::trace::busmaster::fuzz_busmaster(data);
+    crate::trace::format::busmaster::fuzz_busmaster(data);
     reader(Some(Format::Busmaster), data);
 }
 
 /// The `blf` target: the reader's own checks (well-formed frames, no endless
 /// loop, bounded buffers), then [`reader`] with the format forced.
 pub fn blf(data: &[u8]) {
-    crate::trace::blf::fuzz_blf(data);
+    crate::trace::format::blf::fuzz_blf(data);
     reader(Some(Format::Blf), data);
 }
 
@@ -77,7 +77,7 @@ pub fn blf(data: &[u8]) {
 /// endless loop, bounded buffers), then [`reader`] with the format forced
 /// (as `--input-format pcap`: pcap or pcapng, as the magic says).
 pub fn pcap(data: &[u8]) {
-    crate::trace::pcap::fuzz_pcap(data);
+    crate::trace::format::pcap::fuzz_pcap(data);
     reader(Some(Format::Pcap), data);
 }
 
@@ -127,8 +127,8 @@ pub fn ethercat(data: &[u8]) {
         }
         _ => (1, frame.to_vec()),
     };
-    let capture = crate::trace::pcap::capture_of(linktype, &packet, 3);
-    crate::trace::pcap::fuzz_pcap(&capture);
+    let capture = crate::trace::format::pcap::capture_of(linktype, &packet, 3);
+    crate::trace::format::pcap::fuzz_pcap(&capture);
     reader(Some(Format::Pcap), &capture);
 }
 
@@ -192,7 +192,7 @@ pub fn dcf(data: &[u8]) {
 /// endless loop, bounded queues and metadata), then [`reader`] with the
 /// format forced (as `--input-format mf4`).
 pub fn mf4(data: &[u8]) {
-    crate::trace::mf4::fuzz_mf4(data);
+    crate::trace::format::mf4::fuzz_mf4(data);
     reader(Some(Format::Mf4), data);
 }
 

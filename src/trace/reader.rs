@@ -8,14 +8,12 @@
 use std::collections::VecDeque;
 use std::io::{self, Read};
 
-use super::blf::BlfReader;
 use super::deltas::{self, TimeMode};
 use super::detect::{Detector, sniff_binary};
 use super::input::sniff_gzip_generic;
-use super::lines::{BlockReader, DEFAULT_BLOCK, DEFAULT_MAX_LINE, RawLine};
-use super::mf4::Mf4Reader;
-use super::pcap::PcapReader;
-use super::{Format, Frame, FrameKind, Interest, Parsed, Timestamp};
+use super::lines::{DEFAULT_BLOCK, DEFAULT_MAX_LINE};
+use super::text::TextReader;
+use super::{AnyReader, Format, Frame, FrameKind, FrameSource, Next, Parsed, Timestamp};
 
 /// One CAN frame of a trace, owned.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -100,10 +98,8 @@ pub struct TraceReader<'a> {
     source: Source<'a>,
     /// Records of the current block not yet returned.
     queue: VecDeque<Record>,
-    /// Lines before the next block.
+    /// Lines read so far.
     lines: u64,
-    /// The buffer of the last block, reused.
-    buf: Vec<u8>,
     /// Why the candump times are read as `-td` deltas, when the first
     /// lines said so: the first record, unless [`TraceReader::with_timestamps`]
     /// says otherwise.
@@ -111,13 +107,7 @@ pub struct TraceReader<'a> {
 }
 
 enum Source<'a> {
-    Text {
-        blocks: BlockReader<Box<dyn Read + 'a>>,
-        detector: Detector,
-    },
-    Blf(BlfReader<Box<dyn Read + 'a>>),
-    Pcap(Box<PcapReader<Box<dyn Read + 'a>>>),
-    Mf4(Box<Mf4Reader<Box<dyn Read + 'a>>>),
+    Reading(AnyReader<Box<dyn Read + 'a>>),
     Failed(io::Error),
     /// The end, with the format the input had.
     Done(Option<Format>),
@@ -144,7 +134,6 @@ impl<'a> TraceReader<'a> {
             source,
             queue: VecDeque::new(),
             lines: 0,
-            buf: Vec::new(),
             deltas_seen,
         }
     }
@@ -154,8 +143,8 @@ impl<'a> TraceReader<'a> {
     /// them as written. Call it before the first record.
     pub fn with_timestamps(mut self, mode: TimeMode) -> Self {
         self.deltas_seen = None;
-        if let Source::Text { detector, .. } = &mut self.source {
-            detector.set_deltas(mode == TimeMode::Delta);
+        if let Source::Reading(AnyReader::Text(text)) = &mut self.source {
+            text.detector_mut().set_deltas(mode == TimeMode::Delta);
         }
         self
     }
@@ -170,13 +159,8 @@ impl<'a> TraceReader<'a> {
         let (input, magic) = sniff_binary(input);
         let magic = magic?;
         let input: Box<dyn Read + 'a> = Box::new(input);
-        match format.map_or(magic, |f| f.is_binary().then_some(f)) {
-            Some(Format::Blf) => return Ok((Source::Blf(BlfReader::new(input)?), None)),
-            Some(Format::Pcap | Format::Pcapng) => {
-                return Ok((Source::Pcap(Box::new(PcapReader::new(input)?)), None));
-            }
-            Some(Format::Mf4) => return Ok((Source::Mf4(Box::new(Mf4Reader::new(input)?)), None)),
-            _ => {}
+        if let Some(binary) = format.map_or(magic, |f| f.is_binary().then_some(f)) {
+            return Ok((Source::Reading(AnyReader::binary(binary, input)?), None));
         }
         let mut detector = match format {
             Some(f) => Detector::forced(f),
@@ -190,143 +174,66 @@ impl<'a> TraceReader<'a> {
             Some(_) => (input, None),
         };
         detector.set_deltas(evidence.is_some());
-        let source = Source::Text {
-            blocks: BlockReader::new(input, DEFAULT_BLOCK, DEFAULT_MAX_LINE),
-            detector,
-        };
+        let text = TextReader::new(input, detector, DEFAULT_BLOCK, DEFAULT_MAX_LINE);
+        let source = Source::Reading(AnyReader::Text(Box::new(text)));
         Ok((source, evidence))
     }
 
     /// The format: forced, or detected from the lines read so far.
     pub fn format(&self) -> Option<Format> {
         match &self.source {
-            Source::Text { detector, .. } => detector.format(),
-            Source::Blf(_) => Some(Format::Blf),
-            Source::Pcap(reader) => Some(reader.format()),
-            Source::Mf4(_) => Some(Format::Mf4),
+            Source::Reading(reader) => reader.format(),
             Source::Failed(_) => None,
             Source::Done(format) => *format,
         }
     }
 
-    /// Fills the queue from the next block or BLF object; `Err` ends the
-    /// input, `Ok(false)` at its end.
+    /// Fills the queue from the next item of the source; `Err` ends the
+    /// input, `Ok(false)` at its end. Every format goes through this one
+    /// loop: a record is one line, a note is no line.
     fn refill(&mut self) -> io::Result<bool> {
         if let Some(note) = self.deltas_seen.take() {
             self.queue.push_back(Record::Note(note));
             return Ok(true);
         }
-        match &mut self.source {
-            Source::Text { blocks, detector } => {
-                let Some(block) = blocks.next_block(std::mem::take(&mut self.buf))? else {
-                    return Ok(false);
-                };
-
-                let all = Interest::all();
-                for raw in block.lines(DEFAULT_MAX_LINE) {
-                    self.lines += 1;
-                    let line = self.lines;
-                    let record = match raw {
-                        RawLine::TooLong(n) => Record::Malformed {
-                            line,
-                            reason: format!(
-                                "line of {n} bytes is longer than the {DEFAULT_MAX_LINE} \
-                                 byte limit; skipped"
-                            ),
-                        },
-                        RawLine::Text(text) => match detector.parse(text, &all) {
-                            Parsed::Frame(f) => {
-                                if let Some(reason) = detector.take_warning() {
-                                    self.queue.push_back(Record::Warning {
-                                        line,
-                                        reason: reason.into_owned(),
-                                    });
-                                }
-                                Record::Frame(CanFrame::of(line, &f))
-                            }
-                            Parsed::Skipped => Record::Skipped { line },
-                            Parsed::Malformed(reason) => Record::Malformed {
-                                line,
-                                reason: reason.into_owned(),
-                            },
-                        },
-                    };
-                    self.queue.push_back(record);
-                }
-                self.buf = block.bytes;
-                Ok(true)
+        let Source::Reading(reader) = &mut self.source else {
+            return Ok(false);
+        };
+        // Without an interest every record comes one by one, so nothing
+        // is only counted; were something counted, it would still be lines.
+        let parsed = match reader.next_item(None)? {
+            None => return Ok(false),
+            Some(Next::Note(note)) => {
+                self.queue.push_back(Record::Note(note));
+                return Ok(true);
             }
-            Source::Blf(reader) => {
-                if let Some(note) = reader.take_note() {
-                    self.queue.push_back(Record::Note(note));
-                }
-                let Some(parsed) = reader.next_object()? else {
-                    return Ok(false);
-                };
-                self.lines += 1;
-                let line = self.lines;
-                let record = match parsed {
-                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
-                    Parsed::Skipped => Record::Skipped { line },
-                    Parsed::Malformed(reason) => Record::Malformed {
-                        line,
-                        reason: reason.into_owned(),
-                    },
-                };
-                if let Some(reason) = reader.take_warning() {
-                    self.queue.push_back(Record::Warning {
-                        line,
-                        reason: reason.into_owned(),
-                    });
-                }
-                self.queue.push_back(record);
-                Ok(true)
+            Some(Next::Counted(counted)) => {
+                self.lines += counted.lines();
+                return Ok(true);
             }
-            Source::Pcap(reader) => {
-                let more = reader.advance(None);
-                while let Some(note) = reader.take_note() {
-                    self.queue.push_back(Record::Note(note));
-                }
-                if !more? {
-                    return Ok(false);
-                }
-                let Some(parsed) = reader.take() else {
-                    return Ok(true);
-                };
-                self.lines += 1;
-                let line = self.lines;
-                self.queue.push_back(match parsed {
-                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
-                    Parsed::Skipped => Record::Skipped { line },
-                    Parsed::Malformed(reason) => Record::Malformed {
-                        line,
-                        reason: reason.into_owned(),
-                    },
-                });
-                Ok(true)
-            }
-            Source::Mf4(reader) => {
-                let line = self.lines + 1;
-                let record = reader.next_record()?.map(|parsed| match parsed {
-                    Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
-                    Parsed::Skipped => Record::Skipped { line },
-                    Parsed::Malformed(reason) => Record::Malformed {
-                        line,
-                        reason: reason.into_owned(),
-                    },
-                });
-                while let Some(note) = reader.take_note() {
-                    self.queue.push_back(Record::Note(note));
-                }
-                let Some(record) = record else {
-                    return Ok(false);
-                };
-                self.lines = line;
-                self.queue.push_back(record);
-                Ok(true)
-            }
-            Source::Failed(_) | Source::Done(_) => Ok(false),
+            Some(Next::Record(parsed)) => parsed,
+        };
+        self.lines += 1;
+        let line = self.lines;
+        let record = match parsed {
+            Parsed::Frame(f) => Record::Frame(CanFrame::of(line, &f)),
+            Parsed::Skipped => Record::Skipped { line },
+            Parsed::Malformed(reason) => Record::Malformed {
+                line,
+                reason: reason.into_owned(),
+            },
+        };
+        // A warning is about the frame of its line, which comes after it.
+        if let Record::Frame(_) = record
+            && let Some(reason) = reader.take_warning()
+        {
+            self.queue.push_back(Record::Warning {
+                line,
+                reason: reason.into_owned(),
+            });
         }
+        self.queue.push_back(record);
+        Ok(true)
     }
 }
 

@@ -1,0 +1,1227 @@
+//! candump log format (`candump -l`, `candump -L`, what canplayer replays):
+//!
+//! ```text
+//! (1469439874.299654) can0 081#1043080100000000
+//! (000.000100)  vcan-0 12345678#R
+//! (1735270588.936508) can0 120##500112233445566778899AABB T
+//! ```
+//!
+//! The number of id digits decides the frame type (3 = standard, 8 =
+//! extended), not the value: `00000081#...` is an extended frame.
+
+use crate::Format;
+use crate::time::MAX_FRACTION_DIGITS;
+use crate::{
+    DataHead, Folds, Frame, FrameKind, HexText, Interest, LineParser, Parsed, Payload, Reason, Run,
+    Scan, Ticks, Timestamp, is_blank, split_token, trim_end, trim_start,
+};
+use crate::{hex, scan};
+
+/// candump sets this bit in an 8-digit id to mark an error frame.
+pub const ERROR_FLAG: u32 = 0x2000_0000;
+const EFF_MASK: u32 = 0x1FFF_FFFF;
+
+/// Reads `candump -l` / `-L` log lines.
+#[derive(Default, Clone, Copy)]
+pub struct CandumpLogParser {
+    /// The layout of the last canonical line (a cache: results never
+    /// depend on it, only speed).
+    layout: Option<Layout>,
+}
+
+impl CandumpLogParser {
+    /// A parser before the first line.
+    pub fn new() -> Self {
+        CandumpLogParser::default()
+    }
+
+    /// The shape of a canonical line: the last line's layout first, then
+    /// the general scan (which then becomes the layout).
+    #[inline]
+    fn shape(&mut self, line: &[u8]) -> Option<Shape> {
+        if let Some(shape) = self.layout.as_ref().and_then(|l| l.shape(line)) {
+            return Some(shape);
+        }
+        let shape = shape(line)?;
+        self.layout = Layout::of(line, &shape);
+        Some(shape)
+    }
+}
+
+impl LineParser for CandumpLogParser {
+    fn format(&self) -> Format {
+        Format::CandumpLog
+    }
+
+    /// Stateless: every line stands alone.
+    fn context(&self) -> Option<u8> {
+        Some(0)
+    }
+
+    #[inline]
+    fn scan<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        match self.shape(line) {
+            Some(shape) => shape.scan(line, interest),
+            None => Scan::Parse,
+        }
+    }
+
+    /// Lines of the last line's layout, found without a separate newline
+    /// search: the data field's end is where the line must end.
+    #[inline]
+    fn run<'a>(
+        &mut self,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        folds: &mut Folds,
+    ) -> Run<'a> {
+        let mut run = Run::default();
+        let Some(layout) = self.layout.as_ref() else {
+            return run;
+        };
+        let mut last_timed = None;
+        while let Some(rest) = bytes.get(run.bytes..)
+            && let Some((shape, len)) = layout.line(rest)
+            && len <= max_line
+        {
+            let line = rest.get(..len).unwrap_or_default();
+            match shape.kind(line, interest) {
+                Kind::Plain => run.plain += 1,
+                Kind::Timed => {
+                    // Of a run of these (folded frames among them) only the
+                    // first and last time count.
+                    if run.first_time.is_none() {
+                        run.first_time = shape.time(line);
+                    }
+                    run.timed += 1;
+                    last_timed = Some(line);
+                }
+                Kind::Frame(frame) => {
+                    run.before_frame = run.bytes;
+                    run.bytes += len + 1;
+                    run.frame = Some(frame);
+                    break;
+                }
+                // The Timed and Frame arms again, not one match on the
+                // result nor helpers for them: each way cost every plain
+                // line 7-15 instructions (callgrind: the 20 MB heartbeat
+                // trace went 160.6M -> 164-170M).
+                Kind::Fold => {
+                    match fold_line(folds, shape, line, run.plain + run.timed, interest) {
+                        Kind::Timed => {
+                            if run.first_time.is_none() {
+                                run.first_time = time_at(line, layout.dot, layout.close);
+                            }
+                            run.timed += 1;
+                            last_timed = Some(line);
+                        }
+                        Kind::Frame(frame) => {
+                            run.before_frame = run.bytes;
+                            run.bytes += len + 1;
+                            run.frame = Some(frame);
+                            break;
+                        }
+                        _ => break,
+                    }
+                }
+                Kind::Parse => break,
+            }
+            run.bytes += len + 1;
+        }
+        if folds.any()
+            && let Some(line) = last_timed
+        {
+            // Every line of the run has the layout, and so the channel.
+            run.fold_channel = layout.channel(line);
+        }
+        if let Some(line) = last_timed {
+            // A run's last time only moves the input's last time, and a data
+            // frame with a time after it moves it again: its conversion
+            // (about 150 instructions, once per heartbeat in a busy trace)
+            // is spared then.
+            let superseded = run.frame.as_ref().is_some_and(|f| {
+                f.kind == FrameKind::Data && f.time.is_some() && interest.times(f.id, f.extended)
+            });
+            run.last_time = if superseded {
+                run.first_time
+            } else {
+                time_at(line, layout.dot, layout.close)
+            };
+        }
+        if run.frame.is_none() {
+            run.before_frame = run.bytes;
+        }
+        run
+    }
+
+    #[inline]
+    fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        match parse_line(line, interest) {
+            Ok(Some(frame)) => Parsed::Frame(frame),
+            Ok(None) => Parsed::Skipped,
+            Err(reason) => Parsed::Malformed(reason),
+        }
+    }
+}
+
+/// A line of [`CandumpLogParser::run`] on a foldable id: folded into
+/// `folds` ([`Folds::add`]) and then timed like a frame nobody wants, or
+/// what [`Shape::kind`] makes of it. Not inlined: in the loop's body it
+/// made every line slower (callgrind on plain lines).
+#[inline(never)]
+fn fold_line<'a>(
+    folds: &mut Folds,
+    shape: Shape,
+    line: &'a [u8],
+    idx: u64,
+    interest: &Interest,
+) -> Kind<'a> {
+    let text = HexText::of(line, shape.data.start, shape.data.end);
+    let time = shape.ticks(line);
+    let rule = || interest.fold_rule(shape.id);
+    if let (Some(text), Some(time)) = (text, time)
+        && folds.repeat(shape.id, text, time, idx, rule)
+    {
+        return Kind::Timed;
+    }
+    let Some(data) = shape.data(line) else {
+        return Kind::Parse;
+    };
+    if interest.timed_only(shape.id, false, data.as_slice()) {
+        return Kind::Timed;
+    }
+    if let (Some((word, _)), Some(text), Some(time)) = (data.word(), text, time)
+        && folds.add(shape.id, word, text, time, idx, rule)
+    {
+        return Kind::Timed;
+    }
+    match (shape.frame(line, false), shape.time(line)) {
+        (Some(frame), Some(time)) => Kind::Frame(Frame {
+            time: Some(time),
+            data,
+            ..frame
+        }),
+        _ => Kind::Parse,
+    }
+}
+
+/// Lines every candump output may contain besides frames: blank lines,
+/// comments people add, and candump's own `DROPCOUNT:` notices.
+pub fn is_candump_non_frame(line: &[u8]) -> bool {
+    let t = trim_start(line);
+    is_blank(t)
+        || t.starts_with(b"#")
+        || t.starts_with(b"//")
+        || t.starts_with(b";")
+        || t.starts_with(b"DROPCOUNT")
+}
+
+/// The frames a candump `DROPCOUNT:` line says the kernel dropped
+/// (`DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 7)`:
+/// 3, the total being the sum of these); `None` for any other line. Frames
+/// are lost there, and EMCYs may be among them.
+pub fn dropped_frames(line: &[u8]) -> Option<u64> {
+    let rest = trim_start(line).strip_prefix(b"DROPCOUNT")?;
+    let text = std::str::from_utf8(rest).ok()?;
+    let mut words = text.split_whitespace();
+    words.find(|w| *w == "dropped")?;
+    words.next()?.parse().ok()
+}
+
+#[inline]
+fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
+    match canonical(line, interest) {
+        Some(frame) => Ok(Some(frame)),
+        None => parse_line_full(line, interest),
+    }
+}
+
+/// Every form the format allows, with a reason for what it does not.
+fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
+    if is_candump_non_frame(line) {
+        return Ok(None);
+    }
+    let t = trim_end(trim_start(line));
+    let Some(after_paren) = t.strip_prefix(b"(") else {
+        return Err("expected '(' and a timestamp at the start of the line".into());
+    };
+    let close = memchr::memchr(b')', after_paren).ok_or("timestamp has no closing ')'")?;
+    let time_text = &after_paren[..close];
+    let rest = &after_paren[close + 1..];
+    if !rest.starts_with(b" ") && !rest.starts_with(b"\t") {
+        return Err("expected a space after the timestamp".into());
+    }
+    let (channel, rest) = split_token(trim_start(rest));
+    if channel.is_empty() {
+        return Err("missing interface name".into());
+    }
+    let (frame_text, rest) = split_token(trim_start(rest));
+    if frame_text.is_empty() {
+        return Err("missing frame after the interface name".into());
+    }
+    match trim_start(rest) {
+        b"" | b"T" | b"R" => {}
+        _ => return Err("unexpected text after the frame (only T or R may follow)".into()),
+    }
+
+    let mut frame = parse_frame(frame_text, interest)?;
+    // The timestamp is validated for every frame but only converted for wanted ones.
+    let time = Timestamp::parse(time_text).map_err(Reason::from)?;
+    if interest.wants(frame.id, frame.extended) {
+        frame.time = Some(time);
+    }
+    frame.channel = channel;
+    Ok(Some(frame))
+}
+
+/// The fast path for what `candump -l` writes, nearly every line of a real
+/// log: `(SECS.FRAC) DEV ID#HEX` with a single space between fields, 3 or 8
+/// id digits and 0-8 plain data bytes, optionally ` T`/` R`. Anything else
+/// (padding, dots, remote, FD, raw DLC, errors of any kind) returns `None`
+/// and goes to the full parser, which is the one source of error messages;
+/// the fast path only accepts lines the full parser accepts identically.
+#[inline]
+fn canonical<'a>(line: &'a [u8], interest: &Interest) -> Option<Frame<'a>> {
+    let shape = shape(line)?;
+    shape.frame(line, interest.wants(shape.id, shape.extended))
+}
+
+/// Where the fields of a canonical line are.
+#[derive(Debug, PartialEq, Eq)]
+struct Shape {
+    dot: usize,
+    close: usize,
+    channel: std::ops::Range<usize>,
+    id: u32,
+    extended: bool,
+    kind: FrameKind,
+    data: std::ops::Range<usize>,
+}
+
+impl Shape {
+    /// The frame of the line the shape was taken from; time and data are
+    /// converted only when `wanted`.
+    #[inline]
+    fn frame<'a>(&self, line: &'a [u8], wanted: bool) -> Option<Frame<'a>> {
+        let mut frame = Frame {
+            time: None,
+            channel: line.get(self.channel.clone())?,
+            id: self.id,
+            extended: self.extended,
+            kind: self.kind,
+            len: (self.data.len() / 2) as u8,
+            data: Payload::new(),
+        };
+        if wanted {
+            frame.time = Some(self.time(line)?);
+            frame.data = self.data(line)?;
+        }
+        Some(frame)
+    }
+
+    #[inline]
+    fn time(&self, line: &[u8]) -> Option<Timestamp> {
+        time_at(line, self.dot, self.close)
+    }
+
+    /// The time as [`Ticks`] (what folding compares); `None` past 19 digits.
+    #[inline]
+    fn ticks(&self, line: &[u8]) -> Option<Ticks> {
+        let value = scan::decimal_ticks(line, 1, self.dot, self.close)?;
+        Ticks::new(value, (self.close - self.dot - 1) as u8)
+    }
+
+    /// The data's head ([`DataHead`]), its first three bytes parsed.
+    #[inline]
+    fn head(&self, line: &[u8]) -> Option<DataHead> {
+        // At most 8 bytes (the shape checked it).
+        let text = line.get(self.data.clone())?;
+        let mut bytes = [0u8; 3];
+        for (b, pair) in bytes.iter_mut().zip(text.chunks_exact(2)) {
+            *b = hex::parse_byte(pair[0], pair[1])?;
+        }
+        Some(DataHead::new((text.len() / 2) as u8, bytes))
+    }
+
+    #[inline]
+    fn data(&self, line: &[u8]) -> Option<Payload> {
+        // At most 8 bytes (the shape checked it).
+        let text = line.get(self.data.clone())?;
+        let mut bytes = [0u8; 8];
+        for (b, pair) in bytes.iter_mut().zip(text.chunks_exact(2)) {
+            *b = hex::parse_byte(pair[0], pair[1])?;
+        }
+        Some(Payload::inline(bytes, (text.len() / 2) as u8))
+    }
+
+    /// What a line of this shape is to a caller with `interest`.
+    #[inline]
+    fn scan<'a>(&self, line: &'a [u8], interest: &Interest) -> Scan<'a> {
+        let kind = match self.kind(line, interest) {
+            Kind::Fold => self.wanted(line, interest),
+            kind => kind,
+        };
+        match kind {
+            Kind::Plain => Scan::Plain,
+            Kind::Timed => self.time(line).map_or(Scan::Parse, Scan::Timed),
+            Kind::Frame(frame) => Scan::Frame(frame),
+            Kind::Fold | Kind::Parse => Scan::Parse,
+        }
+    }
+
+    /// [`Shape::scan`] without converting the time of a frame only to be
+    /// timed (a run needs only the first and last of those).
+    #[inline(always)]
+    fn kind<'a>(&self, line: &'a [u8], interest: &Interest) -> Kind<'a> {
+        if !interest.wants(self.id, self.extended) {
+            return Kind::Plain;
+        }
+        if self.kind == FrameKind::Data && !self.extended && interest.folds(self.id) {
+            return Kind::Fold;
+        }
+        self.wanted(line, interest)
+    }
+
+    /// [`Shape::kind`] of a frame on a wanted id, folding aside.
+    #[inline(always)]
+    fn wanted<'a>(&self, line: &'a [u8], interest: &Interest) -> Kind<'a> {
+        if self.kind == FrameKind::Data && !self.extended && interest.filters(self.id) {
+            // Only the data's head decides; the rest is parsed, and the
+            // frame built, only if it matters.
+            let Some(head) = self.head(line) else {
+                return Kind::Parse;
+            };
+            if interest.timed_only_head(self.id, head) {
+                return Kind::Timed;
+            }
+            let Some(data) = self.data(line) else {
+                return Kind::Parse;
+            };
+            // Heartbeats get here (about 150 instructions saved on each by
+            // not parsing the data twice).
+            return match (self.frame(line, false), self.time(line)) {
+                (Some(frame), Some(time)) => Kind::Frame(Frame {
+                    time: Some(time),
+                    data,
+                    ..frame
+                }),
+                _ => Kind::Parse,
+            };
+        }
+        match self.frame(line, true) {
+            Some(frame) => Kind::Frame(frame),
+            None => Kind::Parse,
+        }
+    }
+}
+
+/// [`Scan`] with a timed frame's time not yet converted.
+enum Kind<'a> {
+    Plain,
+    Timed,
+    Frame(Frame<'a>),
+    /// A data frame on an id the interest folds (a reader that folds
+    /// decides the rest, one that does not asks [`Shape::wanted`]).
+    Fold,
+    Parse,
+}
+
+/// The time of a canonical line with its dot and `)` at `dot` and `close`.
+#[inline]
+fn time_at(line: &[u8], dot: usize, close: usize) -> Option<Timestamp> {
+    // At most 19 digits: always fits in u64.
+    let secs = scan::decimal_u64(line.get(1..dot)?);
+    let frac = line.get(dot + 1..close)?;
+    Some(Timestamp::from_parts(
+        secs,
+        scan::decimal_u64(frac),
+        frac.len() as u8,
+    ))
+}
+
+/// The fixed part of a canonical line: nearly every line of a log has the
+/// same timestamp width and interface, so a line is first checked against
+/// the last one's layout, a few word compares, before the general scan.
+/// Accepts exactly what [`shape`] accepts with these positions and a 3-digit id.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Layout {
+    dot: usize,
+    close: usize,
+    time: scan::Decimal,
+    /// `) DEV `.
+    sep: scan::Fixed,
+}
+
+impl Layout {
+    fn of(line: &[u8], s: &Shape) -> Option<Layout> {
+        if s.kind != FrameKind::Data || s.extended {
+            return None;
+        }
+        Some(Layout {
+            dot: s.dot,
+            close: s.close,
+            time: scan::Decimal::new(1, s.dot, s.close)?,
+            sep: scan::Fixed::of(line, s.close, s.channel.end + 1 - s.close)?,
+        })
+    }
+
+    /// The shape and length of the line at the start of `bytes` when it
+    /// has this layout and ends with a newline right after its frame.
+    #[inline(always)]
+    fn line(&self, bytes: &[u8]) -> Option<(Shape, usize)> {
+        let id_start = self.head(bytes)?;
+        let data_start = id_start + 4;
+        let data_len = scan::hex_run(bytes, data_start);
+        let data_end = data_start + data_len;
+        let len = match bytes.get(data_end) {
+            Some(b'\n') => data_end,
+            Some(b' ')
+                if matches!(
+                    bytes.get(data_end + 1..data_end + 3),
+                    Some([b'T' | b'R', b'\n'])
+                ) =>
+            {
+                data_end + 2
+            }
+            _ => return None,
+        };
+        if !data_len.is_multiple_of(2) || data_len > 16 {
+            return None;
+        }
+        Some((self.shape_at(id_start, bytes, data_end)?, len))
+    }
+
+    /// The interface of a line of this layout.
+    fn channel<'a>(&self, line: &'a [u8]) -> &'a [u8] {
+        // `) DEV `.
+        let end = (self.close + self.sep.width()).saturating_sub(1);
+        line.get(self.close + 2..end).unwrap_or_default()
+    }
+
+    /// Through the id: the index where the 3-digit id starts, when `line`
+    /// has this layout up to a `#` after it.
+    #[inline(always)]
+    fn head(&self, line: &[u8]) -> Option<usize> {
+        // `)`, a space, the interface, a space: the bytes of the last line.
+        if line.first() != Some(&b'(')
+            || line.get(self.dot) != Some(&b'.')
+            || !self.time.matches(line)
+            || !self.sep.matches(line, self.close)
+        {
+            return None;
+        }
+        let id_start = self.close + self.sep.width();
+        match line.get(id_start + 3) {
+            Some(b'#') => Some(id_start),
+            _ => None,
+        }
+    }
+
+    /// The shape of a whole line.
+    #[inline]
+    fn shape(&self, line: &[u8]) -> Option<Shape> {
+        let id_start = self.head(line)?;
+        let data_start = id_start + 4;
+        let data_end = match line {
+            [.., b' ', b'T' | b'R'] => line.len() - 2,
+            _ => line.len(),
+        };
+        let data_len = data_end.checked_sub(data_start)?;
+        if data_len % 2 != 0 || data_len > 16 || !scan::all_hex_at(line, data_start, data_end) {
+            return None;
+        }
+        self.shape_at(id_start, line, data_end)
+    }
+
+    /// The shape once the layout matched and the data was checked.
+    #[inline(always)]
+    fn shape_at(&self, id_start: usize, line: &[u8], data_end: usize) -> Option<Shape> {
+        let id = hex::parse_u32(line.get(id_start..id_start + 3)?)?;
+        if id > 0x7FF {
+            return None;
+        }
+        let data_start = id_start + 4;
+        Some(Shape {
+            dot: self.dot,
+            close: self.close,
+            channel: self.close + 2..id_start - 1,
+            id,
+            extended: false,
+            kind: FrameKind::Data,
+            data: data_start..data_end,
+        })
+    }
+}
+
+/// Validates a canonical line (see [`canonical`]) without building a frame.
+#[inline]
+fn shape(line: &[u8]) -> Option<Shape> {
+    if line.first() != Some(&b'(') {
+        return None;
+    }
+    let int_len = scan::digit_run(line, 1);
+    let dot = 1 + int_len;
+    if int_len == 0 || int_len > 19 || line.get(dot) != Some(&b'.') {
+        return None;
+    }
+    let frac_len = scan::digit_run(line, dot + 1);
+    let close = dot + 1 + frac_len;
+    if frac_len == 0 || frac_len > MAX_FRACTION_DIGITS || line.get(close) != Some(&b')') {
+        return None;
+    }
+    let dev_start = close + 2;
+    if line.get(close + 1) != Some(&b' ') {
+        return None;
+    }
+    let dev_len = scan::token_run(line, dev_start);
+    let id_start = dev_start + dev_len + 1;
+    if dev_len == 0 || line.get(dev_start + dev_len) != Some(&b' ') {
+        return None;
+    }
+    let id_len = scan::hex_run(line, id_start);
+    let hash = id_start + id_len;
+    if line.get(hash) != Some(&b'#') {
+        return None;
+    }
+    let id = hex::parse_u32(line.get(id_start..hash)?)?;
+    let (extended, kind) = match id_len {
+        3 if id <= 0x7FF => (false, FrameKind::Data),
+        8 if id & !(EFF_MASK | ERROR_FLAG) != 0 => return None,
+        8 if id & ERROR_FLAG != 0 => (true, FrameKind::Error),
+        8 => (true, FrameKind::Data),
+        _ => return None,
+    };
+    let data_start = hash + 1;
+    let data_end = match line {
+        [.., b' ', b'T' | b'R'] => line.len() - 2,
+        _ => line.len(),
+    };
+    let data_len = data_end.checked_sub(data_start)?;
+    if data_len % 2 != 0 || data_len > 16 || !scan::all_hex(line.get(data_start..data_end)?) {
+        return None;
+    }
+    Some(Shape {
+        dot,
+        close,
+        channel: dev_start..dev_start + dev_len,
+        id,
+        extended,
+        kind,
+        data: data_start..data_end,
+    })
+}
+
+/// Parses `ID#DATA`, `ID#R[len]`, `ID##<flags>DATA` (the token after the
+/// interface). Used by the candump log reader and by tests of other readers.
+pub fn parse_frame<'a>(token: &[u8], interest: &Interest) -> Result<Frame<'a>, Reason> {
+    let hash = memchr::memchr(b'#', token).ok_or("frame has no '#' between id and data")?;
+    let id_text = &token[..hash];
+    let body = &token[hash + 1..];
+    let value = hex::parse_u32(id_text);
+    let (id, extended, is_error) = match (id_text.len(), value) {
+        (3, Some(id)) if id <= 0x7FF => (id, false, false),
+        (3, Some(id)) => return Err(format!("standard id {id:03X} exceeds 7FF").into()),
+        (8, Some(id)) if id & !(EFF_MASK | ERROR_FLAG) != 0 => {
+            return Err(format!("extended id {id:08X} has bits above 29 set").into());
+        }
+        (8, Some(id)) => (id, true, id & ERROR_FLAG != 0),
+        (3 | 8, None) => return Err("id is not hexadecimal".into()),
+        (n, _) => {
+            return Err(
+                format!("id has {n} digits; candump writes 3 (standard) or 8 (extended)").into(),
+            );
+        }
+    };
+    let wanted = interest.wants(id, extended);
+    let mut data = Payload::new();
+    let (kind, len) = if let Some(fd) = body.strip_prefix(b"#") {
+        if is_error {
+            return Err("error frame written as a CAN FD frame".into());
+        }
+        let (&flags, hexdata) = fd
+            .split_first()
+            .ok_or("CAN FD frame needs a flags digit after '##'")?;
+        hex::nibble(flags).ok_or("CAN FD flags digit is not hexadecimal")?;
+        let len = parse_data(hexdata, 64, wanted.then_some(&mut data))?;
+        (FrameKind::Fd, len)
+    } else if let Some(rtr) = body.strip_prefix(b"R").or_else(|| body.strip_prefix(b"r")) {
+        if is_error {
+            return Err("error frame written as a remote frame".into());
+        }
+        let (len_text, dlc) = split_raw_dlc(rtr);
+        let len = match len_text {
+            [] => 0,
+            [d @ b'0'..=b'8'] => d - b'0',
+            _ => return Err("remote frame length must be one digit 0-8".into()),
+        };
+        check_raw_dlc(dlc, len)?;
+        (FrameKind::Remote, 0)
+    } else {
+        let (hexdata, dlc) = split_raw_dlc(body);
+        let len = parse_data(hexdata, 8, wanted.then_some(&mut data))?;
+        check_raw_dlc(dlc, len)?;
+        let kind = if is_error {
+            FrameKind::Error
+        } else {
+            FrameKind::Data
+        };
+        (kind, len)
+    };
+    Ok(Frame {
+        time: None,
+        channel: &[],
+        id,
+        extended,
+        kind,
+        len,
+        data,
+    })
+}
+
+/// Splits `1122334455667788_E` into data and the raw DLC digit.
+fn split_raw_dlc(body: &[u8]) -> (&[u8], Option<&[u8]>) {
+    match memchr::memchr(b'_', body) {
+        Some(i) => (&body[..i], Some(&body[i + 1..])),
+        None => (body, None),
+    }
+}
+
+/// A raw DLC (`_9`..`_F`) is only meaningful on an 8-byte classic frame.
+fn check_raw_dlc(dlc: Option<&[u8]>, len: u8) -> Result<(), Reason> {
+    match dlc {
+        None => Ok(()),
+        Some([d]) if len == 8 && matches!(hex::nibble(*d), Some(9..=15)) => Ok(()),
+        Some(_) => Err("raw DLC suffix must be _9.._F after 8 data bytes".into()),
+    }
+}
+
+/// Hex bytes, optionally separated by single dots between bytes
+/// (`11223344` or `11.22.33.44`). Fills `out` when given.
+pub fn parse_data(text: &[u8], max: usize, mut out: Option<&mut Payload>) -> Result<u8, Reason> {
+    let mut len = 0usize;
+    let mut i = 0;
+    while i < text.len() {
+        if text[i] == b'.' {
+            if i == 0 || i + 1 == text.len() || text[i + 1] == b'.' {
+                return Err("misplaced '.' separator in data".into());
+            }
+            i += 1;
+            continue;
+        }
+        let (Some(&hi), Some(&lo)) = (text.get(i), text.get(i + 1)) else {
+            return Err("odd number of hex digits in data".into());
+        };
+        let byte = match hex::parse_byte(hi, lo) {
+            Some(b) => b,
+            None if lo == b'.' => return Err("odd number of hex digits in data".into()),
+            None => return Err("data is not hexadecimal".into()),
+        };
+        len += 1;
+        if len > max {
+            return Err(format!("more than {max} data bytes").into());
+        }
+        if let Some(p) = out.as_deref_mut() {
+            p.push(byte);
+        }
+        i += 2;
+    }
+    Ok(len as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ContentFilter;
+
+    fn parse(line: &str) -> Parsed<'_> {
+        CandumpLogParser::new().parse(line.as_bytes(), &Interest::all())
+    }
+
+    fn frame(line: &str) -> Frame<'_> {
+        match parse(line) {
+            Parsed::Frame(f) => f,
+            other => panic!("{line:?} -> {other:?}"),
+        }
+    }
+
+    fn malformed(line: &str) -> String {
+        match parse(line) {
+            Parsed::Malformed(r) => r.into_owned(),
+            other => panic!("{line:?} should be malformed, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn classic_standard_frame() {
+        let f = frame("(1469439874.299654) can0 081#1043080100000000");
+        assert_eq!(f.time.unwrap().to_string(), "1469439874.299654");
+        assert_eq!(f.channel, b"can0");
+        assert_eq!(
+            (f.id, f.extended, f.kind, f.len),
+            (0x81, false, FrameKind::Data, 8)
+        );
+        assert_eq!(f.data.as_slice(), [0x10, 0x43, 0x08, 0x01, 0, 0, 0, 0]);
+    }
+
+    #[test]
+    fn digit_count_not_value_decides_extended() {
+        let f = frame("(000.000000) vcan0 00000081#1043080100000000");
+        assert!(f.extended);
+        assert_eq!(f.id, 0x81);
+        assert!(!frame("(0.0) can0 081#00").extended);
+    }
+
+    #[test]
+    fn error_frames() {
+        let f = frame("(1.000000) can0 20000004#0000000000000000");
+        assert_eq!(f.kind, FrameKind::Error);
+        assert_eq!(f.id, 0x2000_0004);
+    }
+
+    #[test]
+    fn remote_frames() {
+        let f = frame("(1735279048.349278) can1 110#R4");
+        assert_eq!((f.kind, f.len), (FrameKind::Remote, 0));
+        assert_eq!(frame("(1.0) can1 110#R").kind, FrameKind::Remote);
+        assert_eq!(frame("(1.0) can1 110#r").kind, FrameKind::Remote);
+        assert_eq!(frame("(1.0) can1 110#R8_E").kind, FrameKind::Remote);
+        assert!(malformed("(1.0) can1 110#R9").contains("0-8"));
+        assert!(malformed("(1.0) can0 20000004#R").contains("error frame"));
+    }
+
+    #[test]
+    fn fd_frames() {
+        let f = frame("(1735270588.936508) can0 120##500112233445566778899AABB");
+        assert_eq!((f.kind, f.len), (FrameKind::Fd, 12));
+        assert_eq!(f.data.as_slice()[0], 0x00);
+        let f = frame("(1614188636.000000) can1 4A8##28001E9A318ACC0 R");
+        assert_eq!((f.kind, f.len), (FrameKind::Fd, 7));
+        assert_eq!(frame("(1.0) can0 123##1").len, 0);
+        assert!(malformed("(1.0) can0 123##").contains("flags"));
+        assert!(malformed("(1.0) can0 123##G00").contains("flags"));
+        let long = format!("(1.0) can0 123##0{}", "00".repeat(65));
+        assert!(malformed(&long).contains("64"));
+    }
+
+    #[test]
+    fn separators_and_case() {
+        let f = frame("(1.0) can0 123#11.22.33");
+        assert_eq!(f.data.as_slice(), [0x11, 0x22, 0x33]);
+        assert_eq!(frame("(1.0) can0 0ab#deadbeef").id, 0xAB);
+        assert!(malformed("(1.0) can0 123#11..22").contains("separator"));
+        assert!(malformed("(1.0) can0 123#.11").contains("separator"));
+        assert!(malformed("(1.0) can0 123#11.").contains("separator"));
+        assert!(malformed("(1.0) can0 123#1.122").contains("odd"));
+    }
+
+    #[test]
+    fn raw_dlc() {
+        let f = frame("(1.0) can0 123#1122334455667788_E");
+        assert_eq!(f.len, 8);
+        assert!(malformed("(1.0) can0 123#11_E").contains("raw DLC"));
+        assert!(malformed("(1.0) can0 123#1122334455667788_5").contains("raw DLC"));
+        assert!(malformed("(1.0) can0 123#1122334455667788_").contains("raw DLC"));
+    }
+
+    #[test]
+    fn fraction_digits_any_count() {
+        assert_eq!(frame("(1.5) can0 081#00").time.unwrap().to_string(), "1.5");
+        assert_eq!(
+            frame("(1700000000.123456789) can0 081#00")
+                .time
+                .unwrap()
+                .to_string(),
+            "1700000000.123456789"
+        );
+    }
+
+    #[test]
+    fn padded_names_and_odd_characters() {
+        let f = frame("(1.0)   vcan-0 081#00");
+        assert_eq!(f.channel, b"vcan-0");
+        assert_eq!(frame("(1.0) can0.1 081#00").channel, b"can0.1");
+        assert_eq!(frame("(1.0) my_can 081#00").channel, b"my_can");
+        assert_eq!(frame("(1.0)\tcan0\t081#00 T").channel, b"can0");
+    }
+
+    #[test]
+    fn non_frame_lines_are_skipped() {
+        for line in [
+            "",
+            "   ",
+            "# a comment",
+            "// another",
+            "DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 7)",
+        ] {
+            assert_eq!(parse(line), Parsed::Skipped, "{line:?}");
+        }
+    }
+
+    #[test]
+    fn dropcount_lines_say_how_many_frames_were_dropped() {
+        let n = |l: &str| dropped_frames(l.as_bytes());
+        assert_eq!(
+            n("DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 7)"),
+            Some(3)
+        );
+        assert_eq!(
+            n("  DROPCOUNT: dropped 1 CAN frame on 'vcan0' socket (total drops 1)\r"),
+            Some(1)
+        );
+        assert_eq!(n("DROPCOUNT: garbled"), None);
+        assert_eq!(n("(1.0) can0 081#00"), None);
+        assert_eq!(n("# DROPCOUNT: dropped 3"), None);
+    }
+
+    #[test]
+    fn malformed_lines_say_why() {
+        assert!(malformed("can0 081#00").contains("'('"));
+        assert!(malformed("(1.0 can0 081#00").contains("')'"));
+        assert!(malformed("(1.0)can0 081#00").contains("space"));
+        assert!(malformed("(1.0) can0").contains("missing frame"));
+        assert!(malformed("(1.0) can0 08100").contains("'#'"));
+        assert!(malformed("(1.0) can0 0081#00").contains("4 digits"));
+        assert!(malformed("(1.0) can0 #00").contains("0 digits"));
+        assert!(malformed("(1.0) can0 08G#00").contains("hexadecimal"));
+        assert!(malformed("(1.0) can0 800#00").contains("exceeds"));
+        assert!(malformed("(1.0) can0 40000000#00").contains("29"));
+        assert!(malformed("(1.0) can0 081#0").contains("odd"));
+        assert!(malformed("(1.0) can0 081#ZZ").contains("hexadecimal"));
+        assert!(malformed("(1.0) can0 081#001122334455667788").contains("8"));
+        assert!(malformed("(1.0) can0 081#00 X").contains("unexpected"));
+        assert!(malformed("(x.0) can0 081#00").contains("decimal"));
+        assert!(malformed("(99999999999999999999.0) can0 081#00").contains("overflow"));
+        let long_id = format!("(1.0) can0 {}#00", "1".repeat(10_000));
+        assert!(malformed(&long_id).contains("10000 digits"));
+    }
+
+    proptest::proptest! {
+        /// The fast path may decline a line, but what it accepts the full
+        /// parser accepts identically.
+        #[test]
+        fn fast_path_agrees_with_the_full_parser(
+            line in "\\(([0-9]{0,21}\\.[0-9]{0,20}|x)\\)[ ]{1,2}[a-z0-9._-]{0,5}[ ]{1,2}[0-9a-fA-F]{0,9}[#_.R]{0,2}[0-9a-fA-FRr._#]{0,20}( T| R| X|  )?",
+            narrow in proptest::bool::ANY,
+        ) {
+            let mut interest = if narrow { Interest::none() } else { Interest::all() };
+            interest.add_standard(0x81);
+            if let Some(fast) = canonical(line.as_bytes(), &interest) {
+                proptest::prop_assert_eq!(Ok(Some(fast)), parse_line_full(line.as_bytes(), &interest));
+            }
+        }
+
+        /// Lines of the canonical shape are taken by the fast path (unless the
+        /// id is out of range) and read the same as by the full parser.
+        #[test]
+        fn canonical_lines_take_the_fast_path(
+            line in "\\([0-9]{1,19}\\.[0-9]{1,18}\\) [a-z0-9]{1,5} ([0-7][0-9a-fA-F]{2}|[01][0-9a-fA-F]{7})#([0-9a-fA-F]{2}){0,8}( T| R)?",
+            narrow in proptest::bool::ANY,
+        ) {
+            let mut interest = if narrow { Interest::none() } else { Interest::all() };
+            interest.add_standard(0x81);
+            let fast = canonical(line.as_bytes(), &interest);
+            proptest::prop_assert!(fast.is_some(), "declined {}", line);
+            proptest::prop_assert_eq!(Ok(fast), parse_line_full(line.as_bytes(), &interest));
+        }
+
+        /// The last line's layout accepts exactly what the general scan
+        /// accepts at the same positions, and takes the usual next line.
+        #[test]
+        fn layout_agrees_with_the_general_scan(
+            first in r"\([0-9]{1,12}\.[0-9]{1,9}\) [a-z0-9-]{1,14} [0-7][0-9a-fA-F]{2}#([0-9a-fA-F]{2}){0,8}",
+            next in r"\(([0-9]{0,12}\.[0-9]{0,9}|x)\)[ ]{1,2}[a-z0-9-]{0,14}[ ]{1,2}[0-9a-fA-FxR]{0,9}[#_.R]{0,2}[0-9a-fA-FRr._#]{0,18}( T| R| X|  )?",
+            same_layout in "[0-7][0-9a-fA-F]{2}#([0-9a-fA-F]{2}){0,8}( T| R)?",
+            at in 0usize..48,
+            byte in proptest::sample::select(b"09aG.) #xTR-\t".to_vec()),
+        ) {
+            let first = first.as_bytes();
+            let general = shape(first).expect("a canonical line");
+            let Some(layout) = Layout::of(first, &general) else {
+                // Only short or long timestamps and long interface names keep none.
+                let sep_len = general.channel.end + 1 - general.close;
+                proptest::prop_assert!(general.close < 9 || general.close > 25 || sep_len > 16);
+                return Ok(());
+            };
+            if let Some(fast) = layout.shape(next.as_bytes()) {
+                proptest::prop_assert_eq!(Some(fast), shape(next.as_bytes()), "{}", next);
+            }
+            // The same timestamp width and interface with another frame.
+            let sep_end = layout.close + layout.sep.width();
+            let mut usual = first[..sep_end].to_vec();
+            usual.extend_from_slice(same_layout.as_bytes());
+            let fast = layout.shape(&usual);
+            proptest::prop_assert!(fast.is_some(), "declined {:?}", String::from_utf8_lossy(&usual));
+            proptest::prop_assert_eq!(fast, shape(&usual));
+            // One byte changed anywhere: still never a different answer.
+            if let Some(b) = usual.get_mut(at) {
+                *b = byte;
+            }
+            if let Some(fast) = layout.shape(&usual) {
+                proptest::prop_assert_eq!(Some(fast), shape(&usual), "{:?}", String::from_utf8_lossy(&usual));
+            }
+        }
+    }
+
+    /// What `run` must return: line by line with `scan`, as the general
+    /// loop would read them.
+    /// Frames on foldable ids are folded as [`Folds::add`] allows.
+    fn run_by_lines<'a>(
+        p: &mut CandumpLogParser,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        folds: &mut Folds,
+    ) -> Run<'a> {
+        let mut run = Run::default();
+        while let Some(rest) = bytes.get(run.bytes..)
+            && let Some(len) = rest.iter().position(|b| *b == b'\n')
+            && len <= max_line
+            && !rest[..len].ends_with(b"\r")
+        {
+            let line = &rest[..len];
+            match p.scan(line, interest) {
+                Scan::Plain => run.plain += 1,
+                Scan::Timed(t) => run.timed(t),
+                Scan::Frame(f) => {
+                    let idx = run.plain + run.timed;
+                    // The data's digits, as the line wrote them.
+                    let start = line.iter().position(|b| *b == b'#').map_or(0, |i| i + 1);
+                    let text = HexText::of(line, start, start + 2 * usize::from(f.len));
+                    let folded = match (f.time.and_then(Timestamp::ticks), f.data.word(), text) {
+                        (Some(t), Some((word, _)), Some(text))
+                            if interest.folds(f.id) && !f.extended =>
+                        {
+                            let rule = || interest.fold_rule(f.id);
+                            (f.kind == FrameKind::Data && folds.add(f.id, word, text, t, idx, rule))
+                                .then(|| t.timestamp())
+                        }
+                        _ => None,
+                    };
+                    if let Some(t) = folded {
+                        run.timed(t);
+                        if run.fold_channel.is_empty() {
+                            run.fold_channel = f.channel;
+                        }
+                    } else {
+                        run.before_frame = run.bytes;
+                        run.bytes += len + 1;
+                        run.frame = Some(f);
+                        return run;
+                    }
+                }
+                Scan::Parse => break,
+            }
+            run.bytes += len + 1;
+        }
+        run.before_frame = run.bytes;
+        run
+    }
+
+    type Fields<'a> = (
+        (usize, usize),
+        u64,
+        u64,
+        Option<Timestamp>,
+        Option<Timestamp>,
+        Option<Frame<'a>>,
+        &'a [u8],
+    );
+
+    fn fields<'a>(r: &Run<'a>, interest: &Interest) -> Fields<'a> {
+        // A run that ends in a data frame with a time may leave its last
+        // time unconverted (the frame's time supersedes it).
+        let superseded = r.frame.as_ref().is_some_and(|f| {
+            f.kind == FrameKind::Data && f.time.is_some() && interest.times(f.id, f.extended)
+        });
+        (
+            (r.bytes, r.before_frame),
+            r.plain,
+            r.timed,
+            r.first_time,
+            if superseded { None } else { r.last_time },
+            r.frame.clone(),
+            r.fold_channel,
+        )
+    }
+
+    proptest::proptest! {
+        /// The hot loop reads what reading line by line would.
+        #[test]
+        fn run_equals_line_by_line(
+            lines in proptest::collection::vec(proptest::prop_oneof![
+                4 => r"\(1700000000\.[0-9]{6}\) can0 [0-7][0-9A-F]{2}#([0-9A-F]{2}){0,8}( T)?",
+                // The layout with any id and data: odd lengths and near misses.
+                3 => r"\(1700000000\.[0-9]{6}\) can0 [0-9A-Fa-fg]{3}#[0-9A-Fa-f]{0,18}[g ]?( T| R|\r| X)?",
+                1 => r"\(1700000000\.[0-9]{6}\) can[01] [0-9A-Fa-f]{3,8}#[0-9A-Fa-fR._]{0,18}( T| R|\r)?",
+                1 => r"\(17000000[0-9]{2}\.[0-9]{5,6}\)  ?[a-z0-9]{3,5} [0-9a-f]{3}#[0-9a-f]{0,17}",
+                // Heartbeat-like repeats on foldable ids, times mostly rising.
+                3 => r"\(170000000[0-2]\.[0-9]{6}\) can0 70[1-3]#0[05]",
+            ], 1..12),
+            last_newline in proptest::bool::ANY,
+            max_line in 30usize..60,
+            narrow in proptest::bool::ANY,
+            filtered in proptest::bool::ANY,
+            untimed in proptest::bool::ANY,
+        ) {
+            let mut interest = if narrow { Interest::none() } else { Interest::all() };
+            interest.add_standard(0x181);
+            if untimed {
+                // A run ending in a frame that moves no time keeps its last.
+                interest.untime(0x181);
+            }
+            if filtered {
+                // Frames on 0x100-0x3FF and 0x700-0x77F matter only when
+                // their data starts with 00; repeats on 0x701-0x77F fold.
+                interest.add_standard_range(0x100..=0x3FF);
+                interest.add_standard_range(0x700..=0x77F);
+                let filter = ContentFilter(|_, d| d.head().first() == Some(&0));
+                interest.filter_content(0x100..=0x3FF, filter);
+                interest.filter_content(0x700..=0x77F, filter);
+                interest.fold(0x701..=0x77F);
+            }
+            let mut text = lines.join("\n");
+            if last_newline {
+                text.push('\n');
+            }
+            let bytes = text.as_bytes();
+            let mut fast = CandumpLogParser::new();
+            fast.scan(b"(1700000000.000000) can0 080#", &interest);
+            let mut slow = fast;
+            let mut at = 0;
+            // Run after run, as the classifier calls it.
+            for _ in 0..lines.len() + 1 {
+                // It may stop early (a line of another layout), but the lines
+                // it read, read one by one, give the same.
+                let (mut fast_folds, mut slow_folds) = (Folds::default(), Folds::default());
+                let got = fast.run(&bytes[at..], max_line, &interest, &mut fast_folds);
+                let consumed = &bytes[at..at + got.bytes];
+                let want = run_by_lines(&mut slow, consumed, max_line, &interest, &mut slow_folds);
+                proptest::prop_assert_eq!(fields(&got, &interest), fields(&want, &interest));
+                proptest::prop_assert_eq!(fast_folds.as_slice(), slow_folds.as_slice());
+                proptest::prop_assert_eq!(fast_folds.frames(), slow_folds.frames());
+                at += got.bytes;
+                if got.frame.is_none() {
+                    // The general loop reads the next line; skip it here.
+                    match bytes[at..].iter().position(|b| *b == b'\n') {
+                        Some(i) => {
+                            let line = &bytes[at..at + i];
+                            fast.scan(line, &interest);
+                            slow.scan(line, &interest);
+                            at += i + 1;
+                        }
+                        None => break,
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_layout_is_kept_between_lines_and_replaced_when_it_changes() {
+        let mut p = CandumpLogParser::new();
+        let all = Interest::all();
+        let a = b"(1700000000.000100) can0 383#724F5046";
+        let b = b"(1700000000.000517) can0 604#3684F0716DEF09E6 T";
+        let c = b"(1700000000.000753) vcan12 085#";
+        assert!(p.scan(a, &all) != Scan::Parse);
+        let kept = p.layout;
+        assert!(kept.is_some());
+        assert_eq!(p.scan(b, &all), Scan::Frame(canonical(b, &all).unwrap()));
+        assert_eq!(p.layout, kept, "same layout: not recomputed");
+        assert_eq!(p.scan(c, &all), Scan::Frame(canonical(c, &all).unwrap()));
+        assert_ne!(p.layout, kept, "another interface: a new layout");
+        // A line that fits no layout is left to the full parser.
+        assert_eq!(p.scan(b"(1700000000.000753) can0 085#1", &all), Scan::Parse);
+        // The hot loop takes every line of the layout, and stops at a wanted one.
+        let block = b"(1.000001) can0 181#00\n(1.000002) can0 281#0102 T\n\
+                      (1.000003) can0 381#\n(1.000004) can0 081#10\n(1.000005) can0 181#\n";
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        let mut p = CandumpLogParser::new();
+        let folds = &mut Folds::default();
+        assert_eq!(
+            p.run(block, 100, &interest, folds).bytes,
+            0,
+            "no layout yet"
+        );
+        p.scan(b"(9.000000) can0 080#", &interest);
+        let run = p.run(block, 100, &interest, folds);
+        assert_eq!((run.bytes, run.plain), (94, 3));
+        assert_eq!(run.frame.map(|f| f.id), Some(0x81));
+        let run = p.run(&block[94..], 100, &interest, folds);
+        assert_eq!((run.bytes, run.plain, run.frame), (21, 1, None));
+        assert_eq!(
+            p.run(&block[..22], 100, &interest, folds).bytes,
+            0,
+            "no newline"
+        );
+        assert_eq!(
+            p.run(block, 20, &interest, folds).bytes,
+            0,
+            "longer than max_line"
+        );
+    }
+
+    #[test]
+    fn scan_counts_valid_unwanted_lines_and_decodes_wanted_ones() {
+        let mut p = CandumpLogParser::new();
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        assert_eq!(p.scan(b"(1.000000) can0 181#1122", &interest), Scan::Plain);
+        let line = b"(1.000000) can0 081#1122";
+        assert_eq!(
+            p.scan(line, &interest),
+            Scan::Frame(canonical(line, &interest).unwrap()),
+            "wanted"
+        );
+        let Scan::Frame(f) = p.scan(line, &interest) else {
+            unreachable!()
+        };
+        assert_eq!(f.data.as_slice(), [0x11, 0x22]);
+        assert_eq!(f.time.map(|t| t.to_string()).as_deref(), Some("1.000000"));
+        assert_eq!(
+            p.scan(b"(1.000000) can0 181#112", &interest),
+            Scan::Parse,
+            "invalid"
+        );
+        assert_eq!(
+            p.scan(b"(1.000000)  can0 181#1122", &interest),
+            Scan::Parse,
+            "not canonical"
+        );
+    }
+
+    #[test]
+    fn fast_path_takes_the_common_line() {
+        assert!(
+            canonical(
+                b"(1469439874.299654) can0 081#1043080100000000",
+                &Interest::all()
+            )
+            .is_some()
+        );
+        assert!(canonical(b"(1469439874.299654) can0 00000081#10 T", &Interest::all()).is_some());
+        assert!(canonical(b"(1469439874.299654)  can0 081#10", &Interest::all()).is_none());
+        assert!(canonical(b"(1469439874.299654) can0 081#R", &Interest::all()).is_none());
+    }
+
+    #[test]
+    fn uninteresting_frames_are_validated_but_not_decoded() {
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        let mut p = CandumpLogParser::new();
+        match p.parse(b"(1.0) can0 123#1122", &interest) {
+            Parsed::Frame(f) => {
+                assert_eq!(f.len, 2);
+                assert!(f.data.is_empty());
+                assert!(f.time.is_none());
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            p.parse(b"(1.0) can0 123#11ZZ", &interest),
+            Parsed::Malformed(_)
+        ));
+    }
+}

@@ -1,0 +1,49 @@
+//! Trace readers: one line parser per text format, one reader per binary
+//! format (BLF, pcap/pcapng, MF4), all yielding [`Frame`].
+//!
+//! Every line is classified as exactly one of: a frame, a known non-frame line
+//! (header, comment, status, blank: "skipped"), or a malformed line with a
+//! reason. Parsers never panic and never stop: the caller counts and reports.
+//! (A binary format's "line" is its record: a BLF object, a pcap packet,
+//! an MF4 record.)
+//!
+//! This file is the table of contents. The shared types live in their own
+//! files ([`frame`], [`interest`], [`traits`], [`time`]); each format has a
+//! folder under [`format`]; [`any`] dispatches to them. A caller writes its
+//! read loop once, over [`FrameSource`], and runs it on an [`AnyReader`].
+//!
+//! This crate is the bottom of emcy-decode and imports nothing of it: what
+//! a frame means to CANopen is said above it.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod any;
+pub mod cancel;
+pub mod deltas;
+pub mod detect;
+pub mod ethercat;
+pub mod fold;
+pub mod follow;
+pub mod format;
+pub mod frame;
+pub mod hex;
+pub mod input;
+pub mod interest;
+pub mod lines;
+pub mod read;
+pub mod scan;
+pub mod text;
+pub mod time;
+pub mod token;
+pub mod traits;
+
+pub use any::{AnyParser, AnyReader};
+pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
+pub use format::Format;
+pub use frame::NumberedChannel;
+pub use frame::{Frame, FrameKind, HexBytes, Payload};
+pub use interest::{ContentFilter, DataHead, Interest};
+pub use time::{Span, Step, Ticks, Timestamp};
+pub use token::{is_blank, show_token, split_token, trim_end, trim_start};
+pub use traits::{Counted, FrameSource, LineParser, Next, Parsed, Reason, Run, Scan};
