@@ -75,7 +75,7 @@ impl Evidence {
 
 /// Decides from the first [`SAMPLE_LINES`] lines of a text trace (within
 /// its first [`SAMPLE_BYTES`]) whether its candump times are deltas: `Some`
-/// when at least [`MIN_TIMES`] lines start with a candump time, all below
+/// when at least `MIN_TIMES` lines start with a candump time, all below
 /// [`DELTA_BELOW_SECS`], and at least two and at least a tenth of their
 /// consecutive pairs decrease. Absolute and zero-based times never
 /// decrease (a capture of several interfaces may, rarely); deltas of a real

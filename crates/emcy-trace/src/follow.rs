@@ -24,7 +24,7 @@
 //! Identity (device and inode) and size are checked by path when the file
 //! has no more data, once per poll; the last bytes read are compared also
 //! before each read, so a rewrite is seen whenever it happened (a read of
-//! at most [`TAIL`] bytes and two seeks: a followed file is read in large
+//! at most `TAIL` bytes and two seeks: a followed file is read in large
 //! chunks or waited on, never line by line).
 
 use std::fs::{self, File, Metadata};

@@ -22,7 +22,7 @@ pub struct Interest {
     filtered: [u64; 32],
     content: ContentFilter,
     /// Standard ids whose repeated frames a reader's hot loop may fold
-    /// ([`fold`]).
+    /// ([`crate::fold`]).
     foldable: [u64; 32],
     /// The bits that must repeat for a fold, by id (sorted; ids not here:
     /// every bit).

@@ -9,7 +9,7 @@
 //!
 //! This file is the table of contents. The shared types live in their own
 //! files ([`frame`], [`interest`], [`traits`], [`time`]); each format has a
-//! folder under [`format`]; [`any`] dispatches to them. A caller writes its
+//! folder under `format`; [`any`] dispatches to them. A caller writes its
 //! read loop once, over [`FrameSource`], and runs it on an [`AnyReader`].
 //!
 //! This crate is the bottom of emcy-decode and imports nothing of it: what

@@ -168,7 +168,7 @@ fn back_event(back: Back, at: At) -> (At, Health) {
 /// it ends, found now or before, as events. `Some(start)` when it ends an
 /// outage that began after it (the trace's clock went back, or a frame
 /// stamped ahead of the bus declared the node lost): the outage's duration
-/// is negative, which [`NmtMonitor::outage_after_its_end`] says.
+/// is negative, which [`outage_after_its_end`] says.
 fn sign_of_life(
     h: &mut NodeHealth,
     at: At,

@@ -71,7 +71,7 @@ pub(super) const CS_ABORT: u8 = 4;
 /// Whether `index` is an object whose value the decoder follows: device type and vendor id
 /// choose a node's profile, COB-ID EMCY moves its EMCY id, the error
 /// history is read out, heartbeat times set the timeouts. Frames naming
-/// any other object change nothing (the [`Tracker`] ignores them) except
+/// any other object change nothing (the `Tracker` ignores them) except
 /// aborts, which are reported whatever they name.
 ///
 /// A `match`, not a search of a list: asked of every SDO frame, the search

@@ -5,7 +5,7 @@
 //! is a stream of further objects; an object may start in one container and
 //! end in the next. Objects are padded by `size % 4` bytes, but not every
 //! writer pads every object type (CANoe writes some unpadded), so the next
-//! object is the first `LOBJ` within [`PAD_WINDOW`] bytes of the last one's
+//! object is the first `LOBJ` within `PAD_WINDOW` bytes of the last one's
 //! end, as python-can finds it; `size % 4` when there is none.
 //!
 //! What is read: CAN messages (types 1 and 86), CAN error frames (2 and 73),

@@ -24,7 +24,7 @@
 //! - the number base of ids and data bytes: `***HEX***` or `***DEC***`. The
 //!   data length is always decimal. Older writers (1.6.3, the 2.2 format
 //!   converter) write no base line: then the numbers decide (see
-//!   [`Base::from_byte_width`]), once per session.
+//!   `Base::from_byte_width`), once per session.
 //! - the time mode: `***SYSTEM MODE***` (time of day), `***ABSOLUTE MODE***`
 //!   (time since logging started) or `***RELATIVE MODE***` (each stamp the
 //!   delta to the previous frame). Without a mode line times are read as

@@ -485,7 +485,7 @@ pub fn untranspose(data: &mut [u8], columns: usize) {
     data.copy_from_slice(&out);
 }
 
-/// [`untranspose`] from `stored` into `out`. Column by column, no division
+/// `untranspose` from `stored` into `out`. Column by column, no division
 /// per byte (with one the reader took 2.0x the inflate time; see
 /// docs/performance.md).
 pub fn untranspose_into(stored: &[u8], out: &mut Vec<u8>, columns: usize) {

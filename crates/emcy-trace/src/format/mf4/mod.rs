@@ -43,10 +43,10 @@
 //! from there at the end of the input, in file order. SD blocks always go
 //! to the temporary file: records look their data up there. CANedge writes
 //! a frame before the VLSD record holding its data bytes: the frame waits
-//! for it (at most [`MAX_WAITING`] frames, [`MAX_QUEUE`] records queued).
+//! for it (at most `MAX_WAITING` frames, `MAX_QUEUE` records queued).
 //! Memory is bounded by the kept metadata, a few DZ blocks inflated (the
 //! one decoded, one inflated ahead and their buffers; each at most
-//! [`block::MAX_INFLATED`]), a 64 KiB chunk, one record and the last
+//! `block::MAX_INFLATED`), a 64 KiB chunk, one record and the last
 //! [`VLSD_WINDOW`] VLSD records of each VLSD group; the disk by the input
 //! (measured: a 200 MB CANedge-like file in 8 MiB peak RSS).
 //!
@@ -54,7 +54,7 @@
 //! frames on ids nobody wants are only counted, by a loop that reads just
 //! ID, IDE, DataLength and EDL where a group stores them as they are; a
 //! DZ block is decoded where it was inflated, and spooled DZ blocks are
-//! inflated ahead on a second thread ([`ahead`]). 512 MiB of records:
+//! inflated ahead on a second thread (`ahead`). 512 MiB of records:
 //! 482 MB/s uncompressed; with transposed deflate 1.14x the time of
 //! inflating the DZ blocks alone (docs/performance.md).
 

@@ -4,7 +4,7 @@
 //!
 //! What is read: packets of the link types that carry Linux SocketCAN
 //! frames, LINKTYPE_CAN_SOCKETCAN (227), LINUX_SLL (113) and LINUX_SLL2
-//! (276), CAN classic and CAN FD (see [`packet`]). Every other packet (LIN
+//! (276), CAN classic and CAN FD (see `packet`). Every other packet (LIN
 //! and other link types, other protocols behind a cooked header, CAN XL)
 //! is skipped and counted. pcap: microsecond and nanosecond files in
 //! either byte order, one channel, named [`CHANNEL`]. pcapng: every
@@ -13,7 +13,7 @@
 //! with the device's interface index for LINUX_SLL2 on an interface that
 //! captures several devices, `any`), its time the
 //! interface's `if_tsresol` units (powers of ten and of two) plus
-//! `if_tsoffset` seconds, exactly ([`clock`]). Simple packet blocks have
+//! `if_tsoffset` seconds, exactly (`clock`). Simple packet blocks have
 //! no time; obsolete packet blocks are read like enhanced ones.
 //!
 //! Counting: each packet is one "line", numbered from 1 in file order as
@@ -27,7 +27,7 @@
 //!
 //! Link type 227 defines its id word as big-endian, but some writers
 //! (scapy) store it little-endian. The first packets of that link type
-//! decide which it is (see [`packet::evidence`]): they are held, at most
+//! decide which it is (see `packet::evidence`): they are held, at most
 //! [`SAMPLE`] of them with what came between (bounded), until the order is
 //! known: at once when one order makes no packet impossible and the other
 //! two (a live capture is not held for 32 packets), else after the sample.

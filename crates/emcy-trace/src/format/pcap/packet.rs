@@ -91,7 +91,7 @@ pub enum Packet<'p> {
     /// data frame, or on an id it does not decode): only counted.
     Plain,
     /// A LINKTYPE_CAN_SOCKETCAN packet read before the byte order of its id
-    /// word is known (see [`evidence`]): decode it later with [`socketcan`].
+    /// word is known (see [`evidence`]): decode it later with `socketcan`.
     Undecided(&'p [u8]),
     /// Not a CAN classic or FD frame: another link type, another
     /// protocol behind a cooked header, a CAN XL frame. Skipped.
