@@ -6,12 +6,12 @@
 use std::fmt::{self, Write as _};
 
 use super::bars::{Bar, CLEARED_SLUGS, SMALL_PX};
+use super::lane::{Lane, lane_key, lane_label};
 use super::legend::{CodeKey, CodeKeys};
 use super::marks::{Clusters, MARKS, Mark, Streamed};
 use super::style::{BAR_H, CLASS_COLOURS, LANES_TOP, ROW_H, WIDTH, X0};
 use super::text::{N, clip, esc, plural, short_number};
-use super::time_scale::{Clock, Measure, wall_clock, write_time_scale};
-use super::{Lane, Scale, lane_key, lane_label};
+use super::time_scale::{Clock, Measure, Scale, wall_clock, write_time_scale};
 use crate::analyze::{InputReport, NodeReport};
 use crate::canopen::codes::{self, Class};
 use crate::timeline::ClearedBy;

@@ -4,7 +4,8 @@
 //! its own function: the lane's other bands are the NMT states and
 //! heartbeat outages of `shades`.
 
-use super::{Clock, Scale, Shade};
+use super::lane::Shade;
+use super::time_scale::{Clock, Scale};
 use crate::analyze::NodeReport;
 use crate::canopen::cia402::State;
 use crate::timeline::At;
