@@ -236,8 +236,7 @@ impl EventLines {
             "boot",
             Some(GREEN),
             &what,
-        )?;
-        Ok(())
+        )
     }
 
     /// A health event's row (NMT, heartbeat, SDO abort, error history read
