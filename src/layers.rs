@@ -562,46 +562,21 @@ fn import_circles(src: &Path) -> Vec<Vec<String>> {
     circles
 }
 
-/// Folders whose files still import each other round a circle, being
-/// taken apart: a circle elsewhere fails, and so does a folder listed here
-/// that has none left (take it off the list).
-const CIRCLES_LEFT_IN: [&str; 2] = ["src/report/chart/", "src/report/table/"];
-
 #[test]
 fn no_files_import_each_other_round_a_circle() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut circles = Vec::new();
+    let mut shown = Vec::new();
     for src in ["src", "crates/emcy-trace/src"] {
         for circle in import_circles(&root.join(src)) {
-            circles.push(
-                circle
-                    .iter()
-                    .map(|f| format!("{src}/{f}"))
-                    .collect::<Vec<_>>(),
-            );
+            let files: Vec<String> = circle.iter().map(|f| format!("{src}/{f}")).collect();
+            shown.push(files.join(" <-> "));
         }
     }
-    let listed = |circle: &Vec<String>| {
-        CIRCLES_LEFT_IN
-            .iter()
-            .any(|dir| circle.iter().all(|f| f.starts_with(dir)))
-    };
-    let shown: Vec<String> = circles
-        .iter()
-        .filter(|c| !listed(c))
-        .map(|c| c.join(" <-> "))
-        .collect();
     assert!(
         shown.is_empty(),
         "files that import each other:\n{}",
         shown.join("\n")
     );
-    for dir in CIRCLES_LEFT_IN {
-        assert!(
-            circles.iter().any(|c| c.iter().all(|f| f.starts_with(dir))),
-            "{dir} has no circle left: take it off CIRCLES_LEFT_IN"
-        );
-    }
 }
 
 #[test]

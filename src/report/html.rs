@@ -168,17 +168,17 @@ p.zoom button{margin-right:4px;min-width:2em}
 
 /// The page's behaviour, plain DOM and no library (the page works without
 /// it, as the static chart and the whole table):
-/// - the chart fills the window: the time drive is re-laid from the panel's
-///   `data-*` (plot edges, drive values there, drive kind and origin), bars
+/// - the chart fills the window: the time scale is re-laid from the panel's
+///   `data-*` (plot edges, scale values there, the scale's kind and origin), bars
 ///   and markers move, labels appear on bars wide enough, ticks are redrawn
 ///   as the Rust side draws them, the legend re-flows;
 /// - wheel zooms around the pointer, drag pans, double-click or the
 ///   buttons go back; the events table then lists the rows in the visible
-///   range only (`data-v`: each row's drive value);
+///   range only (`data-v`: each row's value on the time scale);
 /// - filter by node (select, or a click on a lane) and sort by a column.
 ///
 /// The script's comments are part of every page and of the golden files:
-/// its `drive.rs, tick_label` names what is now `chart/time_scale.rs`.
+/// its `axis.rs, tick_label` names what is now `chart/time_scale.rs`.
 const SCRIPT: &str = r#"document.querySelectorAll('section.input').forEach(function(sec){
 var box=sec.querySelector('.chart'),svg=box.querySelector('svg'),p=svg.querySelector('g.panel'),tb=sec.querySelector('tbody'),sel=sec.querySelector('select'),shown=sec.querySelector('.shown');
 var view=null,all=null,drag=null,moved=false,W=0,X0=0,X1=0,fit=null;
@@ -340,7 +340,7 @@ fn write_row(s: &mut String, clock: &Clock, r: &Row) -> std::fmt::Result {
         Kind::Emcy(_) => format!("0x{:02X}", r.register),
         _ => String::new(),
     };
-    // The drive value, for the script's visible-range filter.
+    // The value on the time scale, for the script's visible-range filter.
     let v = clock
         .value(&At {
             time: r.time,

@@ -1,4 +1,4 @@
-//! One CiA 402 drive drive over a trace: the states its statusword showed,
+//! One CiA 402 drive over a trace: the states its statusword showed,
 //! its faults (from entering fault reaction or fault to leaving them), the
 //! fault resets its master sent, and the time it spent in each state.
 //!

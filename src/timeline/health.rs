@@ -18,7 +18,7 @@ pub struct NodeHealth {
     /// Where the caller's deadline schedule keeps the node, once it has
     /// had a deadline.
     pub schedule_slot: Option<u32>,
-    /// Its CiA 402 drive drive, once a statusword or controlword of it was
+    /// Its CiA 402 drive, once a statusword or controlword of it was
     /// decoded.
     pub drive: Option<Box<DriveRecord>>,
 }

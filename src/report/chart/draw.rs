@@ -1,17 +1,17 @@
 //! Drawing: one input's panel as SVG elements (title, lane backgrounds,
 //! lanes with their labels, bars with tooltips, markers, the legend). Only
 //! writes what layout ([`super::Panel`]), binning ([`super::bars`]) and the
-//! markers ([`super::marks`]) decided; the axis draws itself ([`super::axis`]).
+//! markers ([`super::marks`]) decided; the time scale draws itself ([`super::time_scale`]).
 
 use std::fmt::{self, Write as _};
 
 use super::bars::{Bar, CLEARED_SLUGS, SMALL_PX};
+use super::lane::{Lane, lane_key, lane_label};
 use super::legend::{CodeKey, CodeKeys};
 use super::marks::{Clusters, MARKS, Mark, Streamed};
 use super::style::{BAR_H, CLASS_COLOURS, LANES_TOP, ROW_H, WIDTH, X0};
 use super::text::{N, clip, esc, plural, short_number};
-use super::time_scale::{Clock, Measure, wall_clock, write_time_scale};
-use super::{Lane, Scale, lane_key, lane_label};
+use super::time_scale::{Clock, Measure, Scale, wall_clock, write_time_scale};
 use crate::analyze::{InputReport, NodeReport};
 use crate::canopen::codes::{self, Class};
 use crate::timeline::ClearedBy;
@@ -189,7 +189,7 @@ fn write_lane(
         )?,
     }
     for shade in &lane.shades {
-        // An axis state is a strip along the lane's foot, under the bars.
+        // A drive state is a strip along the lane's foot, under the bars.
         let (y, height) = if shade.strip {
             (lane.height - DRIVE_STRIP_H, DRIVE_STRIP_H)
         } else {
@@ -441,7 +441,7 @@ const SHADES: [(&str, &str); 15] = [
     ("a-unknown", "axis state unknown"),
 ];
 
-/// The height of the axis state strip along a lane's foot.
+/// The height of the drive state strip along a lane's foot.
 const DRIVE_STRIP_H: f64 = 4.0;
 
 fn write_legend(

@@ -4,13 +4,14 @@
 //! its own function: the lane's other bands are the NMT states and
 //! heartbeat outages of `shades`.
 
-use super::{Clock, Scale, Shade};
+use super::lane::Shade;
+use super::time_scale::{Clock, Scale};
 use crate::analyze::NodeReport;
 use crate::canopen::cia402::State;
 use crate::timeline::At;
 use crate::timeline::drive::DriveState;
 
-/// The fault bands of a node with an axis; none for other nodes.
+/// The fault bands of a node with a drive; none for other nodes.
 pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Vec<Shade> {
     let Some(drive) = &node.drive else {
         return Vec::new();
@@ -58,7 +59,7 @@ pub(super) fn fault_shades(clock: &Clock, scale: Scale, node: &NodeReport) -> Ve
     out
 }
 
-/// The CSS class of an axis state's strip.
+/// The CSS class of a drive state's strip.
 pub(super) fn drive_class(state: DriveState) -> &'static str {
     let DriveState::State(state) = state else {
         return "a-unknown";
@@ -75,7 +76,7 @@ pub(super) fn drive_class(state: DriveState) -> &'static str {
     }
 }
 
-/// The axis states along the lane's foot: each from its change to the
+/// The drive states along the lane's foot: each from its change to the
 /// next (the last to the end of the trace).
 pub(super) fn drive_shades(
     clock: &Clock,

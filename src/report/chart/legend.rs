@@ -5,7 +5,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use super::Lane;
+use super::lane::Lane;
 use super::style::{SHADES, class_index, code_colour, dark};
 use crate::canopen::codes;
 

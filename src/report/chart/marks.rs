@@ -1,5 +1,5 @@
 //! What streams in: markers (resets, partial resets, boot-ups) placed on
-//! the axis while the input is read, and coalesced as they come so memory
+//! the time scale while the input is read, and coalesced as they come so memory
 //! stays bounded by the chart's pixels, not by the trace.
 
 use std::collections::BTreeMap;

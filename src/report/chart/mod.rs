@@ -20,16 +20,20 @@
 //! that follow each other within a pixel become one bar whose tooltip says
 //! how many errors it merges.
 //!
-//! The parts, one concern each: [`style`] (geometry and CSS), [`text`]
-//! (escaping and number formatting), [`time_scale`] (the time axis,
-//! its ticks and calendar), [`marks`] (markers as they stream in), [`bars`] (intervals
-//! binned into bars), [`draw`] (the SVG elements). This file is the surface
-//! `svg.rs` and `html.rs` use: the [`Collector`] and the [`Panel`] it lays
-//! out, and the lanes and scale the parts share.
+//! The parts, one concern each, each importing only those above it in
+//! this list: [`style`] (geometry and CSS), [`text`] (escaping and number
+//! formatting), [`time_scale`] (the time axis, its scale from values to
+//! pixels, ticks and calendar), [`marks`] (markers as they stream in),
+//! [`bars`] (intervals binned into bars), [`lane`] (a lane: its bars,
+//! markers, bands and label), [`drive`] (a CiA 402 drive's bands),
+//! [`legend`] (the codes' colours), [`draw`] (the SVG elements). This file
+//! is the surface `svg.rs` and `html.rs` use: the [`Collector`] and the
+//! [`Panel`] it lays out; it imports the parts and none imports it.
 
 mod bars;
 mod draw;
 mod drive;
+mod lane;
 mod legend;
 mod marks;
 mod style;
@@ -39,7 +43,7 @@ mod time_scale;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io;
 
-use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport, NodeReport};
+use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport};
 use crate::canopen::NodeId;
 use crate::canopen::nmt::NmtState;
 use crate::timeline::At;
@@ -48,11 +52,13 @@ use crate::trace::Format;
 
 use bars::Bars;
 use draw::write_panel;
+use lane::{Lane, lane_label, shades};
 use legend::CodeKeys;
-use marks::{LaneMarks, Mark, Streamed};
-use style::{LANE_MIN_H, PLOT_W, ROW_H, X0, X1};
-use time_scale::Measure;
+use marks::{Mark, Streamed};
+use style::{LANE_MIN_H, ROW_H, X0, X1};
+use time_scale::{Measure, Scale};
 
+pub(super) use lane::lane_key;
 pub(super) use style::{WIDTH, style_sheet};
 pub(super) use text::{N, esc};
 pub(super) use time_scale::Clock;
@@ -72,7 +78,7 @@ pub(super) struct Collector {
     current: Streamed,
     /// Per lane, the NMT state changes in trace order.
     nmt: BTreeMap<(String, NodeId), Vec<(At, NmtState)>>,
-    /// Per lane, the CiA 402 axis state changes in trace order.
+    /// Per lane, the CiA 402 drive state changes in trace order.
     drive: BTreeMap<(String, NodeId), Vec<(At, DriveState)>>,
 }
 
@@ -83,7 +89,7 @@ impl Collector {
         self.drive.clear();
     }
 
-    /// NMT and axis state changes shade the lane; outages and faults
+    /// NMT and drive state changes shade the lane; outages and faults
     /// come from the report.
     pub(super) fn health(&mut self, ev: &HealthEvent<'_>) {
         let at = At {
@@ -150,30 +156,6 @@ struct Changes {
     drive: BTreeMap<(String, NodeId), Vec<(At, DriveState)>>,
 }
 
-/// The label of a lane: `can0 · node 5`, and a second line.
-struct LaneLabel {
-    main: String,
-    detail: Option<String>,
-}
-
-/// The one place a lane's label is made: channel and node, then the node's
-/// profile and why it has it.
-fn lane_label(node: &NodeReport) -> LaneLabel {
-    LaneLabel {
-        main: format!("{} · node {}", node.channel, node.node),
-        detail: Some(format!(
-            "{} ({})",
-            node.profile.name(),
-            node.profile_source.slug()
-        )),
-    }
-}
-
-/// Key of a lane in the HTML filter: `channel/node`.
-pub(super) fn lane_key(channel: &str, node: NodeId) -> String {
-    format!("{channel}/{node}")
-}
-
 /// One input laid out: the SVG fragment (without `<svg>` and style), its
 /// height, and the clock its times are shown with. `pub(crate)` only because
 /// `svg::document`, which takes panels, is.
@@ -186,122 +168,13 @@ pub(in crate::report) struct Panel {
     /// The `(class, shade)` colours its codes use beyond the class colours
     /// (the document's style sheet has a rule for each).
     pub(super) shades: BTreeSet<(usize, usize)>,
-    /// A lane has a CiA 402 axis state strip (the style sheet then has
+    /// A lane has a CiA 402 drive state strip (the style sheet then has
     /// their fills).
     pub(super) drives: bool,
     /// The attributes of the panel's `<g>` that let the HTML page re-lay
     /// the time axis (fill the window, zoom, pan): the plot's edges in px,
     /// the axis values at them, what the axis measures and its origin.
     pub(super) view: String,
-}
-
-struct Lane<'a> {
-    node: &'a NodeReport,
-    bars: Bars,
-    marks: Option<LaneMarks>,
-    /// NMT states and heartbeat outages, drawn under the bars.
-    shades: Vec<Shade>,
-    height: f64,
-}
-
-/// A band across a lane: an NMT state, or a heartbeat outage.
-struct Shade {
-    x0: f64,
-    x1: f64,
-    /// The CSS class (`n-operational`, `out`, `a-fault`).
-    class: &'static str,
-    title: String,
-    /// A strip along the lane's foot (the drive's axis state) rather than
-    /// the lane's whole height (NMT state, outages, faults).
-    strip: bool,
-}
-
-/// The CSS class of an NMT state's band.
-fn nmt_class(state: NmtState) -> &'static str {
-    match state {
-        NmtState::Initialising => "n-initialising",
-        NmtState::PreOperational => "n-pre_operational",
-        NmtState::Operational => "n-operational",
-        NmtState::Stopped => "n-stopped",
-    }
-}
-
-/// A lane's bands: each NMT state from its change to the next (the last to
-/// the end of the trace), then each heartbeat outage over them.
-fn shades(clock: &Clock, scale: Scale, node: &NodeReport, nmt: &[(At, NmtState)]) -> Vec<Shade> {
-    let mut out = Vec::new();
-    let end = scale.x(scale.end);
-    for (i, (at, state)) in nmt.iter().enumerate() {
-        let Some(v) = clock.value(at) else { continue };
-        let x1 = nmt
-            .get(i + 1)
-            .and_then(|(next, _)| clock.value(next))
-            .map_or(end, |n| scale.x(n));
-        let x0 = scale.x(v);
-        if x1 > x0 {
-            out.push(Shade {
-                x0,
-                x1,
-                class: nmt_class(*state),
-                title: format!("NMT {} from {}", state.slug(), clock.at(at)),
-                strip: false,
-            });
-        }
-    }
-    if let Some(hb) = &node.heartbeat {
-        for o in &hb.outages {
-            let at = |t| At {
-                time: Some(t),
-                line: 0,
-            };
-            let Some(v0) = clock.value(&at(o.start)) else {
-                continue;
-            };
-            let x1 = o
-                .end
-                .and_then(|e| clock.value(&at(e)))
-                .map_or(end, |v| scale.x(v));
-            let x0 = scale.x(v0);
-            let title = match (o.end, o.duration()) {
-                (Some(e), Some(d)) => format!(
-                    "heartbeat lost from {} to {} ({d} s)",
-                    clock.at(&at(o.start)),
-                    clock.at(&at(e))
-                ),
-                _ => format!(
-                    "heartbeat lost from {} to the end of the trace",
-                    clock.at(&at(o.start))
-                ),
-            };
-            out.push(Shade {
-                x0,
-                x1: x1.max(x0 + 1.0),
-                class: "out",
-                title,
-                strip: false,
-            });
-        }
-    }
-    out
-}
-
-/// Maps axis values to x pixels.
-#[derive(Clone, Copy)]
-struct Scale {
-    lo: f64,
-    hi: f64,
-    /// The last frame of the input.
-    end: f64,
-}
-
-impl Scale {
-    fn x(&self, v: f64) -> f64 {
-        let v = v.clamp(self.lo, self.hi);
-        X0 + (v - self.lo) / (self.hi - self.lo) * PLOT_W
-    }
-    fn per_px(&self) -> f64 {
-        (self.hi - self.lo) / PLOT_W
-    }
 }
 
 impl Panel {

@@ -59,7 +59,7 @@ pub(in crate::report) const STYLE: &str = "\
 .ec .out{fill:#d62728;fill-opacity:.28}
 ";
 
-/// The axis state strips' fills, only in documents that have a CiA 402
+/// The drive state strips' fills, only in documents that have a CiA 402
 /// drive (every other chart's style sheet stays as it was): disabled
 /// states grey, ready and switched on light green, operation enabled
 /// green, quick stop amber, fault reaction and fault red.
@@ -175,7 +175,7 @@ fn rgb(h: f64, s: f64, l: f64) -> u32 {
 
 /// The style sheet of a document: [`STYLE`], a fill per class, and a fill
 /// per `(class, shade)` the panels use beyond the first shade.
-/// With `axes`, the axis state strips' fills too.
+/// With `drives`, the drive state strips' fills too.
 pub(in crate::report) fn style_sheet(
     shades: &std::collections::BTreeSet<(usize, usize)>,
     drives: bool,

@@ -7,12 +7,30 @@
 
 use std::fmt::{self, Write as _};
 
-use super::Scale;
 use super::style::{LANES_TOP, PLOT_W, X0, X1};
 use super::text::N;
 use crate::report::timefmt::utc_date;
 use crate::timeline::At;
 use crate::trace::Timestamp;
+
+/// Maps axis values to x pixels.
+#[derive(Clone, Copy)]
+pub(super) struct Scale {
+    pub(super) lo: f64,
+    pub(super) hi: f64,
+    /// The last frame of the input.
+    pub(super) end: f64,
+}
+
+impl Scale {
+    pub(super) fn x(&self, v: f64) -> f64 {
+        let v = v.clamp(self.lo, self.hi);
+        X0 + (v - self.lo) / (self.hi - self.lo) * PLOT_W
+    }
+    pub(super) fn per_px(&self) -> f64 {
+        (self.hi - self.lo) / PLOT_W
+    }
+}
 
 /// What the time scale measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

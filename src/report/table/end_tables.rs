@@ -3,368 +3,311 @@
 //! file) and of the run (inputs). Tables that can have a row per node are
 //! written in two passes, widths then rows, so none is held.
 
-use std::borrow::Cow;
 use std::io::{self, Write};
 
 use comfy_table::{CellAlignment, Table, presets};
 
 use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut, push_row, write_row};
-use super::{BOLD, TableReport};
+use super::page::{BOLD, Page};
+use super::timeline::{NodeTexts, write_timeline};
 use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport};
-use crate::canopen::NodeId;
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
 use crate::report::timefmt::TimeFormat;
 use crate::text::printable;
 
-impl<W: Write> TableReport<W> {
-    /// The end of an input: the events' legend, then the warnings said once,
-    /// the nodes, their health and drives, the error timeline and the bus
-    /// line; in the summary view only the nodes' tables and the bus line.
-    pub(super) fn write_end_of_input(&mut self, input: &InputReport) -> io::Result<()> {
-        if self.summary_only {
-            if !input.nodes.is_empty() {
-                self.write_nodes(input)?;
-                self.write_codes(input)?;
-                self.write_health(input)?;
-                self.write_drives(input)?;
-            }
-            self.write_bus_line(input)?;
-            return writeln!(self.out);
-        }
-        if self.layout.is_none() {
-            writeln!(self.out, "no EMCY frames")?;
-        } else {
-            // The legend of a column a narrow terminal went without is not said.
-            if self.layout.is_some_and(|l| l.transition) {
-                self.write_wrapped(
-                    "TR = transition: 1 first error, 2 one error reset, 3 further error, 4 all reset",
-                    5,
-                )?;
-            }
-        }
-        self.write_repeats()?;
-        if input.nodes.is_empty() {
-            self.write_bus_line(input)?;
-            return writeln!(self.out);
-        }
-        writeln!(self.out)?;
-        self.write_nodes(input)?;
-        self.write_health(input)?;
-        self.write_drives(input)?;
-
-        self.write_timeline(input)?;
-        writeln!(self.out)?;
-        self.write_bus_line(input)?;
-        writeln!(self.out)
+/// The end of an input, under its events' legend: the nodes, their
+/// health and drives, the error timeline and the bus line.
+pub(super) fn write_end_of_input<W: Write>(
+    page: &mut Page<W>,
+    input: &InputReport,
+) -> io::Result<()> {
+    if input.nodes.is_empty() {
+        write_bus_line(page, input)?;
+        return writeln!(page.out);
     }
+    writeln!(page.out)?;
+    write_nodes(page, input)?;
+    write_health(page, input)?;
+    write_drives(page, input)?;
 
-    /// The end of the run: one row per input with its counts.
-    pub(super) fn write_inputs(&mut self, inputs: &[InputReport]) -> io::Result<()> {
-        let rows: Vec<[String; 8]> = inputs
-            .iter()
-            .map(|i| {
-                let c = &i.counts;
-                [
-                    printable(&i.file).into_owned(),
-                    i.format.map_or("-", |f| f.name()).to_string(),
-                    c.lines.to_string(),
-                    c.frames.to_string(),
-                    c.emcy.to_string(),
-                    c.boot.to_string(),
-                    c.skipped.to_string(),
-                    c.malformed.to_string(),
-                ]
-            })
-            .collect();
-        let mut widths = INPUTS_HEADER.map(str::len);
-        for row in &rows {
-            for (w, c) in widths.iter_mut().zip(row) {
-                *w = (*w).max(display_width(c));
-            }
-        }
-        let shown = self.fit(&mut widths, &INPUTS_HEADER, &INPUTS_FIT);
-        writeln!(self.out, "{}", self.paint(BOLD, "Inputs"))?;
-        write_comfy_table(
-            &mut self.out,
-            &INPUTS_HEADER,
-            &rows,
-            &widths,
-            &shown,
-            &INPUTS_RIGHT,
-        )?;
-        self.out.flush()
+    write_timeline(page, input)?;
+    writeln!(page.out)?;
+    write_bus_line(page, input)?;
+    writeln!(page.out)
+}
+
+/// The end of an input in the summary view: only the nodes' tables and the
+/// bus line.
+pub(super) fn write_summary<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    if !input.nodes.is_empty() {
+        write_nodes(page, input)?;
+        write_codes(page, input)?;
+        write_health(page, input)?;
+        write_drives(page, input)?;
     }
+    write_bus_line(page, input)?;
+    writeln!(page.out)
+}
 
-    /// An end table in two passes, widths then rows, so no table of a
-    /// million rows is held: `rows` gives the rows again for each pass and
-    /// `fill` puts a row's cells in `cells`, returning their display widths.
-    /// `title` is written first (after a blank line with `blank`); no rows:
-    /// nothing is written.
-    fn write_in_two_passes<T, I, const N: usize>(
-        &mut self,
-        (title, blank): (&str, bool),
-        (header, right, fit): (&[&str; N], &[bool; N], &Fit),
-        rows: impl Fn() -> I,
-        mut fill: impl FnMut(&mut [String; N], T) -> [usize; N],
-    ) -> io::Result<()>
-    where
-        I: Iterator<Item = T>,
-    {
-        let mut cells: [String; N] = std::array::from_fn(|_| String::new());
-        let mut widths = header.map(str::len);
-        let mut any = false;
-        for row in rows() {
-            any = true;
-            for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
-                *w = (*w).max(c);
-            }
+/// The end of the run: one row per input with its counts.
+pub(super) fn write_inputs<W: Write>(page: &mut Page<W>, inputs: &[InputReport]) -> io::Result<()> {
+    let rows: Vec<[String; 8]> = inputs
+        .iter()
+        .map(|i| {
+            let c = &i.counts;
+            [
+                printable(&i.file).into_owned(),
+                i.format.map_or("-", |f| f.name()).to_string(),
+                c.lines.to_string(),
+                c.frames.to_string(),
+                c.emcy.to_string(),
+                c.boot.to_string(),
+                c.skipped.to_string(),
+                c.malformed.to_string(),
+            ]
+        })
+        .collect();
+    let mut widths = INPUTS_HEADER.map(str::len);
+    for row in &rows {
+        for (w, c) in widths.iter_mut().zip(row) {
+            *w = (*w).max(display_width(c));
         }
-        if !any {
-            return Ok(());
-        }
-        let shown = self.fit(&mut widths, header, fit);
-        if blank {
-            writeln!(self.out)?;
-        }
-        writeln!(self.out, "{}", self.paint(BOLD, title))?;
-        write_row(&mut self.out, header, &widths, &shown, right)?;
-        let mut line = String::new();
-        for row in rows() {
-            let cell_widths = fill(&mut cells, row);
-            push_row(&mut line, &cells, &cell_widths, &widths, &shown, right);
-            self.out.write_all(line.as_bytes())?;
-        }
-        Ok(())
     }
+    let shown = page.fit(&mut widths, &INPUTS_HEADER, &INPUTS_FIT);
+    writeln!(page.out, "{}", page.paint(BOLD, "Inputs"))?;
+    write_comfy_table(
+        &mut page.out,
+        &INPUTS_HEADER,
+        &rows,
+        &widths,
+        &shown,
+        &INPUTS_RIGHT,
+    )?;
+    page.out.flush()
+}
 
-    /// One line per node: state, errors seen with counts, time in error,
-    /// longest error, first and last EMCY.
-    fn write_nodes(&mut self, input: &InputReport) -> io::Result<()> {
-        // Two passes over the nodes, widths then rows, as for the timeline:
-        // a trace can name a million nodes, and a table holding them all
-        // took about 2.5 KB per node on top of the reports.
-        self.times.set_origin(input.first_time);
-        let times = self.times.clone();
-        self.write_in_two_passes(
-            ("Nodes", false),
-            (&NODES_HEADER, &NODES_RIGHT, &NODES_FIT),
-            || input.nodes.iter(),
-            |cells, n| node_cells(cells, &times, input, n),
-        )
-    }
-
-    /// The summary's codes: per node, each code it raised, how often, and
-    /// what the node's profile says it is (the nodes' row gives codes
-    /// only). Two passes, widths then rows, as for the nodes.
-    fn write_codes(&mut self, input: &InputReport) -> io::Result<()> {
-        let rows = || {
-            input.nodes.iter().flat_map(|n| {
-                let texts = NodeTexts::of(n);
-                n.stats.raised.iter().map(move |(&code, &count)| {
-                    let (text, width) = texts.get(code);
-                    let cells = [
-                        printable(&n.channel).into_owned(),
-                        n.node.to_string(),
-                        code_text(code),
-                        count.to_string(),
-                        text.to_owned(),
-                    ];
-                    let mut widths = cells.each_ref().map(|c| display_width(c));
-                    widths[4] = width;
-                    (cells, widths)
-                })
-            })
-        };
-        self.write_in_two_passes(
-            ("Errors seen", true),
-            (&CODES_HEADER, &CODES_RIGHT, &CODES_FIT),
-            rows,
-            |cells, (row, widths)| {
-                *cells = row;
-                widths
-            },
-        )
-    }
-
-    /// The nodes' NMT state, heartbeat and error history, for the nodes the
-    /// trace told any of (none: no section). Two passes, widths then rows,
-    /// as for the nodes: no table of a million rows is held.
-    fn write_health(&mut self, input: &InputReport) -> io::Result<()> {
-        let told = |n: &&NodeReport| {
-            n.nmt_state.is_some() || n.heartbeat.is_some() || n.error_history.is_some()
-        };
-        if !input.nodes.iter().any(|n| told(&n)) {
-            return Ok(());
+/// An end table in two passes, widths then rows, so no table of a
+/// million rows is held: `rows` gives the rows again for each pass and
+/// `fill` puts a row's cells in `cells`, returning their display widths.
+/// `title` is written first (after a blank line with `blank`); no rows:
+/// nothing is written.
+fn write_in_two_passes<W: Write, T, I, const N: usize>(
+    page: &mut Page<W>,
+    (title, blank): (&str, bool),
+    (header, right, fit): (&[&str; N], &[bool; N], &Fit),
+    rows: impl Fn() -> I,
+    mut fill: impl FnMut(&mut [String; N], T) -> [usize; N],
+) -> io::Result<()>
+where
+    I: Iterator<Item = T>,
+{
+    let mut cells: [String; N] = std::array::from_fn(|_| String::new());
+    let mut widths = header.map(str::len);
+    let mut any = false;
+    for row in rows() {
+        any = true;
+        for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
+            *w = (*w).max(c);
         }
-        let times = self.times.clone();
-        self.write_in_two_passes(
-            ("Node health", true),
-            (&HEALTH_HEADER, &HEALTH_RIGHT, &HEALTH_FIT),
-            || input.nodes.iter().filter(told),
-            |cells, n| health_cells(cells, &times, n),
-        )
     }
+    if !any {
+        return Ok(());
+    }
+    let shown = page.fit(&mut widths, header, fit);
+    if blank {
+        writeln!(page.out)?;
+    }
+    writeln!(page.out, "{}", page.paint(BOLD, title))?;
+    write_row(&mut page.out, header, &widths, &shown, right)?;
+    let mut line = String::new();
+    for row in rows() {
+        let cell_widths = fill(&mut cells, row);
+        push_row(&mut line, &cells, &cell_widths, &widths, &shown, right);
+        page.out.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
 
-    /// The CiA 402 drives' drives (none: no section): state at the end,
-    /// faults, where the mapping came from, and the summary's sentence.
-    /// Drives are few: one comfy table.
-    fn write_drives(&mut self, input: &InputReport) -> io::Result<()> {
-        let drives: Vec<(&NodeReport, &DriveReport)> = input
-            .nodes
-            .iter()
-            .filter_map(|n| n.drive.as_deref().map(|a| (n, a)))
-            .collect();
-        if drives.is_empty() {
-            return Ok(());
-        }
-        let rows: Vec<[String; 7]> = drives
-            .iter()
-            .map(|(n, a)| {
-                let mapping: Vec<String> = a
-                    .mappings
-                    .iter()
-                    .map(|m| format!("0x{:03X} {}", m.cob_id.id, m.source.slug()))
-                    .collect();
-                [
+/// One line per node: state, errors seen with counts, time in error,
+/// longest error, first and last EMCY.
+fn write_nodes<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    // Two passes over the nodes, widths then rows, as for the timeline:
+    // a trace can name a million nodes, and a table holding them all
+    // took about 2.5 KB per node on top of the reports.
+    page.times.set_origin(input.first_time);
+    let times = page.times.clone();
+    write_in_two_passes(
+        page,
+        ("Nodes", false),
+        (&NODES_HEADER, &NODES_RIGHT, &NODES_FIT),
+        || input.nodes.iter(),
+        |cells, n| node_cells(cells, &times, input, n),
+    )
+}
+
+/// The summary's codes: per node, each code it raised, how often, and
+/// what the node's profile says it is (the nodes' row gives codes
+/// only). Two passes, widths then rows, as for the nodes.
+fn write_codes<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    let rows = || {
+        input.nodes.iter().flat_map(|n| {
+            let texts = NodeTexts::of(n);
+            n.stats.raised.iter().map(move |(&code, &count)| {
+                let (text, width) = texts.get(code);
+                let cells = [
                     printable(&n.channel).into_owned(),
                     n.node.to_string(),
-                    a.state.map_or("-", |s| s.slug()).to_string(),
-                    a.fault_count.to_string(),
-                    a.fault_resets.to_string(),
-                    if mapping.is_empty() {
-                        "-".to_string()
-                    } else {
-                        mapping.join(", ")
-                    },
-                    a.fault_summary()
-                        .unwrap_or_else(|| "never faulted".to_string()),
-                ]
+                    code_text(code),
+                    count.to_string(),
+                    text.to_owned(),
+                ];
+                let mut widths = cells.each_ref().map(|c| display_width(c));
+                widths[4] = width;
+                (cells, widths)
             })
-            .collect();
-        let mut widths = DRIVES_HEADER.map(str::len);
-        for row in &rows {
-            for (w, c) in widths.iter_mut().zip(row) {
-                *w = (*w).max(display_width(c));
-            }
-        }
-        let shown = self.fit(&mut widths, &DRIVES_HEADER, &DRIVES_FIT);
-        writeln!(self.out)?;
-        writeln!(self.out, "{}", self.paint(BOLD, "Drive axes (CiA 402)"))?;
-        write_comfy_table(
-            &mut self.out,
-            &DRIVES_HEADER,
-            &rows,
-            &widths,
-            &shown,
-            &DRIVES_RIGHT,
-        )
-    }
+        })
+    };
+    write_in_two_passes(
+        page,
+        ("Errors seen", true),
+        (&CODES_HEADER, &CODES_RIGHT, &CODES_FIT),
+        rows,
+        |cells, (row, widths)| {
+            *cells = row;
+            widths
+        },
+    )
+}
 
-    /// The bus-level line: frames, EMCY rate, nodes with errors.
-    fn write_bus_line(&mut self, input: &InputReport) -> io::Result<()> {
-        let c = &input.counts;
-        let span = match (input.first_time, input.last_time) {
-            (Some(first), Some(last)) => format!(" over {} s", last.since(first)),
-            _ => String::new(),
-        };
-        let rate = input
-            .emcy_rate()
-            .map_or_else(String::new, |r| format!(" ({r:.2}/s)"));
-        // Said only when it happened: traces without outages read as before.
-        let lost = input
-            .nodes
-            .iter()
-            .filter(|n| n.heartbeat.as_ref().is_some_and(|h| h.lost > 0))
-            .count();
-        let lost = match lost {
-            0 => String::new(),
-            1 => ", 1 node lost its heartbeat".to_string(),
-            n => format!(", {n} nodes lost their heartbeat"),
-        };
-        // An EtherCAT capture's frames are EtherCAT's, its EMCYs came by mailbox.
-        let frames = match c.ethercat_frames {
-            0 => format!("{} frames", c.frames),
-            n => format!(
-                "{n} EtherCAT frames ({} mailbox messages, {} {}, {} empty polls){}",
-                c.mailbox_messages,
-                c.mailbox_retries,
-                if c.mailbox_retries == 1 {
-                    "retry"
+/// The nodes' NMT state, heartbeat and error history, for the nodes the
+/// trace told any of (none: no section). Two passes, widths then rows,
+/// as for the nodes: no table of a million rows is held.
+fn write_health<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    let told = |n: &&NodeReport| {
+        n.nmt_state.is_some() || n.heartbeat.is_some() || n.error_history.is_some()
+    };
+    if !input.nodes.iter().any(|n| told(&n)) {
+        return Ok(());
+    }
+    let times = page.times.clone();
+    write_in_two_passes(
+        page,
+        ("Node health", true),
+        (&HEALTH_HEADER, &HEALTH_RIGHT, &HEALTH_FIT),
+        || input.nodes.iter().filter(told),
+        |cells, n| health_cells(cells, &times, n),
+    )
+}
+
+/// The CiA 402 drives' drives (none: no section): state at the end,
+/// faults, where the mapping came from, and the summary's sentence.
+/// Drives are few: one comfy table.
+fn write_drives<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    let drives: Vec<(&NodeReport, &DriveReport)> = input
+        .nodes
+        .iter()
+        .filter_map(|n| n.drive.as_deref().map(|a| (n, a)))
+        .collect();
+    if drives.is_empty() {
+        return Ok(());
+    }
+    let rows: Vec<[String; 7]> = drives
+        .iter()
+        .map(|(n, a)| {
+            let mapping: Vec<String> = a
+                .mappings
+                .iter()
+                .map(|m| format!("0x{:03X} {}", m.cob_id.id, m.source.slug()))
+                .collect();
+            [
+                printable(&n.channel).into_owned(),
+                n.node.to_string(),
+                a.state.map_or("-", |s| s.slug()).to_string(),
+                a.fault_count.to_string(),
+                a.fault_resets.to_string(),
+                if mapping.is_empty() {
+                    "-".to_string()
                 } else {
-                    "retries"
+                    mapping.join(", ")
                 },
-                c.mailbox_empty_polls,
-                match c.frames {
-                    0 => String::new(),
-                    n => format!(", {n} CAN frames"),
-                }
-            ),
-        };
-        // Lost frames may have been EMCYs: said where the counts are read.
-        let dropped = match c.dropped {
-            0 => String::new(),
-            1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),
-            n => format!(", {n} frames dropped (DROPCOUNT): EMCYs may be missing"),
-        };
-        let line = format!(
-            "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed{dropped}",
-            c.emcy,
-            input.nodes_with_errors(),
-            input.nodes.len(),
-            c.malformed,
-        );
-        self.write_wrapped(&line, 5)
+                a.fault_summary()
+                    .unwrap_or_else(|| "never faulted".to_string()),
+            ]
+        })
+        .collect();
+    let mut widths = DRIVES_HEADER.map(str::len);
+    for row in &rows {
+        for (w, c) in widths.iter_mut().zip(row) {
+            *w = (*w).max(display_width(c));
+        }
     }
+    let shown = page.fit(&mut widths, &DRIVES_HEADER, &DRIVES_FIT);
+    writeln!(page.out)?;
+    writeln!(page.out, "{}", page.paint(BOLD, "Drive axes (CiA 402)"))?;
+    write_comfy_table(
+        &mut page.out,
+        &DRIVES_HEADER,
+        &rows,
+        &widths,
+        &shown,
+        &DRIVES_RIGHT,
+    )
+}
 
-    /// The warnings said once per node above, with how often each came.
-    fn write_repeats(&mut self) -> io::Result<()> {
-        let mut rows: Vec<(&str, NodeId, &'static str, u64)> = self
-            .repeats
-            .iter()
-            .flat_map(|(channel, nodes)| {
-                nodes
-                    .iter()
-                    .filter(|(_, n)| **n > 1)
-                    .map(move |((node, w), n)| (channel.as_str(), *node, w.tag(), *n))
-            })
-            .collect();
-        if rows.is_empty() {
-            return Ok(());
-        }
-        rows.sort_unstable();
-        let cells: Vec<[String; 4]> = rows
-            .iter()
-            .map(|(channel, node, tag, n)| {
-                [
-                    printable(channel).into_owned(),
-                    node.to_string(),
-                    (*tag).to_string(),
-                    n.to_string(),
-                ]
-            })
-            .collect();
-        let mut widths = REPEATS_HEADER.map(str::len);
-        for row in &cells {
-            for (w, c) in widths.iter_mut().zip(row) {
-                *w = (*w).max(display_width(c));
+/// The bus-level line: frames, EMCY rate, nodes with errors.
+fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    let c = &input.counts;
+    let span = match (input.first_time, input.last_time) {
+        (Some(first), Some(last)) => format!(" over {} s", last.since(first)),
+        _ => String::new(),
+    };
+    let rate = input
+        .emcy_rate()
+        .map_or_else(String::new, |r| format!(" ({r:.2}/s)"));
+    // Said only when it happened: traces without outages read as before.
+    let lost = input
+        .nodes
+        .iter()
+        .filter(|n| n.heartbeat.as_ref().is_some_and(|h| h.lost > 0))
+        .count();
+    let lost = match lost {
+        0 => String::new(),
+        1 => ", 1 node lost its heartbeat".to_string(),
+        n => format!(", {n} nodes lost their heartbeat"),
+    };
+    // An EtherCAT capture's frames are EtherCAT's, its EMCYs came by mailbox.
+    let frames = match c.ethercat_frames {
+        0 => format!("{} frames", c.frames),
+        n => format!(
+            "{n} EtherCAT frames ({} mailbox messages, {} {}, {} empty polls){}",
+            c.mailbox_messages,
+            c.mailbox_retries,
+            if c.mailbox_retries == 1 {
+                "retry"
+            } else {
+                "retries"
+            },
+            c.mailbox_empty_polls,
+            match c.frames {
+                0 => String::new(),
+                n => format!(", {n} CAN frames"),
             }
-        }
-        let shown = self.fit(&mut widths, &REPEATS_HEADER, &REPEATS_FIT);
-        writeln!(self.out)?;
-        let title = self.paint(BOLD, "Repeated warnings");
-        self.write_wrapped(&format!("{title} (said once per node above)"), 0)?;
-        write_row(
-            &mut self.out,
-            &REPEATS_HEADER,
-            &widths,
-            &shown,
-            &REPEATS_RIGHT,
-        )?;
-        for row in &cells {
-            write_row(&mut self.out, row, &widths, &shown, &REPEATS_RIGHT)?;
-        }
-        Ok(())
-    }
+        ),
+    };
+    // Lost frames may have been EMCYs: said where the counts are read.
+    let dropped = match c.dropped {
+        0 => String::new(),
+        1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),
+        n => format!(", {n} frames dropped (DROPCOUNT): EMCYs may be missing"),
+    };
+    let line = format!(
+        "bus: {frames}, {} EMCY{rate}{span}, {} of {} nodes with errors{lost}, {} malformed{dropped}",
+        c.emcy,
+        input.nodes_with_errors(),
+        input.nodes.len(),
+        c.malformed,
+    );
+    page.write_wrapped(&line, 5)
 }
 
 const HEALTH_HEADER: [&str; 6] = [
@@ -462,15 +405,6 @@ const CODES_FIT: Fit = Fit {
     flex: &[(4, usize::MAX, 12), (0, CHANNEL_MAX, 7)],
 };
 
-const REPEATS_HEADER: [&str; 4] = ["CHANNEL", "NODE", "WARNING", "FRAMES"];
-
-const REPEATS_RIGHT: [bool; 4] = [false, true, false, true];
-
-const REPEATS_FIT: Fit = Fit {
-    drop: &[],
-    flex: &[(0, CHANNEL_MAX, 7)],
-};
-
 /// The first outages: `start-end (duration s)`, then how many more.
 fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
     const SHOWN: usize = 3;
@@ -496,35 +430,6 @@ fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
         items.push(format!("+{more} more"));
     }
     items.join(", ")
-}
-
-/// A node's code descriptions with their display widths, measured once per
-/// node (its timeline can have millions of rows; descriptions are rarely
-/// ASCII, so measuring is not free).
-pub(super) struct NodeTexts<'n>(Vec<(u16, Cow<'n, str>, usize)>);
-
-impl<'n> NodeTexts<'n> {
-    pub(super) fn of(node: &'n NodeReport) -> Self {
-        NodeTexts(
-            node.descriptions
-                .iter()
-                .map(|(code, text)| {
-                    let text = printable(text);
-                    let width = display_width(&text);
-                    (code, text, width)
-                })
-                .collect(),
-        )
-    }
-
-    /// `code`'s description and width; empty for a code the node never
-    /// raised (its errors are all raised by it, so never).
-    pub(super) fn get(&self, code: u16) -> (&str, usize) {
-        match self.0.binary_search_by_key(&code, |(c, _, _)| *c) {
-            Ok(i) => self.0.get(i).map_or(("", 0), |(_, t, w)| (&**t, *w)),
-            Err(_) => ("", 0),
-        }
-    }
 }
 
 const NODES_HEADER: [&str; 11] = [
@@ -658,7 +563,7 @@ const INPUTS_FIT: Fit = Fit {
 
 /// A small table (one row per input) laid out by comfy-table, the
 /// project's table crate: the shown columns, cells cut to the widths a
-/// terminal left them (see [`fit_columns`]), two blanks between columns and
+/// terminal left them (see [`super::fit::fit_columns`]), two blanks between columns and
 /// no trailing blanks. The per-event rows are written by hand instead: they
 /// stream, and a table crate would hold them all.
 fn write_comfy_table<const N: usize>(

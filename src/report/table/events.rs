@@ -1,15 +1,19 @@
 //! The events of an input, one row each as they are decoded: the columns
 //! are fixed by the first event (a narrow terminal's least useful ones
 //! given up then), so no row waits for the ones after it. Lines under an
-//! event (the profile's reading, warnings) follow it.
+//! event (the profile's reading, warnings) follow it. Under the input's
+//! events, their legend and the warnings said once per node.
 
 use std::borrow::Cow;
+use std::collections::HashMap;
 use std::io::{self, Write};
 
 use anstyle::Style;
 
-use super::fit::{CHANNEL_MAX, blanks, pad_to, push_cut, push_padded};
-use super::{BOLD, GREEN, RED, TableReport, YELLOW};
+use super::fit::{
+    CHANNEL_MAX, Fit, blanks, display_width, pad_to, push_cut, push_padded, write_row,
+};
+use super::page::{BOLD, GREEN, Page, RED, YELLOW};
 use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, HistoryReport};
 use crate::canopen::NodeId;
 use crate::canopen::emcy::Warning;
@@ -22,7 +26,7 @@ use crate::trace::Timestamp;
 
 /// The event columns, fixed by the first event of an input. At a terminal
 /// narrower than the full columns, the least useful give way first (see
-/// [`TableReport::layout_for`]); in a pipe every column is there.
+/// [`EventLines::layout_for`]); in a pipe every column is there.
 #[derive(Clone, Copy)]
 pub(super) struct Layout {
     pub(super) time: usize,
@@ -69,15 +73,51 @@ const MANUFACTURER_WIDTH: usize = 14;
 /// once on a line of its own.
 const DATE_PREFIX: usize = 11;
 
-impl<W: Write> TableReport<W> {
+/// How often each node sent each warning about the form of its frames, by
+/// channel: said in full the first time, counted after.
+type Repeats = HashMap<String, HashMap<(NodeId, Warning), u64>>;
+
+/// The event rows of an input as they stream: the columns fixed by the
+/// first, the buffers reused from row to row, and the warnings said once.
+pub(super) struct EventLines {
+    /// Column widths fixed by the first event of an input.
+    layout: Option<Layout>,
+    /// The event line being built, kept for its capacity.
+    line: String,
+    /// Register column texts, padded, by register value.
+    registers: Vec<Option<String>>,
+    /// The date of the last time shown as a time of day (a narrow table).
+    date: String,
+    repeats: Repeats,
+}
+
+impl EventLines {
+    pub(super) fn new() -> Self {
+        EventLines {
+            layout: None,
+            line: String::new(),
+            registers: vec![None; 256],
+            date: String::new(),
+            repeats: HashMap::new(),
+        }
+    }
+
+    /// A new input: its first event fixes the columns again.
+    pub(super) fn begin_input(&mut self) {
+        self.layout = None;
+        self.date.clear();
+        self.repeats.clear();
+    }
+
     /// An EMCY's row, and under it the profile's reading and the warnings
     /// not said for the node before.
-    pub(super) fn write_emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
-        if self.summary_only {
-            return Ok(());
-        }
-        self.times.set_origin(ev.time);
-        let l = self.layout_for(ev.time, ev.channel)?;
+    pub(super) fn write_emcy<W: Write>(
+        &mut self,
+        page: &mut Page<W>,
+        ev: &EmcyEvent<'_>,
+    ) -> io::Result<()> {
+        page.times.set_origin(ev.time);
+        let l = self.layout_for(page, ev.time, ev.channel)?;
         let style = match ev.transition {
             Some(1 | 3) => RED,
             Some(2) => YELLOW,
@@ -88,9 +128,9 @@ impl<W: Write> TableReport<W> {
         // output, and traces with many EMCY print a line per frame.
         let mut line = std::mem::take(&mut self.line);
         line.clear();
-        self.push_prefix(&mut line, l, ev.time, ev.channel, ev.node);
-        if self.color {
-            line.push_str(&self.paint(style, &code_text(ev.emcy.code)));
+        self.push_prefix(page, &mut line, l, ev.time, ev.channel, ev.node);
+        if page.color {
+            line.push_str(&page.paint(style, &code_text(ev.emcy.code)));
         } else {
             push_code(&mut line, ev.emcy.code);
         }
@@ -138,7 +178,7 @@ impl<W: Write> TableReport<W> {
         }
         let description = printable(ev.description);
         if ev.cleared.is_empty() {
-            self.push_description(&mut line, l, &description);
+            push_description(&mut line, l, &description);
         } else if l.description.is_none() {
             // Full lines (a pipe): straight into the line, no text to cut.
             line.push_str(&description);
@@ -151,54 +191,64 @@ impl<W: Write> TableReport<W> {
             text.push_str(" (cleared ");
             push_codes(&mut text, ev.cleared.iter().copied(), &TABLE_LIST);
             text.push(')');
-            self.push_description(&mut line, l, &text);
+            push_description(&mut line, l, &text);
         }
         let trimmed = line.trim_end().len();
         line.truncate(trimmed);
         line.push('\n');
-        self.out.write_all(line.as_bytes())?;
+        page.out.write_all(line.as_bytes())?;
         self.line = line;
         let indent = l.description_indent();
         // A reset with bytes 3-7 zero, as the manuals say resets are: its
         // reading (`category: 0`) adds nothing.
         let plain_reset = ev.emcy.is_reset() && ev.emcy.manufacturer().iter().all(|b| *b == 0);
         if let Some(decoded) = ev.decoded.filter(|_| !plain_reset) {
-            self.write_detail(indent, &decoded_text(decoded), None)?;
+            write_detail(page, indent, &decoded_text(decoded), None)?;
         }
         for w in ev.warnings {
             if self.repeated(ev.channel, ev.node, w) {
                 continue;
             }
-            self.write_detail(indent, &format!("warning: {w}"), Some(YELLOW))?;
+            write_detail(page, indent, &format!("warning: {w}"), Some(YELLOW))?;
         }
-        self.end_event()
+        Ok(())
     }
 
     /// A boot-up's row.
-    pub(super) fn write_boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
-        if self.summary_only {
-            return Ok(());
-        }
-        self.times.set_origin(ev.time);
-        let l = self.layout_for(ev.time, ev.channel)?;
+    pub(super) fn write_boot<W: Write>(
+        &mut self,
+        page: &mut Page<W>,
+        ev: &BootEvent<'_>,
+    ) -> io::Result<()> {
+        page.times.set_origin(ev.time);
+        let l = self.layout_for(page, ev.time, ev.channel)?;
         let what = if ev.cleared.is_empty() {
             "NMT boot-up".to_string()
         } else {
             format!("NMT boot-up (cleared {})", codes_list(ev.cleared))
         };
-        self.write_tagged(l, ev.time, ev.channel, ev.node, "boot", Some(GREEN), &what)?;
-        self.end_event()
+        self.write_tagged(
+            page,
+            l,
+            ev.time,
+            ev.channel,
+            ev.node,
+            "boot",
+            Some(GREEN),
+            &what,
+        )
     }
 
     /// A health event's row (NMT, heartbeat, SDO abort, error history read
     /// out, drive state), and an error history's entries under it.
-    pub(super) fn write_health_event(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
-        if self.summary_only {
-            return Ok(());
-        }
-        self.times.set_origin(ev.time);
-        let l = self.layout_for(ev.time, ev.channel)?;
-        let what = health_description(ev.health, &self.times);
+    pub(super) fn write_health_event<W: Write>(
+        &mut self,
+        page: &mut Page<W>,
+        ev: &HealthEvent<'_>,
+    ) -> io::Result<()> {
+        page.times.set_origin(ev.time);
+        let l = self.layout_for(page, ev.time, ev.channel)?;
+        let what = health_description(ev.health, &page.times);
         let (tag, style) = match ev.health {
             Health::Nmt { .. } => ("nmt", None),
             Health::HeartbeatLost { .. } => ("lost", Some(RED)),
@@ -210,6 +260,7 @@ impl<W: Write> TableReport<W> {
             Health::FaultReset { .. } => ("reset", Some(GREEN)),
         };
         self.write_tagged(
+            page,
             l,
             ev.time,
             ev.channel,
@@ -232,21 +283,22 @@ impl<W: Write> TableReport<W> {
                         ""
                     }
                 );
-                self.write_detail(indent, &text, None)?;
+                write_detail(page, indent, &text, None)?;
             }
         }
-        self.end_event()
+        Ok(())
     }
 
-    pub(super) fn layout_for(
+    pub(super) fn layout_for<W: Write>(
         &mut self,
+        page: &mut Page<W>,
         time: Option<Timestamp>,
         channel: &str,
     ) -> io::Result<Layout> {
         if let Some(l) = self.layout {
             return Ok(l);
         }
-        let time_text = time.map(|t| self.times.show(t));
+        let time_text = time.map(|t| page.times.show(t));
         let time_width = time_text.as_ref().map_or(1, |t| t.len()).max(4);
         let mut l = Layout {
             time: time_width,
@@ -257,7 +309,7 @@ impl<W: Write> TableReport<W> {
             manufacturer: true,
             description: None,
         };
-        if let Some(width) = self.width {
+        if let Some(width) = page.width {
             // The least useful columns give way first, until the description
             // has room: the register's bit names (its hex stays), the raw
             // manufacturer bytes (the profile's reading stays, as its line),
@@ -300,14 +352,15 @@ impl<W: Write> TableReport<W> {
             push_padded(&mut header, "MANUFACTURER", MANUFACTURER_WIDTH);
         }
         header.push_str("DESCRIPTION");
-        writeln!(self.out, "{}", self.paint(BOLD, &header))?;
+        writeln!(page.out, "{}", page.paint(BOLD, &header))?;
         Ok(l)
     }
 
     /// `TIME  CHANNEL  NODE  ` padded to the layout, appended to `line`;
     /// before it, for times of day, the date when it changed.
-    fn push_prefix(
+    fn push_prefix<W: Write>(
         &mut self,
+        page: &Page<W>,
         line: &mut String,
         l: Layout,
         time: Option<Timestamp>,
@@ -316,7 +369,7 @@ impl<W: Write> TableReport<W> {
     ) {
         let start = line.len();
         let mut row_start = start;
-        self.times.push_opt(line, time);
+        page.times.push_opt(line, time);
         // `iso_date` checked the 11 ASCII bytes the ranges below remove.
         if l.time_of_day
             && let Some(date) = line.get(start..).and_then(iso_date)
@@ -325,7 +378,7 @@ impl<W: Write> TableReport<W> {
                 self.date.clear();
                 self.date.push_str(date);
                 let mut head = String::with_capacity(16);
-                head.push_str(&self.paint(BOLD, date));
+                head.push_str(&page.paint(BOLD, date));
                 head.push('\n');
                 line.insert_str(start, &head);
                 row_start = start + head.len();
@@ -337,7 +390,7 @@ impl<W: Write> TableReport<W> {
         pad_to(line, row_start + l.time);
         line.push_str("  ");
         let channel = printable(channel);
-        match self.width {
+        match page.width {
             Some(_) => {
                 let shown = push_cut(line, &channel, l.channel);
                 line.push_str(&blanks(l.channel.saturating_sub(shown)));
@@ -359,45 +412,12 @@ impl<W: Write> TableReport<W> {
         line.push_str("  ");
     }
 
-    /// `text` in the description column: cut to the room there is (one row
-    /// per event) when fitting.
-    fn push_description(&self, line: &mut String, l: Layout, text: &str) {
-        match l.description {
-            Some(room) => {
-                push_cut(line, text, room);
-            }
-            None => line.push_str(text),
-        }
-    }
-
-    /// A line of detail under an event (the profile's reading, a warning),
-    /// indented to `indent`; wrapped to the width when fitting.
-    fn write_detail(&mut self, indent: usize, text: &str, style: Option<Style>) -> io::Result<()> {
-        let lines = match self.width {
-            Some(width) => textwrap::wrap(text, width.saturating_sub(indent).max(8)),
-            None => vec![Cow::Borrowed(text)],
-        };
-        for piece in lines {
-            self.out.write_all(blanks(indent).as_bytes())?;
-            match style {
-                Some(style) if self.color => write!(
-                    self.out,
-                    "{}{piece}{}",
-                    style.render(),
-                    style.render_reset()
-                )?,
-                _ => self.out.write_all(piece.as_bytes())?,
-            }
-            self.out.write_all(b"\n")?;
-        }
-        Ok(())
-    }
-
     /// An NMT event's row: its tag in the code column, its text as the
     /// description.
     #[allow(clippy::too_many_arguments)]
-    fn write_tagged(
+    fn write_tagged<W: Write>(
         &mut self,
+        page: &mut Page<W>,
         l: Layout,
         time: Option<Timestamp>,
         channel: &str,
@@ -409,20 +429,85 @@ impl<W: Write> TableReport<W> {
         // The event line's buffer: NMT and heartbeat rows are many too.
         let mut line = std::mem::take(&mut self.line);
         line.clear();
-        self.push_prefix(&mut line, l, time, channel, node);
+        self.push_prefix(page, &mut line, l, time, channel, node);
         match style {
-            Some(style) if self.color => {
-                line.push_str(&self.paint(style, tag));
+            Some(style) if page.color => {
+                line.push_str(&page.paint(style, tag));
             }
             _ => line.push_str(tag),
         }
         let column = l.description_indent();
         line.push_str(&blanks(column.saturating_sub(l.code_column() + tag.len())));
-        self.push_description(&mut line, l, what);
+        push_description(&mut line, l, what);
         line.push('\n');
-        let written = self.out.write_all(line.as_bytes());
+        let written = page.out.write_all(line.as_bytes());
         self.line = line;
         written
+    }
+
+    /// Under the input's events, the legend of their columns (not of one
+    /// a narrow terminal went without), then the warnings said once per
+    /// node, with how often each came.
+    pub(super) fn write_end<W: Write>(&self, page: &mut Page<W>) -> io::Result<()> {
+        match self.layout {
+            None => writeln!(page.out, "no EMCY frames")?,
+            Some(l) if l.transition => page.write_wrapped(
+                "TR = transition: 1 first error, 2 one error reset, 3 further error, 4 all reset",
+                5,
+            )?,
+            Some(_) => {}
+        }
+        self.write_repeats(page)
+    }
+
+    /// The warnings said once per node above, with how often each came.
+    fn write_repeats<W: Write>(&self, page: &mut Page<W>) -> io::Result<()> {
+        let mut rows: Vec<(&str, NodeId, &'static str, u64)> = self
+            .repeats
+            .iter()
+            .flat_map(|(channel, nodes)| {
+                nodes
+                    .iter()
+                    .filter(|(_, n)| **n > 1)
+                    .map(move |((node, w), n)| (channel.as_str(), *node, w.tag(), *n))
+            })
+            .collect();
+        if rows.is_empty() {
+            return Ok(());
+        }
+        rows.sort_unstable();
+        let cells: Vec<[String; 4]> = rows
+            .iter()
+            .map(|(channel, node, tag, n)| {
+                [
+                    printable(channel).into_owned(),
+                    node.to_string(),
+                    (*tag).to_string(),
+                    n.to_string(),
+                ]
+            })
+            .collect();
+        let mut widths = REPEATS_HEADER.map(str::len);
+        for row in &cells {
+            for (w, c) in widths.iter_mut().zip(row) {
+                *w = (*w).max(display_width(c));
+            }
+        }
+        let shown = page.fit(&mut widths, &REPEATS_HEADER, &REPEATS_FIT);
+        writeln!(page.out)?;
+        let title = page.paint(BOLD, "Repeated warnings");
+        page.write_wrapped(&format!("{title} (said once per node above)"), 0)?;
+        write_row(
+            &mut page.out,
+            &REPEATS_HEADER,
+            &widths,
+            &shown,
+            &REPEATS_RIGHT,
+        )?;
+        for row in &cells {
+            write_row(&mut page.out, row, &widths, &shown, &REPEATS_RIGHT)?;
+        }
+        Ok(())
     }
 
     /// Counts `w` for the node; true when it was said for the node before
@@ -443,6 +528,54 @@ impl<W: Write> TableReport<W> {
         *count > 1
     }
 }
+
+/// `text` in the description column: cut to the room there is (one row
+/// per event) when fitting.
+fn push_description(line: &mut String, l: Layout, text: &str) {
+    match l.description {
+        Some(room) => {
+            push_cut(line, text, room);
+        }
+        None => line.push_str(text),
+    }
+}
+
+/// A line of detail under an event (the profile's reading, a warning),
+/// indented to `indent`; wrapped to the width when fitting.
+fn write_detail<W: Write>(
+    page: &mut Page<W>,
+    indent: usize,
+    text: &str,
+    style: Option<Style>,
+) -> io::Result<()> {
+    let lines = match page.width {
+        Some(width) => textwrap::wrap(text, width.saturating_sub(indent).max(8)),
+        None => vec![Cow::Borrowed(text)],
+    };
+    for piece in lines {
+        page.out.write_all(blanks(indent).as_bytes())?;
+        match style {
+            Some(style) if page.color => write!(
+                page.out,
+                "{}{piece}{}",
+                style.render(),
+                style.render_reset()
+            )?,
+            _ => page.out.write_all(piece.as_bytes())?,
+        }
+        page.out.write_all(b"\n")?;
+    }
+    Ok(())
+}
+
+const REPEATS_HEADER: [&str; 4] = ["CHANNEL", "NODE", "WARNING", "FRAMES"];
+
+const REPEATS_RIGHT: [bool; 4] = [false, true, false, true];
+
+const REPEATS_FIT: Fit = Fit {
+    drop: &[],
+    flex: &[(0, CHANNEL_MAX, 7)],
+};
 
 /// What makes a warning a repeat of one said before for the node (`None`:
 /// never one). The register, the bytes, the length may differ from frame
@@ -561,5 +694,90 @@ pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String 
         Health::FaultReset { controlword } => {
             format!("fault reset (controlword 0x{controlword:04X})")
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::table::TableReport;
+    use crate::report::table::fit::MIN_WIDTH;
+
+    /// The page of a report fitted to `width`, as `--width` makes it.
+    fn page(width: Option<usize>) -> Page<Vec<u8>> {
+        TableReport::new(Vec::new(), false, false)
+            .fit_width(width)
+            .page
+    }
+
+    /// The event columns at `width` for a trace with Unix times (shown as
+    /// `2023-11-14T22:13:21.250000Z`, 27 columns) on `can0` (7, the
+    /// header's). Full, the description starts at column 90.
+    fn layout(width: Option<usize>, time: &str) -> Layout {
+        let t = Timestamp::parse(time.as_bytes()).expect("a time");
+        EventLines::new()
+            .layout_for(&mut page(width), Some(t), "can0")
+            .expect("written to memory")
+    }
+
+    /// The columns given way as `(register width, manufacturer, date on its
+    /// own line, transition)` and the description's room.
+    fn given_way(l: Layout) -> ((Option<usize>, bool, bool, bool), Option<usize>) {
+        (
+            (l.register, l.manufacturer, l.time_of_day, l.transition),
+            l.description,
+        )
+    }
+
+    #[test]
+    fn event_columns_give_way_in_the_readme_order() {
+        let unix = "1700000001.250000";
+        let at = |width| given_way(layout(Some(width), unix));
+        // All columns and 50 for the description.
+        assert_eq!(at(140), ((Some(16), true, false, true), Some(50)));
+        // The register's bit names first (its hex stays)...
+        assert_eq!(at(139), ((Some(3), true, false, true), Some(62)));
+        assert_eq!(at(127), ((Some(3), true, false, true), Some(50)));
+        // ...then the manufacturer bytes...
+        assert_eq!(at(126), ((Some(3), false, false, true), Some(65)));
+        // ...then the date, on a line of its own...
+        assert_eq!(at(110), ((Some(3), false, true, true), Some(60)));
+        assert_eq!(at(100), ((Some(3), false, true, true), Some(50)));
+        // ...then the transition...
+        assert_eq!(at(99), ((Some(3), false, true, false), Some(53)));
+        // ...then the register; the description takes what is left.
+        assert_eq!(at(95), ((None, false, true, false), Some(54)));
+        assert_eq!(at(60), ((None, false, true, false), Some(19)));
+    }
+
+    #[test]
+    fn a_pipe_gets_every_column_and_the_whole_description() {
+        assert_eq!(
+            given_way(layout(None, "1700000001.250000")),
+            ((Some(16), true, false, true), None)
+        );
+    }
+
+    #[test]
+    fn times_without_a_date_keep_their_column() {
+        // Seconds since the start of the trace have no date to move out.
+        let l = layout(Some(60), "12.500");
+        assert!(!l.time_of_day);
+        assert_eq!(l.register, None);
+    }
+
+    #[test]
+    fn nothing_is_fitted_below_forty_columns() {
+        assert_eq!(page(Some(10)).width, Some(MIN_WIDTH));
+        assert_eq!(page(Some(39)).width, Some(40));
+        assert_eq!(page(Some(41)).width, Some(41));
+        assert_eq!(page(None).width, None);
+        // At the floor the description still has its 8 columns.
+        let narrowest = layout(Some(40), "1700000001.250000");
+        assert_eq!(narrowest.description, Some(8));
+        assert_eq!(
+            given_way(layout(Some(10), "1700000001.250000")),
+            given_way(narrowest)
+        );
     }
 }

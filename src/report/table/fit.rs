@@ -1,37 +1,18 @@
 //! How the table gives way to a terminal's width (`--width`, README): the
 //! end tables drop their least useful columns and cut the widest cells
 //! ([`fit_columns`]); the event rows give up columns in the order
-//! `TableReport::layout_for` states. A cut cell ends in `…`.
+//! `EventLines::layout_for` states. A cut cell ends in `…`.
 
 use std::borrow::Cow;
 use std::io::{self, Write};
 
 use unicode_width::UnicodeWidthStr;
 
-use super::TableReport;
-
 /// The narrowest width fitted: below it columns cannot give way enough.
 pub const MIN_WIDTH: usize = 40;
 
 /// A channel column longer than this is cut when fitting.
 pub(super) const CHANNEL_MAX: usize = 16;
-
-impl<W: Write> TableReport<W> {
-    /// The columns shown of a table with these widths, fitted to the
-    /// terminal (all of them in a pipe).
-    pub(super) fn fit<const N: usize>(
-        &self,
-        widths: &mut [usize; N],
-        header: &[&str; N],
-        fit: &Fit,
-    ) -> [bool; N] {
-        let mut shown = [true; N];
-        if let Some(width) = self.width {
-            fit_columns(widths, &mut shown, header, fit, width);
-        }
-        shown
-    }
-}
 
 /// How a table gives way to a terminal's width: columns are dropped, least
 /// useful first, then the flexible ones cut (an ellipsis marks a cut cell).
@@ -221,8 +202,6 @@ pub(super) fn write_row(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::table::TableReport;
-    use crate::trace::Timestamp;
 
     /// The narrowest a flexible column gets when nothing forbids it: tests
     /// give it 0 so the header decides.
@@ -370,81 +349,6 @@ mod tests {
         assert_eq!(
             line, "can0    overcurrent in phase U\n",
             "no trailing blanks"
-        );
-    }
-
-    fn report(width: Option<usize>) -> TableReport<Vec<u8>> {
-        TableReport::new(Vec::new(), false, false).fit_width(width)
-    }
-
-    /// The event columns at `width` for a trace with Unix times (shown as
-    /// `2023-11-14T22:13:21.250000Z`, 27 columns) on `can0` (7, the
-    /// header's). Full, the description starts at column 90.
-    fn layout(width: Option<usize>, time: &str) -> super::super::Layout {
-        let t = Timestamp::parse(time.as_bytes()).expect("a time");
-        report(width)
-            .layout_for(Some(t), "can0")
-            .expect("written to memory")
-    }
-
-    /// The columns given way as `(register width, manufacturer, date on its
-    /// own line, transition)` and the description's room.
-    fn given_way(l: super::super::Layout) -> ((Option<usize>, bool, bool, bool), Option<usize>) {
-        (
-            (l.register, l.manufacturer, l.time_of_day, l.transition),
-            l.description,
-        )
-    }
-
-    #[test]
-    fn event_columns_give_way_in_the_readme_order() {
-        let unix = "1700000001.250000";
-        let at = |width| given_way(layout(Some(width), unix));
-        // All columns and 50 for the description.
-        assert_eq!(at(140), ((Some(16), true, false, true), Some(50)));
-        // The register's bit names first (its hex stays)...
-        assert_eq!(at(139), ((Some(3), true, false, true), Some(62)));
-        assert_eq!(at(127), ((Some(3), true, false, true), Some(50)));
-        // ...then the manufacturer bytes...
-        assert_eq!(at(126), ((Some(3), false, false, true), Some(65)));
-        // ...then the date, on a line of its own...
-        assert_eq!(at(110), ((Some(3), false, true, true), Some(60)));
-        assert_eq!(at(100), ((Some(3), false, true, true), Some(50)));
-        // ...then the transition...
-        assert_eq!(at(99), ((Some(3), false, true, false), Some(53)));
-        // ...then the register; the description takes what is left.
-        assert_eq!(at(95), ((None, false, true, false), Some(54)));
-        assert_eq!(at(60), ((None, false, true, false), Some(19)));
-    }
-
-    #[test]
-    fn a_pipe_gets_every_column_and_the_whole_description() {
-        assert_eq!(
-            given_way(layout(None, "1700000001.250000")),
-            ((Some(16), true, false, true), None)
-        );
-    }
-
-    #[test]
-    fn times_without_a_date_keep_their_column() {
-        // Seconds since the start of the trace have no date to move out.
-        let l = layout(Some(60), "12.500");
-        assert!(!l.time_of_day);
-        assert_eq!(l.register, None);
-    }
-
-    #[test]
-    fn nothing_is_fitted_below_forty_columns() {
-        assert_eq!(report(Some(10)).width, Some(MIN_WIDTH));
-        assert_eq!(report(Some(39)).width, Some(40));
-        assert_eq!(report(Some(41)).width, Some(41));
-        assert_eq!(report(None).width, None);
-        // At the floor the description still has its 8 columns.
-        let narrowest = layout(Some(40), "1700000001.250000");
-        assert_eq!(narrowest.description, Some(8));
-        assert_eq!(
-            given_way(layout(Some(10), "1700000001.250000")),
-            given_way(narrowest)
         );
     }
 }

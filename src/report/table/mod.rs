@@ -3,84 +3,64 @@
 //! a trace with a million events prints without holding them), then the
 //! node tables ([`end_tables`]) and the error timeline ([`timeline`]); at
 //! the end of the run, the input counts ([`end_tables`]). [`fit`] is how
-//! all of them give way to a terminal's width. This file holds the report's
-//! state and the [`Sink`] methods, which only dispatch.
+//! all of them give way to a terminal's width; [`page`] is where they are
+//! written and how (colour, width, times).
+//!
+//! Each file imports only the ones below it in this list: `mod.rs` (the
+//! [`TableReport`], whose [`Sink`] methods only dispatch), `end_tables`,
+//! `timeline`, `events`, `page`, `fit`.
 
-use std::collections::HashMap;
 use std::io::{self, Write};
-
-use anstyle::{AnsiColor, Style};
 
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
-use crate::canopen::NodeId;
-use crate::canopen::emcy::Warning;
 use crate::text::printable;
 
 mod end_tables;
 mod events;
 mod fit;
+mod page;
 mod timeline;
 
-use events::Layout;
+use events::EventLines;
 pub(crate) use events::health_description;
-use fit::{MIN_WIDTH, blanks, push_cut};
-
-const RED: Style = AnsiColor::Red.on_default().bold();
-const YELLOW: Style = AnsiColor::Yellow.on_default();
-const GREEN: Style = AnsiColor::Green.on_default();
-const BOLD: Style = Style::new().bold();
+use fit::{MIN_WIDTH, push_cut};
+use page::{BOLD, Page};
 
 /// The table report (`--format table`, the default), written to `out`.
 pub struct TableReport<W: Write> {
-    out: W,
-    color: bool,
-    /// Column widths fixed by the first event of an input.
-    layout: Option<Layout>,
+    page: Page<W>,
+    events: EventLines,
     flush_each: bool,
     /// `--view summary`: no events, no timeline; one line per node and bus.
     summary_only: bool,
-    times: TimeFormat,
-    /// The event line being built, kept for its capacity.
-    line: String,
-    /// Register column texts, padded, by register value.
-    registers: Vec<Option<String>>,
-    /// The terminal's width to fit (`None`: a pipe, full lines).
-    width: Option<usize>,
-    /// The date of the last time shown as a time of day (a narrow table).
-    date: String,
-    /// How often each node sent each warning about the form of its frames,
-    /// by channel: said in full the first time, counted after.
-    repeats: HashMap<String, HashMap<(NodeId, Warning), u64>>,
 }
 
 impl<W: Write> TableReport<W> {
     pub fn new(out: W, color: bool, flush_each: bool) -> Self {
         TableReport {
-            out,
-            color,
-            layout: None,
+            page: Page {
+                out,
+                color,
+                width: None,
+                times: TimeFormat::default(),
+            },
+            events: EventLines::new(),
             flush_each,
             summary_only: false,
-            times: TimeFormat::default(),
-            line: String::new(),
-            registers: vec![None; 256],
-            width: None,
-            date: String::new(),
-            repeats: HashMap::new(),
         }
     }
 
     /// Fits the table to `width` columns (a terminal's); `None` keeps the
     /// full lines (a pipe: scripts grep them).
     pub fn fit_width(mut self, width: Option<usize>) -> Self {
-        self.width = width.map(|w| w.max(MIN_WIDTH));
+        self.page.width = width.map(|w| w.max(MIN_WIDTH));
         self
     }
 
     /// `--time`.
     pub fn time_style(mut self, style: TimeStyle) -> Self {
-        self.times = TimeFormat::new(style);
+        self.page.times = TimeFormat::new(style);
         self
     }
 
@@ -90,33 +70,9 @@ impl<W: Write> TableReport<W> {
         self
     }
 
-    fn paint(&self, style: Style, text: &str) -> String {
-        if self.color {
-            format!("{}{text}{}", style.render(), style.render_reset())
-        } else {
-            text.to_string()
-        }
-    }
-
-    /// A line of its own (legend, bus line), wrapped to the width when
-    /// fitting, its continuation indented by `hang`.
-    fn write_wrapped(&mut self, text: &str, hang: usize) -> io::Result<()> {
-        match self.width {
-            Some(width) => {
-                let indent = blanks(hang);
-                let options = textwrap::Options::new(width).subsequent_indent(&indent);
-                for piece in textwrap::wrap(text, options) {
-                    writeln!(self.out, "{piece}")?;
-                }
-                Ok(())
-            }
-            None => writeln!(self.out, "{text}"),
-        }
-    }
-
     fn end_event(&mut self) -> io::Result<()> {
         if self.flush_each {
-            self.out.flush()?;
+            self.page.out.flush()?;
         }
         Ok(())
     }
@@ -124,37 +80,51 @@ impl<W: Write> TableReport<W> {
 
 impl<W: Write> Sink for TableReport<W> {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
-        self.layout = None;
-        self.times.origin = None;
-        self.date.clear();
-        self.repeats.clear();
+        self.events.begin_input();
+        self.page.times.origin = None;
         let mut head = String::from("== ");
-        match self.width {
+        match self.page.width {
             Some(width) => {
                 push_cut(&mut head, &printable(file), width - 3);
             }
             None => head.push_str(&printable(file)),
         }
-        writeln!(self.out, "{}", self.paint(BOLD, &head))
+        writeln!(self.page.out, "{}", self.page.paint(BOLD, &head))
     }
 
     fn emcy(&mut self, ev: &EmcyEvent<'_>) -> io::Result<()> {
-        self.write_emcy(ev)
+        if self.summary_only {
+            return Ok(());
+        }
+        self.events.write_emcy(&mut self.page, ev)?;
+        self.end_event()
     }
 
     fn boot(&mut self, ev: &BootEvent<'_>) -> io::Result<()> {
-        self.write_boot(ev)
+        if self.summary_only {
+            return Ok(());
+        }
+        self.events.write_boot(&mut self.page, ev)?;
+        self.end_event()
     }
 
     fn health(&mut self, ev: &HealthEvent<'_>) -> io::Result<()> {
-        self.write_health_event(ev)
+        if self.summary_only {
+            return Ok(());
+        }
+        self.events.write_health_event(&mut self.page, ev)?;
+        self.end_event()
     }
 
     fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
-        self.write_end_of_input(input)
+        if self.summary_only {
+            return end_tables::write_summary(&mut self.page, input);
+        }
+        self.events.write_end(&mut self.page)?;
+        end_tables::write_end_of_input(&mut self.page, input)
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
-        self.write_inputs(inputs)
+        end_tables::write_inputs(&mut self.page, inputs)
     }
 }

@@ -1,50 +1,50 @@
 //! The error timeline at the end of an input: one row per error of every
 //! node, start to end. A trace can hold millions of errors, so the table
 //! is written in two passes over the history (widths, then rows) and no
-//! row is kept; the first pass measures without writing.
+//! row is kept; the first pass measures without writing. The nodes' code
+//! descriptions, measured once per node ([`NodeTexts`]), serve the errors
+//! seen table too.
 
+use std::borrow::Cow;
 use std::io::{self, Write};
 
-use super::end_tables::NodeTexts;
 use super::fit::{CHANNEL_MAX, Fit, display_width, push_row, write_row};
-use super::{BOLD, TableReport};
+use super::page::{BOLD, Page};
 use crate::analyze::{InputReport, NodeReport};
 use crate::report::format::push_code;
 use crate::report::timefmt::TimeFormat;
 use crate::text::printable;
 use crate::timeline::Interval;
 
-impl<W: Write> TableReport<W> {
-    /// The error timeline under its title; nothing when no node erred.
-    pub(super) fn write_timeline(&mut self, input: &InputReport) -> io::Result<()> {
-        let times = self.times.clone();
-        let Some(mut widths) = timeline_widths(input, &times)? else {
-            return Ok(());
-        };
-        let shown = self.fit(&mut widths, &TIMELINE_HEADER, &TIMELINE_FIT);
-        writeln!(self.out)?;
-        writeln!(self.out, "{}", self.paint(BOLD, "Error timeline"))?;
-        write_row(
-            &mut self.out,
-            &TIMELINE_HEADER,
+/// The error timeline under its title; nothing when no node erred.
+pub(super) fn write_timeline<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    let times = page.times.clone();
+    let Some(mut widths) = timeline_widths(input, &times)? else {
+        return Ok(());
+    };
+    let shown = page.fit(&mut widths, &TIMELINE_HEADER, &TIMELINE_FIT);
+    writeln!(page.out)?;
+    writeln!(page.out, "{}", page.paint(BOLD, "Error timeline"))?;
+    write_row(
+        &mut page.out,
+        &TIMELINE_HEADER,
+        &widths,
+        &shown,
+        &TIMELINE_RIGHT,
+    )?;
+    let out = &mut page.out;
+    let mut line = String::new();
+    for_each_timeline_row(input, &times, |cells, cell_widths| {
+        push_row(
+            &mut line,
+            cells,
+            cell_widths,
             &widths,
             &shown,
             &TIMELINE_RIGHT,
-        )?;
-        let out = &mut self.out;
-        let mut line = String::new();
-        for_each_timeline_row(input, &times, |cells, cell_widths| {
-            push_row(
-                &mut line,
-                cells,
-                cell_widths,
-                &widths,
-                &shown,
-                &TIMELINE_RIGHT,
-            );
-            out.write_all(line.as_bytes())
-        })
-    }
+        );
+        out.write_all(line.as_bytes())
+    })
 }
 
 const TIMELINE_HEADER: [&str; 8] = [
@@ -196,4 +196,33 @@ fn for_each_timeline_row(
         }
     }
     merge.take_error().map_or(Ok(()), Err)
+}
+
+/// A node's code descriptions with their display widths, measured once per
+/// node (its timeline can have millions of rows; descriptions are rarely
+/// ASCII, so measuring is not free).
+pub(super) struct NodeTexts<'n>(Vec<(u16, Cow<'n, str>, usize)>);
+
+impl<'n> NodeTexts<'n> {
+    pub(super) fn of(node: &'n NodeReport) -> Self {
+        NodeTexts(
+            node.descriptions
+                .iter()
+                .map(|(code, text)| {
+                    let text = printable(text);
+                    let width = display_width(&text);
+                    (code, text, width)
+                })
+                .collect(),
+        )
+    }
+
+    /// `code`'s description and width; empty for a code the node never
+    /// raised (its errors are all raised by it, so never).
+    pub(super) fn get(&self, code: u16) -> (&str, usize) {
+        match self.0.binary_search_by_key(&code, |(c, _, _)| *c) {
+            Ok(i) => self.0.get(i).map_or(("", 0), |(_, t, w)| (&**t, *w)),
+            Err(_) => ("", 0),
+        }
+    }
 }

@@ -1,0 +1,66 @@
+//! Where the report is written and how: the output, whether in colour, the
+//! terminal's width to fit and the times' format; the colours the tables
+//! share. Every part of the table writes through a [`Page`].
+
+use std::io::{self, Write};
+
+use anstyle::{AnsiColor, Style};
+
+use super::fit::{Fit, blanks, fit_columns};
+use crate::report::timefmt::TimeFormat;
+
+pub(super) const RED: Style = AnsiColor::Red.on_default().bold();
+pub(super) const YELLOW: Style = AnsiColor::Yellow.on_default();
+pub(super) const GREEN: Style = AnsiColor::Green.on_default();
+pub(super) const BOLD: Style = Style::new().bold();
+
+/// The output and how it is written.
+pub(super) struct Page<W> {
+    pub(super) out: W,
+    pub(super) color: bool,
+    /// The terminal's width to fit (`None`: a pipe, full lines).
+    pub(super) width: Option<usize>,
+    pub(super) times: TimeFormat,
+}
+
+impl<W: Write> Page<W> {
+    /// `text` in `style` when in colour.
+    pub(super) fn paint(&self, style: Style, text: &str) -> String {
+        if self.color {
+            format!("{}{text}{}", style.render(), style.render_reset())
+        } else {
+            text.to_string()
+        }
+    }
+
+    /// A line of its own (legend, bus line), wrapped to the width when
+    /// fitting, its continuation indented by `hang`.
+    pub(super) fn write_wrapped(&mut self, text: &str, hang: usize) -> io::Result<()> {
+        match self.width {
+            Some(width) => {
+                let indent = blanks(hang);
+                let options = textwrap::Options::new(width).subsequent_indent(&indent);
+                for piece in textwrap::wrap(text, options) {
+                    writeln!(self.out, "{piece}")?;
+                }
+                Ok(())
+            }
+            None => writeln!(self.out, "{text}"),
+        }
+    }
+
+    /// The columns shown of a table with these widths, fitted to the
+    /// terminal (all of them in a pipe).
+    pub(super) fn fit<const N: usize>(
+        &self,
+        widths: &mut [usize; N],
+        header: &[&str; N],
+        fit: &Fit,
+    ) -> [bool; N] {
+        let mut shown = [true; N];
+        if let Some(width) = self.width {
+            fit_columns(widths, &mut shown, header, fit, width);
+        }
+        shown
+    }
+}
