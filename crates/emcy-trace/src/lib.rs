@@ -14,6 +14,22 @@
 //!
 //! This crate is the bottom of emcy-decode and imports nothing of it: what
 //! a frame means to CANopen is said above it.
+//!
+//! ```
+//! use emcy_trace::{Format, Interest, LineParser, Parsed};
+//!
+//! let mut parser = Format::CandumpLog.parser();
+//! let everything = Interest::all();
+//! let Parsed::Frame(frame) =
+//!     parser.parse(b"(1700000001.250000) can0 081#1043080100000000", &everything)
+//! else {
+//!     panic!("a candump log line is a frame");
+//! };
+//! assert_eq!((frame.channel, frame.id), (&b"can0"[..], 0x081));
+//! assert_eq!(frame.data.as_slice(), [0x10, 0x43, 0x08, 0x01, 0, 0, 0, 0]);
+//! assert_eq!(frame.time.map(|t| t.to_string()).as_deref(), Some("1700000001.250000"));
+//! assert!(matches!(parser.parse(b"garbage", &everything), Parsed::Malformed(_)));
+//! ```
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
