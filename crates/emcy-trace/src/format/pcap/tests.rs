@@ -1,9 +1,13 @@
 //! Unit tests of the pcap reader on captures built here byte by byte.
 
+use std::io::{self, Read};
+
 use proptest::prelude::*;
 
+use super::consts::{BOM, BUFFER};
+use super::packet::Order;
 use super::*;
-use crate::FrameKind;
+use crate::{FrameKind, FrameSource, Interest, Parsed};
 
 // ---- writers -------------------------------------------------------------------------
 

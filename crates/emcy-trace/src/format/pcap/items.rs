@@ -1,0 +1,63 @@
+//! What one packet (a "line") is once read, and what it is read with.
+
+use crate::ethercat::EthercatPacket;
+use crate::{Reason, Timestamp};
+
+use super::clock::Clock;
+use super::packet::Can;
+
+/// A pcapng interface (or the one of a pcap file).
+#[derive(Debug)]
+pub(super) struct Interface {
+    pub(super) linktype: u16,
+    pub(super) name: Box<[u8]>,
+    /// It captures several devices: named `any`, or with no name of its
+    /// own (pcap). Its LINUX_SLL2 frames are told apart by the device's
+    /// interface index: channel `NAME:INDEX`.
+    pub(super) several: bool,
+    pub(super) clock: Clock,
+    /// 0: no limit.
+    pub(super) snaplen: u32,
+}
+
+/// A packet's time as the file stores it.
+#[derive(Clone, Copy)]
+pub(super) enum Ts {
+    /// A simple packet block: none.
+    None,
+    Legacy {
+        secs: u32,
+        frac: u32,
+    },
+    Units(u64),
+}
+
+/// What one "line" is, owned.
+#[derive(Debug)]
+pub(super) enum Item {
+    Frame {
+        iface: usize,
+        /// The device's interface index (LINUX_SLL2 on an interface that
+        /// captures several), part of the channel's name.
+        device: Option<u32>,
+        time: Option<Timestamp>,
+        can: Can,
+    },
+    /// A valid frame the caller's interest does not want: counted only.
+    Plain,
+    /// An EtherCAT frame: not a CAN frame (a skipped line, or a malformed
+    /// one when its walk failed), but maybe CoE messages.
+    Ethercat {
+        iface: usize,
+        packet: Box<EthercatPacket>,
+    },
+    /// A link type 227 packet read before the byte order is known.
+    Undecided {
+        iface: usize,
+        time: Option<Timestamp>,
+        bytes: Box<[u8]>,
+        reported: u32,
+    },
+    Skipped,
+    Malformed(Reason),
+}
