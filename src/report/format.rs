@@ -65,6 +65,13 @@ pub(crate) fn push_hex(out: &mut impl Ascii, bytes: &[u8]) {
     }
 }
 
+/// Appends one byte as its upper-case hex pair: the table's register and
+/// manufacturer bytes, a byte at a time, where [`push_hex`]'s word at a
+/// time would convert seven bytes for nothing.
+pub(crate) fn push_hex_byte(out: &mut impl Ascii, byte: u8) {
+    out.push_ascii(&[HEX[usize::from(byte >> 4)], HEX[usize::from(byte & 0xF)]]);
+}
+
 /// The 16 upper-case hex digits of `v`, all at once: each nibble moved into
 /// a byte of its own, then `0`..`9` and `A`..`F` chosen per byte. An EMCY
 /// payload is one `u64`, so its hex is one call instead of a lookup per

@@ -18,7 +18,9 @@ use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, HistoryReport};
 use crate::canopen::NodeId;
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
-use crate::report::format::{TABLE_LIST, code_text, codes_list, push_code, push_codes, push_hex};
+use crate::report::format::{
+    TABLE_LIST, code_text, codes_list, push_code, push_codes, push_hex_byte,
+};
 use crate::report::timefmt::TimeFormat;
 use crate::text::printable;
 use crate::timeline::drive::Via as DriveVia;
@@ -160,7 +162,7 @@ impl EventLines {
             }
             Some(w) => {
                 let start = line.len();
-                push_hex(&mut line, &[reg]);
+                push_hex_byte(&mut line, reg);
                 pad_to(&mut line, start + w + 2);
             }
             None => {}
@@ -171,7 +173,7 @@ impl EventLines {
                 if i > 0 {
                     line.push(' ');
                 }
-                push_hex(&mut line, std::slice::from_ref(b));
+                push_hex_byte(&mut line, *b);
             }
             pad_to(&mut line, start + MANUFACTURER_WIDTH);
             line.push_str("  ");
