@@ -5,7 +5,7 @@
 use super::analysis::OutputError;
 use crate::trace::detect::Detector;
 use crate::trace::format::candump_log;
-use crate::trace::lines::{self, Block, RawLine};
+use crate::trace::lines::{self, Block, RawLine, too_long};
 use crate::trace::{
     Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, Inner, Interest, Parsed, Reason,
     Scan, Timestamp,
@@ -51,10 +51,6 @@ pub(super) trait LineSink {
     /// A line that is not a frame made the format known (an ASC header).
     fn format_known(&mut self);
     fn lines(&mut self, n: u64);
-}
-
-pub(super) fn too_long(n: u64, max_line: usize) -> Reason {
-    format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
 }
 
 /// A run of lines of one layout with frames folded ([`Folds`]), and frames

@@ -216,6 +216,17 @@ mod tests {
     }
 
     #[test]
+    fn a_byte_alone_is_the_pair_the_word_writer_gives() {
+        for b in 0..=u8::MAX {
+            let (mut alone, mut word) = (String::new(), String::new());
+            push_hex_byte(&mut alone, b);
+            push_hex(&mut word, &[b]);
+            assert_eq!(alone, word, "{b:#04x}");
+            assert_eq!(alone, format!("{b:02X}"));
+        }
+    }
+
+    #[test]
     fn lists_in_each_style() {
         let codes = [0x3120, 0x4210];
         let counts = [(0x3120, 1), (0x4210, 12)];

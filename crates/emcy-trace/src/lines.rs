@@ -463,6 +463,12 @@ impl<R: Read> LineReader<R> {
     }
 }
 
+/// Why a line too long to read is malformed: the one wording of every
+/// reader of lines (the analysis's blocks and `TextReader`).
+pub fn too_long(n: u64, max_line: usize) -> crate::Reason {
+    format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

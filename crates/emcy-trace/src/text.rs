@@ -11,7 +11,7 @@
 use std::io::{self, Read};
 
 use crate::detect::Detector;
-use crate::lines::{self, Block, BlockReader, RawLine};
+use crate::lines::{self, Block, BlockReader, RawLine, too_long};
 use crate::{Format, FrameSource, Interest, Next, Parsed, Reason};
 
 /// Reads a text trace line by line.
@@ -67,11 +67,6 @@ impl<R: Read> TextReader<R> {
             }
         }
     }
-}
-
-/// Why a line too long to read is malformed.
-fn too_long(n: u64, max_line: usize) -> Reason {
-    format!("line of {n} bytes is longer than the {max_line} byte limit; skipped").into()
 }
 
 impl<R: Read> FrameSource for TextReader<R> {
