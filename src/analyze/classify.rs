@@ -23,6 +23,10 @@ pub(super) trait LineSink {
     /// `n` wanted frames that only move the input's first/last time (see
     /// [`content_matters`](super::interest::content_matters)), the first and last of their times.
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp);
+    /// The times of the block's first and last frames of any id
+    /// ([`Detector::first_frame_time`], [`Detector::last_frame_time`]):
+    /// the input's span.
+    fn frame_times(&mut self, first: Option<Timestamp>, last: Option<Timestamp>);
     /// A run of lines whose repeated frames the reader folded, its plain
     /// and timed frames (the folded ones among them) to count as by
     /// `plain_frames` and `timed_frames`.
@@ -95,6 +99,8 @@ pub(super) fn classify_block(
     sink: &mut impl LineSink,
 ) -> Result<(), OutputError> {
     let bytes = block.text();
+    // Read before the block moves the detector on (times may chain).
+    let first = detector.first_frame_time(bytes, max_line);
     let mut idx = 0u64;
     let mut pos = 0usize;
     let keep = sink.keeps_folds();
@@ -187,6 +193,8 @@ pub(super) fn classify_block(
         classify_line(raw, idx, detector, sink, max_line)?;
         idx += 1;
     }
+    let last = detector.last_frame_time(bytes, max_line);
+    sink.frame_times(first, last);
     sink.lines(idx);
     sink.block_folds(folds.into_buffers());
     Ok(())

@@ -40,6 +40,9 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// First and last time of a decoded frame.
     first_time: Option<Timestamp>,
     last_time: Option<Timestamp>,
+    /// First and last time of any frame, decoded or not, in line order:
+    /// with the decoded ones', the input's span.
+    frame_times: (Option<Timestamp>, Option<Timestamp>),
     /// The ids decoded now, and where the workers read them.
     pub(super) wanted: Wanted,
     pub(super) nodes: Nodes,
@@ -104,6 +107,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             line_base: 0,
             first_time: None,
             last_time: None,
+            frame_times: (None, None),
             wanted: Wanted::new(ids),
             nodes: Nodes::new(opts.spill_at),
             facts: Facts::new(opts),
@@ -199,8 +203,8 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             ));
         }
         let report = InputReport {
-            first_time: self.first_time,
-            last_time: self.last_time,
+            first_time: earliest(self.first_time, self.frame_times.0),
+            last_time: self.last_time.max(self.frame_times.1),
             timestamps: self.timestamps,
             file: file.to_string(),
             format,
@@ -309,6 +313,19 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         self.last_time = Some(t);
     }
 
+    /// The first and last times of any frames in the next stretch of the
+    /// input: the first of the input is kept, the last moves the end (in
+    /// line order, as the decoded frames' last time: however the input is
+    /// split, the end is its last frame's time).
+    pub(super) fn frame_times(&mut self, first: Option<Timestamp>, last: Option<Timestamp>) {
+        if self.frame_times.0.is_none() {
+            self.frame_times.0 = first;
+        }
+        if last.is_some() {
+            self.frame_times.1 = last;
+        }
+    }
+
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]
@@ -338,6 +355,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
     fn plain_frames(&mut self, n: u64) {
         self.counts.frames += n;
         self.decide();
+    }
+
+    fn frame_times(&mut self, first: Option<Timestamp>, last: Option<Timestamp>) {
+        Consumer::frame_times(self, first, last);
     }
 
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
@@ -454,5 +475,13 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             self.learnt(seen.channel, seen.at, learnt)?;
         }
         Ok(())
+    }
+}
+
+/// The earlier of two times, either of which may be unknown.
+fn earliest(a: Option<Timestamp>, b: Option<Timestamp>) -> Option<Timestamp> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }

@@ -344,7 +344,7 @@ pub struct InputReport {
     pub nodes: Vec<NodeReport>,
     /// Every error interval of every node, in report order.
     pub history: ErrorHistory,
-    /// Times of the first and last decoded frame (EMCY, NMT, SDO): the span
+    /// Times of the input's first and last frame, decoded or not: the span
     /// the summary measures rates and open errors against.
     pub first_time: Option<Timestamp>,
     pub last_time: Option<Timestamp>,
@@ -356,8 +356,8 @@ pub struct InputReport {
 }
 
 impl InputReport {
-    /// EMCY frames per second between the first and last decoded frame;
-    /// `None` without times or over an empty span.
+    /// EMCY frames per second over the input's span; `None` without times
+    /// or over an empty span.
     pub fn emcy_rate(&self) -> Option<f64> {
         let span = self.last_time?.since(self.first_time?).as_f64();
         (span > 0.0).then(|| self.counts.emcy as f64 / span)

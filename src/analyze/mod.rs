@@ -241,6 +241,9 @@ fn read_records<S: FrameSource, E: Write>(
                 if let Some((n, first, last)) = counted.timed {
                     consumer.timed_frames(n, first, last);
                 }
+                if let Some((first, last)) = counted.span {
+                    consumer.frame_times(Some(first), Some(last));
+                }
                 let frames = counted.lines() - counted.skipped;
                 if frames > 0 {
                     consumer.lines(frames);
@@ -248,6 +251,8 @@ fn read_records<S: FrameSource, E: Write>(
                 continue;
             }
             Ok(Some(Next::Record(Parsed::Frame(f)))) => {
+                // Every frame's time, decoded or not, spans the input.
+                consumer.frame_times(f.time, f.time);
                 deliver(consumer, 0, &f, None)?;
                 None
             }

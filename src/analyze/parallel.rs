@@ -78,6 +78,8 @@ struct BlockResult {
     lines: u64,
     /// Frames the consumer would ignore (not EMCY/boot candidates), counted only.
     plain_frames: u64,
+    /// The block's first and last frame times, of any id.
+    frame_times: (Option<Timestamp>, Option<Timestamp>),
     skipped: u64,
     /// Frames DROPCOUNT lines said were lost.
     dropped: u64,
@@ -156,6 +158,10 @@ impl LineSink for Recorder {
 
     fn plain_frames(&mut self, n: u64) {
         self.result.plain_frames += n;
+    }
+
+    fn frame_times(&mut self, first: Option<Timestamp>, last: Option<Timestamp>) {
+        self.result.frame_times = (first, last);
     }
 
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
@@ -294,6 +300,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// Replays a worker's block result as if its lines had been read here.
     fn replay(&mut self, mut r: BlockResult) -> Result<Spare, OutputError> {
         self.counts.frames += r.plain_frames;
+        self.frame_times(r.frame_times.0, r.frame_times.1);
         self.counts.skipped += r.skipped;
         self.counts.dropped = self.counts.dropped.saturating_add(r.dropped);
         self.counts.malformed += r.unreported;
@@ -429,6 +436,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             end: det.fork(),
                             lines: 0,
                             plain_frames: 0,
+                            frame_times: (None, None),
                             skipped: 0,
                             dropped: 0,
                             unreported: 0,

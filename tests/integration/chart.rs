@@ -166,7 +166,8 @@ fn markers_show_resets_partial_resets_and_boot_ups() {
     assert_eq!(lane_marks("boot"), 2);
     // Wall-clock ticks for candump times, the date in the title.
     assert!(doc_text.contains(">22:13:22</text>"), "{doc_text}");
-    assert!(doc_text.contains("2023-11-14 22:13:20.000000 – 22:13:27.000000 UTC"));
+    // The span ends with the last frame, a TPDO nobody decodes.
+    assert!(doc_text.contains("2023-11-14 22:13:20.000000 – 22:13:27.100000 UTC"));
     // ASC times are seconds from measurement start.
     let asc = render("svg", &[Path::new("fixtures/s300.asc")]);
     assert!(
@@ -221,8 +222,9 @@ fn wide_bars_carry_their_code_and_the_legend_lists_every_code() {
             ),
         }
     }
-    // s300: three wide errors, 0x5111 open at the end in a 22 px bar.
-    assert_eq!(labelled, ["0x4310", "0x3120", "0x4210"]);
+    // s300: three wide errors, and 0x5111, open till the last frame 0.1 s
+    // after it, in a bar wide enough for its short label.
+    assert_eq!(labelled, ["0x4310", "0x3120", "0x4210", "5111"]);
 
     // The legend: every code the node raised, with its profile's text, in
     // its class's row; the two temperature codes share the class colour's

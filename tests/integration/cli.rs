@@ -293,9 +293,9 @@ fn summary_view_prints_no_events_in_any_format() {
     let node = of_type(&objects, "node")[0];
     assert_eq!(node["errors_seen"]["0x4310"], 1);
     assert_eq!(node["longest_error"]["code"], "0x4310");
-    // In error 1.25-4.0, 5.0-6.0 (boot) and from 7.0 to the last decoded
-    // frame (7.0; the PDO at 7.1 is only counted, its time never parsed).
-    assert_eq!(node["time_in_error"].as_f64(), Some(3.75));
+    // In error 1.25-4.0, 5.0-6.0 (boot) and from 7.0 to the last frame
+    // (the PDO at 7.1, which nothing decodes but still ends the input).
+    assert_eq!(node["time_in_error"].as_f64(), Some(3.85));
 
     let json = emcy_decode()
         .args(["--view", "summary", "--format", "json", "fixtures/s300.log"])

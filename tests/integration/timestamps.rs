@@ -276,3 +276,40 @@ fn the_library_reader_sums_deltas_too_unless_told_otherwise() {
         "{times:?}"
     );
 }
+
+/// The input's span is its first and last frame, decoded or not: s300 ends
+/// with a TPDO nobody decodes, 7.1 s after its first frame, in every format
+/// that has times (from a text block's edges, a pcap packet's header, a
+/// BLF object, an MF4 record), on one thread and on two.
+#[test]
+fn the_input_spans_every_frame_decoded_or_not_in_every_format() {
+    let formats = [
+        "s300.log",
+        "s300.log.gz",
+        "s300.td.log",
+        "s300.td.txt",
+        "s300.asc",
+        "s300.busmaster.log",
+        "s300.v1_1.trc",
+        "s300.v2_1.trc",
+        "s300.pcap",
+        "s300.swapped.pcap",
+        "s300.blf",
+        "s300.plain.blf",
+        "s300.mf4",
+        "s300.dz.mf4",
+    ];
+    for name in formats {
+        for threads in ["-j1", "-j2"] {
+            let path = format!("fixtures/{name}");
+            let (stdout, _) = run(&["-q", threads, &path]);
+            let input = input(&stdout);
+            let (first, last) = (&input["first_time"], &input["last_time"]);
+            let span = last.as_f64().expect("a last time") - first.as_f64().expect("a first time");
+            assert!(
+                (span - 7.1).abs() < 1e-6,
+                "{name} {threads}: span {span} ({first} to {last})"
+            );
+        }
+    }
+}

@@ -5,6 +5,7 @@
 
 use std::io::{self, Read};
 
+use crate::Timestamp;
 use crate::ethercat::{EthercatCounts, EthercatPacket};
 use crate::format::blf::BlfReader;
 use crate::format::mf4::Mf4Reader;
@@ -75,6 +76,17 @@ impl LineParser for AnyParser {
             AnyParser::Trc(p) => p.identified(),
             AnyParser::Busmaster(p) => p.identified(),
             AnyParser::Binary(p) => p.identified(),
+        }
+    }
+
+    fn clock(&self) -> Option<Timestamp> {
+        match self {
+            AnyParser::CandumpLog(p) => p.clock(),
+            AnyParser::CandumpScreen(p) => p.clock(),
+            AnyParser::Asc(p) => p.clock(),
+            AnyParser::Trc(p) => p.clock(),
+            AnyParser::Busmaster(p) => p.clock(),
+            AnyParser::Binary(p) => p.clock(),
         }
     }
 

@@ -194,6 +194,11 @@ pub struct DeltaClock {
 }
 
 impl DeltaClock {
+    /// The time of the last frame summed (`None` before the first).
+    pub fn sum(&self) -> Option<Timestamp> {
+        self.sum
+    }
+
     /// The time of a frame whose delta is `delta`. A sum past u64 seconds
     /// (only a hostile input gets there) stays where it was.
     pub fn next(&mut self, delta: Timestamp) -> Timestamp {

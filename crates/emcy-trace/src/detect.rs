@@ -277,6 +277,50 @@ impl Detector {
         Some(clock.next(delta))
     }
 
+    /// The time of the first frame in `bytes`, of any id and kind, read
+    /// from this detector's state before the block: the input's start,
+    /// when this is its first block with a frame. The hot loops skip the
+    /// times of frames nobody decodes (most of a real bus), so the span is
+    /// found at the blocks' edges instead, on a fork: a line or two from
+    /// each end, unless a block ends in lines that are no frames.
+    pub fn first_frame_time(&self, bytes: &[u8], max_line: usize) -> Option<Timestamp> {
+        let mut fork = self.fork();
+        let all = Interest::all();
+        bytes
+            .split(|b| *b == b'\n')
+            .find_map(|line| fork.frame_time(line, max_line, &all))
+    }
+
+    /// The time of the last frame in `bytes`, of any id and kind, read from this detector's state after the block (see
+    /// [`Detector::first_frame_time`]). Where times chain (`-td` deltas,
+    /// relative times) every frame's time was read: the sum so far is it.
+    pub fn last_frame_time(&self, bytes: &[u8], max_line: usize) -> Option<Timestamp> {
+        if let Some(clock) = &self.deltas {
+            return clock.sum();
+        }
+        let primary = self.primary.and_then(|i| self.parsers.get(i));
+        if let Some(now) = primary.and_then(|p| p.clock()) {
+            return Some(now);
+        }
+        let mut fork = self.fork();
+        let all = Interest::all();
+        bytes
+            .rsplit(|b| *b == b'\n')
+            .find_map(|line| fork.frame_time(line, max_line, &all))
+    }
+
+    /// A frame line's time (the `-td` clock moves on), else `None`.
+    fn frame_time(&mut self, line: &[u8], max_line: usize, all: &Interest) -> Option<Timestamp> {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        if line.is_empty() || line.len() > max_line {
+            return None;
+        }
+        match self.parse(line, all) {
+            Parsed::Frame(frame) => frame.time,
+            _ => None,
+        }
+    }
+
     fn parse_line<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         self.foreign = None;
         let Some(primary) = self.primary else {
@@ -561,5 +605,42 @@ mod tests {
         let mut d = Detector::forced(Format::CandumpLog);
         let got = kinds(&["  can0  081   [1]  00"], &mut d);
         assert_eq!(got[0], ("malformed".to_string(), None));
+    }
+
+    /// Reads `text` line by line as the analysis does, then asks for the
+    /// block's edge times: the first from the state before it, the last
+    /// from the state after.
+    fn edges(detector: &mut Detector, text: &str) -> (Option<String>, Option<String>) {
+        let first = detector.first_frame_time(text.as_bytes(), 200);
+        for line in text.lines() {
+            detector.parse(line.as_bytes(), &Interest::none());
+        }
+        let last = detector.last_frame_time(text.as_bytes(), 200);
+        (first.map(|t| t.to_string()), last.map(|t| t.to_string()))
+    }
+
+    #[test]
+    fn a_blocks_edge_times_are_its_first_and_last_frames_of_any_id() {
+        let some = |s: &str| Some(s.to_string());
+        // Comments and junk at the edges do not move the span; frames
+        // nobody decodes do.
+        let text = "# a comment\n\n(10.5) can0 181#00\n(11.0) can0 081#00\n\
+                    (12.25) can0 7FF#\nnot a frame\n";
+        let mut d = Detector::auto();
+        assert_eq!(edges(&mut d, text), (some("10.5"), some("12.25")));
+        // A block with no frame has no edges.
+        assert_eq!(edges(&mut d, "# only talk\n"), (None, None));
+        // `-td` deltas: the first frame is at its own delta, the last at
+        // the sum of them all.
+        let mut d = Detector::forced(Format::CandumpLog);
+        d.read_deltas();
+        let deltas = "(0.5) can0 181#00\n(1.0) can0 181#00\n(0.25) can0 181#00\n";
+        assert_eq!(edges(&mut d, deltas), (some("0.5"), some("1.75")));
+        // Relative ASC times chain the same way: the parser's running time
+        // is the last frame's.
+        let asc = "base hex  timestamps relative\n   1.000000 1  181  Rx   d 1 00\n\
+                   2.000000 1  181  Rx   d 1 00\n";
+        let mut d = Detector::auto();
+        assert_eq!(edges(&mut d, asc), (some("1.000000"), some("3.000000")));
     }
 }

@@ -148,6 +148,14 @@ pub trait LineParser: Send {
         false
     }
 
+    /// The time of the last frame read, for a format whose times chain
+    /// (relative times: each line's time is the sum of those before, so
+    /// every line's is read); `None` where a line's time stands alone and
+    /// the lines nobody decodes keep theirs unread.
+    fn clock(&self) -> Option<Timestamp> {
+        None
+    }
+
     /// The state later lines depend on, as a small exact value (below 256):
     /// a block parsed from a fork is valid only if the state it started from
     /// equals the state the previous block ended in. `None` when every line
@@ -180,6 +188,9 @@ pub struct Counted {
     /// Records known not to be frames (an EtherCAT frame without a
     /// mailbox message).
     pub skipped: u64,
+    /// The first and last times of all these frames, where the reader
+    /// knows them cheaply: the input's span.
+    pub span: Option<(Timestamp, Timestamp)>,
 }
 
 impl Counted {

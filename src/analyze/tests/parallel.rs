@@ -438,3 +438,24 @@ fn cia402_mappings_learnt_mid_trace_across_blocks() {
         assert_eq!(run(unknown, threads, block), reference);
     }
 }
+
+/// The input's span runs from its first frame to its last, decoded or
+/// not, however the input is split and however many threads read it: here
+/// both ends are frames nobody decodes, behind comments.
+#[test]
+fn the_span_reaches_the_frames_nobody_decodes_at_both_ends() {
+    let mut trace = b"# recorded on the test bench\n(500.250000) can1 181#00\n".to_vec();
+    trace.extend(candump_trace());
+    trace.extend(b"\n(2500.750000) can1 381#0102\n# end of recording\n");
+    for threads in [1, 2, 3] {
+        for block in [1, 7, 64, 300, 4096, 1 << 20] {
+            let (out, _) = run(&trace, threads, block);
+            let input = out.lines().last().expect("the input object");
+            assert!(
+                input.contains("\"first_time\":500.250000,")
+                    && input.contains("\"last_time\":2500.750000,"),
+                "{threads} threads, {block}-byte blocks: {input}"
+            );
+        }
+    }
+}

@@ -100,6 +100,10 @@ impl LineParser for AscParser {
     }
 
     /// The number base; relative timestamps chain every line to the last.
+    fn clock(&self) -> Option<Timestamp> {
+        self.relative.then_some(self.now)
+    }
+
     fn context(&self) -> Option<u8> {
         match (self.relative, self.base) {
             (true, _) => None,

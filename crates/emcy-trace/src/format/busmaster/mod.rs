@@ -189,6 +189,10 @@ impl LineParser for BusmasterParser {
     /// the start date were read (a fork that missed one has a lower count;
     /// one that saw them all has the same start). Relative times chain every frame to the
     /// one before: `None`, parse sequentially.
+    fn clock(&self) -> Option<Timestamp> {
+        (self.mode == TimeMode::Relative).then_some(self.now)
+    }
+
     fn context(&self) -> Option<u8> {
         if self.mode == TimeMode::Relative || self.dates > MAX_DATES {
             return None;

@@ -104,8 +104,24 @@ enum Out {
     /// (CANedge writes it after the frame): data group, VLSD group, offset
     /// of the record, data length.
     Waiting(Decoded, Key, usize),
-    /// Data frames on ids the caller does not want: only counted.
-    Plain(u64),
+    /// Data frames on ids the caller does not want: only counted, with the
+    /// first and last of their times (the input's span) where known.
+    Plain(u64, Option<(Timestamp, Timestamp)>),
+}
+
+/// Adds `n` plain frames over `span` to the queue's last entry when that is
+/// plain frames too (the span grows to cover both), else queues them.
+fn queue_plain(queue: &mut VecDeque<Out>, n: u64, span: Option<(Timestamp, Timestamp)>) {
+    match queue.back_mut() {
+        Some(Out::Plain(k, s)) => {
+            *k += n;
+            *s = match (*s, span) {
+                (Some((first, _)), Some((_, last))) => Some((first, last)),
+                (s, span) => s.or(span),
+            };
+        }
+        _ => queue.push_back(Out::Plain(n, span)),
+    }
 }
 
 impl<R: Read> FrameSource for Mf4Reader<R> {
@@ -505,8 +521,9 @@ impl<R: Read> Mf4Reader<R> {
                     Out::Frame(d) => Next::Record(Parsed::Frame(self.frame(d))),
                     Out::Skipped => Next::Record(Parsed::Skipped),
                     Out::Malformed(r) => Next::Record(Parsed::Malformed(r)),
-                    Out::Plain(n) => Next::Counted(Counted {
+                    Out::Plain(n, span) => Next::Counted(Counted {
                         plain: n,
+                        span,
                         ..Counted::default()
                     }),
                     Out::Waiting(..) => {
@@ -1098,13 +1115,20 @@ impl<R: Read> Mf4Reader<R> {
             pos += step;
         }
         if n > 0 {
+            // Only the run's first and last records are timed: the span is
+            // all the report needs of them.
+            let start = self.start;
+            let mut span = None;
             if let Some(s) = self.states.get_mut(dg).and_then(|s| s.samples.get_mut(gi)) {
+                let at = |i: u64| {
+                    let offset = usize::try_from(i).ok()?.checked_mul(step)? + id_size;
+                    let record = data.get(offset..offset - id_size + step)?;
+                    time(group.time.as_ref()?, record, *s + i, start)
+                };
+                span = at(0).zip(at(n - 1));
                 *s += n;
             }
-            match self.queue.back_mut() {
-                Some(Out::Plain(k)) => *k += n,
-                _ => self.queue.push_back(Out::Plain(n)),
-            }
+            queue_plain(&mut self.queue, n, span);
         }
         pos
     }
@@ -1182,10 +1206,7 @@ impl<R: Read> Mf4Reader<R> {
         let out = self.decode(dg, gi, record, sample, interest)?;
         let wanted = matches!(out, Out::Frame(_) | Out::Waiting(..));
         match out {
-            Out::Plain(n) => match self.queue.back_mut() {
-                Some(Out::Plain(k)) => *k += n,
-                _ => self.queue.push_back(Out::Plain(n)),
-            },
+            Out::Plain(n, span) => queue_plain(&mut self.queue, n, span),
             Out::Waiting(_, key, _) => {
                 self.waiting
                     .insert(key, self.popped + self.queue.len() as u64);
@@ -1285,7 +1306,11 @@ impl<R: Read> Mf4Reader<R> {
                 !c.vlsd && c.bytes(record).len() >= len as usize
             })
         {
-            return Ok(Out::Plain(1));
+            let time = group
+                .time
+                .as_ref()
+                .and_then(|c| time(c, record, sample, self.start));
+            return Ok(Out::Plain(1, time.map(|t| (t, t))));
         }
         let time = group
             .time

@@ -10,8 +10,10 @@ use super::items::Ts;
 /// What the hot loop made of a packet it counts.
 #[derive(Clone, Copy)]
 pub(super) enum Hot {
-    /// A CAN frame only counted, and timed if it has a [`RawTime`].
-    Plain(Option<RawTime>),
+    /// A CAN frame only counted, with its time when it can be read later
+    /// (the input's span), `timed` when the report wants it as a frame
+    /// only timed.
+    Plain { time: Option<RawTime>, timed: bool },
     /// An EtherCAT frame without mailbox messages: a skipped line.
     Ethercat(ethercat::Walked),
 }
@@ -61,6 +63,8 @@ impl Timed {
 pub(super) struct Counted {
     pub(super) plain: u64,
     pub(super) timed: Timed,
+    /// Every counted frame's time: the input's span.
+    pub(super) span: Timed,
     pub(super) quiet: u64,
     pub(super) ethercat: EthercatCounts,
 }
@@ -72,10 +76,13 @@ impl Counted {
     #[inline]
     pub(super) fn add(&mut self, hot: Hot) -> bool {
         match hot {
-            Hot::Plain(time) => {
+            Hot::Plain { time, timed } => {
                 self.plain += 1;
                 if let Some(t) = time {
-                    self.timed.count(t);
+                    self.span.count(t);
+                    if timed {
+                        self.timed.count(t);
+                    }
                 }
             }
             Hot::Ethercat(walked) => {

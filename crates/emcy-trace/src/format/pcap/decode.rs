@@ -159,6 +159,19 @@ impl Decoder {
         interest: &Interest,
     ) -> Option<Hot> {
         let i = self.interfaces.get(iface)?;
+        // The time as stored, when reading it later cannot fail.
+        let raw_time = || {
+            let sure = match ts {
+                Ts::Legacy { .. } => true,
+                Ts::Units(_) => i.clock.infallible(),
+                Ts::None => false,
+            };
+            sure.then_some(RawTime {
+                clock: i.clock,
+                ts,
+                nanos: self.nanos,
+            })
+        };
         match packet::quick(
             i.linktype,
             data,
@@ -167,19 +180,14 @@ impl Decoder {
             self.socketcan,
             interest,
         ) {
-            packet::Quick::Plain => Some(Hot::Plain(None)),
-            packet::Quick::Timed => {
-                let sure = match ts {
-                    Ts::Legacy { .. } => true,
-                    Ts::Units(_) => i.clock.infallible(),
-                    Ts::None => false,
-                };
-                sure.then_some(Hot::Plain(Some(RawTime {
-                    clock: i.clock,
-                    ts,
-                    nanos: self.nanos,
-                })))
-            }
+            packet::Quick::Plain => Some(Hot::Plain {
+                time: raw_time(),
+                timed: false,
+            }),
+            packet::Quick::Timed => raw_time().map(|t| Hot::Plain {
+                time: Some(t),
+                timed: true,
+            }),
             packet::Quick::Full => {
                 // Process data and empty polls, nearly every packet of an
                 // EtherCAT capture, are counted here; a mailbox message

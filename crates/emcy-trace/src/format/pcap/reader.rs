@@ -50,6 +50,7 @@ impl<R: Read> FrameSource for PcapReader<R> {
                     plain: counted.saturating_sub(timed_n),
                     timed,
                     skipped,
+                    span: self.take_counted_span(),
                 })));
             }
             match self.advanced.take() {
@@ -316,6 +317,13 @@ impl<R: Read> PcapReader<R> {
         let last = timed.last.and_then(RawTime::get);
         let times = timed.first.zip(last).map(|(f, l)| (timed.n, f, l));
         (std::mem::take(&mut self.counted.plain), times)
+    }
+
+    /// The first and last times of the frames counted since the last call
+    /// (those that have one): the input's span. Cleared by the call.
+    pub fn take_counted_span(&mut self) -> Option<(Timestamp, Timestamp)> {
+        let span = std::mem::take(&mut self.counted.span);
+        span.first.zip(span.last.and_then(RawTime::get))
     }
 
     /// EtherCAT frames [`PcapReader::advance`] only counted (they carried
