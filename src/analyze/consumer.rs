@@ -326,6 +326,14 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         }
     }
 
+    /// The first and last times of the frames a binary reader only
+    /// counted, known at the input's end: they came before, among and after
+    /// the records, so the span reaches them where they lie outside it.
+    pub(super) fn plain_span(&mut self, first: Timestamp, last: Timestamp) {
+        self.frame_times.0 = earliest(self.frame_times.0, Some(first));
+        self.frame_times.1 = self.frame_times.1.max(Some(last));
+    }
+
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]

@@ -204,6 +204,9 @@ impl<E: Write> Visit for ReadRecords<'_, '_, '_, E> {
 
     fn visit<S: FrameSource>(self, source: &mut S) -> Self::Output {
         let result = read_records(source, self.0);
+        if let Some((first, last)) = source.plain_span() {
+            self.0.plain_span(first, last);
+        }
         if let Some(e) = source.ethercat_counts() {
             self.0.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
         }
@@ -240,9 +243,6 @@ fn read_records<S: FrameSource, E: Write>(
                 }
                 if let Some((n, first, last)) = counted.timed {
                     consumer.timed_frames(n, first, last);
-                }
-                if let Some((first, last)) = counted.span {
-                    consumer.frame_times(Some(first), Some(last));
                 }
                 let frames = counted.lines() - counted.skipped;
                 if frames > 0 {

@@ -188,9 +188,6 @@ pub struct Counted {
     /// Records known not to be frames (an EtherCAT frame without a
     /// mailbox message).
     pub skipped: u64,
-    /// The first and last times of all these frames, where the reader
-    /// knows them cheaply: the input's span.
-    pub span: Option<(Timestamp, Timestamp)>,
 }
 
 impl Counted {
@@ -232,6 +229,15 @@ pub trait FrameSource {
 
     /// The EtherCAT seen so far, for a format that can carry it.
     fn ethercat_counts(&self) -> Option<EthercatCounts> {
+        None
+    }
+
+    /// The times of the first and last frames the reader only counted
+    /// ([`Next::Counted`]), read once when asked: with the times of the
+    /// records it handed on, the input's span. Kept as stored until then
+    /// (converting every plain frame's time cost a pcapng 16% and an MF4
+    /// 23% more instructions).
+    fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
         None
     }
 }

@@ -104,23 +104,47 @@ enum Out {
     /// (CANedge writes it after the frame): data group, VLSD group, offset
     /// of the record, data length.
     Waiting(Decoded, Key, usize),
-    /// Data frames on ids the caller does not want: only counted, with the
-    /// first and last of their times (the input's span) where known.
-    Plain(u64, Option<(Timestamp, Timestamp)>),
+    /// Data frames on ids the caller does not want: only counted.
+    Plain(u64),
 }
 
-/// Adds `n` plain frames over `span` to the queue's last entry when that is
-/// plain frames too (the span grows to cover both), else queues them.
-fn queue_plain(queue: &mut VecDeque<Out>, n: u64, span: Option<(Timestamp, Timestamp)>) {
-    match queue.back_mut() {
-        Some(Out::Plain(k, s)) => {
-            *k += n;
-            *s = match (*s, span) {
-                (Some((first, _)), Some((_, last))) => Some((first, last)),
-                (s, span) => s.or(span),
-            };
+/// A plain frame's time as stored: its group, its index there and the
+/// bytes of its group's master channel, read as a time only when asked for
+/// ([`FrameSource::plain_span`]; converting every plain frame's time cost
+/// MF4 23% more instructions, reading its value 6%, copying its bytes 1%).
+#[derive(Clone, Copy, Debug)]
+struct PlainTime {
+    dg: usize,
+    gi: usize,
+    sample: u64,
+    /// The record's bytes from the master channel's first: a value of up
+    /// to 64 bits at a bit offset under 8 fits in 9.
+    bytes: [u8; 9],
+}
+
+impl PlainTime {
+    fn of(dg: usize, gi: usize, c: &Channel, record: &[u8], sample: u64) -> PlainTime {
+        let mut bytes = [0u8; 9];
+        let from = record.get(c.byte..).unwrap_or_default();
+        let n = from.len().min(bytes.len());
+        if let (Some(to), Some(from)) = (bytes.get_mut(..n), from.get(..n)) {
+            to.copy_from_slice(from);
         }
-        _ => queue.push_back(Out::Plain(n, span)),
+        PlainTime {
+            dg,
+            gi,
+            sample,
+            bytes,
+        }
+    }
+}
+
+/// Adds `n` plain frames to the queue's last entry when that is plain
+/// frames too, else queues them.
+fn queue_plain(queue: &mut VecDeque<Out>, n: u64) {
+    match queue.back_mut() {
+        Some(Out::Plain(k)) => *k += n,
+        _ => queue.push_back(Out::Plain(n)),
     }
 }
 
@@ -135,6 +159,11 @@ impl<R: Read> FrameSource for Mf4Reader<R> {
     #[inline]
     fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
         self.decode_next(interest, true)
+    }
+
+    fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
+        let first = self.plain_time(self.plain_first?)?;
+        Some((first, self.plain_time(self.plain_last?)?))
     }
 }
 
@@ -334,6 +363,9 @@ pub struct Mf4Reader<R> {
     active: Option<Active>,
     /// Records decoded, not yet taken (at most one chunk's).
     queue: VecDeque<Out>,
+    /// The first and last plain frames' times as stored (the input's span).
+    plain_first: Option<PlainTime>,
+    plain_last: Option<PlainTime>,
     /// Records taken from the queue so far (queue positions of waiters).
     popped: u64,
     /// Waiting frames by the VLSD record they need: their queue position.
@@ -433,6 +465,8 @@ impl<R: Read> Mf4Reader<R> {
             replay: None,
             active: None,
             queue: VecDeque::new(),
+            plain_first: None,
+            plain_last: None,
             popped: 0,
             waiting: HashMap::new(),
             notes,
@@ -521,9 +555,8 @@ impl<R: Read> Mf4Reader<R> {
                     Out::Frame(d) => Next::Record(Parsed::Frame(self.frame(d))),
                     Out::Skipped => Next::Record(Parsed::Skipped),
                     Out::Malformed(r) => Next::Record(Parsed::Malformed(r)),
-                    Out::Plain(n, span) => Next::Counted(Counted {
+                    Out::Plain(n) => Next::Counted(Counted {
                         plain: n,
-                        span,
                         ..Counted::default()
                     }),
                     Out::Waiting(..) => {
@@ -540,6 +573,18 @@ impl<R: Read> Mf4Reader<R> {
             }
             self.step(interest)?;
         }
+    }
+
+    /// A plain frame's time from its stored value.
+    fn plain_time(&self, t: PlainTime) -> Option<Timestamp> {
+        let layout = self.layout.as_ref()?;
+        let group = layout.groups.get(t.dg)?.groups.get(t.gi)?;
+        // The channel read from the copied bytes, which start at its first.
+        let c = Channel {
+            byte: 0,
+            ..group.time.clone()?
+        };
+        time(&c, &t.bytes, t.sample, self.start)
     }
 
     fn frame(&mut self, d: Decoded) -> Frame<'_> {
@@ -1117,18 +1162,24 @@ impl<R: Read> Mf4Reader<R> {
         if n > 0 {
             // Only the run's first and last records are timed: the span is
             // all the report needs of them.
-            let start = self.start;
-            let mut span = None;
             if let Some(s) = self.states.get_mut(dg).and_then(|s| s.samples.get_mut(gi)) {
                 let at = |i: u64| {
                     let offset = usize::try_from(i).ok()?.checked_mul(step)? + id_size;
                     let record = data.get(offset..offset - id_size + step)?;
-                    time(group.time.as_ref()?, record, *s + i, start)
+                    let c = group.time.as_ref()?;
+                    Some(PlainTime::of(dg, gi, c, record, *s + i))
                 };
-                span = at(0).zip(at(n - 1));
+                // Only the run's first and last records: the span is all
+                // the report needs of them.
+                if self.plain_first.is_none() {
+                    self.plain_first = at(0);
+                }
+                if let Some(last) = at(n - 1) {
+                    self.plain_last = Some(last);
+                }
                 *s += n;
             }
-            queue_plain(&mut self.queue, n, span);
+            queue_plain(&mut self.queue, n);
         }
         pos
     }
@@ -1206,7 +1257,7 @@ impl<R: Read> Mf4Reader<R> {
         let out = self.decode(dg, gi, record, sample, interest)?;
         let wanted = matches!(out, Out::Frame(_) | Out::Waiting(..));
         match out {
-            Out::Plain(n, span) => queue_plain(&mut self.queue, n, span),
+            Out::Plain(n) => queue_plain(&mut self.queue, n),
             Out::Waiting(_, key, _) => {
                 self.waiting
                     .insert(key, self.popped + self.queue.len() as u64);
@@ -1306,11 +1357,12 @@ impl<R: Read> Mf4Reader<R> {
                 !c.vlsd && c.bytes(record).len() >= len as usize
             })
         {
-            let time = group
-                .time
-                .as_ref()
-                .and_then(|c| time(c, record, sample, self.start));
-            return Ok(Out::Plain(1, time.map(|t| (t, t))));
+            if let Some(c) = group.time.as_ref() {
+                let time = PlainTime::of(dg, gi, c, record, sample);
+                self.plain_first.get_or_insert(time);
+                self.plain_last = Some(time);
+            }
+            return Ok(Out::Plain(1));
         }
         let time = group
             .time
@@ -1638,7 +1690,12 @@ fn dlc_len(dlc: u64) -> u64 {
 /// compiler stopped inlining it on its own.
 #[inline]
 fn time(c: &Channel, record: &[u8], sample: u64, start: (u128, u8)) -> Option<Timestamp> {
-    let raw = c.raw(record, sample)?;
+    time_of(c, c.raw(record, sample)?, start)
+}
+
+/// The time of a master channel's raw value (see [`time`]).
+#[inline(always)]
+fn time_of(c: &Channel, raw: Raw, start: (u128, u8)) -> Option<Timestamp> {
     // Float seconds without a scale are no count of units (python-can).
     let counts = !matches!((raw, c.scale), (Raw::F(_), Some(0)));
     let (offset, digits): (i128, u8) = match (c.scale, raw.integer()) {

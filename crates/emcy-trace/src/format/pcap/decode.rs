@@ -145,6 +145,16 @@ impl Decoder {
         }
     }
 
+    /// A packet's time as stored, with what reads it.
+    pub(super) fn raw_time(&self, iface: usize, ts: Ts) -> Option<RawTime> {
+        let i = self.interfaces.get(iface)?;
+        Some(RawTime {
+            clock: i.clock,
+            ts,
+            nanos: self.nanos,
+        })
+    }
+
     /// What the hot loop makes of a packet (see [`packet::quick`]): a
     /// plain frame, a frame only timed (with its time, to be read when
     /// needed: it cannot fail), an EtherCAT frame with no mailbox message,
@@ -159,19 +169,6 @@ impl Decoder {
         interest: &Interest,
     ) -> Option<Hot> {
         let i = self.interfaces.get(iface)?;
-        // The time as stored, when reading it later cannot fail.
-        let raw_time = || {
-            let sure = match ts {
-                Ts::Legacy { .. } => true,
-                Ts::Units(_) => i.clock.infallible(),
-                Ts::None => false,
-            };
-            sure.then_some(RawTime {
-                clock: i.clock,
-                ts,
-                nanos: self.nanos,
-            })
-        };
         match packet::quick(
             i.linktype,
             data,
@@ -180,14 +177,19 @@ impl Decoder {
             self.socketcan,
             interest,
         ) {
-            packet::Quick::Plain => Some(Hot::Plain {
-                time: raw_time(),
-                timed: false,
-            }),
-            packet::Quick::Timed => raw_time().map(|t| Hot::Plain {
-                time: Some(t),
-                timed: true,
-            }),
+            packet::Quick::Plain => Some(Hot::Plain(None)),
+            packet::Quick::Timed => {
+                let sure = match ts {
+                    Ts::Legacy { .. } => true,
+                    Ts::Units(_) => i.clock.infallible(),
+                    Ts::None => false,
+                };
+                sure.then_some(Hot::Plain(Some(RawTime {
+                    clock: i.clock,
+                    ts,
+                    nanos: self.nanos,
+                })))
+            }
             packet::Quick::Full => {
                 // Process data and empty polls, nearly every packet of an
                 // EtherCAT capture, are counted here; a mailbox message

@@ -50,7 +50,6 @@ impl<R: Read> FrameSource for PcapReader<R> {
                     plain: counted.saturating_sub(timed_n),
                     timed,
                     skipped,
-                    span: self.take_counted_span(),
                 })));
             }
             match self.advanced.take() {
@@ -71,6 +70,10 @@ impl<R: Read> FrameSource for PcapReader<R> {
 
     fn ethercat_counts(&self) -> Option<EthercatCounts> {
         Some(PcapReader::ethercat_counts(self))
+    }
+
+    fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
+        PcapReader::plain_span(self)
     }
 }
 
@@ -319,11 +322,11 @@ impl<R: Read> PcapReader<R> {
         (std::mem::take(&mut self.counted.plain), times)
     }
 
-    /// The first and last times of the frames counted since the last call
-    /// (those that have one): the input's span. Cleared by the call.
-    pub fn take_counted_span(&mut self) -> Option<(Timestamp, Timestamp)> {
-        let span = std::mem::take(&mut self.counted.span);
-        span.first.zip(span.last.and_then(RawTime::get))
+    /// The first and last times of the frames only counted so far.
+    pub fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
+        let (first, last) = self.counted.span?;
+        let time = |(iface, ts)| self.decoder.raw_time(iface, ts).and_then(RawTime::get);
+        time(first).zip(time(last))
     }
 
     /// EtherCAT frames [`PcapReader::advance`] only counted (they carried
@@ -537,15 +540,16 @@ impl<R: Read> PcapReader<R> {
                     return;
                 };
                 let units = u64::from(field(12)) << 32 | u64::from(field(16));
-                let Some(hot) = self.decoder.quick(
-                    field(8) as usize,
-                    Ts::Units(units),
-                    packet,
-                    field(24),
-                    interest,
-                ) else {
+                let iface = field(8) as usize;
+                let Some(hot) =
+                    self.decoder
+                        .quick(iface, Ts::Units(units), packet, field(24), interest)
+                else {
                     return;
                 };
+                if let Hot::Plain(_) = hot {
+                    self.counted.saw(iface, Ts::Units(units));
+                }
                 reader.consume_noshift(len);
                 if !self.counted.add(hot) {
                     return;
@@ -574,6 +578,9 @@ impl<R: Read> PcapReader<R> {
                 let Some(hot) = self.decoder.quick(0, ts, b.data, b.origlen, interest) else {
                     return;
                 };
+                if let Hot::Plain(_) = hot {
+                    self.counted.saw(0, ts);
+                }
                 reader.consume_noshift(len);
                 if !self.counted.add(hot) {
                     return;
