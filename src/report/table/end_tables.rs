@@ -199,7 +199,7 @@ fn write_health<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result
     )
 }
 
-/// The CiA 402 drives' drives (none: no section): state at the end,
+/// The CiA 402 drives (none: no section): state at the end,
 /// faults, where the mapping came from, and the summary's sentence.
 /// Drives are few: one comfy table.
 fn write_drives<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
