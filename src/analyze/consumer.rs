@@ -372,6 +372,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         self.counts.dropped = self.counts.dropped.saturating_add(n);
     }
 
+    fn annotated(&mut self) {
+        self.counts.annotated += 1;
+    }
+
     fn malformed(&mut self, idx: u64, reason: Reason) {
         self.counts.malformed += 1;
         let line = self.line_no(idx);

@@ -67,6 +67,17 @@ impl LineParser for AnyParser {
         }
     }
 
+    fn take_annotated(&mut self) -> bool {
+        match self {
+            AnyParser::CandumpLog(p) => p.take_annotated(),
+            AnyParser::CandumpScreen(p) => p.take_annotated(),
+            AnyParser::Asc(p) => p.take_annotated(),
+            AnyParser::Trc(p) => p.take_annotated(),
+            AnyParser::Busmaster(p) => p.take_annotated(),
+            AnyParser::Binary(p) => p.take_annotated(),
+        }
+    }
+
     fn identified(&self) -> bool {
         match self {
             AnyParser::CandumpLog(p) => p.identified(),
@@ -218,6 +229,10 @@ impl<R: Read> FrameSource for AnyReader<R> {
 
     fn take_warning(&mut self) -> Option<Reason> {
         each_reader!(self, r => FrameSource::take_warning(&mut **r))
+    }
+
+    fn take_annotated(&mut self) -> bool {
+        each_reader!(self, r => FrameSource::take_annotated(&mut **r))
     }
 
     fn take_ethercat(&mut self) -> Option<(Box<EthercatPacket>, &[u8])> {

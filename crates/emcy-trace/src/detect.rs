@@ -198,6 +198,18 @@ impl Detector {
         self.parsers.iter_mut().find_map(|p| p.take_warning())
     }
 
+    /// After a frame: whether a note followed it on its line (see
+    /// [`LineParser::take_annotated`]). Cleared by the call.
+    pub fn take_annotated(&mut self) -> bool {
+        // Every parser clears its own when it parses a line, so only the
+        // one that read the frame can answer yes.
+        let mut any = false;
+        for p in &mut self.parsers {
+            any |= p.take_annotated();
+        }
+        any
+    }
+
     /// See [`LineParser::run`]; only once the format is known (nothing
     /// read before), and only for the detected format.
     #[inline]
