@@ -9,7 +9,7 @@ use crate::ethercat::{EthercatCounts, EthercatPacket};
 use crate::format::blf::BlfReader;
 use crate::format::mf4::Mf4Reader;
 use crate::format::pcap::PcapReader;
-use crate::format::{asc, busmaster, candump_log, candump_screen, trc};
+use crate::format::{asc, busmaster, candump_log, candump_screen, ixxat, trc};
 use crate::text::TextReader;
 use crate::{Folds, Format, FrameSource, Interest, LineParser, Next, Parsed, Reason, Run, Scan};
 
@@ -28,6 +28,8 @@ pub enum AnyParser {
     Trc(trc::TrcParser),
     /// A BUSMASTER log parser.
     Busmaster(busmaster::BusmasterParser),
+    /// An IXXAT MiniMon V3 ASCII trace parser.
+    Ixxat(ixxat::IxxatParser),
     /// The parser of a binary format, which reads no lines.
     Binary(BinaryParser),
 }
@@ -40,6 +42,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.format(),
             AnyParser::Trc(p) => p.format(),
             AnyParser::Busmaster(p) => p.format(),
+            AnyParser::Ixxat(p) => p.format(),
             AnyParser::Binary(p) => p.format(),
         }
     }
@@ -52,6 +55,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.parse(line, interest),
             AnyParser::Trc(p) => p.parse(line, interest),
             AnyParser::Busmaster(p) => p.parse(line, interest),
+            AnyParser::Ixxat(p) => p.parse(line, interest),
             AnyParser::Binary(p) => p.parse(line, interest),
         }
     }
@@ -63,6 +67,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.take_warning(),
             AnyParser::Trc(p) => p.take_warning(),
             AnyParser::Busmaster(p) => p.take_warning(),
+            AnyParser::Ixxat(p) => p.take_warning(),
             AnyParser::Binary(p) => p.take_warning(),
         }
     }
@@ -74,6 +79,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.take_annotated(),
             AnyParser::Trc(p) => p.take_annotated(),
             AnyParser::Busmaster(p) => p.take_annotated(),
+            AnyParser::Ixxat(p) => p.take_annotated(),
             AnyParser::Binary(p) => p.take_annotated(),
         }
     }
@@ -85,6 +91,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.identified(),
             AnyParser::Trc(p) => p.identified(),
             AnyParser::Busmaster(p) => p.identified(),
+            AnyParser::Ixxat(p) => p.identified(),
             AnyParser::Binary(p) => p.identified(),
         }
     }
@@ -96,6 +103,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.context(),
             AnyParser::Trc(p) => p.context(),
             AnyParser::Busmaster(p) => p.context(),
+            AnyParser::Ixxat(p) => p.context(),
             AnyParser::Binary(p) => p.context(),
         }
     }
@@ -114,6 +122,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.run(bytes, max_line, interest, folds),
             AnyParser::Trc(p) => p.run(bytes, max_line, interest, folds),
             AnyParser::Busmaster(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::Ixxat(p) => p.run(bytes, max_line, interest, folds),
             AnyParser::Binary(p) => p.run(bytes, max_line, interest, folds),
         }
     }
@@ -125,6 +134,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.scan(line, interest),
             AnyParser::Trc(p) => p.scan(line, interest),
             AnyParser::Busmaster(p) => p.scan(line, interest),
+            AnyParser::Ixxat(p) => p.scan(line, interest),
             AnyParser::Binary(p) => p.scan(line, interest),
         }
     }
@@ -176,7 +186,8 @@ impl<R: Read> AnyReader<R> {
             | Format::CandumpScreen
             | Format::Asc
             | Format::Trc
-            | Format::Busmaster => {
+            | Format::Busmaster
+            | Format::Ixxat => {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidInput,
                     format!("{format} is a text format, read line by line"),

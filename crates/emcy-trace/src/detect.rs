@@ -336,7 +336,7 @@ impl Detector {
             Parsed::Skipped
         } else {
             Parsed::Malformed(
-                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC, BUSMASTER)"
+                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC, BUSMASTER, IXXAT MiniMon)"
                     .into(),
             )
         }
