@@ -234,6 +234,15 @@ pub fn is_candump_non_frame(line: &[u8]) -> bool {
         || is_elision(t)
 }
 
+/// Whether text after a complete frame (blanks already skipped) starts a
+/// note: `// boot`, `# config`, `< response`, any sign or non-ASCII
+/// character. A letter or digit there is more likely damage (two lines run
+/// together, a split data field) than a note, so it stays an error.
+pub fn starts_note(rest: &[u8]) -> bool {
+    rest.first()
+        .is_some_and(|b| !b.is_ascii_alphanumeric() && !b.is_ascii_control() && *b != b' ')
+}
+
 /// `...` or `…` alone on a line (blanks aside): lines left out of a paste.
 fn is_elision(t: &[u8]) -> bool {
     matches!(trim_end(t), b"..." | b"\xE2\x80\xA6")
@@ -310,6 +319,14 @@ fn parse_line_full<'a>(
     {
         return Err(format!(
             "'{}' after the frame looks like more data: ID#DATA is one word, without blanks",
+            crate::show_token(first_word)
+        )
+        .into());
+    }
+    if annotated && !starts_note(note) {
+        return Err(format!(
+            "unexpected '{}' after the frame (only T or R may follow it, or a note \
+             starting with a sign such as //, # or <)",
             crate::show_token(first_word)
         )
         .into());
@@ -977,6 +994,10 @@ mod tests {
             malformed("(1.0) can0 081#00 11").contains("'11' after the frame looks like more data")
         );
         assert!(malformed("(1.0) can0 081#00 T 2F").contains("looks like more data"));
+        assert_eq!(
+            malformed("(1.0) can0 081#00 boot"),
+            "unexpected 'boot' after the frame (only T or R may follow it, or a note starting with a sign such as //, # or <)"
+        );
         assert!(malformed("(x.0) can0 081#00").contains("decimal"));
         assert!(malformed("(99999999999999999999.0) can0 081#00").contains("overflow"));
         let long_id = format!("(1.0) can0 {}#00", "1".repeat(10_000));
@@ -990,8 +1011,8 @@ mod tests {
         fn a_note_after_a_frame_changes_nothing_of_it(
             line in "\\([0-9]{1,10}\\.[0-9]{1,9}\\) [a-z0-9]{1,5} ([0-7][0-9A-F]{2}|[01][0-9A-F]{7})#(R[0-8]?|([0-9A-F]{2}){0,8}|#[0-9A-F]([0-9A-F]{2}){0,12})( T| R)?",
             gap in "[ \t]{1,3}",
-            // A lone T or R would be the direction flag.
-            note in "[^0-9A-FRT \t\r\n][^\r\n]{0,30}",
+            // A note starts with a sign (a letter or digit is damage).
+            note in "[<>/#=!*~(\\[-][^\r\n]{0,30}",
         ) {
             let all = Interest::all();
             let mut p = CandumpLogParser::new();

@@ -32,7 +32,9 @@
 //! CAN XL frames (`[nnnn]` lengths) are reported as malformed: a [`Frame`]
 //! cannot hold them and dropping them silently would hide data.
 
-use crate::format::candump_log::{ERROR_FLAG, is_candump_command, is_candump_non_frame};
+use crate::format::candump_log::{
+    ERROR_FLAG, is_candump_command, is_candump_non_frame, starts_note,
+};
 use crate::hex;
 use crate::time::{MAX_FRACTION_DIGITS, unix_midnight};
 use crate::{
@@ -342,7 +344,17 @@ fn parse_body<'a, const LENIENT: bool>(
         if let Some(quote @ (b'\'' | b'`')) = cur.peek() {
             if LENIENT {
                 body.ascii = Some(ascii_column(cur, quote, body.count)?);
-                body.annotated = cur.token().is_some();
+                if let Some(extra) = cur.token() {
+                    if !starts_note(extra) {
+                        return Err(format!(
+                            "unexpected '{}' after the ASCII column (a note after a frame \
+                             starts with a sign such as //, # or <)",
+                            show(extra)
+                        )
+                        .into());
+                    }
+                    body.annotated = true;
+                }
                 break;
             }
             // The ASCII column may hold blanks and quotes: it runs to the
@@ -362,7 +374,7 @@ fn parse_body<'a, const LENIENT: bool>(
         let Some(tok) = cur.token() else { break };
         if tok == b"ERRORFRAME" {
             if let Some(extra) = cur.token() {
-                if !LENIENT {
+                if !LENIENT || !starts_note(extra) {
                     return Err(format!("unexpected '{}' after ERRORFRAME", show(extra)).into());
                 }
                 body.annotated = true;
@@ -371,7 +383,7 @@ fn parse_body<'a, const LENIENT: bool>(
             break;
         }
         if LENIENT && !is_data_byte(tok) {
-            if body.count == expected {
+            if body.count == expected && starts_note(tok) {
                 // The frame is complete: the rest of the line is a note.
                 body.annotated = true;
                 break;
@@ -518,7 +530,7 @@ fn parse_line<'a, const LENIENT: bool>(
             return Err("expected 'remote request' and nothing after it".into());
         }
         if let Some(note) = cur.token() {
-            if !LENIENT || is_data_byte(note) {
+            if !LENIENT || !starts_note(note) {
                 return Err("expected 'remote request' and nothing after it".into());
             }
             annotated = true;
@@ -784,10 +796,13 @@ mod tests {
             malformed("  vcan0  00000004   [2]  00 00   ERRORFRAME")
                 .contains("without the error flag")
         );
+        assert!(
+            malformed("  vcan0  20000004   [2]  00 00   ERRORFRAME x").contains("after ERRORFRAME")
+        );
         assert_eq!(
-            frame("  vcan0  20000004   [2]  00 00   ERRORFRAME x").kind,
+            frame("  vcan0  20000004   [2]  00 00   ERRORFRAME  // bus off?").kind,
             FrameKind::Error,
-            "text after ERRORFRAME is a note"
+            "a note after ERRORFRAME"
         );
         assert!(malformed("  vcan0  20000004  [08]  00 00 00 00 00 00 00 00").contains("CAN FD"));
     }
@@ -976,7 +991,7 @@ mod tests {
         );
         assert_eq!(read("  can0  701   [1]  00   # boot"), ok(0x701, &[0]));
         assert_eq!(
-            read("  can0  123   [2]  31 32   '12' 33"),
+            read("  can0  123   [2]  31 32   '12' <- 33"),
             ok(0x123, &[0x31, 0x32])
         );
         assert_eq!(
@@ -995,8 +1010,13 @@ mod tests {
             malformed("  can0  123   [2]  31 32 33 // x"),
             "3 data bytes where the length field says 2, then '//'"
         );
-        // A data byte right after `remote request` is no note.
+        // A letter or digit after the frame is damage, not a note.
         assert!(malformed("  can0  081   [8]  remote request 11").contains("remote request"));
+        assert_eq!(
+            malformed("  can0  123   [2]  31 32   '12' 33"),
+            "unexpected '33' after the ASCII column (a note after a frame starts with a sign such as //, # or <)"
+        );
+        assert!(malformed("  can0  123   [2]  31 32  boot").contains("'boot' is not"));
     }
 
     #[test]
