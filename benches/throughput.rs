@@ -196,6 +196,7 @@ fn main() {
     let gz = dir.join(format!("candump-{gz_mb}MB.v2.log.gz"));
     let pcapng = dir.join(format!("pcapng-{mb}MB.v2.pcapng"));
     let busmaster = dir.join(format!("busmaster-{mb}MB.v2.log"));
+    let ixxat = dir.join(format!("ixxat-{mb}MB.v2.trc"));
     let mf4 = dir.join(format!("canedge-{mb}MB.v2.mf4"));
     let mf4_dz = dir.join(format!("dz-{mb}MB.v2.mf4"));
     let ethercat = dir.join(format!("ethercat-{mb}MB.pcapng"));
@@ -216,6 +217,7 @@ fn main() {
         ),
         ("pcapng, LINUX_SLL", &pcapng, TraceFormat::Pcapng, 2),
         ("BUSMASTER HEX", &busmaster, TraceFormat::Busmaster, 2),
+        ("IXXAT MiniMon", &ixxat, TraceFormat::Ixxat, 2),
         ("MF4, CANedge unfinalized", &mf4, TraceFormat::Mf4, 2),
     ];
     for (label, file, format, emcy) in files {

@@ -48,6 +48,9 @@ pub(super) trait LineSink {
     /// Frames a skipped line says were lost before they were logged
     /// (candump `DROPCOUNT`).
     fn dropped(&mut self, n: u64);
+    /// The frame just handed on had a note after it on its line (see
+    /// [`LineParser::take_annotated`](crate::trace::LineParser::take_annotated)).
+    fn annotated(&mut self);
     fn malformed(&mut self, idx: u64, reason: Reason);
     /// A diagnostic about the frame on the same line, which the reader made
     /// good (a contradiction it resolved); the frame follows.
@@ -220,6 +223,9 @@ fn classify_line(
                     Parsed::Frame(frame) => {
                         if let Some(warning) = detector.take_warning() {
                             sink.warning(idx, warning);
+                        }
+                        if detector.take_annotated() {
+                            sink.annotated();
                         }
                         let foreign = detector.take_foreign().zip(detector.format());
                         deliver(sink, idx, &frame, foreign)?;

@@ -136,9 +136,9 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         if format.is_none() && self.counts.malformed > 0 && error.is_none() {
             error = Some(
                 "cannot detect the trace format: no line is a candump log, candump screen, \
-             Vector ASC, PEAK TRC or BUSMASTER frame and the input is not BLF, pcap, pcapng \
-             or MF4 (force one with --input-format \
-             candump|candump-screen|asc|trc|busmaster|blf|pcap|mf4)"
+             Vector ASC, PEAK TRC, BUSMASTER or IXXAT MiniMon frame and the input is not BLF, \
+             pcap, pcapng or MF4 (force one with --input-format \
+             candump|candump-screen|asc|trc|busmaster|ixxat|blf|pcap|mf4)"
                     .to_string(),
             );
         } else {
@@ -399,6 +399,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn dropped(&mut self, n: u64) {
         self.counts.dropped = self.counts.dropped.saturating_add(n);
+    }
+
+    fn annotated(&mut self) {
+        self.counts.annotated += 1;
     }
 
     fn malformed(&mut self, idx: u64, reason: Reason) {

@@ -332,6 +332,9 @@ pub struct Counts {
     /// Frames lost before they were logged, as the trace says (candump
     /// `DROPCOUNT` lines): not lines, so outside the line sum.
     pub dropped: u64,
+    /// Frame lines with a note after the complete frame (a pasted trace's
+    /// `< response`, `// boot`): frames, so counted in `frames` too.
+    pub annotated: u64,
 }
 
 /// Everything known about one input after reading it.

@@ -267,6 +267,9 @@ fn read_records<S: FrameSource, E: Write>(
                 if let Some(warning) = source.take_warning() {
                     consumer.warning(0, warning);
                 }
+                if source.take_annotated() {
+                    consumer.annotated();
+                }
             }
             Some(why) => {
                 // An EtherCAT frame's CoE messages, all on this line, even

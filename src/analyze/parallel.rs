@@ -83,6 +83,8 @@ struct BlockResult {
     skipped: u64,
     /// Frames DROPCOUNT lines said were lost.
     dropped: u64,
+    /// Frame lines with a note after the frame.
+    annotated: u64,
     /// Malformed lines beyond the diagnostics limit: counted, not reported.
     unreported: u64,
     /// Warnings beyond the diagnostics limit: only counted as not shown.
@@ -226,6 +228,10 @@ impl LineSink for Recorder {
         self.result.dropped = self.result.dropped.saturating_add(n);
     }
 
+    fn annotated(&mut self) {
+        self.result.annotated += 1;
+    }
+
     fn malformed(&mut self, idx: u64, reason: Reason) {
         // The consumer shows at most `limit` per input, in line order, so no
         // block needs to keep more than that.
@@ -303,6 +309,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.frame_times(r.frame_times.0, r.frame_times.1);
         self.counts.skipped += r.skipped;
         self.counts.dropped = self.counts.dropped.saturating_add(r.dropped);
+        self.counts.annotated += r.annotated;
         self.counts.malformed += r.unreported;
         self.diags.suppressed += r.unreported + r.unreported_warnings;
         for record in r.records.drain(..) {
@@ -439,6 +446,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             frame_times: (None, None),
                             skipped: 0,
                             dropped: 0,
+                            annotated: 0,
                             unreported: 0,
                             unreported_warnings: 0,
                             records: spare.records,

@@ -63,6 +63,13 @@ pub fn busmaster(data: &[u8]) {
     reader(Some(Format::Busmaster), data);
 }
 
+/// The `ixxat` target: the reader's own checks (well-formed frames, the
+/// title identifies the format), then [`reader`] with the format forced.
+pub fn ixxat(data: &[u8]) {
+    crate::trace::format::ixxat::fuzz_ixxat(data);
+    reader(Some(Format::Ixxat), data);
+}
+
 /// The `blf` target: the reader's own checks (well-formed frames, no endless
 /// loop, bounded buffers), then [`reader`] with the format forced.
 pub fn blf(data: &[u8]) {

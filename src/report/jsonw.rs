@@ -855,6 +855,7 @@ impl JsonWriter {
             mailbox_retries,
             mailbox_empty_polls,
             dropped,
+            annotated,
         } = input.counts;
         o.u64("lines", lines);
         o.u64("frames", frames);
@@ -875,6 +876,10 @@ impl JsonWriter {
         // Only when frames were lost: other inputs' objects stay as they were.
         if dropped > 0 {
             o.u64("dropped", dropped);
+        }
+        // Only for pastes with notes after frames, likewise.
+        if annotated > 0 {
+            o.u64("annotated", annotated);
         }
         self.time_pair(&mut o, ["first_time", "first_time_text"], input.first_time);
         self.time_pair(&mut o, ["last_time", "last_time_text"], input.last_time);

@@ -14,12 +14,13 @@ use emcy_decode::fuzzing;
 type Body = fn(&[u8]);
 
 /// The fuzz targets (`fuzz/fuzz_targets/`) and the bodies they run.
-const TARGETS: [(&str, Body); 12] = [
+const TARGETS: [(&str, Body); 13] = [
     ("candump_log", fuzzing::candump_log),
     ("candump_screen", fuzzing::candump_screen),
     ("asc", fuzzing::asc),
     ("trc", fuzzing::trc),
     ("busmaster", fuzzing::busmaster),
+    ("ixxat", fuzzing::ixxat),
     ("blf", fuzzing::blf),
     ("pcap", fuzzing::pcap),
     ("ethercat", fuzzing::ethercat),

@@ -54,6 +54,11 @@ fn check_lines(
     Ok(())
 }
 
+/// A note someone pasted after a frame: any printable text that does not
+/// start like more of the frame (a data byte, an ASCII column, candump's
+/// `T`/`R` direction flag).
+const NOTE: &str = "[<>/#=!*~(\\[-][ -~]{0,30}";
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(1500))]
 
@@ -65,6 +70,30 @@ proptest! {
     #[test]
     fn candump_screen_roundtrip(f in frame(), style in screen_style()) {
         check(&render_screen(&f, &style), &f, style.time)?;
+    }
+
+    /// A pasted line: indented, with a note after the complete frame
+    /// (`< response`, `// boot`), reads as the same frame.
+    #[test]
+    fn candump_log_with_a_note_roundtrip(
+        f in frame(),
+        style in log_style(),
+        indent in "[ \t]{0,4}",
+        gap in "[ \t]{1,3}",
+        note in NOTE,
+    ) {
+        check(&format!("{indent}{}{gap}{note}", render_log(&f, &style)), &f, true)?;
+    }
+
+    #[test]
+    fn candump_screen_with_a_note_roundtrip(
+        f in frame(),
+        style in screen_style(),
+        indent in "[ \t]{0,4}",
+        gap in "[ \t]{1,3}",
+        note in NOTE,
+    ) {
+        check(&format!("{indent}{}{gap}{note}", render_screen(&f, &style)), &f, style.time)?;
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::ethercat::{EthercatCounts, EthercatPacket};
 use crate::format::blf::BlfReader;
 use crate::format::mf4::Mf4Reader;
 use crate::format::pcap::PcapReader;
-use crate::format::{asc, busmaster, candump_log, candump_screen, trc};
+use crate::format::{asc, busmaster, candump_log, candump_screen, ixxat, trc};
 use crate::text::TextReader;
 use crate::{Folds, Format, FrameSource, Interest, LineParser, Next, Parsed, Reason, Run, Scan};
 
@@ -29,6 +29,8 @@ pub enum AnyParser {
     Trc(trc::TrcParser),
     /// A BUSMASTER log parser.
     Busmaster(busmaster::BusmasterParser),
+    /// An IXXAT MiniMon V3 ASCII trace parser.
+    Ixxat(ixxat::IxxatParser),
     /// The parser of a binary format, which reads no lines.
     Binary(BinaryParser),
 }
@@ -41,6 +43,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.format(),
             AnyParser::Trc(p) => p.format(),
             AnyParser::Busmaster(p) => p.format(),
+            AnyParser::Ixxat(p) => p.format(),
             AnyParser::Binary(p) => p.format(),
         }
     }
@@ -53,6 +56,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.parse(line, interest),
             AnyParser::Trc(p) => p.parse(line, interest),
             AnyParser::Busmaster(p) => p.parse(line, interest),
+            AnyParser::Ixxat(p) => p.parse(line, interest),
             AnyParser::Binary(p) => p.parse(line, interest),
         }
     }
@@ -64,7 +68,20 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.take_warning(),
             AnyParser::Trc(p) => p.take_warning(),
             AnyParser::Busmaster(p) => p.take_warning(),
+            AnyParser::Ixxat(p) => p.take_warning(),
             AnyParser::Binary(p) => p.take_warning(),
+        }
+    }
+
+    fn take_annotated(&mut self) -> bool {
+        match self {
+            AnyParser::CandumpLog(p) => p.take_annotated(),
+            AnyParser::CandumpScreen(p) => p.take_annotated(),
+            AnyParser::Asc(p) => p.take_annotated(),
+            AnyParser::Trc(p) => p.take_annotated(),
+            AnyParser::Busmaster(p) => p.take_annotated(),
+            AnyParser::Ixxat(p) => p.take_annotated(),
+            AnyParser::Binary(p) => p.take_annotated(),
         }
     }
 
@@ -75,6 +92,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.identified(),
             AnyParser::Trc(p) => p.identified(),
             AnyParser::Busmaster(p) => p.identified(),
+            AnyParser::Ixxat(p) => p.identified(),
             AnyParser::Binary(p) => p.identified(),
         }
     }
@@ -86,6 +104,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.clock(),
             AnyParser::Trc(p) => p.clock(),
             AnyParser::Busmaster(p) => p.clock(),
+            AnyParser::Ixxat(p) => p.clock(),
             AnyParser::Binary(p) => p.clock(),
         }
     }
@@ -97,6 +116,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.context(),
             AnyParser::Trc(p) => p.context(),
             AnyParser::Busmaster(p) => p.context(),
+            AnyParser::Ixxat(p) => p.context(),
             AnyParser::Binary(p) => p.context(),
         }
     }
@@ -115,6 +135,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.run(bytes, max_line, interest, folds),
             AnyParser::Trc(p) => p.run(bytes, max_line, interest, folds),
             AnyParser::Busmaster(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::Ixxat(p) => p.run(bytes, max_line, interest, folds),
             AnyParser::Binary(p) => p.run(bytes, max_line, interest, folds),
         }
     }
@@ -126,6 +147,7 @@ impl LineParser for AnyParser {
             AnyParser::Asc(p) => p.scan(line, interest),
             AnyParser::Trc(p) => p.scan(line, interest),
             AnyParser::Busmaster(p) => p.scan(line, interest),
+            AnyParser::Ixxat(p) => p.scan(line, interest),
             AnyParser::Binary(p) => p.scan(line, interest),
         }
     }
@@ -177,7 +199,8 @@ impl<R: Read> AnyReader<R> {
             | Format::CandumpScreen
             | Format::Asc
             | Format::Trc
-            | Format::Busmaster => {
+            | Format::Busmaster
+            | Format::Ixxat => {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidInput,
                     format!("{format} is a text format, read line by line"),
@@ -230,6 +253,10 @@ impl<R: Read> FrameSource for AnyReader<R> {
 
     fn take_warning(&mut self) -> Option<Reason> {
         each_reader!(self, r => FrameSource::take_warning(&mut **r))
+    }
+
+    fn take_annotated(&mut self) -> bool {
+        each_reader!(self, r => FrameSource::take_annotated(&mut **r))
     }
 
     fn take_ethercat(&mut self) -> Option<(Box<EthercatPacket>, &[u8])> {

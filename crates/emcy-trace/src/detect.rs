@@ -108,6 +108,8 @@ pub struct Detector {
     forced: bool,
     /// The format of the last frame when it was not the primary one.
     foreign: Option<Format>,
+    /// Index of the parser that read the last frame `parse` returned.
+    reader: usize,
     /// Candump times are `-td` deltas, summed here (see [`super::deltas`]).
     deltas: Option<DeltaClock>,
 }
@@ -120,6 +122,7 @@ impl Detector {
             primary: None,
             forced: false,
             foreign: None,
+            reader: 0,
             deltas: None,
         }
     }
@@ -131,6 +134,7 @@ impl Detector {
             primary: Some(0),
             forced: true,
             foreign: None,
+            reader: 0,
             deltas: None,
         }
     }
@@ -142,6 +146,7 @@ impl Detector {
             primary: self.primary,
             forced: self.forced,
             foreign: None,
+            reader: 0,
             deltas: self.deltas,
         }
     }
@@ -196,6 +201,17 @@ impl Detector {
         // Only the parser that read the frame has one: every parser clears
         // its own when it parses a line.
         self.parsers.iter_mut().find_map(|p| p.take_warning())
+    }
+
+    /// After a frame: whether a note followed it on its line (see
+    /// [`LineParser::take_annotated`]). Cleared by the call.
+    pub fn take_annotated(&mut self) -> bool {
+        // Only the parser that read the frame is asked: a flag another
+        // parser set on an earlier line is cleared by its next `parse`,
+        // before it could read a frame again.
+        self.parsers
+            .get_mut(self.reader)
+            .is_some_and(|p| p.take_annotated())
     }
 
     /// See [`LineParser::run`]; only once the format is known (nothing
@@ -332,7 +348,10 @@ impl Detector {
             .map(|p| p.parse(line, interest))
         {
             Some(Parsed::Malformed(reason)) => reason,
-            Some(other) => return other,
+            Some(other) => {
+                self.reader = primary;
+                return other;
+            }
             None => return Parsed::Malformed("no parser".into()),
         };
         if !self.forced {
@@ -342,6 +361,7 @@ impl Detector {
                 }
                 if let Parsed::Frame(frame) = parser.parse(line, interest) {
                     self.foreign = Some(parser.format());
+                    self.reader = i;
                     return Parsed::Frame(frame);
                 }
             }
@@ -355,6 +375,7 @@ impl Detector {
             match parser.parse(line, interest) {
                 Parsed::Frame(frame) => {
                     self.primary = Some(i);
+                    self.reader = i;
                     return Parsed::Frame(frame);
                 }
                 Parsed::Skipped => skipped = true,
@@ -368,7 +389,7 @@ impl Detector {
             Parsed::Skipped
         } else {
             Parsed::Malformed(
-                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC, BUSMASTER)"
+                "not a line of any format read (candump log, candump screen, Vector ASC, PEAK TRC, BUSMASTER, IXXAT MiniMon)"
                     .into(),
             )
         }
@@ -414,6 +435,25 @@ mod tests {
                 (kind, detector.take_foreign())
             })
             .collect()
+    }
+
+    #[test]
+    fn a_note_after_a_frame_is_told_once_by_the_parser_that_read_it() {
+        let mut d = Detector::auto();
+        let all = Interest::all();
+        let mut read = |line: &str| {
+            let frame = matches!(d.parse(line.as_bytes(), &all), Parsed::Frame(_));
+            (frame, d.take_annotated(), d.take_annotated())
+        };
+        // Undecided, then as the detected format, then as a foreign one.
+        assert_eq!(read("  can0  701   [1]  00   // boot"), (true, true, false));
+        assert_eq!(read("  can0  701   [1]  05"), (true, false, false));
+        assert_eq!(read("(1.0) can0 701#05 < response"), (true, true, false));
+        assert_eq!(
+            read("  can0  701   [1]  05  < heartbeat"),
+            (true, true, false)
+        );
+        assert_eq!(d.format(), Some(Format::CandumpScreen));
     }
 
     #[test]

@@ -100,4 +100,8 @@ impl<R: Read> FrameSource for TextReader<R> {
     fn take_warning(&mut self) -> Option<Reason> {
         self.detector.take_warning()
     }
+
+    fn take_annotated(&mut self) -> bool {
+        self.detector.take_annotated()
+    }
 }

@@ -141,6 +141,14 @@ pub trait LineParser: Send {
         None
     }
 
+    /// After `parse` returned a frame: whether text followed the complete
+    /// frame on its line (a note someone pasted, `< response`, `// boot`),
+    /// which the frame's reading ignored. Cleared by the call and by the
+    /// next `parse`. Counted, never an error.
+    fn take_annotated(&mut self) -> bool {
+        false
+    }
+
     /// Whether a line read so far was a header only this format writes
     /// (an ASC `base` line): the format is known without a frame, and lines
     /// it cannot read are its malformed lines, not an unknown format.
@@ -219,6 +227,13 @@ pub trait FrameSource {
     /// record, which stays a frame. Cleared by the call and the next item.
     fn take_warning(&mut self) -> Option<Reason> {
         None
+    }
+
+    /// After a frame record: whether a note followed the frame on its line
+    /// (see [`LineParser::take_annotated`]). Cleared by the call and the
+    /// next item.
+    fn take_annotated(&mut self) -> bool {
+        false
     }
 
     /// After a skipped or malformed record that was an EtherCAT frame: its

@@ -34,7 +34,7 @@ Examples:
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
 candump screen output (with or without -t/-x/-a), Vector ASC, PEAK TRC
 (1.0-2.1), BUSMASTER log (HEX or DEC, system/absolute/relative times),
-Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2), ASAM MDF 4
+IXXAT MiniMon V3 ASCII trace, Vector BLF, pcap and pcapng (SocketCAN, LINUX_SLL, LINUX_SLL2), ASAM MDF 4
 bus logging (MF4: CANedge, Vector, python-can).
 
 Exit status:
@@ -314,6 +314,8 @@ pub enum InputFormat {
     Trc,
     /// BUSMASTER log: ***BUSMASTER Ver ...***, 14:19:11:4184 Tx 1 0x099 s 8 ...
     Busmaster,
+    /// IXXAT MiniMon V3 ASCII trace: "00:02:20.66";"83";"Std";"";"00 01 "
+    Ixxat,
     /// Vector BLF (binary)
     Blf,
     /// pcap or pcapng capture (binary; SocketCAN, LINUX_SLL, LINUX_SLL2)
@@ -331,6 +333,7 @@ impl From<InputFormat> for Format {
             InputFormat::Asc => Format::Asc,
             InputFormat::Trc => Format::Trc,
             InputFormat::Busmaster => Format::Busmaster,
+            InputFormat::Ixxat => Format::Ixxat,
             InputFormat::Blf => Format::Blf,
             InputFormat::Pcap => Format::Pcap,
             InputFormat::Mf4 => Format::Mf4,

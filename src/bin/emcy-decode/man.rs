@@ -195,6 +195,14 @@ BUSMASTER log (versions 1.6 to 2.4): 14:19:11:4184 Tx 1 0x099 s 8 ...; \
 ***HEX***/***DEC*** (else decided by the first data byte), system, \
 absolute and relative time modes, appended sessions, J1939 sessions.
 
+IXXAT MiniMon V3 ASCII trace: \"00:02:20.66\";\"83\";\"Std\";\"\";\"00 01 \"; Std and \
+Ext ids, Rtr remote requests; times are seconds since the measurement \
+start; the title and header lines skipped.
+
+Pasted candump text: indented lines, the candump command line, ... where \
+lines were cut, blank lines and #, // notes are skipped; a note after a \
+complete frame (< response) is counted as annotated, never an error.
+
 Vector BLF (binary, LOGG): plain or zlib containers, object headers v1 and \
 v2, CAN and CAN FD messages, error frames.
 

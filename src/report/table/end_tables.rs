@@ -51,7 +51,7 @@ pub(super) fn write_summary<W: Write>(page: &mut Page<W>, input: &InputReport) -
 
 /// The end of the run: one row per input with its counts.
 pub(super) fn write_inputs<W: Write>(page: &mut Page<W>, inputs: &[InputReport]) -> io::Result<()> {
-    let rows: Vec<[String; 8]> = inputs
+    let rows: Vec<[String; 9]> = inputs
         .iter()
         .map(|i| {
             let c = &i.counts;
@@ -64,16 +64,21 @@ pub(super) fn write_inputs<W: Write>(page: &mut Page<W>, inputs: &[InputReport])
                 c.boot.to_string(),
                 c.skipped.to_string(),
                 c.malformed.to_string(),
+                c.annotated.to_string(),
             ]
         })
         .collect();
+    // Frames with notes after them come only from pastes: the column is
+    // there only when some input has one.
+    let mut shown = [true; 9];
+    shown[8] = inputs.iter().any(|i| i.counts.annotated > 0);
     let mut widths = INPUTS_HEADER.map(str::len);
     for row in &rows {
         for (w, c) in widths.iter_mut().zip(row) {
             *w = (*w).max(display_width(c));
         }
     }
-    let shown = page.fit(&mut widths, &INPUTS_HEADER, &INPUTS_FIT);
+    let shown = page.fit_shown(&mut widths, &INPUTS_HEADER, &INPUTS_FIT, shown);
     writeln!(page.out, "{}", page.paint(BOLD, "Inputs"))?;
     write_comfy_table(
         &mut page.out,
@@ -295,6 +300,12 @@ fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Resu
         ),
     };
     // Lost frames may have been EMCYs: said where the counts are read.
+    // Notes pasted after frames were read past: said, so the count of
+    // frames is not a surprise.
+    let frames = match c.annotated {
+        0 => frames,
+        n => format!("{frames} ({n} annotated)"),
+    };
     let dropped = match c.dropped {
         0 => String::new(),
         1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),
@@ -543,7 +554,7 @@ const DRIVES_FIT: Fit = Fit {
     flex: &[(6, 60, 20), (0, CHANNEL_MAX, 7)],
 };
 
-const INPUTS_HEADER: [&str; 8] = [
+const INPUTS_HEADER: [&str; 9] = [
     "FILE",
     "FORMAT",
     "LINES",
@@ -552,12 +563,13 @@ const INPUTS_HEADER: [&str; 8] = [
     "BOOT",
     "SKIPPED",
     "MALFORMED",
+    "ANNOTATED",
 ];
 
-const INPUTS_RIGHT: [bool; 8] = [false, false, true, true, true, true, true, true];
+const INPUTS_RIGHT: [bool; 9] = [false, false, true, true, true, true, true, true, true];
 
 const INPUTS_FIT: Fit = Fit {
-    drop: &[5, 6, 2],
+    drop: &[8, 5, 6, 2],
     flex: &[(0, 60, 12)],
 };
 

@@ -57,7 +57,18 @@ impl<W: Write> Page<W> {
         header: &[&str; N],
         fit: &Fit,
     ) -> [bool; N] {
-        let mut shown = [true; N];
+        self.fit_shown(widths, header, fit, [true; N])
+    }
+
+    /// [`Page::fit`] of the columns `shown` already keeps (a column only
+    /// some inputs need is left out before fitting).
+    pub(super) fn fit_shown<const N: usize>(
+        &self,
+        widths: &mut [usize; N],
+        header: &[&str; N],
+        fit: &Fit,
+        mut shown: [bool; N],
+    ) -> [bool; N] {
         if let Some(width) = self.width {
             fit_columns(widths, &mut shown, header, fit, width);
         }

@@ -18,6 +18,8 @@ pub enum TraceFormat {
     Pcapng,
     /// BUSMASTER log as 2.0 writes it: HEX, system time, ids as `0x181`.
     Busmaster,
+    /// IXXAT MiniMon V3 ASCII trace: its header, then quoted `;` rows.
+    Ixxat,
     /// MDF 4 as a CANedge logger writes it: unfinalized, the DT block's
     /// length 24 and its records to the end; one unsorted group (1-byte
     /// record ids) of `CAN_DataFrame` records (u64 microseconds, u32 ID
@@ -123,6 +125,14 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
         written += header.len() as u64;
         lines += 8;
     }
+    if format == TraceFormat::Ixxat {
+        let header = b"ASCII Trace IXXAT MiniMon V3  Version: 1.0.0.1271\nDate: 14.11.2023\n\
+Start time: 22:13:20\nStop time: 23:59:59\nOverruns: 0\nBaudrate: 500 kbit/s\n\
+\"Time\";\"Identifier (hex)\";\"Format\";\"Flags\";\"Data (hex)\"\n";
+        out.write_all(header)?;
+        written += header.len() as u64;
+        lines += 7;
+    }
     if format == TraceFormat::Mf4 {
         let (header, _) = mf4_header(true, 1);
         out.write_all(&header)?;
@@ -214,6 +224,7 @@ internal events logged\n// version 9.0.0\nBegin Triggerblock Tue Nov 14 22:13:20
             TraceFormat::Asc => asc_line(&mut line, micros, id, &data[..len]),
             TraceFormat::Pcapng => pcapng_packet(&mut line, micros, id, &data[..len]),
             TraceFormat::Busmaster => busmaster_line(&mut line, micros, id, &data[..len]),
+            TraceFormat::Ixxat => ixxat_line(&mut line, micros, id, &data[..len]),
             TraceFormat::Mf4 => {
                 line.push(1);
                 mf4_record(&mut line, micros, id, &data[..len]);
@@ -272,6 +283,25 @@ fn asc_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
         push_hex(line, b);
     }
     let _ = writeln!(line, "  Length = 228000 BitCount = 118 ID = {id}");
+}
+
+/// `"00:00:01.25";"181";"Std";"";"11 22 33 44 55 66 77 88 "`: hundredths
+/// since the start, as MiniMon writes them.
+fn ixxat_line(line: &mut Vec<u8>, micros: u64, id: u32, data: &[u8]) {
+    let secs = micros / 1_000_000;
+    let _ = write!(
+        line,
+        "\"{:02}:{:02}:{:02}.{:02}\";\"{id:X}\";\"Std\";\"\";\"",
+        secs / 3600,
+        secs / 60 % 60,
+        secs % 60,
+        micros % 1_000_000 / 10_000
+    );
+    for &b in data {
+        push_hex(line, b);
+        line.push(b' ');
+    }
+    line.extend_from_slice(b"\"\n");
 }
 
 /// `22:13:20:1234 Rx 1 0x181 s 8 11 22 33 44 55 66 77 88 ` (time of day

@@ -11,6 +11,7 @@ pub mod blf;
 pub mod busmaster;
 pub mod candump_log;
 pub mod candump_screen;
+pub mod ixxat;
 pub mod mf4;
 pub mod pcap;
 pub mod trc;
@@ -32,6 +33,8 @@ pub enum Format {
     Trc,
     /// BUSMASTER log (`***BUSMASTER Ver 2.0.0***`, `14:19:11:4184 Tx 1 0x099 s 8 ...`).
     Busmaster,
+    /// IXXAT MiniMon V3 ASCII trace (`"00:02:20.66";"83";"Std";"";"00 01 "`).
+    Ixxat,
     /// Vector BLF, binary: read object by object, not line by line, and
     /// detected by its `LOGG` magic, so it is not in [`Format::ALL`].
     Blf,
@@ -48,12 +51,13 @@ pub enum Format {
 
 impl Format {
     /// The text formats, read line by line and detected from their lines.
-    pub const ALL: [Format; 5] = [
+    pub const ALL: [Format; 6] = [
         Format::CandumpLog,
         Format::CandumpScreen,
         Format::Asc,
         Format::Trc,
         Format::Busmaster,
+        Format::Ixxat,
     ];
 
     /// The name used on the command line and in the `format` JSON key.
@@ -64,6 +68,7 @@ impl Format {
             Format::Asc => "asc",
             Format::Trc => "trc",
             Format::Busmaster => "busmaster",
+            Format::Ixxat => "ixxat",
             Format::Blf => "blf",
             Format::Pcap => "pcap",
             Format::Pcapng => "pcapng",
@@ -91,6 +96,7 @@ impl Format {
             Format::Asc => AnyParser::Asc(asc::AscParser::new()),
             Format::Trc => AnyParser::Trc(trc::TrcParser::new()),
             Format::Busmaster => AnyParser::Busmaster(busmaster::BusmasterParser::new()),
+            Format::Ixxat => AnyParser::Ixxat(ixxat::IxxatParser::new()),
             Format::Blf | Format::Pcap | Format::Pcapng | Format::Mf4 => {
                 AnyParser::Binary(BinaryParser(self))
             }

@@ -27,6 +27,9 @@ pub struct CandumpLogParser {
     /// The layout of the last canonical line (a cache: results never
     /// depend on it, only speed).
     layout: Option<Layout>,
+    /// The last line read was a frame with a note after it (see
+    /// [`LineParser::take_annotated`]); no line depends on it.
+    annotated: bool,
 }
 
 impl CandumpLogParser {
@@ -157,11 +160,23 @@ impl LineParser for CandumpLogParser {
 
     #[inline]
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
-        match parse_line(line, interest) {
-            Ok(Some(frame)) => Parsed::Frame(frame),
+        self.annotated = false;
+        if let Some(frame) = canonical(line, interest) {
+            return Parsed::Frame(frame);
+        }
+        match parse_line_full(line, interest) {
+            Ok(Some((frame, annotated))) => {
+                self.annotated = annotated;
+                Parsed::Frame(frame)
+            }
             Ok(None) => Parsed::Skipped,
+            Err(_) if is_candump_command(line) => Parsed::Skipped,
             Err(reason) => Parsed::Malformed(reason),
         }
+    }
+
+    fn take_annotated(&mut self) -> bool {
+        std::mem::take(&mut self.annotated)
     }
 }
 
@@ -207,7 +222,8 @@ fn fold_line<'a>(
 }
 
 /// Lines every candump output may contain besides frames: blank lines,
-/// comments people add, and candump's own `DROPCOUNT:` notices.
+/// comments people add, candump's own `DROPCOUNT:` notices, and the `...`
+/// (or `…`) with which a pasted excerpt says lines were left out.
 pub fn is_candump_non_frame(line: &[u8]) -> bool {
     let t = trim_start(line);
     is_blank(t)
@@ -215,6 +231,36 @@ pub fn is_candump_non_frame(line: &[u8]) -> bool {
         || t.starts_with(b"//")
         || t.starts_with(b";")
         || t.starts_with(b"DROPCOUNT")
+        || is_elision(t)
+}
+
+/// Whether text after a complete frame (blanks already skipped) starts a
+/// note: `// boot`, `# config`, `< response`, any sign or non-ASCII
+/// character. A letter or digit there is more likely damage (two lines run
+/// together, a split data field) than a note, so it stays an error.
+pub fn starts_note(rest: &[u8]) -> bool {
+    rest.first()
+        .is_some_and(|b| !b.is_ascii_alphanumeric() && !b.is_ascii_control() && *b != b' ')
+}
+
+/// `...` or `…` alone on a line (blanks aside): lines left out of a paste.
+fn is_elision(t: &[u8]) -> bool {
+    matches!(trim_end(t), b"..." | b"\xE2\x80\xA6")
+}
+
+/// The shell command line people paste above candump's output
+/// (`candump can0`, `$ candump -l can0`, `pi@box:~ $ candump -td -a vcan0`,
+/// `/usr/bin/candump any`): a prompt, then candump or a path ending in it.
+/// Only asked of lines that are no frame, so it costs frame lines nothing.
+pub fn is_candump_command(line: &[u8]) -> bool {
+    let t = trim_start(line);
+    // Everything up to a prompt's `$ ` or `> ` is the prompt.
+    let command = match memchr::memmem::find(t, b"$ ").or_else(|| memchr::memmem::find(t, b"> ")) {
+        Some(at) => trim_start(t.get(at + 2..).unwrap_or_default()),
+        None => t,
+    };
+    let (program, _) = split_token(command);
+    program == b"candump" || program.ends_with(b"/candump")
 }
 
 /// The frames a candump `DROPCOUNT:` line says the kernel dropped
@@ -229,16 +275,12 @@ pub fn dropped_frames(line: &[u8]) -> Option<u64> {
     words.next()?.parse().ok()
 }
 
-#[inline]
-fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
-    match canonical(line, interest) {
-        Some(frame) => Ok(Some(frame)),
-        None => parse_line_full(line, interest),
-    }
-}
-
-/// Every form the format allows, with a reason for what it does not.
-fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Frame<'a>>, Reason> {
+/// Every form the format allows, with a reason for what it does not: a
+/// frame, and whether a note followed it (`(...) can0 701#00  // boot`).
+fn parse_line_full<'a>(
+    line: &'a [u8],
+    interest: &Interest,
+) -> Result<Option<(Frame<'a>, bool)>, Reason> {
     if is_candump_non_frame(line) {
         return Ok(None);
     }
@@ -260,9 +302,34 @@ fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Fra
     if frame_text.is_empty() {
         return Err("missing frame after the interface name".into());
     }
-    match trim_start(rest) {
-        b"" | b"T" | b"R" => {}
-        _ => return Err("unexpected text after the frame (only T or R may follow)".into()),
+    // `-L` may write T or R (the direction) after the frame; anything after
+    // that is a note someone added, unless it reads as more data: hex
+    // digits after a blank mean the data was split, not annotated.
+    let (flag, after_flag) = split_token(trim_start(rest));
+    let note = match flag {
+        b"T" | b"R" => trim_start(after_flag),
+        _ => trim_start(rest),
+    };
+    let annotated = !note.is_empty();
+    let (first_word, _) = split_token(note);
+    if !first_word.is_empty()
+        && first_word
+            .iter()
+            .all(|b| matches!(b, b'0'..=b'9' | b'A'..=b'F'))
+    {
+        return Err(format!(
+            "'{}' after the frame looks like more data: ID#DATA is one word, without blanks",
+            crate::show_token(first_word)
+        )
+        .into());
+    }
+    if annotated && !starts_note(note) {
+        return Err(format!(
+            "unexpected '{}' after the frame (only T or R may follow it, or a note \
+             starting with a sign such as //, # or <)",
+            crate::show_token(first_word)
+        )
+        .into());
     }
 
     let mut frame = parse_frame(frame_text, interest)?;
@@ -272,7 +339,7 @@ fn parse_line_full<'a>(line: &'a [u8], interest: &Interest) -> Result<Option<Fra
         frame.time = Some(time);
     }
     frame.channel = channel;
-    Ok(Some(frame))
+    Ok(Some((frame, annotated)))
 }
 
 /// The fast path for what `candump -l` writes, nearly every line of a real
@@ -853,9 +920,43 @@ mod tests {
             "# a comment",
             "// another",
             "DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 7)",
+            "...",
+            "    ...  ",
+            "\u{2026}",
+            "candump -l can0",
+            "$ candump -L any",
+            "pi@box:~ $ candump -td vcan0",
+            "  /usr/bin/candump can0,701:7FF",
         ] {
             assert_eq!(parse(line), Parsed::Skipped, "{line:?}");
         }
+        // Only a line that says nothing more is an elision or a command.
+        for line in ["... (1.0) can0 081#00", "candumps", "cat log | candumpx"] {
+            assert!(matches!(parse(line), Parsed::Malformed(_)), "{line:?}");
+        }
+    }
+
+    #[test]
+    fn notes_after_the_frame_are_counted_not_errors() {
+        let mut p = CandumpLogParser::new();
+        let all = Interest::all();
+        let mut read = |line: &str| match p.parse(line.as_bytes(), &all) {
+            Parsed::Frame(f) => (f.id, f.data.as_slice().to_vec(), p.take_annotated()),
+            other => panic!("{line:?} -> {other:?}"),
+        };
+        assert_eq!(
+            read("(1.0) can0 701#00  // boot of node 1"),
+            (0x701, vec![0], true)
+        );
+        assert_eq!(
+            read("    (1.0) can0 701#00 T < response"),
+            (0x701, vec![0], true)
+        );
+        assert_eq!(read("(1.0) can0 701#00 # add"), (0x701, vec![0], true));
+        // The direction flag alone is no note; the flag is cleared by a read.
+        assert_eq!(read("(1.0) can0 701#00 R"), (0x701, vec![0], false));
+        assert_eq!(read("(1.0) can0 701#00"), (0x701, vec![0], false));
+        assert!(!p.take_annotated());
     }
 
     #[test]
@@ -889,7 +990,14 @@ mod tests {
         assert!(malformed("(1.0) can0 081#0").contains("odd"));
         assert!(malformed("(1.0) can0 081#ZZ").contains("hexadecimal"));
         assert!(malformed("(1.0) can0 081#001122334455667788").contains("8"));
-        assert!(malformed("(1.0) can0 081#00 X").contains("unexpected"));
+        assert!(
+            malformed("(1.0) can0 081#00 11").contains("'11' after the frame looks like more data")
+        );
+        assert!(malformed("(1.0) can0 081#00 T 2F").contains("looks like more data"));
+        assert_eq!(
+            malformed("(1.0) can0 081#00 boot"),
+            "unexpected 'boot' after the frame (only T or R may follow it, or a note starting with a sign such as //, # or <)"
+        );
         assert!(malformed("(x.0) can0 081#00").contains("decimal"));
         assert!(malformed("(99999999999999999999.0) can0 081#00").contains("overflow"));
         let long_id = format!("(1.0) can0 {}#00", "1".repeat(10_000));
@@ -897,6 +1005,27 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// A note after any valid line (after a blank, not starting like
+        /// more data) leaves its frame as it was, and is counted.
+        #[test]
+        fn a_note_after_a_frame_changes_nothing_of_it(
+            line in "\\([0-9]{1,10}\\.[0-9]{1,9}\\) [a-z0-9]{1,5} ([0-7][0-9A-F]{2}|[01][0-9A-F]{7})#(R[0-8]?|([0-9A-F]{2}){0,8}|#[0-9A-F]([0-9A-F]{2}){0,12})( T| R)?",
+            gap in "[ \t]{1,3}",
+            // A note starts with a sign (a letter or digit is damage).
+            note in "[<>/#=!*~(\\[-][^\r\n]{0,30}",
+        ) {
+            let all = Interest::all();
+            let mut p = CandumpLogParser::new();
+            let Parsed::Frame(plain) = p.parse(line.as_bytes(), &all) else {
+                return Err(proptest::test_runner::TestCaseError::fail(format!("{line:?} is no frame")));
+            };
+            proptest::prop_assert!(!p.take_annotated());
+            let annotated = format!("{line}{gap}{note}");
+            let mut q = CandumpLogParser::new();
+            proptest::prop_assert_eq!(q.parse(annotated.as_bytes(), &all), Parsed::Frame(plain));
+            proptest::prop_assert!(q.take_annotated(), "{:?} not counted", annotated);
+        }
+
         /// The fast path may decline a line, but what it accepts the full
         /// parser accepts identically.
         #[test]
@@ -907,7 +1036,7 @@ mod tests {
             let mut interest = if narrow { Interest::none() } else { Interest::all() };
             interest.add_standard(0x81);
             if let Some(fast) = canonical(line.as_bytes(), &interest) {
-                proptest::prop_assert_eq!(Ok(Some(fast)), parse_line_full(line.as_bytes(), &interest));
+                proptest::prop_assert_eq!(Ok(Some((fast, false))), parse_line_full(line.as_bytes(), &interest));
             }
         }
 
@@ -922,7 +1051,10 @@ mod tests {
             interest.add_standard(0x81);
             let fast = canonical(line.as_bytes(), &interest);
             proptest::prop_assert!(fast.is_some(), "declined {}", line);
-            proptest::prop_assert_eq!(Ok(fast), parse_line_full(line.as_bytes(), &interest));
+            proptest::prop_assert_eq!(
+                Ok(fast.map(|f| (f, false))),
+                parse_line_full(line.as_bytes(), &interest)
+            );
         }
 
         /// The last line's layout accepts exactly what the general scan

@@ -32,7 +32,9 @@
 //! CAN XL frames (`[nnnn]` lengths) are reported as malformed: a [`Frame`]
 //! cannot hold them and dropping them silently would hide data.
 
-use crate::format::candump_log::{ERROR_FLAG, is_candump_non_frame};
+use crate::format::candump_log::{
+    ERROR_FLAG, is_candump_command, is_candump_non_frame, starts_note,
+};
 use crate::hex;
 use crate::time::{MAX_FRACTION_DIGITS, unix_midnight};
 use crate::{
@@ -45,12 +47,16 @@ const ESC: u8 = 0x1B;
 /// Reader for candump's default screen output. Stateless: every line
 /// carries all it needs (ids are told apart by digit count, not indentation).
 #[derive(Default, Clone, Copy)]
-pub struct CandumpScreenParser;
+pub struct CandumpScreenParser {
+    /// The last line read was a frame with a note after it (see
+    /// [`LineParser::take_annotated`]); no line depends on it.
+    annotated: bool,
+}
 
 impl CandumpScreenParser {
     /// A parser before the first line.
     pub fn new() -> Self {
-        CandumpScreenParser
+        CandumpScreenParser::default()
     }
 }
 
@@ -65,6 +71,7 @@ impl LineParser for CandumpScreenParser {
     }
 
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        self.annotated = false;
         if is_candump_non_frame(line) {
             return Parsed::Skipped;
         }
@@ -74,11 +81,23 @@ impl LineParser for CandumpScreenParser {
             // Only colour codes: `-c -c` resets the colour after `-e` text.
             return Parsed::Skipped;
         }
-        match parse_line(line, interest) {
-            Ok(frame) => Parsed::Frame(frame),
-            Err(_) if is_error_explanation(line) => Parsed::Skipped,
-            Err(reason) => Parsed::Malformed(reason),
+        match parse_line::<false>(line, interest) {
+            Ok((frame, _)) => Parsed::Frame(frame),
+            // Only a line the strict reading refused is read again for
+            // notes after its frame: ordinary lines pay nothing for them.
+            Err(_) => match parse_line::<true>(line, interest) {
+                Ok((frame, annotated)) => {
+                    self.annotated = annotated;
+                    Parsed::Frame(frame)
+                }
+                Err(_) if is_error_explanation(line) || is_candump_command(line) => Parsed::Skipped,
+                Err(reason) => Parsed::Malformed(reason),
+            },
         }
+    }
+
+    fn take_annotated(&mut self) -> bool {
+        std::mem::take(&mut self.annotated)
     }
 }
 
@@ -296,15 +315,26 @@ struct Body<'a> {
     errorframe: bool,
     /// The `-a` column between its quotes.
     ascii: Option<&'a [u8]>,
+    /// Text followed the complete frame (lenient reading only).
+    annotated: bool,
 }
 
-fn parse_body<'a>(cur: &mut Cursor<'a>) -> Result<Body<'a>, Reason> {
+/// The body after the length field. `LENIENT` reads a pasted line that
+/// the strict reading refused: the ASCII column is exactly one character
+/// per byte between its quotes (so it may hold quotes and be followed by
+/// text), and text after the complete frame (after the data bytes, the
+/// ASCII column or `ERRORFRAME`) is a note, `annotated`.
+fn parse_body<'a, const LENIENT: bool>(
+    cur: &mut Cursor<'a>,
+    expected: usize,
+) -> Result<Body<'a>, Reason> {
     let mut body = Body {
         shown: [0; Payload::MAX],
         count: 0,
         swapped: false,
         errorframe: false,
         ascii: None,
+        annotated: false,
     };
     let mut width = None;
     let mut groups = 0usize;
@@ -312,6 +342,21 @@ fn parse_body<'a>(cur: &mut Cursor<'a>) -> Result<Body<'a>, Reason> {
         cur.skip_blanks();
         let start = cur.pos;
         if let Some(quote @ (b'\'' | b'`')) = cur.peek() {
+            if LENIENT {
+                body.ascii = Some(ascii_column(cur, quote, body.count)?);
+                if let Some(extra) = cur.token() {
+                    if !starts_note(extra) {
+                        return Err(format!(
+                            "unexpected '{}' after the ASCII column (a note after a frame \
+                             starts with a sign such as //, # or <)",
+                            show(extra)
+                        )
+                        .into());
+                    }
+                    body.annotated = true;
+                }
+                break;
+            }
             // The ASCII column may hold blanks and quotes: it runs to the
             // last token of the line and must end with its opening quote.
             let mut end = start;
@@ -329,10 +374,30 @@ fn parse_body<'a>(cur: &mut Cursor<'a>) -> Result<Body<'a>, Reason> {
         let Some(tok) = cur.token() else { break };
         if tok == b"ERRORFRAME" {
             if let Some(extra) = cur.token() {
-                return Err(format!("unexpected '{}' after ERRORFRAME", show(extra)).into());
+                if !LENIENT || !starts_note(extra) {
+                    return Err(format!("unexpected '{}' after ERRORFRAME", show(extra)).into());
+                }
+                body.annotated = true;
             }
             body.errorframe = true;
             break;
+        }
+        if LENIENT && !is_data_byte(tok) {
+            if body.count == expected && starts_note(tok) {
+                // The frame is complete: the rest of the line is a note.
+                body.annotated = true;
+                break;
+            }
+            if !tok.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'`') {
+                // Not meant as a byte (`<`, `//`, `#`): a note after too
+                // few or too many bytes.
+                return Err(format!(
+                    "{} data bytes where the length field says {expected}, then '{}'",
+                    body.count,
+                    show(tok)
+                )
+                .into());
+            }
         }
         groups += 1;
         if memchr::memchr(b'`', tok).is_some() {
@@ -352,6 +417,46 @@ fn parse_body<'a>(cur: &mut Cursor<'a>) -> Result<Body<'a>, Reason> {
     Ok(body)
 }
 
+/// Whether a token reads as one printed data byte (or a `-S` group of
+/// them): a note after the data never starts with one, or it would be a
+/// byte too many.
+fn is_data_byte(tok: &[u8]) -> bool {
+    let mut width = None;
+    tok.split(|b| *b == b'`')
+        .all(|piece| parse_byte(piece, &mut width).is_ok())
+}
+
+/// The `-a` column of a frame of `count` bytes, the cursor on its opening
+/// quote: candump prints exactly one character per byte, so the column
+/// ends `count` characters later with the same quote (a quote inside it is
+/// a byte), and a blank or the end of the line follows. The cursor ends
+/// after the column.
+fn ascii_column<'a>(cur: &mut Cursor<'a>, quote: u8, count: usize) -> Result<&'a [u8], Reason> {
+    let open = cur.pos;
+    let inner = cur
+        .line
+        .get(open + 1..open + 1 + count)
+        .filter(|inner| inner.len() == count);
+    let close = open + 1 + count;
+    let closed = cur.line.get(close) == Some(&quote)
+        && matches!(
+            cur.line.get(close + 1).copied(),
+            None | Some(b' ' | b'\t' | ESC)
+        );
+    match inner {
+        Some(inner) if closed => {
+            cur.pos = close + 1;
+            Ok(inner)
+        }
+        _ => Err(format!(
+            "ASCII column must be {count} characters (one per data byte) between {q} and {q}, found {}",
+            crate::show_token(crate::trim_end(cur.rest())),
+            q = char::from(quote)
+        )
+        .into()),
+    }
+}
+
 /// `-a` prints each byte as itself when printable ASCII, else as `.`.
 fn ascii_matches(column: &[u8], bytes: &[u8]) -> bool {
     column.len() == bytes.len()
@@ -364,7 +469,12 @@ fn ascii_matches(column: &[u8], bytes: &[u8]) -> bool {
         })
 }
 
-fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Frame<'a>, Reason> {
+/// A frame line, and whether a note followed the frame (only `LENIENT`
+/// reads notes, see [`parse_body`]).
+fn parse_line<'a, const LENIENT: bool>(
+    line: &'a [u8],
+    interest: &Interest,
+) -> Result<(Frame<'a>, bool), Reason> {
     let mut cur = Cursor::new(line);
     cur.skip_blanks();
 
@@ -414,9 +524,16 @@ fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Frame<'a>, Reas
     let wanted = interest.wants(id, extended);
     let mut data = Payload::new();
     let before_body = cur.pos;
+    let mut annotated = false;
     let (kind, len) = if matches!(cur.token(), Some(b"remote")) {
-        if !matches!(cur.token(), Some(b"request")) || cur.token().is_some() {
+        if !matches!(cur.token(), Some(b"request")) {
             return Err("expected 'remote request' and nothing after it".into());
+        }
+        if let Some(note) = cur.token() {
+            if !LENIENT || !starts_note(note) {
+                return Err("expected 'remote request' and nothing after it".into());
+            }
+            annotated = true;
         }
         if is_error {
             return Err("error frame printed as a remote request".into());
@@ -427,8 +544,9 @@ fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Frame<'a>, Reas
         (FrameKind::Remote, 0)
     } else {
         cur.pos = before_body;
-        let body = parse_body(&mut cur)?;
         let expected = len_field.bytes();
+        let body = parse_body::<LENIENT>(&mut cur, expected)?;
+        annotated = body.annotated;
         if body.count != expected {
             let note = match len_field {
                 LenField::RawDlc(dlc) if dlc > 8 => " (a raw DLC above 8 means 8 bytes)",
@@ -480,7 +598,7 @@ fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Frame<'a>, Reas
         Some(text) => Some(parse_time(text)?),
         None => None,
     };
-    Ok(Frame {
+    let frame = Frame {
         time: if wanted { time } else { None },
         channel,
         id,
@@ -488,7 +606,8 @@ fn parse_line<'a>(line: &'a [u8], interest: &Interest) -> Result<Frame<'a>, Reas
         kind,
         len,
         data,
-    })
+    };
+    Ok((frame, annotated))
 }
 
 /// The text between the parentheses: a decimal number of seconds
@@ -680,6 +799,11 @@ mod tests {
         assert!(
             malformed("  vcan0  20000004   [2]  00 00   ERRORFRAME x").contains("after ERRORFRAME")
         );
+        assert_eq!(
+            frame("  vcan0  20000004   [2]  00 00   ERRORFRAME  // bus off?").kind,
+            FrameKind::Error,
+            "a note after ERRORFRAME"
+        );
         assert!(malformed("  vcan0  20000004  [08]  00 00 00 00 00 00 00 00").contains("CAN FD"));
     }
 
@@ -837,9 +961,76 @@ mod tests {
             0
         );
         assert!(malformed("  can0  123   [4]  31 20 27 34   '1 '5'").contains("does not match"));
-        assert!(malformed("  can0  123   [4]  31 20 27 34   '1 '4").contains("quote"));
-        assert!(malformed("  can0  123   [4]  31 20 27 34   '").contains("quote"));
-        assert!(malformed("  can0  123   [2]  31 32   '12' 33").contains("quote"));
+        assert!(
+            malformed("  can0  123   [4]  31 20 27 34   '1 '4")
+                .contains("ASCII column must be 4 characters (one per data byte) between ' and '")
+        );
+        assert!(malformed("  can0  123   [4]  31 20 27 34   '").contains("found '"));
+        assert!(malformed("  can0  123   [2]  31 32   '1' 2'").contains("found '1' 2'"));
+        // A closed column holding a quote, then a note.
+        let f = frame("    (000.000010)  vcan0  604   [2]  62 27   'b'' < response");
+        assert_eq!(f.data.as_slice(), [0x62, 0x27]);
+    }
+
+    #[test]
+    fn notes_after_the_frame_are_counted_not_errors() {
+        let mut p = CandumpScreenParser::new();
+        let all = Interest::all();
+        let mut read = |line: &str| match p.parse(line.as_bytes(), &all) {
+            Parsed::Frame(f) => (f.id, f.data.as_slice().to_vec(), p.take_annotated()),
+            other => panic!("{line:?} -> {other:?}"),
+        };
+        let ok = |id, data: &[u8]| (id, data.to_vec(), true);
+        assert_eq!(
+            read("    (000.000010)  vcan0  603   [2]  A2 7F   '..' < response"),
+            ok(0x603, &[0xA2, 0x7F])
+        );
+        assert_eq!(
+            read("  can0  701   [1]  00   // boot of node 1"),
+            ok(0x701, &[0])
+        );
+        assert_eq!(read("  can0  701   [1]  00   # boot"), ok(0x701, &[0]));
+        assert_eq!(
+            read("  can0  123   [2]  31 32   '12' <- 33"),
+            ok(0x123, &[0x31, 0x32])
+        );
+        assert_eq!(
+            read("  can0  701   [1]  remote request  < guard"),
+            ok(0x701, &[])
+        );
+        // The common line stays unannotated, and a read clears the flag.
+        assert_eq!(read("  can0  701   [1]  00"), (0x701, vec![0], false));
+        assert!(!p.take_annotated());
+        // Too few or too many bytes before a note say so.
+        assert_eq!(
+            malformed("  can0  123   [8]  31 32  < response"),
+            "2 data bytes where the length field says 8, then '<'"
+        );
+        assert_eq!(
+            malformed("  can0  123   [2]  31 32 33 // x"),
+            "3 data bytes where the length field says 2, then '//'"
+        );
+        // A letter or digit after the frame is damage, not a note.
+        assert!(malformed("  can0  081   [8]  remote request 11").contains("remote request"));
+        assert_eq!(
+            malformed("  can0  123   [2]  31 32   '12' 33"),
+            "unexpected '33' after the ASCII column (a note after a frame starts with a sign such as //, # or <)"
+        );
+        assert!(malformed("  can0  123   [2]  31 32  boot").contains("'boot' is not"));
+    }
+
+    #[test]
+    fn pasted_excerpts_skip_elisions_and_the_command_line() {
+        for line in [
+            "    ...",
+            "\u{2026}",
+            "candump can0",
+            "$ candump -td -a vcan0",
+            "",
+            "    // SDO upload",
+        ] {
+            assert_eq!(parse(line), Parsed::Skipped, "{line:?}");
+        }
     }
 
     #[test]
