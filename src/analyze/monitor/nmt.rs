@@ -96,8 +96,9 @@ impl Monitor for NmtMonitor {
         self.nmt_frame(frame, nodes, emit)
     }
 
-    /// Heartbeat times set by SDO: the consumer times (0x1016) and the
-    /// producer time (0x1017).
+    /// The node that answered by SDO exists; heartbeat times set by SDO:
+    /// the consumer times (0x1016) and the producer time (0x1017); node
+    /// guarding's guard time (0x100C) and life time factor (0x100D).
     fn learn<E: Write>(
         &mut self,
         channel: &[u8],
@@ -107,6 +108,12 @@ impl Monitor for NmtMonitor {
         _facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
+        // Every fact comes from the node's own SDO response (an upload, or
+        // the confirmation of a write): it spoke, so it is a node. (SDO
+        // traffic about objects the decoder does not follow is only timed,
+        // never decoded, so those responses make no node.)
+        let (Fact::Read { node, .. } | Fact::Holds { node, .. }) = fact;
+        nodes.get(channel, node);
         let Fact::Holds {
             node,
             object,
