@@ -32,6 +32,7 @@ mod inputs;
 mod live;
 mod memory;
 mod mf4;
+mod network;
 mod output;
 mod pcap;
 mod readme;
