@@ -412,15 +412,15 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         if frame.kind != FrameKind::Data {
             if frame.kind == FrameKind::Remote && !frame.extended && interest.wants(frame.id, false)
             {
-                // A guard request is the master's NMT traffic: its time
-                // moves the clock, so a guarded node that stopped replying
-                // is found lost while the master keeps asking.
-                if let Some(t) = frame.time {
-                    self.time(t);
-                    if self.monitors.nmt.passed(t) {
-                        let (monitors, nodes, _, emit) = parts!(self);
-                        monitors.nmt.deadlines_passed(t, line_no, nodes, emit)?;
-                    }
+                // A guard request's time is checked against the deadlines,
+                // so a guarded node that stopped replying is found lost
+                // while the master keeps asking. It is not the input's
+                // first or last time, which stays that of data frames.
+                if let Some(t) = frame.time
+                    && self.monitors.nmt.passed(t)
+                {
+                    let (monitors, nodes, _, emit) = parts!(self);
+                    monitors.nmt.deadlines_passed(t, line_no, nodes, emit)?;
                 }
                 let (monitors, nodes, _, emit) = parts!(self);
                 monitors
