@@ -53,6 +53,8 @@ pub(in crate::analyze) struct NmtMonitor {
 struct Addressed {
     /// Commands by [`Command::index`], guard requests last.
     sent: [u64; 6],
+    /// The line of the first of each (0: none sent).
+    first_line: [u64; 6],
     /// The line of a guard request waiting for its reply.
     guard_asked: Option<u64>,
     /// A consumer heartbeat time (0x1016, ms) naming it.
@@ -61,6 +63,18 @@ struct Addressed {
 
 /// Where guard requests are counted in [`Addressed::sent`].
 const GUARD_REQUESTS: usize = 5;
+
+impl Addressed {
+    /// One more of kind `i` sent, at `line`.
+    fn sent_at(&mut self, i: usize, line: u64) {
+        if let (Some(n), Some(first)) = (self.sent.get_mut(i), self.first_line.get_mut(i)) {
+            if *n == 0 {
+                *first = line;
+            }
+            *n += 1;
+        }
+    }
+}
 
 /// What taking a fold does, worked out once: the time of its last frame,
 /// and for a heartbeat fold the node (and where it is in its channel) and
@@ -172,7 +186,7 @@ impl Monitor for NmtMonitor {
         if let Some(time) = end.time {
             self.deadlines_passed(time, end.line, nodes, emit)?;
         }
-        self.unanswered_at_end(end.line, nodes, emit);
+        self.unanswered_at_end(nodes, emit);
         Ok(())
     }
 
@@ -554,7 +568,7 @@ impl NmtMonitor {
             }
             None => {
                 let a = self.addressed(raw, node);
-                a.sent[GUARD_REQUESTS] += 1;
+                a.sent_at(GUARD_REQUESTS, line);
                 a.guard_asked = Some(line);
             }
         }
@@ -595,25 +609,23 @@ impl NmtMonitor {
     }
 
     /// The end of the input: what was sent to ids that never spoke (no
-    /// frame of theirs made a node), one diagnostic per command at `line`.
-    fn unanswered_at_end<E: Write>(
-        &mut self,
-        line: u64,
-        nodes: &mut Nodes,
-        emit: &mut Emit<'_, E>,
-    ) {
+    /// frame of theirs made a node), one diagnostic per command, at the
+    /// line of the first one sent.
+    fn unanswered_at_end<E: Write>(&mut self, nodes: &mut Nodes, emit: &mut Emit<'_, E>) {
         let mut sent = [0u64; 6];
         let mut ids = [0u64; 6];
+        let mut first = [u64::MAX; 6];
         for (raw, addressed) in &self.addressed {
             for (&node, a) in addressed {
                 // Spoken to another monitor (EMCY, SDO, PDO): a node.
                 if nodes.known(raw, node).is_some() {
                     continue;
                 }
-                for (i, &n) in a.sent.iter().enumerate() {
-                    if n > 0 {
-                        sent[i] += n;
+                for i in 0..sent.len() {
+                    if a.sent[i] > 0 {
+                        sent[i] += a.sent[i];
                         ids[i] += 1;
+                        first[i] = first[i].min(a.first_line[i]);
                     }
                 }
             }
@@ -629,7 +641,7 @@ impl NmtMonitor {
                 sent: sent[i],
                 ids: ids[i],
             };
-            emit.diagnostic(line, u.sentence());
+            emit.diagnostic(first[i], u.sentence());
             self.unanswered.push(u);
         }
     }
@@ -731,7 +743,7 @@ impl NmtMonitor {
             }
             if nodes.known(raw, node).is_none() {
                 // Addressed, not heard: no node (see `Addressed`).
-                self.addressed(raw, node).sent[command.index()] += 1;
+                self.addressed(raw, node).sent_at(command.index(), at.line);
                 continue;
             }
             let slot = nodes.get(raw, node);
