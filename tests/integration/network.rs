@@ -89,8 +89,8 @@ fn a_reset_scan_of_absent_ids_makes_no_nodes() {
     let stderr = stderr_of(&[RESET_SCAN]);
     assert_eq!(
         stderr,
-        "fixtures/network-reset-scan.log:1: NMT reset node sent 248 times to 124 ids that \
-         never answered\n"
+        "fixtures/network-reset-scan.log:315: NMT reset node sent 248 times to 124 ids that \
+         never answered (the first at line 1)\n"
     );
     let summary = stdout_of(&["--view", "summary", RESET_SCAN]);
     assert!(
@@ -210,7 +210,8 @@ fn node_guarding_is_supervised_by_its_life_time() {
         "network-guarding.log:30: node 10: node guarding: no reply to the guard request at line 28",
         "network-guarding.log:38: node 10: node guarding: toggle bit error (the reply has 0, expected 1)",
         "network-guarding.log:50: node 10: node guarding: no reply to the guard request at line 49",
-        "network-guarding.log:27: node guarding request sent 3 times to 1 id that never answered",
+        "network-guarding.log:82: node guarding request sent 3 times to 1 id that never answered \
+         (the first at line 27)",
     ] {
         assert!(stderr.contains(said), "{said}\n{stderr}");
     }

@@ -186,7 +186,7 @@ impl Monitor for NmtMonitor {
         if let Some(time) = end.time {
             self.deadlines_passed(time, end.line, nodes, emit)?;
         }
-        self.unanswered_at_end(nodes, emit);
+        self.unanswered_at_end(end.line, nodes, emit);
         Ok(())
     }
 
@@ -608,10 +608,16 @@ impl NmtMonitor {
         }
     }
 
-    /// The end of the input: what was sent to ids that never spoke (no
-    /// frame of theirs made a node), one diagnostic per command, at the
-    /// line of the first one sent.
-    fn unanswered_at_end<E: Write>(&mut self, nodes: &mut Nodes, emit: &mut Emit<'_, E>) {
+    /// The end of the input (its last line `line`): what was sent to ids
+    /// that never spoke (no frame of theirs made a node), one diagnostic
+    /// per command, at the last line (diagnostics come in line order) and
+    /// naming the line of the first one sent, where a reader finds it.
+    fn unanswered_at_end<E: Write>(
+        &mut self,
+        line: u64,
+        nodes: &mut Nodes,
+        emit: &mut Emit<'_, E>,
+    ) {
         let mut sent = [0u64; 6];
         let mut ids = [0u64; 6];
         let mut first = [u64::MAX; 6];
@@ -641,7 +647,8 @@ impl NmtMonitor {
                 sent: sent[i],
                 ids: ids[i],
             };
-            emit.diagnostic(first[i], u.sentence());
+            let said = format!("{} (the first at line {})", u.sentence(), first[i]);
+            emit.diagnostic(line, said);
             self.unanswered.push(u);
         }
     }
