@@ -22,6 +22,7 @@ impl Analysis {
                 last_time: None,
                 timestamps: None,
                 error: Some(error),
+                nmt_unanswered: Vec::new(),
             },
             errors_raised: 0,
             frames_with_warnings: 0,

@@ -14,7 +14,7 @@ use super::diagnostics::{DiagnosticLog, InputDiagnostics};
 use super::event::{CodeTexts, Counts, InputReport};
 use super::interest::{Wanted, interest};
 use super::monitor::context::{Emit, Fact, Facts, Learnt, Seen, Step};
-use super::monitor::{Carried, Monitors, NmtMonitor, TakenFold};
+use super::monitor::{Carried, Monitors, TakenFold};
 use super::nodes::Nodes;
 use super::options::Options;
 use super::sink::Sink;
@@ -133,6 +133,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         };
         let (monitors, nodes, facts, emit) = parts!(self);
         monitors.finish(end, nodes, facts, emit)?;
+        let nmt_unanswered = self.monitors.nmt.take_unanswered();
         if format.is_none() && self.counts.malformed > 0 && error.is_none() {
             error = Some(
                 "cannot detect the trace format: no line is a candump log, candump screen, \
@@ -213,6 +214,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             nodes,
             history,
             error,
+            nmt_unanswered,
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;
@@ -443,8 +445,20 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         if frame.kind != FrameKind::Data {
             if frame.kind == FrameKind::Remote && !frame.extended && interest.wants(frame.id, false)
             {
-                let timeout = self.opts.heartbeat_timeout;
-                NmtMonitor::remote_frame(frame.channel, frame.id, &mut self.nodes, timeout);
+                // A guard request's time is checked against the deadlines,
+                // so a guarded node that stopped replying is found lost
+                // while the master keeps asking. It is not the input's
+                // first or last time, which stays that of data frames.
+                if let Some(t) = frame.time
+                    && self.monitors.nmt.passed(t)
+                {
+                    let (monitors, nodes, _, emit) = parts!(self);
+                    monitors.nmt.deadlines_passed(t, line_no, nodes, emit)?;
+                }
+                let (monitors, nodes, _, emit) = parts!(self);
+                monitors
+                    .nmt
+                    .remote_frame(frame.channel, frame.id, line_no, nodes, emit);
             }
             return Ok(());
         }

@@ -9,14 +9,14 @@ use std::sync::Arc;
 use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
-use crate::canopen::nmt::NmtState;
+use crate::canopen::nmt::{Command, NmtState};
 use crate::canopen::pdo::Mapping;
 use crate::canopen::profile::{Decoded, Profile};
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
 use crate::timeline::drive::{self, DriveState, Fault};
-use crate::timeline::heartbeat::{Outage, TimeoutSource};
+use crate::timeline::heartbeat::{Outage, Supervision, TimeoutSource};
 use crate::timeline::history::ErrorHistory;
-use crate::timeline::nmt::Via;
+use crate::timeline::nmt::{GuardCounts, Via};
 use crate::timeline::{NodeStats, State};
 use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Span, Timestamp};
@@ -85,12 +85,14 @@ pub struct HealthEvent<'a> {
 pub enum Health {
     /// The NMT state changed.
     Nmt { state: NmtState, via: Via },
-    /// The node's heartbeat deadline passed.
+    /// The node's heartbeat (or life guarding) deadline passed.
     HeartbeatLost {
         last_seen: Option<Timestamp>,
         last_seen_line: u64,
         timeout: Span,
         timeout_source: TimeoutSource,
+        /// Heartbeats or guarding replies stopped.
+        via: Supervision,
     },
     /// A lost node was heard again.
     HeartbeatBack {
@@ -98,6 +100,8 @@ pub enum Health {
         silent: Span,
         /// It came back with a boot-up.
         restarted: bool,
+        /// What it was supervised by when lost.
+        via: Supervision,
     },
     /// An SDO transfer was aborted.
     SdoAbort {
@@ -166,11 +170,23 @@ pub struct HistoryItem {
     pub before_trace: bool,
 }
 
-/// A node's heartbeats over the input.
+/// A node's heartbeats (or guarding replies) over the input.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeartbeatReport {
+    /// Heartbeats, or node guarding once the node answered a guard request.
+    pub via: Supervision,
     /// The typical interval, once learnt.
     pub period: Option<Span>,
+    /// The period the trace configured by SDO: the producer heartbeat time
+    /// (0x1017), or for guarding the guard time (0x100C).
+    pub configured_period: Option<Span>,
+    /// `period` is further from `configured_period` than the tolerance
+    /// ([`DRIFT_PER_MILLE`](crate::timeline::heartbeat::DRIFT_PER_MILLE)).
+    pub drifts: bool,
+    /// Node guarding: the life time factor (0x100D) configured, and the
+    /// requests, replies and errors counted; `None` for a node never
+    /// guarded.
+    pub guarding: Option<GuardingReport>,
     /// The timeout in force at the end, and where it came from.
     pub timeout: Option<(Span, TimeoutSource)>,
     /// Outages in all.
@@ -178,6 +194,63 @@ pub struct HeartbeatReport {
     /// The first outages (`end: None`: silent to the end).
     pub outages: Vec<Outage>,
     pub silent_at_end: bool,
+}
+
+/// Node guarding of one node over the input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GuardingReport {
+    pub life_time_factor: Option<u8>,
+    pub counts: GuardCounts,
+}
+
+/// What the master sent, over an input, to ids that never answered (sent
+/// no frame at all): one NMT command, or node guarding's remote request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Unanswered {
+    /// `None`: guard requests.
+    pub command: Option<Command>,
+    /// Frames sent.
+    pub sent: u64,
+    /// Ids (per channel) they were sent to.
+    pub ids: u64,
+}
+
+impl Unanswered {
+    /// The stable name in JSON: the command's (`reset_node`), or
+    /// `guard_request`.
+    pub fn slug(&self) -> &'static str {
+        self.command.map_or("guard_request", Command::slug)
+    }
+
+    /// "NMT reset node sent 1,576 times to 116 ids that never answered".
+    pub fn sentence(&self) -> String {
+        let what = match self.command {
+            Some(c) => format!("NMT {}", c.name()),
+            None => "node guarding request".to_string(),
+        };
+        let times = match self.sent {
+            1 => "once".to_string(),
+            n => format!("{} times", grouped(n)),
+        };
+        let ids = match self.ids {
+            1 => "1 id that never answered".to_string(),
+            n => format!("{} ids that never answered", grouped(n)),
+        };
+        format!("{what} sent {times} to {ids}")
+    }
+}
+
+/// `1576` as `1,576`.
+fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// A node's state at the end of an input; its errors are in the input's
@@ -198,8 +271,11 @@ pub struct NodeReport {
     pub profile_reason: Option<String>,
     /// The profile's description of every code the node raised.
     pub descriptions: CodeTexts,
-    /// The NMT state at the end; `None` if the trace never told.
+    /// The NMT state the node said last; `None` if it never told.
     pub nmt_state: Option<NmtState>,
+    /// The state a command asked for that the node had not confirmed by
+    /// the end; `None` when no command waits.
+    pub nmt_commanded: Option<NmtState>,
     /// `None` for a node that sent no heartbeat.
     pub heartbeat: Option<HeartbeatReport>,
     /// The last read-out of 0x1003.
@@ -356,6 +432,10 @@ pub struct InputReport {
     pub timestamps: Option<TimeMode>,
     /// Why reading stopped early (I/O error, corrupt gzip, unknown format).
     pub error: Option<String>,
+    /// NMT commands and guard requests sent to ids that never answered,
+    /// one entry per command (in the order of their bytes), guard requests
+    /// last; empty when every id addressed spoke.
+    pub nmt_unanswered: Vec<Unanswered>,
 }
 
 impl InputReport {
@@ -383,5 +463,35 @@ pub struct Diagnostic {
 impl std::fmt::Display for Diagnostic {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}:{}: {}", self.file, self.line, self.message)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unanswered_reads_well() {
+        let u = Unanswered {
+            command: Some(Command::ResetNode),
+            sent: 1576,
+            ids: 116,
+        };
+        assert_eq!(
+            u.sentence(),
+            "NMT reset node sent 1,576 times to 116 ids that never answered"
+        );
+        assert_eq!(u.slug(), "reset_node");
+        let g = Unanswered {
+            command: None,
+            sent: 1,
+            ids: 1,
+        };
+        assert_eq!(
+            g.sentence(),
+            "node guarding request sent once to 1 id that never answered"
+        );
+        assert_eq!(grouped(1_234_567), "1,234,567");
+        assert_eq!(grouped(999), "999");
     }
 }

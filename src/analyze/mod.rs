@@ -47,8 +47,8 @@ use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub use diagnostics::DiagnosticLog;
 pub use event::{
-    BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, Health, HealthEvent, HeartbeatReport,
-    HistoryReport, InputReport, NodeReport,
+    BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, GuardingReport, Health, HealthEvent,
+    HeartbeatReport, HistoryReport, InputReport, NodeReport, Unanswered,
 };
 pub use options::{EmcyId, Options};
 pub use sink::{Discard, Sink, WithoutEvents};

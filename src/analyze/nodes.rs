@@ -334,6 +334,7 @@ impl Nodes {
                     profile_reason: None,
                     descriptions: CodeTexts::default(),
                     nmt_state: None,
+                    nmt_commanded: None,
                     heartbeat: None,
                     error_history: None,
                     drive: None,

@@ -100,6 +100,42 @@ impl Command {
             Command::ResetCommunication => "reset communication",
         }
     }
+
+    /// The stable name in JSON (`reset_node`).
+    pub fn slug(self) -> &'static str {
+        match self {
+            Command::Start => "start",
+            Command::Stop => "stop",
+            Command::EnterPreOperational => "enter_pre_operational",
+            Command::ResetNode => "reset_node",
+            Command::ResetCommunication => "reset_communication",
+        }
+    }
+
+    /// Every command, in the order of their bytes.
+    pub const ALL: [Command; 5] = [
+        Command::Start,
+        Command::Stop,
+        Command::EnterPreOperational,
+        Command::ResetNode,
+        Command::ResetCommunication,
+    ];
+
+    /// The command's place in [`Command::ALL`], for tables of counts.
+    pub fn index(self) -> usize {
+        match self {
+            Command::Start => 0,
+            Command::Stop => 1,
+            Command::EnterPreOperational => 2,
+            Command::ResetNode => 3,
+            Command::ResetCommunication => 4,
+        }
+    }
+
+    /// Whether the command restarts the node (answered by a boot-up).
+    pub fn is_reset(self) -> bool {
+        matches!(self, Command::ResetNode | Command::ResetCommunication)
+    }
 }
 
 /// Who an NMT command addresses.
@@ -184,6 +220,16 @@ mod tests {
         assert_eq!(NmtState::Initialising.slug(), "initialising");
         assert_eq!(NmtState::Operational.slug(), "operational");
         assert_eq!(NmtState::Stopped.slug(), "stopped");
+    }
+
+    #[test]
+    fn command_table_indexes_every_command_once() {
+        for (i, c) in Command::ALL.iter().enumerate() {
+            assert_eq!(c.index(), i, "{c:?}");
+        }
+        assert_eq!(Command::ResetNode.slug(), "reset_node");
+        assert!(Command::ResetCommunication.is_reset());
+        assert!(!Command::Start.is_reset());
     }
 
     #[test]

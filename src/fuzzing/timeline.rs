@@ -289,6 +289,7 @@ pub fn decode_timeline(data: &[u8]) {
             profile_reason: None,
             descriptions: CodeTexts::new(m.profile, m.timeline.stats().raised.keys().copied()),
             nmt_state: None,
+            nmt_commanded: None,
             heartbeat: None,
             error_history: None,
             drive: None,
@@ -305,6 +306,7 @@ pub fn decode_timeline(data: &[u8]) {
         last_time,
         timestamps: None,
         error: None,
+        nmt_unanswered: Vec::new(),
     };
     let inputs = std::slice::from_ref(&report);
     ndjson.end_input(&report).expect("Vec");

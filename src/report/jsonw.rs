@@ -506,15 +506,22 @@ impl JsonWriter {
                 last_seen_line,
                 timeout,
                 timeout_source,
+                via,
             } => {
                 self.time_pair(&mut o, ["last_seen", "last_seen_text"], *last_seen);
                 o.u64("last_seen_line", *last_seen_line);
                 push_span(o.key("timeout"), Some(*timeout));
                 o.str("timeout_source", timeout_source.slug());
+                o.str("via", via.slug());
             }
-            Health::HeartbeatBack { silent, restarted } => {
+            Health::HeartbeatBack {
+                silent,
+                restarted,
+                via,
+            } => {
                 push_span(o.key("silent"), Some(*silent));
                 o.bool("restarted", *restarted);
+                o.str("via", via.slug());
             }
             Health::SdoAbort {
                 index,
@@ -635,6 +642,10 @@ impl JsonWriter {
             Some(state) => o.str("nmt_state", state.slug()),
             None => o.null("nmt_state"),
         }
+        match node.nmt_commanded {
+            Some(state) => o.str("nmt_commanded", state.slug()),
+            None => o.null("nmt_commanded"),
+        }
         match &node.heartbeat {
             Some(hb) => self.heartbeat(o.key("heartbeat"), hb),
             None => o.null("heartbeat"),
@@ -746,7 +757,10 @@ impl JsonWriter {
     /// A node's `heartbeat` object.
     fn heartbeat(&mut self, out: &mut Vec<u8>, hb: &HeartbeatReport) {
         let mut o = Obj::new(out);
+        o.str("via", hb.via.slug());
         push_span(o.key("period"), hb.period);
+        push_span(o.key("configured_period"), hb.configured_period);
+        o.bool("drifts", hb.drifts);
         push_span(o.key("timeout"), hb.timeout.map(|t| t.0));
         match hb.timeout {
             Some((_, source)) => o.str("timeout_source", source.slug()),
@@ -767,6 +781,21 @@ impl JsonWriter {
         }
         list.push(b']');
         o.bool("silent_at_end", hb.silent_at_end);
+        match &hb.guarding {
+            Some(g) => {
+                let mut go = Obj::new(o.key("guarding"));
+                match g.life_time_factor {
+                    Some(f) => go.u64("life_time_factor", u64::from(f)),
+                    None => go.null("life_time_factor"),
+                }
+                go.u64("requests", g.counts.requests);
+                go.u64("replies", g.counts.replies);
+                go.u64("unanswered", g.counts.unanswered);
+                go.u64("toggle_errors", g.counts.toggle_errors);
+                go.end();
+            }
+            None => o.null("guarding"),
+        }
         o.end();
     }
 
@@ -890,6 +919,23 @@ impl JsonWriter {
         match &input.error {
             Some(e) => o.str("error", e),
             None => o.key("error").extend_from_slice(b"null"),
+        }
+        // Only when the master addressed ids that never answered: other
+        // inputs' objects stay as they were.
+        if !input.nmt_unanswered.is_empty() {
+            let list = o.key("nmt_unanswered");
+            list.push(b'[');
+            for (i, u) in input.nmt_unanswered.iter().enumerate() {
+                if i > 0 {
+                    list.push(b',');
+                }
+                let mut uo = Obj::new(list);
+                uo.str("request", u.slug());
+                uo.u64("sent", u.sent);
+                uo.u64("ids", u.ids);
+                uo.end();
+            }
+            list.push(b']');
         }
         o.end();
     }

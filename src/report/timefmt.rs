@@ -4,7 +4,7 @@
 use std::cell::{Cell, RefCell};
 use std::io::Write;
 
-use crate::trace::Timestamp;
+use crate::trace::{Span, Timestamp};
 
 /// `--time`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -219,8 +219,55 @@ pub(crate) fn utc_date(secs: u64) -> Option<(jiff::civil::Date, u32)> {
     Some((date, (secs % SECS_PER_DAY) as u32))
 }
 
+/// A duration as a person reads it, with the digits that matter: `1 s`,
+/// `1.44 s`, `1.002 s`, `100 ms`, `12.5 ms`: seconds to the millisecond
+/// from one second up, milliseconds to the microsecond below, trailing
+/// zeros dropped. For the table's periods and timeouts, whose trace
+/// precision (`1.000000`) says nothing; JSON keeps the numbers.
+pub(crate) fn human_span(span: Span) -> String {
+    let attos = span.attos();
+    let sign = if attos < 0 { "-" } else { "" };
+    let attos = attos.unsigned_abs();
+    const ATTO_PER_MS: u128 = 1_000_000_000_000_000;
+    let (unit, scale, digits) = if attos >= 1000 * ATTO_PER_MS {
+        ("s", 1000 * ATTO_PER_MS, 3u32)
+    } else {
+        ("ms", ATTO_PER_MS, 3u32)
+    };
+    let step = scale / 10u128.pow(digits);
+    // Rounded to the last digit shown, half away from zero.
+    let rounded = (attos + step / 2) / step;
+    let whole = rounded / 10u128.pow(digits);
+    let frac = rounded % 10u128.pow(digits);
+    let mut text = format!("{sign}{whole}");
+    if frac > 0 {
+        let f = format!("{frac:0width$}", width = digits as usize);
+        text.push('.');
+        text.push_str(f.trim_end_matches('0'));
+    }
+    format!("{text} {unit}")
+}
+
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn human_spans_show_the_digits_that_matter() {
+        use super::human_span;
+        use crate::trace::{Span, Timestamp};
+        let ms = |n| human_span(Span::from_millis(n));
+        assert_eq!(ms(1000), "1 s");
+        assert_eq!(ms(1440), "1.44 s");
+        assert_eq!(ms(100), "100 ms");
+        assert_eq!(ms(4200), "4.2 s");
+        assert_eq!(ms(0), "0 ms");
+        let t = |text: &str| Timestamp::parse(text.as_bytes()).expect("a time");
+        // Trace precision is not shown: 1.000000 s is 1 s.
+        assert_eq!(human_span(t("2.000000").since(t("1.000000"))), "1 s");
+        assert_eq!(human_span(t("1.0016").since(t("0"))), "1.002 s");
+        assert_eq!(human_span(t("0.0125").since(t("0"))), "12.5 ms");
+        assert_eq!(human_span(t("0").since(t("0.25"))), "-250 ms");
+    }
 
     #[test]
     fn widths_are_the_shown_lengths() {

@@ -1,12 +1,17 @@
-//! Heartbeat outages of one node.
+//! Heartbeat and node guarding outages of one node.
 //!
-//! The timeout comes from, in this order: `--heartbeat-timeout`, the
-//! consumer heartbeat time (0x1016) some node was given for this one, the
-//! node's producer heartbeat time (0x1017) with a margin, else what the
+//! A node is supervised by its heartbeats or, once it answered a guard
+//! request, by its guarding replies (life guarding); both are signs of
+//! life to the same monitor. The timeout comes from, in this order:
+//! `--heartbeat-timeout`; for heartbeats the consumer heartbeat time
+//! (0x1016) some node was given for this one, else the node's producer
+//! heartbeat time (0x1017) with a margin; for guarding the node's life
+//! time, guard time (0x100C) times life time factor (0x100D); else what the
 //! trace shows: [`LEARNT_FACTOR`] times the node's typical interval once
 //! [`LEARN_FROM`] intervals are known. A gap over the timeout is an outage
-//! from the deadline (last heartbeat + timeout) to the next sign of life
-//! (a heartbeat or boot-up); monitoring begins with the first one.
+//! from the deadline (last sign of life + timeout) to the next sign of life
+//! (a heartbeat, guarding reply or boot-up); monitoring begins with the
+//! first one.
 
 use super::interval::At;
 use crate::trace::{Span, Step, Timestamp};
@@ -22,6 +27,42 @@ pub const PRODUCER_MARGIN: (i128, i128) = (3, 2);
 /// Outages a node keeps for its report; more are counted only (a flapping
 /// node could have millions).
 pub const MAX_OUTAGES: usize = 256;
+/// How far, in per mille, the measured period may be from the configured
+/// one (0x1017, or the guard time) before the report says it drifts. A
+/// node's clock is good to a per mille or two, and the measured period is
+/// the median of its first intervals, so bus queueing of single frames
+/// does not move it; a node whose timer restarts after each send (late by
+/// its own processing time every period) shows up, as 1.44 s for 1.4 s
+/// (29 per mille) does, while 1.41 s for 1.4 s (7 per mille) is usual.
+pub const DRIFT_PER_MILLE: i128 = 20;
+
+/// How a node's signs of life come.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Supervision {
+    /// The node sends heartbeats.
+    #[default]
+    Heartbeat,
+    /// The master guards it: remote requests answered by guarding replies.
+    Guarding,
+}
+
+impl Supervision {
+    /// The stable name in JSON (`via`).
+    pub fn slug(self) -> &'static str {
+        match self {
+            Supervision::Heartbeat => "heartbeat",
+            Supervision::Guarding => "guarding",
+        }
+    }
+
+    /// What a sentence calls it (`node guarding lost: ...`).
+    pub fn words(self) -> &'static str {
+        match self {
+            Supervision::Heartbeat => "heartbeat",
+            Supervision::Guarding => "node guarding",
+        }
+    }
+}
 
 /// Where a node's timeout came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -32,6 +73,8 @@ pub enum TimeoutSource {
     Consumer,
     /// The node's producer heartbeat time (0x1017), with a margin.
     Producer,
+    /// Guard time (0x100C) times life time factor (0x100D): node guarding.
+    LifeTime,
     /// Learnt from the trace.
     Learnt,
 }
@@ -43,6 +86,7 @@ impl TimeoutSource {
             TimeoutSource::Option => "option",
             TimeoutSource::Consumer => "consumer",
             TimeoutSource::Producer => "producer",
+            TimeoutSource::LifeTime => "life_time",
             TimeoutSource::Learnt => "learnt",
         }
     }
@@ -89,6 +133,10 @@ pub struct HeartbeatMonitor {
     option: Option<Span>,
     consumer: Option<Span>,
     producer: Option<Span>,
+    /// Node guarding's guard time (0x100C) and life time factor (0x100D).
+    guard_time: Option<Span>,
+    life_time_factor: Option<u8>,
+    supervision: Supervision,
     /// Intervals seen so far, up to [`LEARN_FROM`].
     samples: Vec<Span>,
     /// The typical interval (the median of the first [`LEARN_FROM`]).
@@ -137,14 +185,23 @@ impl HeartbeatMonitor {
         if let Some(t) = self.option {
             return Some((t, TimeoutSource::Option));
         }
-        if let Some(t) = self.consumer {
-            return Some((t, TimeoutSource::Consumer));
-        }
-        if let Some(t) = self
-            .producer
-            .and_then(|p| p.scaled(PRODUCER_MARGIN.0, PRODUCER_MARGIN.1))
-        {
-            return Some((t, TimeoutSource::Producer));
+        match self.supervision {
+            Supervision::Heartbeat => {
+                if let Some(t) = self.consumer {
+                    return Some((t, TimeoutSource::Consumer));
+                }
+                if let Some(t) = self
+                    .producer
+                    .and_then(|p| p.scaled(PRODUCER_MARGIN.0, PRODUCER_MARGIN.1))
+                {
+                    return Some((t, TimeoutSource::Producer));
+                }
+            }
+            Supervision::Guarding => {
+                if let Some(t) = self.life_time() {
+                    return Some((t, TimeoutSource::LifeTime));
+                }
+            }
         }
         let learnt = self.period?.scaled(LEARNT_FACTOR, 1)?;
         Some((learnt, TimeoutSource::Learnt))
@@ -153,6 +210,68 @@ impl HeartbeatMonitor {
     /// The node's typical interval, once learnt.
     pub fn period(&self) -> Option<Span> {
         self.period
+    }
+
+    /// How the node's signs of life come.
+    pub fn supervision(&self) -> Supervision {
+        self.supervision
+    }
+
+    /// The node answered a guard request: from now on its guarding replies
+    /// are what it is supervised by (its life time, not its heartbeat
+    /// times, sets the timeout).
+    pub fn guarded(&mut self) {
+        if self.supervision != Supervision::Guarding {
+            self.supervision = Supervision::Guarding;
+            self.relearn();
+            self.refresh();
+        }
+    }
+
+    /// The period the trace configured: the producer heartbeat time
+    /// (0x1017) for heartbeats, the guard time (0x100C) for guarding.
+    pub fn configured_period(&self) -> Option<Span> {
+        match self.supervision {
+            Supervision::Heartbeat => self.producer,
+            Supervision::Guarding => self.guard_time,
+        }
+    }
+
+    /// The life time factor (0x100D) the trace configured, if any.
+    pub fn life_time_factor(&self) -> Option<u8> {
+        self.life_time_factor
+    }
+
+    /// Guard time times life time factor, when both are known and not 0.
+    fn life_time(&self) -> Option<Span> {
+        let factor = self.life_time_factor.filter(|&f| f > 0)?;
+        self.guard_time?.scaled(i128::from(factor), 1)
+    }
+
+    /// Whether the measured period is more than [`DRIFT_PER_MILLE`] from
+    /// the configured one (`false` when either is unknown).
+    pub fn drifts(&self) -> bool {
+        let (Some(measured), Some(configured)) = (self.period, self.configured_period()) else {
+            return false;
+        };
+        let (m, c) = (measured.attos(), configured.attos());
+        c > 0 && (m - c).abs() * 1000 > c * DRIFT_PER_MILLE
+    }
+
+    /// Node guarding's guard time (ms); 0: not guarded.
+    pub fn set_guard_time_ms(&mut self, ms: u16) {
+        let guard_time = (ms > 0).then(|| Span::from_millis(u64::from(ms)));
+        if guard_time != self.guard_time && self.supervision == Supervision::Guarding {
+            self.relearn();
+        }
+        self.guard_time = guard_time;
+        self.refresh();
+    }
+
+    /// Node guarding's life time factor; 0: no life guarding.
+    pub fn set_life_time_factor(&mut self, factor: u8) {
+        self.life_time_factor = Some(factor);
+        self.refresh();
     }
 
     /// When the node is lost unless heard from; `None` while lost, before
@@ -177,8 +296,20 @@ impl HeartbeatMonitor {
 
     /// The node's producer heartbeat time (ms); 0: it sends none.
     pub fn set_producer_ms(&mut self, ms: u16) {
-        self.producer = (ms > 0).then(|| Span::from_millis(u64::from(ms)));
+        let producer = (ms > 0).then(|| Span::from_millis(u64::from(ms)));
+        if producer != self.producer && self.supervision == Supervision::Heartbeat {
+            self.relearn();
+        }
+        self.producer = producer;
         self.refresh();
+    }
+
+    /// The period configured changed: the typical interval is measured
+    /// again from the next intervals, so it is compared with the
+    /// configuration it was sent under, not the one before.
+    fn relearn(&mut self) {
+        self.period = None;
+        self.samples.clear();
     }
 
     /// The trace's clock reached `now`: the node is lost if its deadline
@@ -556,6 +687,80 @@ mod tests {
         );
         assert!(m.monitored());
         assert_eq!(m.deadline(), None);
+    }
+
+    #[test]
+    fn a_guarded_node_is_lost_after_its_life_time() {
+        let mut m = HeartbeatMonitor::new(None);
+        m.set_guard_time_ms(100);
+        m.set_life_time_factor(3);
+        // Heartbeat times do not apply to a guarded node, nor life time
+        // to one that beats.
+        m.set_producer_ms(1000);
+        assert_eq!(m.timeout().map(|t| t.1), Some(TimeoutSource::Producer));
+        m.guarded();
+        assert_eq!(m.supervision(), Supervision::Guarding);
+        assert_eq!(
+            m.timeout(),
+            Some((Span::from_millis(300), TimeoutSource::LifeTime))
+        );
+        assert_eq!(m.configured_period(), Some(Span::from_millis(100)));
+        assert_eq!(m.life_time_factor(), Some(3));
+        m.seen(at(1000));
+        assert_eq!(m.check(t(1300)), None, "equal to the life time is not over");
+        let lost = m.check(t(1301)).expect("lost after 300 ms");
+        assert_eq!(lost.deadline, t(1300));
+        let (_, back) = m.seen(at(1500));
+        assert_eq!(back.map(|b| b.silent), Some(Span::from_millis(500)));
+        // A factor of 0 switches life guarding off: the timeout is learnt.
+        m.set_life_time_factor(0);
+        assert_eq!(m.timeout(), None);
+    }
+
+    #[test]
+    fn a_guarded_node_without_a_life_time_learns_its_timeout() {
+        let mut m = HeartbeatMonitor::new(None);
+        m.guarded();
+        beats(&mut m, 0, 800, 100);
+        assert_eq!(
+            m.timeout(),
+            Some((Span::from_millis(300), TimeoutSource::Learnt))
+        );
+        assert_eq!(m.configured_period(), None);
+    }
+
+    #[test]
+    fn drift_is_a_measured_period_off_the_configured_one() {
+        let beat_every = |period: u64| {
+            let mut m = HeartbeatMonitor::new(None);
+            m.set_producer_ms(1400);
+            beats(&mut m, 0, 8 * period, period);
+            m
+        };
+        let m = beat_every(1440);
+        assert_eq!(m.period(), Some(Span::from_millis(1440)));
+        assert!(m.drifts(), "29 per mille");
+        assert!(!beat_every(1405).drifts(), "4 per mille");
+        assert!(!beat_every(1428).drifts(), "20 per mille is not over");
+        assert!(beat_every(1372 - 1).drifts(), "21 per mille, early");
+        let mut unknown = HeartbeatMonitor::new(None);
+        beats(&mut unknown, 0, 800, 100);
+        assert!(!unknown.drifts(), "nothing configured");
+    }
+
+    #[test]
+    fn a_new_configured_period_is_measured_again() {
+        let mut m = HeartbeatMonitor::new(None);
+        beats(&mut m, 0, 800, 100);
+        assert_eq!(m.period(), Some(Span::from_millis(100)));
+        m.set_producer_ms(200);
+        assert_eq!(m.period(), None, "measured again");
+        beats(&mut m, 1000, 2600, 200);
+        assert_eq!(m.period(), Some(Span::from_millis(200)));
+        assert!(!m.drifts());
+        // The same value again keeps what was measured.
+        m.set_producer_ms(200);
+        assert_eq!(m.period(), Some(Span::from_millis(200)));
     }
 
     proptest::proptest! {

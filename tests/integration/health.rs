@@ -70,29 +70,27 @@ fn nmt_events_are_state_changes_with_their_source() {
             .collect()
     };
     let pair = |s: &str, v: &str| (s.to_string(), v.to_string());
-    // Node 1: boot-up, pre-operational, then the start command; its own
-    // heartbeats confirm it (no second event).
+    // Node 1: the boot-up enters pre-operational (CiA 301), the start
+    // command asks for operational, its own heartbeat confirms it.
     assert_eq!(
         changes(1),
         [
-            pair("initialising", "heartbeat"),
-            pair("pre_operational", "heartbeat"),
+            pair("pre_operational", "boot_up"),
             pair("operational", "command"),
+            pair("operational", "heartbeat"),
         ]
     );
-    // Node 3 ignores the stop: the command says stopped, its heartbeat
-    // says operational.
-    assert_eq!(
-        changes(3)[3..],
-        [pair("stopped", "command"), pair("operational", "heartbeat")]
-    );
+    // Node 3 ignores the stop: the command asks for stopped, its heartbeat
+    // 3 ms later was queued before it, the one after the grace still says
+    // operational, which it never stopped being: no event.
+    assert_eq!(changes(3)[3..], [pair("stopped", "command")]);
     // Node 2 restarts after the outage and is started again.
     assert_eq!(
         changes(2)[3..],
         [
-            pair("initialising", "heartbeat"),
-            pair("pre_operational", "heartbeat"),
+            pair("pre_operational", "boot_up"),
             pair("operational", "command"),
+            pair("operational", "heartbeat"),
         ]
     );
     // Node 4 is guarded, not heartbeating.
@@ -101,11 +99,19 @@ fn nmt_events_are_state_changes_with_their_source() {
         [
             pair("pre_operational", "guarding"),
             pair("operational", "command"),
+            pair("operational", "guarding"),
         ]
     );
     let n4 = node(&objects, 4);
     assert_eq!(n4["nmt_state"], "operational");
-    assert_eq!(n4["heartbeat"], Value::Null);
+    assert_eq!(n4["nmt_commanded"], Value::Null);
+    // Supervised by its guarding replies, the toggle error counted.
+    assert_eq!(n4["heartbeat"]["via"], "guarding");
+    assert_eq!(n4["heartbeat"]["guarding"]["toggle_errors"], 1);
+    assert_eq!(
+        n4["heartbeat"]["guarding"]["requests"],
+        n4["heartbeat"]["guarding"]["replies"]
+    );
 }
 
 #[test]
@@ -117,13 +123,13 @@ fn warnings_name_the_ignored_command_and_the_toggle_error() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains(
-            "commissioning.log:102: node 3: ignored the NMT command stop (it reports operational, not stopped)"
+            "commissioning.log:106: node 3: ignored the NMT command stop (it reports operational, not stopped)"
         ),
         "{stderr}"
     );
     assert!(
         stderr.contains(
-            "commissioning.log:84: node 4: node guarding: the toggle bit did not alternate"
+            "commissioning.log:84: node 4: node guarding: toggle bit error (the reply has 1, expected 0)"
         ),
         "{stderr}"
     );

@@ -33,6 +33,7 @@ mod ixxat;
 mod live;
 mod memory;
 mod mf4;
+mod network;
 mod output;
 mod pasted;
 mod pcap;

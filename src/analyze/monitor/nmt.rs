@@ -4,21 +4,22 @@
 //! from the EMCY path (the hot one); its own fast paths are the steady
 //! heartbeat and the folded runs of them.
 
+use std::collections::HashMap;
 use std::io::Write;
 
 use super::context::{Emit, Fact, Facts, Monitor, Seen, Step};
 use super::deadlines::Deadlines;
 use crate::analyze::analysis::OutputError;
-use crate::analyze::event::{Health, HeartbeatReport, NodeReport};
+use crate::analyze::event::{GuardingReport, Health, HeartbeatReport, NodeReport, Unanswered};
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::NodeId;
 use crate::canopen::emcy;
-use crate::canopen::nmt::{self, ErrorControl, NmtState, Target};
+use crate::canopen::nmt::{self, Command, ErrorControl, NmtState, Target};
 use crate::canopen::sdo;
 use crate::timeline::At;
 use crate::timeline::health::NodeHealth;
-use crate::timeline::heartbeat::{Back, Lost, TimeoutSource};
+use crate::timeline::heartbeat::{Back, Lost, Supervision, TimeoutSource};
 use crate::timeline::nmt::{NmtChange, NmtWarning};
 use crate::trace::{Fold, Frame, FrameKind, Interest, Span, Timestamp};
 
@@ -33,6 +34,46 @@ pub(in crate::analyze) struct NmtMonitor {
     warnings: Vec<NmtWarning>,
     groups: Vec<u32>,
     due: Vec<(Timestamp, u32, NodeId)>,
+    /// What the master sent to ids that have not spoken, by channel (the
+    /// trace's bytes) and id: at most 127 entries a channel.
+    addressed: HashMap<Box<[u8]>, HashMap<NodeId, Addressed>>,
+    /// At the end: what went to ids that never spoke.
+    unanswered: Vec<Unanswered>,
+}
+
+/// What the master sent to an id that has not spoken (yet). A node exists
+/// once it speaks; until then an NMT command or a guard request to its id
+/// is not its story (the trace cannot tell whether anything was on the bus
+/// to receive it), only counted here, a few facts per id. When the id
+/// speaks these are dropped, except what shapes how its frames read: a
+/// guard request waiting makes its first frame a guarding reply, and a
+/// consumer heartbeat time set for it is its timeout. When it never
+/// speaks, the counts become the input's [`Unanswered`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Addressed {
+    /// Commands by [`Command::index`], guard requests last.
+    sent: [u64; 6],
+    /// The line of the first of each (0: none sent).
+    first_line: [u64; 6],
+    /// The line of a guard request waiting for its reply.
+    guard_asked: Option<u64>,
+    /// A consumer heartbeat time (0x1016, ms) naming it.
+    consumer_ms: Option<u16>,
+}
+
+/// Where guard requests are counted in [`Addressed::sent`].
+const GUARD_REQUESTS: usize = 5;
+
+impl Addressed {
+    /// One more of kind `i` sent, at `line`.
+    fn sent_at(&mut self, i: usize, line: u64) {
+        if let (Some(n), Some(first)) = (self.sent.get_mut(i), self.first_line.get_mut(i)) {
+            if *n == 0 {
+                *first = line;
+            }
+            *n += 1;
+        }
+    }
 }
 
 /// What taking a fold does, worked out once: the time of its last frame,
@@ -69,8 +110,9 @@ impl Monitor for NmtMonitor {
         self.nmt_frame(frame, nodes, emit)
     }
 
-    /// Heartbeat times set by SDO: the consumer times (0x1016) and the
-    /// producer time (0x1017).
+    /// The node that answered by SDO exists; heartbeat times set by SDO:
+    /// the consumer times (0x1016) and the producer time (0x1017); node
+    /// guarding's guard time (0x100C) and life time factor (0x100D).
     fn learn<E: Write>(
         &mut self,
         channel: &[u8],
@@ -80,6 +122,12 @@ impl Monitor for NmtMonitor {
         _facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
+        // Every fact comes from the node's own SDO response (an upload, or
+        // the confirmation of a write): it spoke, so it is a node. (SDO
+        // traffic about objects the decoder does not follow is only timed,
+        // never decoded, so those responses make no node.)
+        let (Fact::Read { node, .. } | Fact::Holds { node, .. }) = fact;
+        nodes.get(channel, node);
         let Fact::Holds {
             node,
             object,
@@ -93,11 +141,29 @@ impl Monitor for NmtMonitor {
         match object.index {
             sdo::CONSUMER_HEARTBEAT if object.sub > 0 => {
                 let producer = ((value >> 16) & 0xFF) as NodeId;
-                if (1..=127).contains(&producer) {
-                    self.set_timeout(channel, producer, nodes, timeout, |h| {
-                        h.heartbeat.set_consumer_ms((value & 0xFFFF) as u16)
-                    });
+                let ms = (value & 0xFFFF) as u16;
+                if !(1..=127).contains(&producer) {
+                    return Ok(());
                 }
+                if nodes.known(channel, producer).is_some() {
+                    self.set_timeout(channel, producer, nodes, timeout, |h| {
+                        h.heartbeat.set_consumer_ms(ms)
+                    });
+                } else {
+                    // A producer that has not spoken is no node yet: the
+                    // time waits for it.
+                    self.addressed(channel, producer).consumer_ms = Some(ms);
+                }
+            }
+            sdo::GUARD_TIME if object.sub == 0 => {
+                self.set_timeout(channel, node, nodes, timeout, |h| {
+                    h.heartbeat.set_guard_time_ms((value & 0xFFFF) as u16)
+                });
+            }
+            sdo::LIFE_TIME_FACTOR if object.sub == 0 => {
+                self.set_timeout(channel, node, nodes, timeout, |h| {
+                    h.heartbeat.set_life_time_factor((value & 0xFF) as u8)
+                });
             }
             sdo::PRODUCER_HEARTBEAT if object.sub == 0 => {
                 self.set_timeout(channel, node, nodes, timeout, |h| {
@@ -117,18 +183,31 @@ impl Monitor for NmtMonitor {
         _facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
-        match end.time {
-            Some(time) => self.deadlines_passed(time, end.line, nodes, emit),
-            None => Ok(()),
+        if let Some(time) = end.time {
+            self.deadlines_passed(time, end.line, nodes, emit)?;
         }
+        self.unanswered_at_end(end.line, nodes, emit);
+        Ok(())
     }
 
     fn report(&self, report: &mut NodeReport, health: Option<&NodeHealth>) {
         let Some(h) = health else { return };
         report.nmt_state = h.nmt.state();
+        report.nmt_commanded = h.nmt.commanded();
         if h.heartbeat.monitored() {
+            let via = h.heartbeat.supervision();
+            let counts = h.nmt.guard_counts();
             report.heartbeat = Some(HeartbeatReport {
+                via,
                 period: h.heartbeat.period(),
+                configured_period: h.heartbeat.configured_period(),
+                drifts: h.heartbeat.drifts(),
+                guarding: (via == Supervision::Guarding || counts.requests > 0).then_some(
+                    GuardingReport {
+                        life_time_factor: h.heartbeat.life_time_factor(),
+                        counts,
+                    },
+                ),
                 timeout: h.heartbeat.timeout(),
                 lost: h.heartbeat.lost_count(),
                 outages: h.heartbeat.outages().to_vec(),
@@ -138,7 +217,12 @@ impl Monitor for NmtMonitor {
     }
 }
 
-fn lost_event(lost: Lost, line: u64, timeout: Option<(Span, TimeoutSource)>) -> (At, Health) {
+fn lost_event(
+    lost: Lost,
+    line: u64,
+    timeout: Option<(Span, TimeoutSource)>,
+    via: Supervision,
+) -> (At, Health) {
     let (timeout, timeout_source) = timeout.unwrap_or((Span::ZERO, TimeoutSource::Learnt));
     (
         At {
@@ -150,16 +234,18 @@ fn lost_event(lost: Lost, line: u64, timeout: Option<(Span, TimeoutSource)>) -> 
             last_seen_line: lost.last_seen.line,
             timeout,
             timeout_source,
+            via,
         },
     )
 }
 
-fn back_event(back: Back, at: At) -> (At, Health) {
+fn back_event(back: Back, at: At, via: Supervision) -> (At, Health) {
     (
         at,
         Health::HeartbeatBack {
             silent: back.silent,
             restarted: back.restarted,
+            via,
         },
     )
 }
@@ -176,16 +262,17 @@ fn sign_of_life(
     events: &mut Vec<(At, Health)>,
 ) -> Option<Timestamp> {
     let timeout = h.heartbeat.timeout();
+    let via = h.heartbeat.supervision();
     let (newly, back) = if boot {
         h.heartbeat.boot(at)
     } else {
         h.heartbeat.seen(at)
     };
     if let Some(lost) = newly {
-        events.push(lost_event(lost, at.line, timeout));
+        events.push(lost_event(lost, at.line, timeout, via));
     }
     let back = back?;
-    events.push(back_event(back, at));
+    events.push(back_event(back, at, via));
     at.time.filter(|&now| now < back.lost.deadline)?;
     Some(back.lost.deadline)
 }
@@ -268,8 +355,9 @@ impl NmtMonitor {
             };
             let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
             let timeout = h.heartbeat.timeout();
+            let via = h.heartbeat.supervision();
             if let Some(lost) = h.heartbeat.check(now) {
-                self.events.push(lost_event(lost, line, timeout));
+                self.events.push(lost_event(lost, line, timeout, via));
             }
             if self.events.is_empty() {
                 continue;
@@ -438,10 +526,13 @@ impl NmtMonitor {
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
         let slot = nodes.get(raw, node);
+        let first = slot.timeline.health().is_none();
         let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
+        if first {
+            self.spoke(raw, node, h);
+        }
         let early = sign_of_life(h, at, true, &mut self.events);
-        let change = h.nmt.heartbeat(NmtState::Initialising, &mut self.warnings);
-        nmt_event(change, at, &mut self.events);
+        nmt_event(Some(h.nmt.boot_up()), at, &mut self.events);
         self.schedule(slot.channel_id, node, h);
         emit.health(slot.channel, node, &mut self.events)?;
         outage_after_its_end(node, "boot-up", at, early, emit);
@@ -456,21 +547,115 @@ impl NmtMonitor {
         }
     }
 
-    /// A remote request on a standard id: on 0x700 + node, node guarding.
-    pub(in crate::analyze) fn remote_frame(
+    /// A remote request on a standard id at `line`: on 0x700 + node, node
+    /// guarding's guard request. It asks; it does not make a node.
+    pub(in crate::analyze) fn remote_frame<E: Write>(
+        &mut self,
         raw: &[u8],
         id: u32,
+        line: u64,
         nodes: &mut Nodes,
-        timeout: Option<Span>,
+        emit: &mut Emit<'_, E>,
     ) {
-        if let Some(node) = nmt::error_control_node(id) {
-            nodes
-                .get(raw, node)
-                .timeline
-                .health_mut(timeout)
-                .nmt
-                .guard_request();
+        let Some(node) = nmt::error_control_node(id) else {
+            return;
+        };
+        let timeout = emit.opts.heartbeat_timeout;
+        match nodes.known(raw, node) {
+            Some(timeline) => {
+                let h = timeline.health_mut(timeout);
+                h.nmt.guard_request(line, &mut self.warnings);
+            }
+            None => {
+                let a = self.addressed(raw, node);
+                a.sent_at(GUARD_REQUESTS, line);
+                a.guard_asked = Some(line);
+            }
         }
+        self.nmt_warnings(node, line, emit);
+    }
+
+    /// The facts kept of what was sent to `node` on `raw` before it spoke.
+    fn addressed(&mut self, raw: &[u8], node: NodeId) -> &mut Addressed {
+        if !self.addressed.contains_key(raw) {
+            self.addressed.insert(raw.into(), HashMap::new());
+        }
+        self.addressed
+            .get_mut(raw)
+            .map(|ids| ids.entry(node).or_default())
+            .expect("inserted above")
+    }
+
+    /// `node` on `raw` spoke for the first time to this monitor (its health
+    /// is new): what was sent to it before that shapes how its frames read
+    /// (see [`Addressed`]).
+    fn spoke(&mut self, raw: &[u8], node: NodeId, h: &mut NodeHealth) {
+        if self.addressed.is_empty() {
+            return;
+        }
+        let Some(a) = self
+            .addressed
+            .get_mut(raw)
+            .and_then(|ids| ids.remove(&node))
+        else {
+            return;
+        };
+        if let Some(line) = a.guard_asked {
+            h.nmt.guard_request(line, &mut self.warnings);
+        }
+        if let Some(ms) = a.consumer_ms {
+            h.heartbeat.set_consumer_ms(ms);
+        }
+    }
+
+    /// The end of the input (its last line `line`): what was sent to ids
+    /// that never spoke (no frame of theirs made a node), one diagnostic
+    /// per command, at the last line (diagnostics come in line order) and
+    /// naming the line of the first one sent, where a reader finds it.
+    fn unanswered_at_end<E: Write>(
+        &mut self,
+        line: u64,
+        nodes: &mut Nodes,
+        emit: &mut Emit<'_, E>,
+    ) {
+        let mut sent = [0u64; 6];
+        let mut ids = [0u64; 6];
+        let mut first = [u64::MAX; 6];
+        for (raw, addressed) in &self.addressed {
+            for (&node, a) in addressed {
+                // Spoken to another monitor (EMCY, SDO, PDO): a node.
+                if nodes.known(raw, node).is_some() {
+                    continue;
+                }
+                for i in 0..sent.len() {
+                    if a.sent[i] > 0 {
+                        sent[i] += a.sent[i];
+                        ids[i] += 1;
+                        first[i] = first[i].min(a.first_line[i]);
+                    }
+                }
+            }
+        }
+        self.addressed = HashMap::new();
+        let commands = Command::ALL.iter().map(|&c| Some(c));
+        for (i, command) in commands.chain([None]).enumerate() {
+            if sent[i] == 0 {
+                continue;
+            }
+            let u = Unanswered {
+                command,
+                sent: sent[i],
+                ids: ids[i],
+            };
+            let said = format!("{} (the first at line {})", u.sentence(), first[i]);
+            emit.diagnostic(line, said);
+            self.unanswered.push(u);
+        }
+    }
+
+    /// What went to ids that never spoke ([`NmtMonitor::finish`] found it).
+    pub(in crate::analyze) fn take_unanswered(&mut self) -> Vec<Unanswered> {
+        std::mem::take(&mut self.unanswered)
     }
 
     /// A data frame that is neither EMCY, SDO nor boot-up: a heartbeat or
@@ -491,7 +676,11 @@ impl NmtMonitor {
         };
         let (ErrorControl::Heartbeat { node, .. } | ErrorControl::Unknown { node, .. }) = ec;
         let slot = nodes.get(raw, node);
+        let first = slot.timeline.health().is_none();
         let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
+        if first {
+            self.spoke(raw, node, h);
+        }
         // Nearly every heartbeat: same state, in time. Its deadline moves
         // on; the schedule catches up lazily.
         if let ErrorControl::Heartbeat { state, .. } = ec
@@ -510,21 +699,27 @@ impl NmtMonitor {
             if reply.state.is_none() {
                 undefined = Some(byte);
             }
-            nmt_event(h.nmt.guard_reply(reply, warnings), at, events);
+            // A reply is the guarded node's sign of life (life guarding).
+            h.heartbeat.guarded();
+            early = sign_of_life(h, at, false, events);
+            nmt_event(h.nmt.guard_reply(reply, at.time, warnings), at, events);
         } else {
             match ec {
                 ErrorControl::Heartbeat { state, .. } => {
                     early = sign_of_life(h, at, false, events);
-                    nmt_event(h.nmt.heartbeat(state, warnings), at, events);
+                    nmt_event(h.nmt.heartbeat(state, at.time, warnings), at, events);
                 }
                 ErrorControl::Unknown { byte, .. } => undefined = Some(byte),
             }
         }
+        let what = match h.heartbeat.supervision() {
+            Supervision::Guarding => "guarding reply",
+            Supervision::Heartbeat => "heartbeat",
+        };
         self.schedule(slot.channel_id, node, h);
         emit.health(slot.channel, node, &mut self.events)?;
-        outage_after_its_end(node, "heartbeat", at, early, emit);
+        outage_after_its_end(node, what, at, early, emit);
         if let Some(byte) = undefined {
-            self.warnings.clear();
             emit.diagnostic(
                 at.line,
                 format!("node {node}: NMT error control byte 0x{byte:02X} names no NMT state"),
@@ -553,9 +748,14 @@ impl NmtMonitor {
             if node == 0 {
                 continue;
             }
+            if nodes.known(raw, node).is_none() {
+                // Addressed, not heard: no node (see `Addressed`).
+                self.addressed(raw, node).sent_at(command.index(), at.line);
+                continue;
+            }
             let slot = nodes.get(raw, node);
             let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
-            nmt_event(h.nmt.command(command), at, &mut self.events);
+            nmt_event(h.nmt.command(command, at.time), at, &mut self.events);
             emit.health(slot.channel, node, &mut self.events)?;
         }
         Ok(())

@@ -279,7 +279,7 @@ fn nmt_changes_boot_ups_clock_jumps_and_silence_to_the_end() {
         );
         let (out, err) = run_with(&t, base_options());
         assert!(out.contains("\"state\":\"pre_operational\""), "{seed}");
-        assert!(out.contains("\"state\":\"initialising\""), "{seed}");
+        assert!(out.contains("\"via\":\"boot_up\""), "{seed}");
         assert!(out.contains("\"silent_at_end\":true"), "{seed}");
         assert!(err.contains("ignored the NMT command"), "{seed}: {err}");
         assert!(err.contains("clock went backwards"), "{seed}: {err}");

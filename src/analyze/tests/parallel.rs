@@ -378,7 +378,68 @@ fn nmt_heartbeats_and_error_history_across_blocks() {
         assert!(out.contains(&format!("\"type\":\"{t}\"")), "{t}");
     }
     assert!(out.contains("\"via\":\"guarding\""));
-    assert!(err.contains("toggle bit did not alternate"), "{err}");
+    assert!(err.contains("toggle bit error"), "{err}");
+}
+
+/// The network fixtures (a reset scan of absent ids, node guarding, the
+/// command grace), split anywhere: what the master sent to ids that had
+/// not spoken yet, a guard request waiting and a command waiting carry
+/// across blocks, and ids that never spoke stay no nodes.
+#[test]
+fn nodes_exist_when_they_speak_across_blocks() {
+    let traces: [(&str, &[u8]); 3] = [
+        (
+            "reset scan",
+            include_bytes!("../../../fixtures/network-reset-scan.log"),
+        ),
+        (
+            "guarding",
+            include_bytes!("../../../fixtures/network-guarding.log"),
+        ),
+        (
+            "grace",
+            include_bytes!("../../../fixtures/network-nmt-grace.log"),
+        ),
+    ];
+    for (name, trace) in traces {
+        let reference = run(trace, 1, 1 << 20);
+        for threads in [1, 2, 3] {
+            for block_size in [64, 333, 4096] {
+                assert_eq!(
+                    run(trace, threads, block_size),
+                    reference,
+                    "{name}: {threads} threads, blocks of {block_size}"
+                );
+            }
+        }
+    }
+    let (scan, err) = run(traces[0].1, 2, 64);
+    let nodes = scan.matches("\"type\":\"node\"").count();
+    assert_eq!(nodes, 3, "only the ids that spoke");
+    assert!(!scan.contains("\"state\":\"initialising\""), "{scan}");
+    assert!(
+        scan.contains("\"nmt_unanswered\":[{\"request\":\"reset_node\",\"sent\":248,\"ids\":124}]"),
+        "{scan}"
+    );
+    assert!(
+        err.contains("trace:315: NMT reset node sent 248 times to 124 ids that never answered (the first at line 1)"),
+        "{err}"
+    );
+    let (guarded, err) = run(traces[1].1, 2, 64);
+    assert!(guarded.contains("\"timeout_source\":\"life_time\",\"via\":\"guarding\""));
+    assert!(err.contains("toggle bit error"), "{err}");
+    let (_, err) = run(traces[2].1, 2, 64);
+    assert_eq!(err.matches("ignored the NMT command").count(), 1, "{err}");
+    // Guarded before it ever spoke: its first frame answers the request
+    // waiting, so it is a guarding reply, not a heartbeat.
+    let first_reply = b"(1.000000) can0 70B#R\n(1.001000) can0 70B#05\n\
+        (1.100000) can0 70B#R\n(1.101000) can0 70B#85\n";
+    let (out, err) = run(first_reply, 1, 1 << 20);
+    assert!(
+        out.contains("\"node\":11,\"state\":\"operational\",\"via\":\"guarding\""),
+        "{out}"
+    );
+    assert!(err.is_empty(), "{err}");
 }
 
 /// A drive's TPDO made valid by a segmented download of its COB-ID, its

@@ -22,6 +22,11 @@ pub const ERROR_HISTORY: u16 = 0x1003;
 pub const CONSUMER_HEARTBEAT: u16 = 0x1016;
 /// Object 0x1017: producer heartbeat time (ms).
 pub const PRODUCER_HEARTBEAT: u16 = 0x1017;
+/// Object 0x100C: node guarding's guard time (ms).
+pub const GUARD_TIME: u16 = 0x100C;
+/// Object 0x100D: node guarding's life time factor (the node's life time
+/// is the guard time times this).
+pub const LIFE_TIME_FACTOR: u16 = 0x100D;
 
 /// One SDO frame that matters to value tracking.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,7 +75,7 @@ pub(super) const CS_ABORT: u8 = 4;
 
 /// Whether `index` is an object whose value the decoder follows: device type and vendor id
 /// choose a node's profile, COB-ID EMCY moves its EMCY id, the error
-/// history is read out, heartbeat times set the timeouts. Frames naming
+/// history is read out, heartbeat and guarding times set the timeouts. Frames naming
 /// any other object change nothing (the `Tracker` ignores them) except
 /// aborts, which are reported whatever they name.
 ///
@@ -85,6 +90,8 @@ pub fn is_followed(index: u16) -> bool {
             | COB_ID_EMCY
             | CONSUMER_HEARTBEAT
             | PRODUCER_HEARTBEAT
+            | GUARD_TIME
+            | LIFE_TIME_FACTOR
             | IDENTITY
     )
 }
@@ -133,6 +140,8 @@ mod tests {
             COB_ID_EMCY,
             CONSUMER_HEARTBEAT,
             PRODUCER_HEARTBEAT,
+            GUARD_TIME,
+            LIFE_TIME_FACTOR,
             IDENTITY,
         ];
         for index in 0..=u16::MAX {

@@ -18,8 +18,9 @@ pub mod segmented;
 mod tracker;
 
 pub use access::{
-    COB_ID_EMCY, CONSUMER_HEARTBEAT, DEVICE_TYPE, ERROR_HISTORY, IDENTITY, Object,
-    PRODUCER_HEARTBEAT, REQUEST_BASE, RESPONSE_BASE, Sdo, cob_id_emcy, is_followed, is_sdo_id,
+    COB_ID_EMCY, CONSUMER_HEARTBEAT, DEVICE_TYPE, ERROR_HISTORY, GUARD_TIME, IDENTITY,
+    LIFE_TIME_FACTOR, Object, PRODUCER_HEARTBEAT, REQUEST_BASE, RESPONSE_BASE, Sdo, cob_id_emcy,
+    is_followed, is_sdo_id,
 };
 #[cfg(test)]
 pub use frame::names_followed_object;

@@ -12,8 +12,9 @@ use super::page::{BOLD, Page};
 use super::timeline::{NodeTexts, write_timeline};
 use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport};
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
-use crate::report::timefmt::TimeFormat;
+use crate::report::timefmt::{TimeFormat, human_span};
 use crate::text::printable;
+use crate::timeline::heartbeat::Supervision;
 
 /// The end of an input, under its events' legend: the nodes, their
 /// health and drives, the error timeline and the bus line.
@@ -318,7 +319,14 @@ fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Resu
         input.nodes.len(),
         c.malformed,
     );
-    page.write_wrapped(&line, 5)
+    page.write_wrapped(&line, 5)?;
+    // Ids the master addressed that never answered are no nodes: one line
+    // says them all, instead of a row each.
+    if !input.nmt_unanswered.is_empty() {
+        let said: Vec<String> = input.nmt_unanswered.iter().map(|u| u.sentence()).collect();
+        page.write_wrapped(&format!("unanswered: {}", said.join("; ")), 12)?;
+    }
+    Ok(())
 }
 
 const HEALTH_HEADER: [&str; 6] = [
@@ -334,7 +342,13 @@ const HEALTH_RIGHT: [bool; 6] = [false, true, false, false, false, false];
 
 const HEALTH_FIT: Fit = Fit {
     drop: &[],
-    flex: &[(3, 40, 12), (4, 40, 10), (5, 40, 12), (0, CHANNEL_MAX, 7)],
+    flex: &[
+        (3, 40, 12),
+        (4, 40, 10),
+        (5, 40, 12),
+        (2, 40, 15),
+        (0, CHANNEL_MAX, 7),
+    ],
 };
 
 /// Fills the cells of one node health row; returns their display widths.
@@ -342,7 +356,7 @@ fn health_cells(cells: &mut [String; 6], times: &TimeFormat, n: &NodeReport) -> 
     let [channel, node, nmt, heartbeat, outages, history] = cells;
     *channel = printable(&n.channel).into_owned();
     *node = n.node.to_string();
-    *nmt = n.nmt_state.map_or("-", |s| s.slug()).to_string();
+    *nmt = nmt_text(n);
     *heartbeat = heartbeat_text(n);
     *outages = outages_text(times, n);
     *history = n
@@ -383,17 +397,47 @@ fn history_cell(h: &HistoryReport) -> String {
     s
 }
 
-/// `period 0.100 s, timeout 0.300 s (learnt), lost 1x, silent at end`.
+/// The NMT state the node said last, and a commanded state it did not
+/// confirm: `pre_operational (operational commanded)`.
+fn nmt_text(n: &NodeReport) -> String {
+    let said = n.nmt_state.map_or("-", |s| s.slug());
+    match n.nmt_commanded {
+        Some(asked) => format!("{said} ({} commanded)", asked.slug()),
+        None => said.to_string(),
+    }
+}
+
+/// `period 1.44 s (configured 1.4 s: drifts), timeout 2.1 s (producer),
+/// lost 1x, silent at end`; a guarded node's starts `guarding 100 ms x 3`
+/// and counts its unanswered requests and toggle errors.
 fn heartbeat_text(n: &NodeReport) -> String {
     let Some(h) = &n.heartbeat else {
         return "-".to_string();
     };
     let mut parts = Vec::new();
+    if let Some(g) = &h.guarding {
+        let mut text = "guarding".to_string();
+        if h.via == Supervision::Guarding
+            && let Some(guard) = h.configured_period
+        {
+            text.push_str(&format!(" {}", human_span(guard)));
+            if let Some(f) = g.life_time_factor {
+                text.push_str(&format!(" x {f}"));
+            }
+        }
+        parts.push(text);
+    }
     if let Some(p) = h.period {
-        parts.push(format!("period {p} s"));
+        let mut text = format!("period {}", human_span(p));
+        if let Some(c) = h.configured_period
+            && h.drifts
+        {
+            text.push_str(&format!(" (configured {}: drifts)", human_span(c)));
+        }
+        parts.push(text);
     }
     match h.timeout {
-        Some((t, source)) => parts.push(format!("timeout {t} s ({})", source.slug())),
+        Some((t, source)) => parts.push(format!("timeout {} ({})", human_span(t), source.slug())),
         None => parts.push("no timeout known".to_string()),
     }
     parts.push(if h.lost == 0 {
@@ -403,6 +447,17 @@ fn heartbeat_text(n: &NodeReport) -> String {
     });
     if h.silent_at_end {
         parts.push("silent at end".to_string());
+    }
+    if let Some(g) = &h.guarding {
+        let c = g.counts;
+        if c.unanswered > 0 {
+            parts.push(format!("{} unanswered", c.unanswered));
+        }
+        match c.toggle_errors {
+            0 => {}
+            1 => parts.push("1 toggle error".to_string()),
+            e => parts.push(format!("{e} toggle errors")),
+        }
     }
     parts.join(", ")
 }
@@ -430,9 +485,12 @@ fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
         .iter()
         .take(SHOWN)
         .map(|o| match (o.end, o.duration()) {
-            (Some(end), Some(d)) => {
-                format!("{}-{} ({d} s)", times.show(o.start), times.show(end))
-            }
+            (Some(end), Some(d)) => format!(
+                "{}-{} ({})",
+                times.show(o.start),
+                times.show(end),
+                human_span(d)
+            ),
             _ => format!("{}-end", times.show(o.start)),
         })
         .collect();

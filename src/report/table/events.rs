@@ -21,7 +21,7 @@ use crate::canopen::profile::{Decoded, FieldValue};
 use crate::report::format::{
     TABLE_LIST, code_text, codes_list, push_code, push_codes, push_hex_byte,
 };
-use crate::report::timefmt::TimeFormat;
+use crate::report::timefmt::{TimeFormat, human_span};
 use crate::text::printable;
 use crate::timeline::drive::Via as DriveVia;
 use crate::trace::Timestamp;
@@ -645,14 +645,22 @@ pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String 
             last_seen,
             timeout,
             timeout_source,
+            via,
             ..
         } => format!(
-            "heartbeat lost: silent since {} (timeout {timeout} s, {})",
+            "{} lost: silent since {} (timeout {}, {})",
+            via.words(),
             times.show_opt(*last_seen),
+            human_span(*timeout),
             timeout_source.slug()
         ),
-        Health::HeartbeatBack { silent, restarted } => format!(
-            "heartbeat back after {silent} s{}",
+        Health::HeartbeatBack {
+            silent,
+            restarted,
+            via,
+        } => format!(
+            "{} back after {silent} s{}",
+            via.words(),
             if *restarted {
                 ", restarted (boot-up)"
             } else {
