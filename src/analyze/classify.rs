@@ -235,6 +235,14 @@ fn classify_line(
                         if let Some(n) = candump_log::dropped_frames(text) {
                             sink.dropped(n);
                         }
+                        if detector.reads_deltas() && candump_log::is_elision_line(text) {
+                            sink.warning(
+                                idx,
+                                "lines were left out here: their -td deltas are missing, so \
+                                 every later time is early by their sum"
+                                    .into(),
+                            );
+                        }
                         if !known && detector.format().is_some() {
                             sink.format_known();
                         }

@@ -64,3 +64,18 @@ fn inputs_without_notes_keep_their_json_object_and_table_as_they_were() {
     assert!(table.contains("ANNOTATED"), "{table}");
     assert!(table.contains("16 frames (6 annotated)"), "{table}");
 }
+
+#[test]
+fn a_cut_in_a_td_paste_is_told_where_its_deltas_go_missing() {
+    let out = emcy_decode().arg("fixtures/pasted.txt").output().unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains(
+            "fixtures/pasted.txt:13: lines were left out here: their -td deltas are missing"
+        ),
+        "{stderr}"
+    );
+    // Absolute times lose nothing at a cut.
+    let out = emcy_decode().arg("fixtures/pasted.log").output().unwrap();
+    assert!(!String::from_utf8(out.stderr).unwrap().contains("left out"));
+}

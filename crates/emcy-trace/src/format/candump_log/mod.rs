@@ -234,6 +234,12 @@ pub fn is_candump_non_frame(line: &[u8]) -> bool {
         || is_elision(t)
 }
 
+/// Whether a line is `...` or `…` alone: where a paste left lines out.
+/// Under `-td` the left-out lines' deltas are missing from every later time.
+pub fn is_elision_line(line: &[u8]) -> bool {
+    is_elision(trim_start(line))
+}
+
 /// Whether text after a complete frame (blanks already skipped) starts a
 /// note: `// boot`, `# config`, `< response`, any sign or non-ASCII
 /// character. A letter or digit there is more likely damage (two lines run
