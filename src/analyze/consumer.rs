@@ -228,7 +228,10 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// shared facts first (a profile, a moved EMCY id), then to every
     /// monitor.
     fn learnt(&mut self, channel: &[u8], at: At, learnt: Learnt) -> Result<(), OutputError> {
-        for fact in [learnt.read, learnt.holds].into_iter().flatten() {
+        for fact in [learnt.read, learnt.holds, learnt.written]
+            .into_iter()
+            .flatten()
+        {
             if let Fact::Holds {
                 node,
                 object,

@@ -698,17 +698,21 @@ impl Learner {
     }
 }
 
-/// Which frames PDO learning needs is a question about PDO parameters, so
-/// it is answered here rather than beside the assembly.
+/// Which writes the decoder learns from is a question about PDOs and
+/// drives, so it is answered here rather than beside the assembly.
 impl Downloads {
-    /// Whether a frame can matter to PDO configuration: an SDO frame
-    /// naming a PDO parameter, or any SDO frame of a node with a download
+    /// Whether a frame can matter to a write the decoder learns from: an
+    /// SDO frame naming a PDO parameter or the controlword (a drive's
+    /// fault reset is a write), or any SDO frame of a node with a download
     /// in progress (segments name no object). A cheap test, so the pipeline
     /// feeds only these.
     pub fn wants(&self, id: u32, data: &[u8]) -> bool {
         self.in_progress(id)
             || sdo::is_sdo_id(id)
-                && matches!(data, [_, lo, hi, ..] if PdoId::is_pdo_parameter(u16::from_le_bytes([*lo, *hi])))
+                && matches!(data, [_, lo, hi, ..] if {
+                    let index = u16::from_le_bytes([*lo, *hi]);
+                    PdoId::is_pdo_parameter(index) || index == cia402::CONTROLWORD
+                })
     }
 }
 
@@ -962,6 +966,8 @@ mod tests {
         assert!(d.wants(0x605, &[0x23, 0x00, 0x1A, 0x01]));
         assert!(d.wants(0x585, &[0x60, 0x00, 0x14, 0x01]));
         assert!(!d.wants(0x605, &[0x23, 0x18, 0x10, 0x01]), "identity");
+        assert!(d.wants(0x605, &[0x2B, 0x40, 0x60, 0x00]), "controlword");
+        assert!(!d.wants(0x605, &[0x2B, 0x41, 0x60, 0x00]), "statusword");
         assert!(!d.wants(0x185, &[0x23, 0x00, 0x1A, 0x01]), "not SDO");
         assert!(!d.wants(0x605, &[0x00]), "a segment, nothing going");
         d.feed(0x605, &[0x21, 0x00, 0x18, 0x01, 4, 0, 0, 0]);

@@ -97,17 +97,19 @@ pub(in crate::analyze) enum Step {
 }
 
 /// What one SDO access showed: an object read directly, a value a node
-/// holds. Either, both or neither.
+/// holds, a write the node confirmed. Any of them, or none.
 #[derive(Default)]
 pub(in crate::analyze) struct Learnt {
     pub(in crate::analyze) read: Option<Fact>,
     pub(in crate::analyze) holds: Option<Fact>,
+    pub(in crate::analyze) written: Option<Fact>,
 }
 
 /// A fact about a node that one monitor learnt and others may need.
 #[derive(Clone, Copy, Debug)]
 pub(in crate::analyze) enum Fact {
-    /// An expedited SDO upload: `object` of `node` read directly.
+    /// An SDO upload (expedited, segmented or block) of at most four
+    /// bytes: `object` of `node` read directly.
     Read {
         node: NodeId,
         object: Object,
@@ -120,6 +122,13 @@ pub(in crate::analyze) enum Fact {
         object: Object,
         value: u32,
         written: bool,
+    },
+    /// A download of at most four bytes to `object` (any object the SDO
+    /// monitor assembles writes of) that `node` confirmed.
+    Written {
+        node: NodeId,
+        object: Object,
+        value: u32,
     },
 }
 

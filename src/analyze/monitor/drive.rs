@@ -1,7 +1,8 @@
 //! The drive monitor: CiA 402 drives. PDO mappings learnt from the
-//! trace's SDO writes or given (DCF, `--pdo`, `--assume-cia402-pdo`), the
-//! statuswords and controlwords read out of PDOs and SDO uploads, and the
-//! `drive_state` / `fault_reset` events. Kept apart from the EMCY path: a
+//! trace's SDO writes and reads (the SDO monitor assembles them) or given
+//! (DCF, `--pdo`, `--assume-cia402-pdo`), the statuswords read out of PDOs
+//! and SDO uploads, the controlwords the master writes (RPDO or SDO
+//! download), and the `drive_state` / `fault_reset` events. Kept apart from the EMCY path: a
 //! PDO on an id no mapping decodes costs one array lookup there.
 
 use std::collections::BTreeMap;
@@ -17,7 +18,7 @@ use crate::canopen::cia402::{self, Command};
 use crate::canopen::pdo::{
     self, Cia402Fields, Cia402Values, CobId, Learner, Mapping, MappingTable, Source,
 };
-use crate::canopen::sdo::{self, Downloads};
+use crate::canopen::sdo::{self, Object};
 use crate::timeline::At;
 use crate::timeline::drive::{DriveRecord, Via};
 use crate::timeline::health::NodeHealth;
@@ -58,7 +59,6 @@ struct Last {
 pub(in crate::analyze) struct DriveMonitor {
     table: MappingTable,
     learner: Learner,
-    downloads: Downloads,
     /// Slots by standard id, rebuilt when the table changes.
     by_id: Box<[Option<PdoSlot>]>,
     /// Slots of 29-bit ids (a `--pdo` or a DCF may give one).
@@ -96,7 +96,6 @@ impl DriveMonitor {
         let mut d = DriveMonitor {
             table,
             learner: Learner::new(),
-            downloads: Downloads::new(),
             by_id: vec![None; STANDARD_IDS].into_boxed_slice(),
             extended: Vec::new(),
             watched: BTreeMap::new(),
@@ -227,14 +226,13 @@ impl Monitor for DriveMonitor {
         DriveMonitor::with_mappings(opts)
     }
 
-    /// A PDO some mapping decodes is taken; an SDO frame that may
-    /// configure a PDO is followed, and goes on to the SDO monitor.
+    /// A PDO some mapping decodes is taken.
     #[inline]
     fn frame<E: Write>(
         &mut self,
         frame: &Seen<'_>,
         nodes: &mut Nodes,
-        facts: &Facts<'_>,
+        _facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<Step, OutputError> {
         if let Some(slot) = self.slot(frame.id, frame.extended) {
@@ -249,16 +247,13 @@ impl Monitor for DriveMonitor {
             )?;
             return Ok(Step::Done);
         }
-        // An SDO id an EMCY id moved to is the EMCY monitor's.
-        if !frame.extended && sdo::is_sdo_id(frame.id) && facts.emcy_node(frame.id, false).is_none()
-        {
-            self.pdo_configuration(frame.id, frame.data, nodes, emit);
-        }
         Ok(Step::Pass)
     }
 
-    /// The device type (0x1000), and the statusword, controlword and
-    /// error code read directly (0x6041, 0x6040, 0x603F).
+    /// The device type (0x1000); PDO parameters read or written; the
+    /// statusword and error code read directly (0x6041, 0x603F); the
+    /// controlword written (0x6040), or read, which only says what the
+    /// drive holds: a read is no command, so no fault reset.
     fn learn<E: Write>(
         &mut self,
         raw: &[u8],
@@ -282,17 +277,55 @@ impl Monitor for DriveMonitor {
                 node,
                 object,
                 value,
+            }
+            | Fact::Written {
+                node,
+                object,
+                value,
+            } if pdo::PdoId::is_pdo_parameter(object.index) => {
+                self.pdo_configuration(node, object, value, nodes, emit);
+                Ok(())
+            }
+            Fact::Read {
+                node,
+                object,
+                value,
+            } if object.sub == 0 && object.index == cia402::CONTROLWORD => {
+                let h = nodes
+                    .get(raw, node)
+                    .timeline
+                    .health_mut(emit.opts.heartbeat_timeout);
+                let rec = h.drive.get_or_insert_with(|| Box::new(DriveRecord::new()));
+                rec.drive.controlword_read(value as u16);
+                Ok(())
+            }
+            Fact::Written {
+                node,
+                object,
+                value,
+            } if object.sub == 0 && object.index == cia402::CONTROLWORD => {
+                let words = Words {
+                    statusword: None,
+                    controlword: Some(value as u16),
+                    error_code: None,
+                    via: Via::Sdo,
+                };
+                self.words(raw, node, at, words, nodes, emit)
+            }
+            Fact::Read {
+                node,
+                object,
+                value,
             } if object.sub == 0 => {
                 let word = Some(value as u16);
-                let (statusword, controlword, error_code) = match object.index {
-                    cia402::STATUSWORD => (word, None, None),
-                    cia402::CONTROLWORD => (None, word, None),
-                    cia402::ERROR_CODE => (None, None, word),
+                let (statusword, error_code) = match object.index {
+                    cia402::STATUSWORD => (word, None),
+                    cia402::ERROR_CODE => (None, word),
                     _ => return Ok(()),
                 };
                 let words = Words {
                     statusword,
-                    controlword,
+                    controlword: None,
                     error_code,
                     via: Via::Sdo,
                 };
@@ -376,22 +409,18 @@ struct Words {
 }
 
 impl DriveMonitor {
-    /// An SDO frame on a CAN SDO id that may configure a PDO: followed to
-    /// the node's confirmation, then learnt.
+    /// A PDO parameter's value the node confirmed writing or reported in
+    /// an upload: a master that reads a mapping back learns it as surely
+    /// as one that writes it.
     fn pdo_configuration<E: Write>(
         &mut self,
-        id: u32,
-        data: &[u8],
+        node: NodeId,
+        object: Object,
+        value: u32,
         nodes: &mut Nodes,
         emit: &mut Emit<'_, E>,
     ) {
-        if !self.downloads.wants(id, data) {
-            return;
-        }
-        let Some(c) = self.downloads.feed(id, data) else {
-            return;
-        };
-        let Some(pdo) = self.learner.confirmed(c.node, c.object, c.value) else {
+        let Some(pdo) = self.learner.confirmed(node, object, value) else {
             return;
         };
         let mapping = self.learner.mapping(pdo);

@@ -284,6 +284,16 @@ impl Uploads {
         Self::default()
     }
 
+    /// Whether the node of SDO id `id` has a segmented upload going on:
+    /// its segments name no object, so only this says they matter.
+    pub fn in_progress(&self, id: u32) -> bool {
+        sender(id).is_some_and(|(_, node)| {
+            self.transfers
+                .get(node as usize)
+                .is_some_and(|t| !matches!(t, Upload::Idle))
+        })
+    }
+
     /// Feeds one frame on an SDO id (others change nothing); the upload it
     /// completes, if it completes one with a value of at most four bytes.
     /// Only the server's frames matter: its initiate response names the
