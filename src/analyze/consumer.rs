@@ -165,6 +165,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.facts.profiles.reason(n.node).map(str::to_string);
+            n.device_type = self.facts.profiles.device_type(n.node);
             if let Some(h) = &mut n.error_history {
                 for e in &mut h.entries {
                     e.description = n.profile.describe(e.code);

@@ -198,6 +198,8 @@ pub struct NodeReport {
     pub profile_reason: Option<String>,
     /// The profile's description of every code the node raised.
     pub descriptions: CodeTexts,
+    /// Its device type (object 0x1000) as the trace or its DCF showed it.
+    pub device_type: Option<u32>,
     /// The NMT state at the end; `None` if the trace never told.
     pub nmt_state: Option<NmtState>,
     /// `None` for a node that sent no heartbeat.

@@ -402,6 +402,24 @@ impl MappingTable {
         }
     }
 
+    /// Withdraws the assumed mappings of `node` (its device type says it is
+    /// no drive); whether it had any.
+    pub fn withdraw_assumed(&mut self, node: NodeId) -> bool {
+        let rank = Source::Assumed.rank();
+        let mut withdrew = false;
+        self.by_cob.retain(|_, slots| {
+            if let Some(slot) = slots.by_source.get_mut(rank)
+                && slot.as_ref().is_some_and(|m| m.node == Some(node))
+            {
+                *slot = None;
+                withdrew = true;
+                slots.refresh();
+            }
+            slots.best().is_some()
+        });
+        withdrew
+    }
+
     /// Where the CiA 402 words sit in PDOs on `cob_id`, if the mapping in
     /// force there maps any: the per-frame call.
     pub fn fields(&self, cob_id: CobId) -> Option<&Cia402Fields> {
@@ -1049,6 +1067,21 @@ mod tests {
 
     #[test]
     fn assumed_mapping_is_tpdo1_statusword_and_rpdo1_controlword() {
+        let mut table = MappingTable::new();
+        for node in [3, 4] {
+            for m in assumed_cia402(node).into_iter().flatten() {
+                table.insert(m);
+            }
+        }
+        let tpdo3 = CobId {
+            id: 0x183,
+            extended: false,
+        };
+        assert!(table.fields(tpdo3).is_some());
+        assert!(table.withdraw_assumed(3));
+        assert!(!table.withdraw_assumed(3), "withdrawn already");
+        assert!(table.fields(tpdo3).is_none());
+        assert_eq!(table.in_force().count(), 2, "node 4's stay");
         let [t, r] = assumed_cia402(3).expect("node 3");
         assert_eq!(t.cob_id.id, 0x183);
         assert_eq!(t.direction, Some(Direction::Tpdo));

@@ -225,14 +225,6 @@ impl Drive {
         })
     }
 
-    /// A controlword read from the drive (an SDO upload): what the drive
-    /// holds, so the next word the master writes is compared with it, but
-    /// no command: only a write commands, and a read of a word with the
-    /// fault reset bit set is no fault reset.
-    pub fn controlword_read(&mut self, controlword: u16) {
-        self.controlword = Some(controlword);
-    }
-
     /// Feeds a controlword the master wrote; the command it gives, if it
     /// gives one, when it differs from the last (a repeated word repeats
     /// no command).

@@ -36,6 +36,7 @@ mod output;
 mod pcap;
 mod readme;
 mod roundtrip;
+mod sdo;
 mod table;
 mod timestamps;
 mod trc;

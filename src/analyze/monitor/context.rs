@@ -143,11 +143,18 @@ pub(in crate::analyze) struct Facts<'r> {
 
 impl<'r> Facts<'r> {
     /// The facts the options give: `--emcy-id`, the profiles chosen, and
-    /// the DCFs' identities, as if the trace had shown 0x1018 (they choose
-    /// the node's profile).
+    /// the DCFs' device types and identities, as if the trace had shown
+    /// 0x1000 and 0x1018 (they choose the node's profile).
     pub(in crate::analyze) fn new(opts: &'r Options) -> Self {
         let mut profiles = NodeProfiles::new(&opts.profiles);
         for (node, dcf) in &opts.dcf {
+            if let Some(v) = dcf.device_type {
+                let object = Object {
+                    index: sdo::DEVICE_TYPE,
+                    sub: 0,
+                };
+                profiles.object_value(*node, object, v);
+            }
             if let Some(v) = dcf.vendor_id {
                 let object = Object {
                     index: sdo::IDENTITY,

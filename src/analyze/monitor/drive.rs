@@ -15,6 +15,7 @@ use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::NodeId;
 use crate::canopen::cia402::{self, Command};
+use crate::canopen::device_profile;
 use crate::canopen::pdo::{
     self, Cia402Fields, Cia402Values, CobId, Learner, Mapping, MappingTable, Source,
 };
@@ -31,9 +32,6 @@ const STANDARD_IDS: usize = 0x800;
 /// (ten frames are 10-100 ms of one), not the odd PDO of a trace recorded
 /// for its EMCYs, which would make every such trace say it.
 const UNMAPPED_NOTE_AT: u64 = 10;
-
-/// Profile number of CiA 402 in the low 16 bits of the device type (0x1000).
-const CIA402_PROFILE: u32 = 402;
 
 /// What a PDO id decodes to: whose it is and where its words sit.
 #[derive(Clone, Copy, Debug)]
@@ -71,6 +69,10 @@ pub(in crate::analyze) struct DriveMonitor {
     last: Vec<Option<Last>>,
     /// Drives whose PDOs went by undecoded: the first such id, how many.
     unmapped: BTreeMap<NodeId, (u32, u64)>,
+    /// Nodes `--assume-cia402-pdo` skips, as their device type says they
+    /// are no drive: the device type, and whether states read before it
+    /// came were withdrawn from the node's report.
+    not_drives: BTreeMap<NodeId, (u32, bool)>,
     /// Buffer reused from frame to frame.
     events: Vec<(At, Health)>,
 }
@@ -86,8 +88,17 @@ impl DriveMonitor {
         for m in &opts.pdo {
             table.insert(m.clone());
         }
+        let mut not_drives = BTreeMap::new();
         if opts.assume_cia402_pdo {
+            for (node, dcf) in &opts.dcf {
+                if let Some(t) = dcf.device_type.filter(|&t| !device_profile::is_drive(t)) {
+                    not_drives.insert(*node, (t, false));
+                }
+            }
             for node in 1..=127 {
+                if not_drives.contains_key(&node) {
+                    continue;
+                }
                 for m in pdo::assumed_cia402(node).into_iter().flatten() {
                     table.insert(m);
                 }
@@ -100,6 +111,7 @@ impl DriveMonitor {
             extended: Vec::new(),
             watched: BTreeMap::new(),
             unmapped: BTreeMap::new(),
+            not_drives,
             last: vec![None; STANDARD_IDS],
             events: Vec::new(),
         };
@@ -252,8 +264,10 @@ impl Monitor for DriveMonitor {
 
     /// The device type (0x1000); PDO parameters read or written; the
     /// statusword and error code read directly (0x6041, 0x603F); the
-    /// controlword written (0x6040), or read, which only says what the
-    /// drive holds: a read is no command, so no fault reset.
+    /// controlword written (0x6040). A read of the controlword is no
+    /// command, so never a fault reset, and it is not compared with the
+    /// words written either: the master's RPDOs that follow it repeat the
+    /// word before it, and their repeats are not fed again.
     fn learn<E: Write>(
         &mut self,
         raw: &[u8],
@@ -270,7 +284,7 @@ impl Monitor for DriveMonitor {
                 value,
                 ..
             } if object.index == sdo::DEVICE_TYPE && object.sub == 0 => {
-                self.device_type(node, value, emit);
+                self.device_type(raw, node, value, nodes, emit);
                 Ok(())
             }
             Fact::Read {
@@ -284,19 +298,6 @@ impl Monitor for DriveMonitor {
                 value,
             } if pdo::PdoId::is_pdo_parameter(object.index) => {
                 self.pdo_configuration(node, object, value, nodes, emit);
-                Ok(())
-            }
-            Fact::Read {
-                node,
-                object,
-                value,
-            } if object.sub == 0 && object.index == cia402::CONTROLWORD => {
-                let h = nodes
-                    .get(raw, node)
-                    .timeline
-                    .health_mut(emit.opts.heartbeat_timeout);
-                let rec = h.drive.get_or_insert_with(|| Box::new(DriveRecord::new()));
-                rec.drive.controlword_read(value as u16);
                 Ok(())
             }
             Fact::Written {
@@ -362,6 +363,37 @@ impl Monitor for DriveMonitor {
                  --assume-cia402-pdo",
                 list.join(", "),
             ));
+        }
+        if !self.not_drives.is_empty() {
+            let list: Vec<String> = self
+                .not_drives
+                .iter()
+                .map(|(n, (t, _))| format!("{n} (0x{t:08X}, {})", device_profile::describe(*t)))
+                .collect();
+            let withdrawn: Vec<String> = self
+                .not_drives
+                .iter()
+                .filter(|(_, (_, w))| *w)
+                .map(|(n, _)| n.to_string())
+                .collect();
+            let (one, verb, their) = if list.len() == 1 {
+                ("node", "is not a drive", "its")
+            } else {
+                ("nodes", "are not drives", "their")
+            };
+            let mut note = format!(
+                "--assume-cia402-pdo: {one} {} {verb} by {their} device type; {their} PDOs are \
+                 not read as CiA 402",
+                list.join(", ")
+            );
+            if !withdrawn.is_empty() {
+                note.push_str(&format!(
+                    " (the states read before the device type came are left out of the report \
+                     of node {})",
+                    withdrawn.join(", ")
+                ));
+            }
+            emit.note(&note);
         }
         let dropped = self.learner.dropped();
         if dropped > 0 {
@@ -431,9 +463,37 @@ impl DriveMonitor {
     }
 
     /// A node's device type (0x1000): a CiA 402 drive without a known
-    /// transmit PDO mapping gets its TPDO ids watched.
-    fn device_type<E: Write>(&mut self, node: NodeId, value: u32, emit: &mut Emit<'_, E>) {
-        if value & 0xFFFF != CIA402_PROFILE || !(1..=127).contains(&node) {
+    /// transmit PDO mapping gets its TPDO ids watched; a node of another
+    /// profile is no drive, and `--assume-cia402-pdo` does not read its
+    /// PDOs as one. What was read of it as a drive before is withdrawn
+    /// from its report when nothing but that assumption decoded it: the
+    /// words were read from a layout the node does not have, and a report
+    /// of a drive state for an I/O module would mislead (the events
+    /// already written stay, the note says so).
+    fn device_type<E: Write>(
+        &mut self,
+        raw: &[u8],
+        node: NodeId,
+        value: u32,
+        nodes: &mut Nodes,
+        emit: &mut Emit<'_, E>,
+    ) {
+        if !(1..=127).contains(&node) {
+            return;
+        }
+        if !device_profile::is_drive(value) {
+            if emit.opts.assume_cia402_pdo && self.table.withdraw_assumed(node) {
+                self.flush_repeats(nodes);
+                self.rebuild();
+                let withdrawn = self.mappings_of(node).is_empty()
+                    && nodes
+                        .get(raw, node)
+                        .timeline
+                        .health_if_any()
+                        .and_then(|h| h.drive.take())
+                        .is_some();
+                self.not_drives.insert(node, (value, withdrawn));
+            }
             return;
         }
         if self.has_tpdo(node) {

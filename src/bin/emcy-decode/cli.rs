@@ -485,9 +485,10 @@ impl DriveArgs {
         for (node, path) in &self.dcf {
             let dcf = emcy_decode::canopen::dcf::load(path, *node)
                 .map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
-            if dcf.mappings.is_empty() && dcf.vendor_id.is_none() {
+            if dcf.mappings.is_empty() && dcf.vendor_id.is_none() && dcf.device_type.is_none() {
                 bail!(
-                    "--dcf {}: no PDO mapping and no identity in it: not a DCF or EDS file{}",
+                    "--dcf {}: no PDO mapping, device type or identity in it: not a DCF or EDS \
+                     file{}",
                     path.display(),
                     dcf.problems
                         .first()
