@@ -74,8 +74,7 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
 /// 0x6040/0x6041/0x603F, or it is a segment of a segmented download or
 /// upload, a segment's confirmation, or a block transfer's command (their
 /// frames name no object; the SDO monitor keeps only those of a transfer
-/// it follows, and a block transfer whose value it keeps has every frame
-/// of its node decoded while it goes on).
+/// it follows).
 pub(super) fn concerns_drive(id: u32, data: &[u8]) -> bool {
     match *data {
         [cmd, lo, hi, ..] => names_drive_object(id, cmd, index_of(lo, hi)),
@@ -110,8 +109,8 @@ fn names_drive_object(id: u32, cmd: u8, index: u16) -> bool {
 
 /// Whether a frame can widen the interest when the consumer reads it: an
 /// SDO access of 0x1014 (moves an EMCY id), of 0x1000 (a CiA 402 drive's
-/// PDOs get watched), one that can complete a PDO configuration, or a
-/// block transfer's initiate (its node's frames all get decoded). A
+/// PDOs get watched) or one that can complete a PDO configuration (by any
+/// transfer). A
 /// worker's block holding one is classified again on the consumer's thread.
 pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
     if frame.extended || !sdo::is_sdo_id(frame.id) {

@@ -55,18 +55,6 @@ impl Monitor for SdoMonitor {
         match self.blocks.feed(id, data, learns_from) {
             BlockStep::Other => {}
             BlockStep::Part => return Ok(Step::Done),
-            BlockStep::Started { node, object } => {
-                // Every frame of the transfer is needed to keep its value:
-                // the content filter would let only some segments by.
-                if learns_from(object.index) {
-                    let n = u32::from(node);
-                    emit.wanted.widen(|i| {
-                        i.unfilter(sdo::REQUEST_BASE + n);
-                        i.unfilter(sdo::RESPONSE_BASE + n);
-                    });
-                }
-                return Ok(Step::Done);
-            }
             BlockStep::Done { upload, value, .. } => {
                 let mut learnt = Learnt::default();
                 if let Some(c) = value {

@@ -14,6 +14,13 @@
 //! Data is kept only for the objects the decoder learns from, and only
 //! their first [`KEPT_BYTES`]: a firmware download (0x1F50) is followed to
 //! its end and nothing of it kept.
+//!
+//! The content filter lets through only the SDO frames that may matter, so
+//! not every segment of a long transfer reaches this: it need not. A value
+//! kept fits in a transfer's one segment (1, `0x01` or `0x81`), the block
+//! commands and every sub-block's segment 1 always pass the filter, and
+//! inside a sub-block a missed segment changes nothing but the data, which
+//! is not kept then (the receiver's acknowledgement tells what it took).
 
 use super::access::{
     CCS_BLOCK_DOWNLOAD, CCS_BLOCK_UPLOAD, CS_ABORT, Object, SCS_BLOCK_DOWNLOAD, SCS_BLOCK_UPLOAD,
@@ -41,9 +48,8 @@ pub enum BlockStep {
     /// included: an abort ends the node's block transfer and is then read
     /// as one).
     Other,
-    /// A block transfer of `object` began (the client's initiate).
-    Started { node: NodeId, object: Object },
-    /// A frame of a block transfer going on.
+    /// A frame of a block transfer: its initiate, or one of a transfer
+    /// going on.
     Part,
     /// The frame that completed a block transfer: an upload the client
     /// confirmed (`upload`), or a download the node confirmed. `None` when
@@ -200,7 +206,7 @@ fn step(
     // uploads.
     let sender = request != t.upload;
     match t.phase {
-        Phase::Idle => return initiate(t, node, request, cmd, data, keeps),
+        Phase::Idle => return initiate(t, request, cmd, data, keeps),
         Phase::SubBlock { seen } if sender => {
             if cmd == ABORT {
                 *t = Transfer::default();
@@ -214,7 +220,7 @@ fn step(
                 if ends {
                     return end(t, cmd, data);
                 }
-                return give_up(t, node, request, cmd, data, keeps);
+                return give_up(t, request, cmd, data, keeps);
             }
             segment(t, seqno, cmd & 0x80 != 0, data);
             t.phase = Phase::SubBlock {
@@ -272,7 +278,7 @@ fn step(
         }
         // Anything else: the transfer is out of step (or the client began
         // another), and the frame is read as any other.
-        _ => give_up(t, node, request, cmd, data, keeps),
+        _ => give_up(t, request, cmd, data, keeps),
     }
 }
 
@@ -297,14 +303,7 @@ fn ack_cs(upload: bool) -> u8 {
 }
 
 /// A frame of no transfer: the client's block initiate starts one.
-fn initiate(
-    t: &mut Transfer,
-    node: NodeId,
-    request: bool,
-    cmd: u8,
-    data: &[u8],
-    keeps: Keeps,
-) -> BlockStep {
+fn initiate(t: &mut Transfer, request: bool, cmd: u8, data: &[u8], keeps: Keeps) -> BlockStep {
     let cs = cmd >> 5;
     if !request {
         return BlockStep::Other;
@@ -331,20 +330,13 @@ fn initiate(
         whole: true,
         ..Transfer::default()
     };
-    BlockStep::Started { node, object }
+    BlockStep::Part
 }
 
 /// The transfer ends out of step; the frame may begin another.
-fn give_up(
-    t: &mut Transfer,
-    node: NodeId,
-    request: bool,
-    cmd: u8,
-    data: &[u8],
-    keeps: Keeps,
-) -> BlockStep {
+fn give_up(t: &mut Transfer, request: bool, cmd: u8, data: &[u8], keeps: Keeps) -> BlockStep {
     *t = Transfer::default();
-    initiate(t, node, request, cmd, data, keeps)
+    initiate(t, request, cmd, data, keeps)
 }
 
 /// Segment `seqno` of the sub-block (the transfer's last when `last`).
@@ -481,14 +473,7 @@ mod tests {
         let mut b = Blocks::new();
         let frames = download_frames([0x92, 0x01, 0x02, 0x00]);
         let steps: Vec<BlockStep> = frames.iter().map(|(id, d)| feed(&mut b, *id, d)).collect();
-        assert_eq!(
-            steps[0],
-            BlockStep::Started {
-                node: 4,
-                object: DEVICE_TYPE
-            }
-        );
-        assert!(steps[1..5].iter().all(|s| *s == BlockStep::Part));
+        assert!(steps[..5].iter().all(|s| *s == BlockStep::Part));
         assert_eq!(
             steps[5],
             BlockStep::Done {
@@ -586,6 +571,38 @@ mod tests {
     }
 
     #[test]
+    fn segments_the_filter_kept_back_change_nothing_but_the_data() {
+        // Only segment 1 and the last (0x85) of a sub-block reach the
+        // follower, as the content filter lets them by: the transfer is
+        // still read to its end, the 0x85 no abort.
+        let mut b = Blocks::new();
+        feed(&mut b, 0x604, &[0xC2, 0x00, 0x10, 0x01, 33, 0, 0, 0]);
+        feed(&mut b, 0x584, &[0xA0, 0x00, 0x10, 0x01, 127, 0, 0, 0]);
+        assert_eq!(
+            feed(&mut b, 0x604, &[0x01, 1, 2, 3, 4, 5, 6, 7]),
+            BlockStep::Part
+        );
+        assert_eq!(
+            feed(&mut b, 0x604, &[0x85, 0, 0, 0, 0, 0, 0, 0]),
+            BlockStep::Part
+        );
+        assert_eq!(
+            feed(&mut b, 0x584, &[0xA2, 5, 127, 0, 0, 0, 0, 0]),
+            BlockStep::Part
+        );
+        assert_eq!(
+            feed(&mut b, 0x604, &[0xC9, 0, 0, 0, 0, 0, 0, 0]),
+            BlockStep::Part
+        );
+        let done = feed(&mut b, 0x584, &[0xA1, 0, 0, 0, 0, 0, 0, 0]);
+        assert!(
+            matches!(done, BlockStep::Done { value: None, .. }),
+            "{done:?}"
+        );
+        assert!(!b.going(4));
+    }
+
+    #[test]
     fn wrong_sequence_is_asked_again() {
         let mut b = Blocks::new();
         // 10 bytes of 0x1000 sub 1 (kept, but too long to keep whole): the
@@ -645,14 +662,7 @@ mod tests {
             (0x603, [0xA1, 0, 0, 0, 0, 0, 0, 0]),
         ];
         let steps: Vec<BlockStep> = frames.iter().map(|(id, d)| feed(&mut b, *id, d)).collect();
-        assert_eq!(
-            steps[0],
-            BlockStep::Started {
-                node: 3,
-                object: DEVICE_TYPE
-            }
-        );
-        assert!(steps[1..6].iter().all(|s| *s == BlockStep::Part));
+        assert!(steps[..6].iter().all(|s| *s == BlockStep::Part));
         let BlockStep::Done {
             upload: true,
             value: Some(c),
