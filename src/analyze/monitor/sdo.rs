@@ -73,10 +73,18 @@ impl Monitor for SdoMonitor {
                 value: c.value,
             });
         }
-        if self.uploads_wanted(id, data)
-            && let Some(c) = self.uploads.feed(id, data)
-        {
-            completed(&mut learnt, c, true);
+        if self.uploads_wanted(id, data) {
+            let going = self.uploads.in_progress(id);
+            if let Some(c) = self.uploads.feed(id, data) {
+                completed(&mut learnt, c, true);
+            }
+            if !going && self.uploads.in_progress(id) && sdo::begins_segmented_upload(id, data) {
+                // Its segments name no object, so the content filter
+                // keeps them back: the node's answers are decoded from
+                // here on (a master that uploads such an object in
+                // segments from a node is likely to do so again).
+                emit.wanted.widen(|i| i.unfilter(id));
+            }
         }
         if let Some(access) = sdo::parse(id, data) {
             let more = self.access(frame.channel, frame.at, access, nodes, facts, emit)?;
