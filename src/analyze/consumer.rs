@@ -170,6 +170,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             n.profile = chosen.profile;
             n.profile_source = chosen.source;
             n.profile_reason = self.facts.profiles.reason(n.node).map(str::to_string);
+            n.device_type = self.facts.profiles.device_type(n.node);
             if let Some(h) = &mut n.error_history {
                 for e in &mut h.entries {
                     e.description = n.profile.describe(e.code);
@@ -234,7 +235,10 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// shared facts first (a profile, a moved EMCY id), then to every
     /// monitor.
     fn learnt(&mut self, channel: &[u8], at: At, learnt: Learnt) -> Result<(), OutputError> {
-        for fact in [learnt.read, learnt.holds].into_iter().flatten() {
+        for fact in [learnt.read, learnt.holds, learnt.written]
+            .into_iter()
+            .flatten()
+        {
             if let Fact::Holds {
                 node,
                 object,

@@ -271,6 +271,8 @@ pub struct NodeReport {
     pub profile_reason: Option<String>,
     /// The profile's description of every code the node raised.
     pub descriptions: CodeTexts,
+    /// Its device type (object 0x1000) as the trace or its DCF showed it.
+    pub device_type: Option<u32>,
     /// The NMT state the node said last; `None` if it never told.
     pub nmt_state: Option<NmtState>,
     /// The state a command asked for that the node had not confirmed by

@@ -69,10 +69,16 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     }
 }
 
-/// Whether an SDO frame can matter to a CiA 402 drive's decoding: it
-/// names a PDO parameter (0x1400-0x1BFF) or one of 0x6040/0x6041/0x603F,
-/// or it is a download segment or its confirmation (segments name no
-/// object; the PDO assembler keeps only those of a transfer it follows).
+/// Whether an SDO frame can matter to a CiA 402 drive's decoding or to a
+/// transfer: it names a PDO parameter (0x1400-0x1BFF) or one of
+/// 0x6040/0x6041/0x603F, or it is a segment of a segmented download, a
+/// segment's confirmation, or a block transfer's command (their frames
+/// name no object; the SDO monitor keeps only those of a transfer it
+/// follows). A segmented upload's segments are not among them: nearly
+/// every one is of an object nobody learns from (a name, a string), and
+/// decoding them all cost more than twice the instructions on an SDO-heavy
+/// trace; the SDO monitor has its node's responses decoded from the upload
+/// of an object it learns from on.
 pub(super) fn concerns_drive(id: u32, data: &[u8]) -> bool {
     match *data {
         [cmd, lo, hi, ..] => names_drive_object(id, cmd, index_of(lo, hi)),
@@ -84,19 +90,31 @@ fn index_of(lo: u8, hi: u8) -> u16 {
     u16::from_le_bytes([lo, hi])
 }
 
+/// Command specifiers of the client's segments and block commands
+/// (download segment 0, block upload 5, block download 6), a bit each.
+const REQUEST_TRANSFER_CS: u8 = 1 << 0 | 1 << 5 | 1 << 6;
+/// Command specifiers of the server's confirmations and block commands
+/// (download segment 1, block download 5, block upload 6).
+const RESPONSE_TRANSFER_CS: u8 = 1 << 1 | 1 << 5 | 1 << 6;
+
 /// [`concerns_drive`] of a frame with command byte `cmd` naming `index`.
 #[inline]
 fn names_drive_object(id: u32, cmd: u8, index: u16) -> bool {
-    let request = id >= sdo::REQUEST_BASE;
+    let transfer = if id >= sdo::REQUEST_BASE {
+        REQUEST_TRANSFER_CS
+    } else {
+        RESPONSE_TRANSFER_CS
+    };
     pdo::PdoId::is_pdo_parameter(index)
         || cia402::is_decoded(index)
-        || (request && cmd >> 5 == 0)
-        || (!request && cmd >> 5 == 1)
+        || transfer >> (cmd >> 5) & 1 != 0
 }
 
 /// Whether a frame can widen the interest when the consumer reads it: an
 /// SDO access of 0x1014 (moves an EMCY id), of 0x1000 (a CiA 402 drive's
-/// PDOs get watched) or one that can complete a PDO configuration. A
+/// PDOs get watched), one that can complete a PDO configuration (by any
+/// transfer), or a node's answer that begins a segmented upload of an
+/// object some monitor learns from (its node's answers get decoded). A
 /// worker's block holding one is classified again on the consumer's thread.
 pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
     if frame.extended || !sdo::is_sdo_id(frame.id) {
@@ -106,6 +124,8 @@ pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
     sdo::names_object(frame.id, data, sdo::COB_ID_EMCY)
         || sdo::names_object(frame.id, data, sdo::DEVICE_TYPE)
         || concerns_drive(frame.id, data)
+        || sdo::begins_segmented_upload(frame.id, data)
+            && matches!(*data, [_, lo, hi, ..] if sdo::is_followed(index_of(lo, hi)))
 }
 
 /// The current interest and its generation, shared with workers: a block

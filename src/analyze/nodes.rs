@@ -332,6 +332,7 @@ impl Nodes {
                     profile: default_profile(),
                     profile_source: ProfileSource::Default,
                     profile_reason: None,
+                    device_type: None,
                     descriptions: CodeTexts::default(),
                     nmt_state: None,
                     nmt_commanded: None,

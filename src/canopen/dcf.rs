@@ -21,7 +21,7 @@ use std::path::Path;
 
 use super::NodeId;
 use super::pdo::{Learner, Mapping, PdoId, Source};
-use super::sdo::{IDENTITY, Object};
+use super::sdo::{DEVICE_TYPE, IDENTITY, Object};
 
 /// The largest file read: DCFs of real drives are tens to hundreds of
 /// kilobytes; anything larger is not one.
@@ -38,6 +38,8 @@ pub struct Dcf {
     pub vendor_id: Option<u32>,
     /// `[DeviceInfo]` ProductNumber, else 0x1018 sub 2.
     pub product_code: Option<u32>,
+    /// Object 0x1000 (device type): its ParameterValue, else DefaultValue.
+    pub device_type: Option<u32>,
     /// `[DeviceComissioning]` NodeID (CiA 306 spells it so), for a check
     /// against the node the user named.
     pub node_id: Option<u32>,
@@ -101,9 +103,12 @@ enum Section {
     Other,
 }
 
-/// Whether the decoder uses an object of a DCF: identity and PDO parameters.
+/// Whether the decoder uses an object of a DCF: device type, identity and
+/// PDO parameters.
 fn used(object: Object) -> bool {
-    (object.index == IDENTITY && matches!(object.sub, 1 | 2)) || PdoId::shapes_mapping(object)
+    (object.index == DEVICE_TYPE && object.sub == 0)
+        || (object.index == IDENTITY && matches!(object.sub, 1 | 2))
+        || PdoId::shapes_mapping(object)
 }
 
 /// `1A00sub1` (hex index, `sub`, hex sub-index) or `1018`, case-insensitive.
@@ -243,11 +248,13 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
     let product = info.get("product").or(identity(2).and_then(Entry::value));
     dcf.product_code = eval(&mut dcf, product);
     dcf.node_id = eval(&mut dcf, info.get("node"));
+    let device_type = entries.get(&(DEVICE_TYPE, 0)).and_then(Entry::value);
+    dcf.device_type = eval(&mut dcf, device_type);
     // The declared values, applied as if the node had confirmed them in
     // index order: the same rules as a mapping learnt from the trace.
     let mut learner = Learner::new();
     for (&(index, sub), entry) in &entries {
-        if index == IDENTITY {
+        if index == IDENTITY || index == DEVICE_TYPE {
             continue;
         }
         if let Some(value) = eval(&mut dcf, entry.value()) {
@@ -404,6 +411,17 @@ DefaultValue=0x60640020
         assert_eq!(dcf.vendor_id, Some(0x9A));
         assert_eq!(dcf.product_code, Some(0o17), "octal");
         assert_eq!(dcf.mappings, []);
+    }
+
+    #[test]
+    fn device_type_parameter_value_before_default() {
+        let text = "[1000]\nDefaultValue=0x00000000\nParameterValue=0x000F0191\n";
+        assert_eq!(parse(text.as_bytes(), 3).device_type, Some(0x000F_0191));
+        let text = "[1000]\nDefaultValue=0x00020192\n";
+        assert_eq!(parse(text.as_bytes(), 3).device_type, Some(0x0002_0192));
+        let text = "[1000sub1]\nDefaultValue=0x00020192\n";
+        assert_eq!(parse(text.as_bytes(), 3).device_type, None, "sub 0 only");
+        assert_eq!(parse(b"[1018sub1]\nDefaultValue=1\n", 3).device_type, None);
     }
 
     #[test]

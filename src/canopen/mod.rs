@@ -4,6 +4,7 @@
 pub mod cia402;
 pub mod codes;
 pub mod dcf;
+pub mod device_profile;
 pub mod emcy;
 pub mod nmt;
 pub mod pdo;

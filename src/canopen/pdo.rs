@@ -402,6 +402,24 @@ impl MappingTable {
         }
     }
 
+    /// Withdraws the assumed mappings of `node` (its device type says it is
+    /// no drive); whether it had any.
+    pub fn withdraw_assumed(&mut self, node: NodeId) -> bool {
+        let rank = Source::Assumed.rank();
+        let mut withdrew = false;
+        self.by_cob.retain(|_, slots| {
+            if let Some(slot) = slots.by_source.get_mut(rank)
+                && slot.as_ref().is_some_and(|m| m.node == Some(node))
+            {
+                *slot = None;
+                withdrew = true;
+                slots.refresh();
+            }
+            slots.best().is_some()
+        });
+        withdrew
+    }
+
     /// Where the CiA 402 words sit in PDOs on `cob_id`, if the mapping in
     /// force there maps any: the per-frame call.
     pub fn fields(&self, cob_id: CobId) -> Option<&Cia402Fields> {
@@ -698,17 +716,21 @@ impl Learner {
     }
 }
 
-/// Which frames PDO learning needs is a question about PDO parameters, so
-/// it is answered here rather than beside the assembly.
+/// Which writes the decoder learns from is a question about PDOs and
+/// drives, so it is answered here rather than beside the assembly.
 impl Downloads {
-    /// Whether a frame can matter to PDO configuration: an SDO frame
-    /// naming a PDO parameter, or any SDO frame of a node with a download
+    /// Whether a frame can matter to a write the decoder learns from: an
+    /// SDO frame naming a PDO parameter or the controlword (a drive's
+    /// fault reset is a write), or any SDO frame of a node with a download
     /// in progress (segments name no object). A cheap test, so the pipeline
     /// feeds only these.
     pub fn wants(&self, id: u32, data: &[u8]) -> bool {
         self.in_progress(id)
             || sdo::is_sdo_id(id)
-                && matches!(data, [_, lo, hi, ..] if PdoId::is_pdo_parameter(u16::from_le_bytes([*lo, *hi])))
+                && matches!(data, [_, lo, hi, ..] if {
+                    let index = u16::from_le_bytes([*lo, *hi]);
+                    PdoId::is_pdo_parameter(index) || index == cia402::CONTROLWORD
+                })
     }
 }
 
@@ -962,6 +984,8 @@ mod tests {
         assert!(d.wants(0x605, &[0x23, 0x00, 0x1A, 0x01]));
         assert!(d.wants(0x585, &[0x60, 0x00, 0x14, 0x01]));
         assert!(!d.wants(0x605, &[0x23, 0x18, 0x10, 0x01]), "identity");
+        assert!(d.wants(0x605, &[0x2B, 0x40, 0x60, 0x00]), "controlword");
+        assert!(!d.wants(0x605, &[0x2B, 0x41, 0x60, 0x00]), "statusword");
         assert!(!d.wants(0x185, &[0x23, 0x00, 0x1A, 0x01]), "not SDO");
         assert!(!d.wants(0x605, &[0x00]), "a segment, nothing going");
         d.feed(0x605, &[0x21, 0x00, 0x18, 0x01, 4, 0, 0, 0]);
@@ -1043,6 +1067,21 @@ mod tests {
 
     #[test]
     fn assumed_mapping_is_tpdo1_statusword_and_rpdo1_controlword() {
+        let mut table = MappingTable::new();
+        for node in [3, 4] {
+            for m in assumed_cia402(node).into_iter().flatten() {
+                table.insert(m);
+            }
+        }
+        let tpdo3 = CobId {
+            id: 0x183,
+            extended: false,
+        };
+        assert!(table.fields(tpdo3).is_some());
+        assert!(table.withdraw_assumed(3));
+        assert!(!table.withdraw_assumed(3), "withdrawn already");
+        assert!(table.fields(tpdo3).is_none());
+        assert_eq!(table.in_force().count(), 2, "node 4's stay");
         let [t, r] = assumed_cia402(3).expect("node 3");
         assert_eq!(t.cob_id.id, 0x183);
         assert_eq!(t.direction, Some(Direction::Tpdo));

@@ -127,6 +127,14 @@ impl<'c> NodeProfiles<'c> {
         self.from_trace.get(&node).map(|(_, r)| r.as_str())
     }
 
+    /// The node's device type (0x1000), as the trace or its DCF showed it.
+    pub fn device_type(&self, node: NodeId) -> Option<u32> {
+        if self.identity.is_empty() {
+            return None;
+        }
+        self.identity.get(&node)?.device_type
+    }
+
     /// A value the node holds (SDO upload or confirmed download): device
     /// type and vendor id choose its profile.
     pub fn object_value(&mut self, node: NodeId, object: Object, value: u32) {

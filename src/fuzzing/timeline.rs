@@ -287,6 +287,7 @@ pub fn decode_timeline(data: &[u8]) {
             profile: m.profile,
             profile_source: ProfileSource::Flag,
             profile_reason: None,
+            device_type: None,
             descriptions: CodeTexts::new(m.profile, m.timeline.stats().raised.keys().copied()),
             nmt_state: None,
             nmt_commanded: None,

@@ -9,7 +9,7 @@
 
 use std::io::{self, Write};
 
-use super::format::{CSV_LIST, push_code, push_code_counts, push_codes, push_hex};
+use super::format::{self, CSV_LIST, push_code, push_code_counts, push_codes, push_hex};
 use super::jsonw::{JsonWriter, push_decoded};
 use super::table::health_description;
 use super::timefmt::{TimeFormat, TimeStyle};
@@ -17,6 +17,7 @@ use crate::analyze::{
     BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, NodeReport, Sink,
 };
 use crate::cache::{Cache, profile_key, slot};
+use crate::canopen::device_profile;
 use crate::canopen::register::Register;
 use crate::trace::Timestamp;
 
@@ -47,7 +48,7 @@ pub const EVENT_COLUMNS: [&str; 22] = [
 ];
 
 /// The columns of a node row (`--view summary`), in order.
-pub const NODE_COLUMNS: [&str; 16] = [
+pub const NODE_COLUMNS: [&str; 18] = [
     "file",
     "channel",
     "node",
@@ -64,6 +65,8 @@ pub const NODE_COLUMNS: [&str; 16] = [
     "last_emcy_text",
     "profile",
     "profile_source",
+    "device_type",
+    "device_profile",
 ];
 
 pub struct Csv<W: Write> {
@@ -245,6 +248,11 @@ impl<W: Write> Csv<W> {
         let (last, last_text) = time(n.stats.last_emcy.and_then(|a| a.time));
         let node = itoa::Buffer::new().format(n.node).to_string();
         let count = itoa::Buffer::new().format(n.emcy_count).to_string();
+        let device_type = n.device_type.map(format::device_type).unwrap_or_default();
+        let device_profile = n
+            .device_type
+            .map(device_profile::describe)
+            .unwrap_or_default();
         let mut line = encode([
             input.file.as_bytes(),
             n.channel.as_bytes(),
@@ -262,6 +270,8 @@ impl<W: Write> Csv<W> {
             &last_text,
             n.profile.name().as_bytes(),
             n.profile_source.slug().as_bytes(),
+            device_type.as_bytes(),
+            device_profile.as_bytes(),
         ]);
         line.push(b'\n');
         self.out.write_all(&line)

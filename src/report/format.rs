@@ -51,6 +51,11 @@ pub(crate) fn code_text(c: u16) -> String {
 
 /// Appends `bytes` as upper-case hex pairs with nothing between
 /// (`1043080100000000`).
+/// A device type (object 0x1000) as every output writes it: `0x00020192`.
+pub(crate) fn device_type(value: u32) -> String {
+    format!("0x{value:08X}")
+}
+
 pub(crate) fn push_hex(out: &mut impl Ascii, bytes: &[u8]) {
     if let Ok(classic) = <&[u8; 8]>::try_from(bytes) {
         // The usual EMCY payload: one word, one copy.

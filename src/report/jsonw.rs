@@ -18,6 +18,7 @@ use crate::analyze::{
     HistoryReport, InputReport, NodeReport,
 };
 use crate::cache::{Cache, profile_key, slot};
+use crate::canopen::device_profile;
 use crate::canopen::emcy::Warning;
 use crate::canopen::pdo::{Direction, Mapped};
 use crate::canopen::profile::{Decoded, FieldValue};
@@ -608,6 +609,16 @@ impl JsonWriter {
         match &node.profile_reason {
             Some(r) => o.str("profile_reason", r),
             None => o.key("profile_reason").extend_from_slice(b"null"),
+        }
+        match node.device_type {
+            Some(t) => {
+                o.str("device_type", &format::device_type(t));
+                o.str("device_profile", &device_profile::describe(t));
+            }
+            None => {
+                o.null("device_type");
+                o.null("device_profile");
+            }
         }
         format::push_code_counts(
             o.key("errors_seen"),

@@ -225,8 +225,9 @@ impl Drive {
         })
     }
 
-    /// Feeds a controlword; the command it gives, if it gives one, when it
-    /// differs from the last (a repeated word repeats no command).
+    /// Feeds a controlword the master wrote; the command it gives, if it
+    /// gives one, when it differs from the last (a repeated word repeats
+    /// no command).
     pub fn controlword(&mut self, at: At, controlword: u16) -> Option<Commanded> {
         let previous = self.controlword;
         if previous == Some(controlword) {

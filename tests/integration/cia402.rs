@@ -325,3 +325,129 @@ fn the_chart_draws_the_fault_as_a_band_on_the_drive_lane() {
     assert!(!svg.contains("axis state"), "{svg}");
     assert!(!svg.contains(".a-operation_enabled"), "no axis: no fills");
 }
+
+const NOT_DRIVE: &str = "fixtures/cia402-not-drive.log";
+const CONTROLWORD_READ: &str = "fixtures/cia402-controlword-read.log";
+const PDO_READ: &str = "fixtures/cia402-pdo-read.log";
+
+fn node(objects: &[Value], n: u64) -> Value {
+    objects
+        .iter()
+        .find(|o| o["type"] == "node" && o["node"] == n)
+        .cloned()
+        .unwrap_or(Value::Null)
+}
+
+#[test]
+fn the_device_type_decides_which_nodes_the_assumption_reads_as_drives() {
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "--assume-cia402-pdo", NOT_DRIVE])
+        .output()
+        .expect("runs");
+    let objects: Vec<Value> = String::from_utf8(out.stdout)
+        .expect("utf-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("json"))
+        .collect();
+    // Node 5 is a drive; node 3 (I/O) and 7 (encoder) are not: node 3's
+    // PDO read before its device type came stays an event, but its report
+    // has no drive, and its later PDOs (and node 7's) are not read.
+    let drives: Vec<(u64, String)> = of_type(&objects, "axis_state")
+        .iter()
+        .map(|e| (e["node"].as_u64().unwrap_or(0), e["time_text"].to_string()))
+        .collect();
+    assert_eq!(
+        drives.iter().filter(|(n, _)| *n == 3).count(),
+        1,
+        "{drives:?}"
+    );
+    assert_eq!(drives.iter().filter(|(n, _)| *n == 5).count(), 3);
+    assert!(drives.iter().all(|(n, _)| *n != 7));
+    assert_eq!(drive(&objects, 3), Value::Null);
+    assert_eq!(drive(&objects, 7), Value::Null);
+    assert_eq!(drive(&objects, 5)["state"], "operation_enabled");
+    for (n, t, p) in [
+        (3, "0x000F0191", "CiA 401 I/O"),
+        (5, "0x00020192", "CiA 402 drive"),
+        (7, "0x00010196", "CiA 406 encoder"),
+    ] {
+        let o = node(&objects, n);
+        assert_eq!(o["device_type"], t, "node {n}");
+        assert_eq!(o["device_profile"], p, "node {n}");
+    }
+    let stderr = String::from_utf8(out.stderr).expect("utf-8");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains(
+            "--assume-cia402-pdo: nodes 3 (0x000F0191, CiA 401 I/O), 7 (0x00010196, CiA 406 \
+             encoder) are not drives by their device type; their PDOs are not read as CiA 402"
+        ),
+        "{stderr}"
+    );
+    // Without the assumption nothing is read as a drive, and no note.
+    let out = emcy_decode()
+        .args(["--format", "ndjson", NOT_DRIVE])
+        .output()
+        .expect("runs");
+    assert!(out.stderr.is_empty());
+    // A DCF's device type decides before the first PDO: node 3 is never
+    // read as a drive.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let dcf = dir.path().join("io.dcf");
+    fs::write(&dcf, "[1000]\nDefaultValue=0x000F0191\n").expect("write");
+    let out = emcy_decode()
+        .args(["--format", "ndjson", "--assume-cia402-pdo", "--dcf"])
+        .arg(format!("3={}", dcf.display()))
+        .arg(NOT_DRIVE)
+        .output()
+        .expect("runs");
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(!text.contains("\"node\":3,\"state\":\"operation_enabled\""));
+    let objects: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("json"))
+        .collect();
+    assert!(
+        of_type(&objects, "axis_state")
+            .iter()
+            .all(|e| e["node"] != 3)
+    );
+    let stderr = String::from_utf8(out.stderr).expect("utf-8");
+    assert!(stderr.contains("nodes 3 (0x000F0191"), "{stderr}");
+    assert!(!stderr.contains("left out"), "{stderr}");
+}
+
+#[test]
+fn a_controlword_read_is_no_fault_reset_and_one_written_is() {
+    let objects = ndjson([CONTROLWORD_READ]);
+    let resets = of_type(&objects, "fault_reset");
+    assert_eq!(resets.len(), 1, "{resets:?}");
+    assert_eq!(resets[0]["controlword"], "0x0080");
+    assert_eq!(drive(&objects, 5)["fault_resets"], 1);
+    // Written by SDO download (confirmed), the word commands; read by an
+    // upload, it does not.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("sdo.log");
+    fs::write(
+        &path,
+        "(1.000000) can0 605#4040600000000000\n\
+         (1.001000) can0 585#4B40600080000000\n\
+         (1.002000) can0 605#2B40600080000000\n\
+         (1.003000) can0 585#6040600000000000\n",
+    )
+    .expect("write");
+    let objects = ndjson([&path]);
+    let resets = of_type(&objects, "fault_reset");
+    assert_eq!(resets.len(), 1, "{objects:?}");
+    assert_eq!(resets[0]["time"], 1.003);
+}
+
+#[test]
+fn a_mapping_read_back_decodes_the_tpdo() {
+    let objects = ndjson([PDO_READ]);
+    assert_eq!(states(&objects), LIFE);
+    let (cob_id, objects_mapped, source) = tpdo(&drive(&objects, 6));
+    assert_eq!(cob_id, 0x186);
+    assert_eq!(objects_mapped, ["0x6041:16", "0x603F:16"]);
+    assert_eq!(source, "sdo");
+}

@@ -12,7 +12,7 @@ description,register,register_bits,data,manufacturer,profile,profile_fields,tran
 cleared,warnings,details";
 const NODE_HEADER: &str = "file,channel,node,state,active,emcy_count,errors_seen,time_in_error,\
 longest_error_code,longest_error_duration,first_emcy,first_emcy_text,last_emcy,last_emcy_text,\
-profile,profile_source";
+profile,profile_source,device_type,device_profile";
 
 /// The rows of a CSV run (header first), parsed by the csv crate.
 fn rows(args: &[&std::ffi::OsStr]) -> Vec<csv::StringRecord> {
@@ -120,15 +120,20 @@ fn summary_is_one_row_per_node_object() {
         "summary".as_ref(),
         "fixtures/s300.log".as_ref(),
         "fixtures/stoeber-ecat.pcapng".as_ref(),
+        "fixtures/cia402-commissioning.log".as_ref(),
     ]);
     assert_eq!(rows[0].iter().collect::<Vec<_>>().join(","), NODE_HEADER);
-    let nodes: Vec<Value> = support::ndjson(["fixtures/s300.log", "fixtures/stoeber-ecat.pcapng"])
-        .into_iter()
-        .filter(|o| o["type"] == "node")
-        .collect();
+    let nodes: Vec<Value> = support::ndjson([
+        "fixtures/s300.log",
+        "fixtures/stoeber-ecat.pcapng",
+        "fixtures/cia402-commissioning.log",
+    ])
+    .into_iter()
+    .filter(|o| o["type"] == "node")
+    .collect();
     assert_eq!(rows.len() - 1, nodes.len());
     for (row, n) in rows[1..].iter().zip(&nodes) {
-        assert_eq!(row.len(), 16);
+        assert_eq!(row.len(), 18);
         assert_eq!(&row[1], n["channel"].as_str().unwrap());
         assert_eq!(row[2], n["node"].to_string());
         assert_eq!(&row[3], n["state"].as_str().unwrap());
@@ -141,7 +146,13 @@ fn summary_is_one_row_per_node_object() {
             .collect();
         assert_eq!(&row[6], seen.join(" "));
         assert_eq!(&row[14], n["profile"].as_str().unwrap());
+        assert_eq!(&row[16], n["device_type"].as_str().unwrap_or_default());
+        assert_eq!(&row[17], n["device_profile"].as_str().unwrap_or_default());
     }
+    assert!(
+        rows.iter()
+            .any(|r| &r[16] == "0x00020192" && &r[17] == "CiA 402 drive")
+    );
 }
 
 #[test]

@@ -34,6 +34,8 @@ pub(crate) fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
         "stoeber-ecat" => &["--profile", "1002=stoeber"],
         // Only the DCF gives this drive's PDO mapping.
         "cia402-dcf" => &["--dcf", "5=fixtures/cia402-drive.dcf"],
+        // Nodes 3 and 7 are no drives by their device type.
+        "cia402-not-drive" => &["--assume-cia402-pdo"],
         _ => &[],
     }
 }

@@ -39,6 +39,7 @@ mod pasted;
 mod pcap;
 mod readme;
 mod roundtrip;
+mod sdo;
 mod table;
 mod timestamps;
 mod trc;

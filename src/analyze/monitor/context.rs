@@ -97,17 +97,19 @@ pub(in crate::analyze) enum Step {
 }
 
 /// What one SDO access showed: an object read directly, a value a node
-/// holds. Either, both or neither.
+/// holds, a write the node confirmed. Any of them, or none.
 #[derive(Default)]
 pub(in crate::analyze) struct Learnt {
     pub(in crate::analyze) read: Option<Fact>,
     pub(in crate::analyze) holds: Option<Fact>,
+    pub(in crate::analyze) written: Option<Fact>,
 }
 
 /// A fact about a node that one monitor learnt and others may need.
 #[derive(Clone, Copy, Debug)]
 pub(in crate::analyze) enum Fact {
-    /// An expedited SDO upload: `object` of `node` read directly.
+    /// An SDO upload (expedited, segmented or block) of at most four
+    /// bytes: `object` of `node` read directly.
     Read {
         node: NodeId,
         object: Object,
@@ -120,6 +122,13 @@ pub(in crate::analyze) enum Fact {
         object: Object,
         value: u32,
         written: bool,
+    },
+    /// A download of at most four bytes to `object` (any object the SDO
+    /// monitor assembles writes of) that `node` confirmed.
+    Written {
+        node: NodeId,
+        object: Object,
+        value: u32,
     },
 }
 
@@ -134,11 +143,18 @@ pub(in crate::analyze) struct Facts<'r> {
 
 impl<'r> Facts<'r> {
     /// The facts the options give: `--emcy-id`, the profiles chosen, and
-    /// the DCFs' identities, as if the trace had shown 0x1018 (they choose
-    /// the node's profile).
+    /// the DCFs' device types and identities, as if the trace had shown
+    /// 0x1000 and 0x1018 (they choose the node's profile).
     pub(in crate::analyze) fn new(opts: &'r Options) -> Self {
         let mut profiles = NodeProfiles::new(&opts.profiles);
         for (node, dcf) in &opts.dcf {
+            if let Some(v) = dcf.device_type {
+                let object = Object {
+                    index: sdo::DEVICE_TYPE,
+                    sub: 0,
+                };
+                profiles.object_value(*node, object, v);
+            }
             if let Some(v) = dcf.vendor_id {
                 let object = Object {
                     index: sdo::IDENTITY,

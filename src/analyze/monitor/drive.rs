@@ -1,7 +1,8 @@
 //! The drive monitor: CiA 402 drives. PDO mappings learnt from the
-//! trace's SDO writes or given (DCF, `--pdo`, `--assume-cia402-pdo`), the
-//! statuswords and controlwords read out of PDOs and SDO uploads, and the
-//! `drive_state` / `fault_reset` events. Kept apart from the EMCY path: a
+//! trace's SDO writes and reads (the SDO monitor assembles them) or given
+//! (DCF, `--pdo`, `--assume-cia402-pdo`), the statuswords read out of PDOs
+//! and SDO uploads, the controlwords the master writes (RPDO or SDO
+//! download), and the `drive_state` / `fault_reset` events. Kept apart from the EMCY path: a
 //! PDO on an id no mapping decodes costs one array lookup there.
 
 use std::collections::BTreeMap;
@@ -14,10 +15,11 @@ use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::NodeId;
 use crate::canopen::cia402::{self, Command};
+use crate::canopen::device_profile;
 use crate::canopen::pdo::{
     self, Cia402Fields, Cia402Values, CobId, Learner, Mapping, MappingTable, Source,
 };
-use crate::canopen::sdo::{self, Downloads};
+use crate::canopen::sdo::{self, Object};
 use crate::timeline::At;
 use crate::timeline::drive::{DriveRecord, Via};
 use crate::timeline::health::NodeHealth;
@@ -30,9 +32,6 @@ const STANDARD_IDS: usize = 0x800;
 /// (ten frames are 10-100 ms of one), not the odd PDO of a trace recorded
 /// for its EMCYs, which would make every such trace say it.
 const UNMAPPED_NOTE_AT: u64 = 10;
-
-/// Profile number of CiA 402 in the low 16 bits of the device type (0x1000).
-const CIA402_PROFILE: u32 = 402;
 
 /// What a PDO id decodes to: whose it is and where its words sit.
 #[derive(Clone, Copy, Debug)]
@@ -58,7 +57,6 @@ struct Last {
 pub(in crate::analyze) struct DriveMonitor {
     table: MappingTable,
     learner: Learner,
-    downloads: Downloads,
     /// Slots by standard id, rebuilt when the table changes.
     by_id: Box<[Option<PdoSlot>]>,
     /// Slots of 29-bit ids (a `--pdo` or a DCF may give one).
@@ -71,6 +69,10 @@ pub(in crate::analyze) struct DriveMonitor {
     last: Vec<Option<Last>>,
     /// Drives whose PDOs went by undecoded: the first such id, how many.
     unmapped: BTreeMap<NodeId, (u32, u64)>,
+    /// Nodes `--assume-cia402-pdo` skips, as their device type says they
+    /// are no drive: the device type, and whether states read before it
+    /// came were withdrawn from the node's report.
+    not_drives: BTreeMap<NodeId, (u32, bool)>,
     /// Buffer reused from frame to frame.
     events: Vec<(At, Health)>,
 }
@@ -86,8 +88,17 @@ impl DriveMonitor {
         for m in &opts.pdo {
             table.insert(m.clone());
         }
+        let mut not_drives = BTreeMap::new();
         if opts.assume_cia402_pdo {
+            for (node, dcf) in &opts.dcf {
+                if let Some(t) = dcf.device_type.filter(|&t| !device_profile::is_drive(t)) {
+                    not_drives.insert(*node, (t, false));
+                }
+            }
             for node in 1..=127 {
+                if not_drives.contains_key(&node) {
+                    continue;
+                }
                 for m in pdo::assumed_cia402(node).into_iter().flatten() {
                     table.insert(m);
                 }
@@ -96,11 +107,11 @@ impl DriveMonitor {
         let mut d = DriveMonitor {
             table,
             learner: Learner::new(),
-            downloads: Downloads::new(),
             by_id: vec![None; STANDARD_IDS].into_boxed_slice(),
             extended: Vec::new(),
             watched: BTreeMap::new(),
             unmapped: BTreeMap::new(),
+            not_drives,
             last: vec![None; STANDARD_IDS],
             events: Vec::new(),
         };
@@ -227,14 +238,13 @@ impl Monitor for DriveMonitor {
         DriveMonitor::with_mappings(opts)
     }
 
-    /// A PDO some mapping decodes is taken; an SDO frame that may
-    /// configure a PDO is followed, and goes on to the SDO monitor.
+    /// A PDO some mapping decodes is taken.
     #[inline]
     fn frame<E: Write>(
         &mut self,
         frame: &Seen<'_>,
         nodes: &mut Nodes,
-        facts: &Facts<'_>,
+        _facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<Step, OutputError> {
         if let Some(slot) = self.slot(frame.id, frame.extended) {
@@ -249,16 +259,15 @@ impl Monitor for DriveMonitor {
             )?;
             return Ok(Step::Done);
         }
-        // An SDO id an EMCY id moved to is the EMCY monitor's.
-        if !frame.extended && sdo::is_sdo_id(frame.id) && facts.emcy_node(frame.id, false).is_none()
-        {
-            self.pdo_configuration(frame.id, frame.data, nodes, emit);
-        }
         Ok(Step::Pass)
     }
 
-    /// The device type (0x1000), and the statusword, controlword and
-    /// error code read directly (0x6041, 0x6040, 0x603F).
+    /// The device type (0x1000); PDO parameters read or written; the
+    /// statusword and error code read directly (0x6041, 0x603F); the
+    /// controlword written (0x6040). A read of the controlword is no
+    /// command, so never a fault reset, and it is not compared with the
+    /// words written either: the master's RPDOs that follow it repeat the
+    /// word before it, and their repeats are not fed again.
     fn learn<E: Write>(
         &mut self,
         raw: &[u8],
@@ -275,8 +284,34 @@ impl Monitor for DriveMonitor {
                 value,
                 ..
             } if object.index == sdo::DEVICE_TYPE && object.sub == 0 => {
-                self.device_type(node, value, emit);
+                self.device_type(raw, node, value, nodes, emit);
                 Ok(())
+            }
+            Fact::Read {
+                node,
+                object,
+                value,
+            }
+            | Fact::Written {
+                node,
+                object,
+                value,
+            } if pdo::PdoId::is_pdo_parameter(object.index) => {
+                self.pdo_configuration(node, object, value, nodes, emit);
+                Ok(())
+            }
+            Fact::Written {
+                node,
+                object,
+                value,
+            } if object.sub == 0 && object.index == cia402::CONTROLWORD => {
+                let words = Words {
+                    statusword: None,
+                    controlword: Some(value as u16),
+                    error_code: None,
+                    via: Via::Sdo,
+                };
+                self.words(raw, node, at, words, nodes, emit)
             }
             Fact::Read {
                 node,
@@ -284,15 +319,14 @@ impl Monitor for DriveMonitor {
                 value,
             } if object.sub == 0 => {
                 let word = Some(value as u16);
-                let (statusword, controlword, error_code) = match object.index {
-                    cia402::STATUSWORD => (word, None, None),
-                    cia402::CONTROLWORD => (None, word, None),
-                    cia402::ERROR_CODE => (None, None, word),
+                let (statusword, error_code) = match object.index {
+                    cia402::STATUSWORD => (word, None),
+                    cia402::ERROR_CODE => (None, word),
                     _ => return Ok(()),
                 };
                 let words = Words {
                     statusword,
-                    controlword,
+                    controlword: None,
                     error_code,
                     via: Via::Sdo,
                 };
@@ -329,6 +363,37 @@ impl Monitor for DriveMonitor {
                  --assume-cia402-pdo",
                 list.join(", "),
             ));
+        }
+        if !self.not_drives.is_empty() {
+            let list: Vec<String> = self
+                .not_drives
+                .iter()
+                .map(|(n, (t, _))| format!("{n} (0x{t:08X}, {})", device_profile::describe(*t)))
+                .collect();
+            let withdrawn: Vec<String> = self
+                .not_drives
+                .iter()
+                .filter(|(_, (_, w))| *w)
+                .map(|(n, _)| n.to_string())
+                .collect();
+            let (one, verb, their) = if list.len() == 1 {
+                ("node", "is not a drive", "its")
+            } else {
+                ("nodes", "are not drives", "their")
+            };
+            let mut note = format!(
+                "--assume-cia402-pdo: {one} {} {verb} by {their} device type; {their} PDOs are \
+                 not read as CiA 402",
+                list.join(", ")
+            );
+            if !withdrawn.is_empty() {
+                note.push_str(&format!(
+                    " (the states read before the device type came are left out of the report \
+                     of node {})",
+                    withdrawn.join(", ")
+                ));
+            }
+            emit.note(&note);
         }
         let dropped = self.learner.dropped();
         if dropped > 0 {
@@ -376,22 +441,18 @@ struct Words {
 }
 
 impl DriveMonitor {
-    /// An SDO frame on a CAN SDO id that may configure a PDO: followed to
-    /// the node's confirmation, then learnt.
+    /// A PDO parameter's value the node confirmed writing or reported in
+    /// an upload: a master that reads a mapping back learns it as surely
+    /// as one that writes it.
     fn pdo_configuration<E: Write>(
         &mut self,
-        id: u32,
-        data: &[u8],
+        node: NodeId,
+        object: Object,
+        value: u32,
         nodes: &mut Nodes,
         emit: &mut Emit<'_, E>,
     ) {
-        if !self.downloads.wants(id, data) {
-            return;
-        }
-        let Some(c) = self.downloads.feed(id, data) else {
-            return;
-        };
-        let Some(pdo) = self.learner.confirmed(c.node, c.object, c.value) else {
+        let Some(pdo) = self.learner.confirmed(node, object, value) else {
             return;
         };
         let mapping = self.learner.mapping(pdo);
@@ -402,9 +463,37 @@ impl DriveMonitor {
     }
 
     /// A node's device type (0x1000): a CiA 402 drive without a known
-    /// transmit PDO mapping gets its TPDO ids watched.
-    fn device_type<E: Write>(&mut self, node: NodeId, value: u32, emit: &mut Emit<'_, E>) {
-        if value & 0xFFFF != CIA402_PROFILE || !(1..=127).contains(&node) {
+    /// transmit PDO mapping gets its TPDO ids watched; a node of another
+    /// profile is no drive, and `--assume-cia402-pdo` does not read its
+    /// PDOs as one. What was read of it as a drive before is withdrawn
+    /// from its report when nothing but that assumption decoded it: the
+    /// words were read from a layout the node does not have, and a report
+    /// of a drive state for an I/O module would mislead (the events
+    /// already written stay, the note says so).
+    fn device_type<E: Write>(
+        &mut self,
+        raw: &[u8],
+        node: NodeId,
+        value: u32,
+        nodes: &mut Nodes,
+        emit: &mut Emit<'_, E>,
+    ) {
+        if !(1..=127).contains(&node) {
+            return;
+        }
+        if !device_profile::is_drive(value) {
+            if emit.opts.assume_cia402_pdo && self.table.withdraw_assumed(node) {
+                self.flush_repeats(nodes);
+                self.rebuild();
+                let withdrawn = self.mappings_of(node).is_empty()
+                    && nodes
+                        .get(raw, node)
+                        .timeline
+                        .health_if_any()
+                        .and_then(|h| h.drive.take())
+                        .is_some();
+                self.not_drives.insert(node, (value, withdrawn));
+            }
             return;
         }
         if self.has_tpdo(node) {

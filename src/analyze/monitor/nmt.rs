@@ -126,7 +126,8 @@ impl Monitor for NmtMonitor {
         // the confirmation of a write): it spoke, so it is a node. (SDO
         // traffic about objects the decoder does not follow is only timed,
         // never decoded, so those responses make no node.)
-        let (Fact::Read { node, .. } | Fact::Holds { node, .. }) = fact;
+        let (Fact::Read { node, .. } | Fact::Holds { node, .. } | Fact::Written { node, .. }) =
+            fact;
         nodes.get(channel, node);
         let Fact::Holds {
             node,

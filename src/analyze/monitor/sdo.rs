@@ -1,6 +1,7 @@
-//! The SDO monitor: SDO transfers followed to the values nodes hold (the
-//! facts other monitors need: device type, identity, the EMCY id, the
-//! heartbeat times), aborts, and the error history (0x1003) read-outs.
+//! The SDO monitor: SDO transfers (expedited, segmented and block) followed
+//! to the values nodes hold and report (the facts other monitors need:
+//! device type, identity, the EMCY id, the heartbeat times, PDO parameters,
+//! a drive's words), aborts, and the error history (0x1003) read-outs.
 
 use std::io::Write;
 
@@ -10,16 +11,25 @@ use crate::analyze::event::{Health, HistoryItem, HistoryReport, NodeReport};
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::NodeId;
+use crate::canopen::cia402;
+use crate::canopen::pdo::PdoId;
 use crate::canopen::sdo::abort as sdo_abort;
-use crate::canopen::sdo::{self, Sdo};
+use crate::canopen::sdo::{self, BlockStep, Blocks, Confirmed, Downloads, Sdo, Uploads};
 use crate::timeline::At;
 use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
 
 #[derive(Default)]
 pub(in crate::analyze) struct SdoMonitor {
-    /// Transfers going on, to the values they carry.
+    /// Expedited transfers of the followed objects, to the values they carry.
     tracker: sdo::Tracker,
+    /// Block transfers going on: their frames are no other command.
+    blocks: Blocks,
+    /// Downloads (expedited and segmented) of the objects other monitors
+    /// learn from writes ([`Downloads::wants`]).
+    downloads: Downloads,
+    /// Segmented uploads of the objects some monitor learns from.
+    uploads: Uploads,
     /// Buffers reused from frame to frame.
     events: Vec<(At, Health)>,
     read_outs: Vec<ReadOut>,
@@ -41,13 +51,47 @@ impl Monitor for SdoMonitor {
         if frame.extended || !sdo::is_sdo_id(frame.id) {
             return Ok(Step::Pass);
         }
-        match sdo::parse(frame.id, frame.data) {
-            Some(access) => {
-                let learnt = self.access(frame.channel, frame.at, access, nodes, facts, emit)?;
-                Ok(Step::Learnt(learnt))
+        let (id, data) = (frame.id, frame.data);
+        match self.blocks.feed(id, data, learns_from) {
+            BlockStep::Other => {}
+            BlockStep::Part => return Ok(Step::Done),
+            BlockStep::Done { upload, value, .. } => {
+                let mut learnt = Learnt::default();
+                if let Some(c) = value {
+                    completed(&mut learnt, c, upload);
+                }
+                return Ok(Step::Learnt(learnt));
             }
-            None => Ok(Step::Done),
         }
+        let mut learnt = Learnt::default();
+        if self.downloads.wants(id, data)
+            && let Some(c) = self.downloads.feed(id, data)
+        {
+            learnt.written = Some(Fact::Written {
+                node: c.node,
+                object: c.object,
+                value: c.value,
+            });
+        }
+        if self.uploads_wanted(id, data) {
+            let going = self.uploads.in_progress(id);
+            if let Some(c) = self.uploads.feed(id, data) {
+                completed(&mut learnt, c, true);
+            }
+            if !going && self.uploads.in_progress(id) && sdo::begins_segmented_upload(id, data) {
+                // Its segments name no object, so the content filter
+                // keeps them back: the node's answers are decoded from
+                // here on (a master that uploads such an object in
+                // segments from a node is likely to do so again).
+                emit.wanted.widen(|i| i.unfilter(id));
+            }
+        }
+        if let Some(access) = sdo::parse(id, data) {
+            let more = self.access(frame.channel, frame.at, access, nodes, facts, emit)?;
+            learnt.read = learnt.read.or(more.read);
+            learnt.holds = learnt.holds.or(more.holds);
+        }
+        Ok(Step::Learnt(learnt))
     }
 
     /// A value of the error history (0x1003) a node holds.
@@ -142,7 +186,58 @@ impl Monitor for SdoMonitor {
     }
 }
 
+/// Whether some monitor learns from `index`'s value: the followed objects,
+/// PDO parameters, a drive's words. Transfers of others are followed only
+/// so that their frames are read right; their data is not kept.
+fn learns_from(index: u16) -> bool {
+    sdo::is_followed(index) || PdoId::is_pdo_parameter(index) || cia402::is_decoded(index)
+}
+
+/// What a segmented or block transfer that completed showed: an upload is
+/// a read, a download a confirmed write; of a followed object, a value the
+/// node holds.
+fn completed(learnt: &mut Learnt, c: Confirmed, upload: bool) {
+    let Confirmed {
+        node,
+        object,
+        value,
+        ..
+    } = c;
+    if !learns_from(object.index) {
+        return;
+    }
+    if upload {
+        learnt.read = Some(Fact::Read {
+            node,
+            object,
+            value,
+        });
+    } else {
+        learnt.written = Some(Fact::Written {
+            node,
+            object,
+            value,
+        });
+    }
+    if sdo::is_followed(object.index) {
+        learnt.holds = Some(Fact::Holds {
+            node,
+            object,
+            value,
+            written: !upload,
+        });
+    }
+}
+
 impl SdoMonitor {
+    /// Whether a frame can matter to a segmented upload: the server's
+    /// answer naming an object some monitor learns from, or any frame of a
+    /// node whose upload is going on.
+    fn uploads_wanted(&self, id: u32, data: &[u8]) -> bool {
+        self.uploads.in_progress(id)
+            || matches!(*data, [_, lo, hi, ..] if learns_from(u16::from_le_bytes([lo, hi])))
+    }
+
     /// An SDO access (on a CAN SDO id, or parsed from another transport by
     /// [`sdo::parse_payload`]) on channel `raw` at `at`: an abort, and
     /// what the access showed of the node.

@@ -436,11 +436,12 @@ pub struct DriveArgs {
     #[arg(long, value_parser = parse_pdo, value_name = "COBID=OBJECT[:BITS],...", help_heading = DECODING)]
     pub pdo: Vec<PdoSpec>,
 
-    /// A node's DCF or EDS file: its PDO mappings and identity, NODE=FILE (repeatable)
+    /// A node's DCF or EDS file: its PDO mappings, device type and identity, NODE=FILE (repeatable)
     ///
     /// A node's DCF or EDS file, NODE=FILE (repeatable): the PDO mappings it declares
     /// decode the node's statusword and controlword (the trace's own SDO writes win),
-    /// its vendor id chooses its profile as a 0x1018 upload does
+    /// its vendor id and device type choose its profile as uploads of 0x1018 and
+    /// 0x1000 do, and a device type other than 402 keeps --assume-cia402-pdo off it
     #[arg(long, value_parser = parse_dcf, value_name = "NODE=FILE", help_heading = DECODING)]
     pub dcf: Vec<(NodeId, PathBuf)>,
 
@@ -448,7 +449,8 @@ pub struct DriveArgs {
     ///
     /// Assume the CiA 402 predefined PDO mapping where nothing else maps a PDO: TPDO1
     /// (0x180 + node) starts with the statusword, RPDO1 (0x200 + node) with the
-    /// controlword. Reported with source `assumed`
+    /// controlword. Reported with source `assumed`. Not for a node whose device type
+    /// (0x1000, read in the trace or given by its DCF) says it is no drive
     #[arg(long, help_heading = DECODING)]
     pub assume_cia402_pdo: bool,
 }
@@ -488,9 +490,10 @@ impl DriveArgs {
         for (node, path) in &self.dcf {
             let dcf = emcy_decode::canopen::dcf::load(path, *node)
                 .map_err(|e| anyhow::anyhow!("--dcf {e}"))?;
-            if dcf.mappings.is_empty() && dcf.vendor_id.is_none() {
+            if dcf.mappings.is_empty() && dcf.vendor_id.is_none() && dcf.device_type.is_none() {
                 bail!(
-                    "--dcf {}: no PDO mapping and no identity in it: not a DCF or EDS file{}",
+                    "--dcf {}: no PDO mapping, device type or identity in it: not a DCF or EDS \
+                     file{}",
                     path.display(),
                     dcf.problems
                         .first()

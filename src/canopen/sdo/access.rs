@@ -57,7 +57,7 @@ pub enum Sdo {
 }
 
 /// An object dictionary entry.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Object {
     pub index: u16,
     pub sub: u8,
@@ -72,6 +72,13 @@ pub(super) const SCS_DOWNLOAD_SEGMENT: u8 = 1;
 pub(super) const SCS_UPLOAD_INITIATE: u8 = 2;
 pub(super) const SCS_DOWNLOAD_INITIATE: u8 = 3;
 pub(super) const CS_ABORT: u8 = 4;
+pub(super) const SCS_UPLOAD_SEGMENT: u8 = 0;
+/// Block transfers: the client's block upload commands share 5 with the
+/// server's block download responses, and 6 the other way round.
+pub(super) const CCS_BLOCK_UPLOAD: u8 = 5;
+pub(super) const CCS_BLOCK_DOWNLOAD: u8 = 6;
+pub(super) const SCS_BLOCK_DOWNLOAD: u8 = 5;
+pub(super) const SCS_BLOCK_UPLOAD: u8 = 6;
 
 /// Whether `index` is an object whose value the decoder follows: device type and vendor id
 /// choose a node's profile, COB-ID EMCY moves its EMCY id, the error

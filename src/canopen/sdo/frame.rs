@@ -33,6 +33,15 @@ pub fn names_followed_object(id: u32, data: &[u8]) -> bool {
     is_sdo_id(id) && named_index(data).is_some_and(is_followed)
 }
 
+/// Whether an SDO frame is a node's answer that begins a segmented upload
+/// (scs 2 with e = 0): its segments follow, naming no object.
+pub fn begins_segmented_upload(id: u32, data: &[u8]) -> bool {
+    matches!(
+        (sender(id), data.first()),
+        (Some((false, _)), Some(&cmd)) if cmd >> 5 == SCS_UPLOAD_INITIATE && cmd & 0b10 == 0
+    )
+}
+
 /// Whether an SDO frame's command byte says abort (any object).
 pub fn is_abort(data: &[u8]) -> bool {
     data.first().is_some_and(|cmd| cmd >> 5 == CS_ABORT)
@@ -156,6 +165,21 @@ mod tests {
     fn segmented_upload_is_not_tracked() {
         // 0x41: segmented initiate (e = 0): the value is not in this frame.
         assert_eq!(parse(0x581, &[0x41, 0x08, 0x10, 0x00, 0x10, 0, 0, 0]), None);
+    }
+
+    #[test]
+    fn segmented_upload_answers() {
+        assert!(begins_segmented_upload(0x581, &[0x41, 0x08, 0x10, 0]));
+        assert!(begins_segmented_upload(0x581, &[0x40, 0x08, 0x10, 0]));
+        assert!(
+            !begins_segmented_upload(0x581, &[0x43, 0x08, 0x10, 0]),
+            "expedited"
+        );
+        assert!(
+            !begins_segmented_upload(0x601, &[0x41, 0x08, 0x10, 0]),
+            "a request"
+        );
+        assert!(!begins_segmented_upload(0x581, &[]));
     }
 
     #[test]

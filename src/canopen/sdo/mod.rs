@@ -6,13 +6,14 @@
 //! - [`tracker`]: following writes of the objects the decoder follows to
 //!   their confirmation;
 //! - [`segmented`]: assembling downloads of any object, expedited and
-//!   segmented, for PDO mapping learning;
+//!   segmented, and segmented uploads, for PDO mapping learning;
+//! - [`block`]: following block transfers, so that their segments are
+//!   never read as commands, and the small values they carry;
 //! - [`abort`]: what abort codes mean.
-//!
-//! Block transfers carry nothing the decoder needs and are ignored.
 
 pub mod abort;
 mod access;
+pub mod block;
 mod frame;
 pub mod segmented;
 mod tracker;
@@ -22,8 +23,9 @@ pub use access::{
     LIFE_TIME_FACTOR, Object, PRODUCER_HEARTBEAT, REQUEST_BASE, RESPONSE_BASE, Sdo, cob_id_emcy,
     is_followed, is_sdo_id,
 };
+pub use block::{BlockStep, Blocks};
 #[cfg(test)]
 pub use frame::names_followed_object;
-pub use frame::{is_abort, names_object, parse, parse_payload};
-pub use segmented::Downloads;
+pub use frame::{begins_segmented_upload, is_abort, names_object, parse, parse_payload};
+pub use segmented::{Confirmed, Downloads, Uploads};
 pub use tracker::Tracker;

@@ -1,9 +1,12 @@
 //! Assembling SDO downloads, expedited and segmented, to the writes a node
-//! confirmed. PDO mappings are configured by such writes (a mapping entry
-//! may come in segments), so PDO learning reads what this assembles.
+//! confirmed, and segmented uploads to the values a node reported. PDO
+//! mappings are configured by such writes (a mapping entry may come in
+//! segments) and read back by such uploads, so PDO learning reads what
+//! this assembles.
 
 use super::access::{
-    CCS_DOWNLOAD_INITIATE, CCS_DOWNLOAD_SEGMENT, Object, SCS_DOWNLOAD_SEGMENT, Sdo, sender,
+    CCS_DOWNLOAD_INITIATE, CCS_DOWNLOAD_SEGMENT, CS_ABORT, Object, SCS_DOWNLOAD_SEGMENT,
+    SCS_UPLOAD_INITIATE, SCS_UPLOAD_SEGMENT, Sdo, sender,
 };
 use super::frame::parse;
 use crate::canopen::NodeId;
@@ -244,9 +247,193 @@ impl Downloads {
     }
 }
 
+/// One node's segmented upload in progress: the server answered the
+/// initiate without the value (e = 0), its segments are coming.
+#[derive(Clone, Copy, Debug, Default)]
+enum Upload {
+    #[default]
+    Idle,
+    /// `toggle` is the bit the next segment must carry.
+    Segments {
+        object: Object,
+        size: Option<u32>,
+        kept: [u8; KEPT_BYTES],
+        len: u32,
+        toggle: bool,
+    },
+}
+
+/// Follows segmented uploads, per node, to the value the node reported
+/// (expedited uploads carry theirs in one frame: [`parse`] reads them).
+/// Memory is one small fixed record per node (ids 1-127).
+#[derive(Clone, Debug)]
+pub struct Uploads {
+    transfers: Box<[Upload; 128]>,
+}
+
+impl Default for Uploads {
+    fn default() -> Self {
+        Uploads {
+            transfers: Box::new([Upload::Idle; 128]),
+        }
+    }
+}
+
+impl Uploads {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Whether the node of SDO id `id` has a segmented upload going on:
+    /// its segments name no object, so only this says they matter.
+    pub fn in_progress(&self, id: u32) -> bool {
+        sender(id).is_some_and(|(_, node)| {
+            self.transfers
+                .get(node as usize)
+                .is_some_and(|t| !matches!(t, Upload::Idle))
+        })
+    }
+
+    /// Feeds one frame on an SDO id (others change nothing); the upload it
+    /// completes, if it completes one with a value of at most four bytes.
+    /// Only the server's frames matter: its initiate response names the
+    /// object, and its segments carry the toggle the client asked for.
+    pub fn feed(&mut self, id: u32, data: &[u8]) -> Option<Confirmed> {
+        let (request, node) = sender(id)?;
+        let slot = self.transfers.get_mut(node as usize)?;
+        let &[cmd, ..] = data else {
+            return None;
+        };
+        let cs = cmd >> 5;
+        if cs == CS_ABORT {
+            *slot = Upload::Idle;
+            return None;
+        }
+        if request {
+            return None;
+        }
+        match (cs, *slot) {
+            (SCS_UPLOAD_INITIATE, _) => {
+                *slot = match *data {
+                    // e = 0: the segments follow; s = 1: size in bytes 4-7.
+                    [_, lo, hi, sub, b4, b5, b6, b7] if cmd & 0b10 == 0 => Upload::Segments {
+                        object: Object {
+                            index: u16::from_le_bytes([lo, hi]),
+                            sub,
+                        },
+                        size: (cmd & 0x01 != 0).then(|| u32::from_le_bytes([b4, b5, b6, b7])),
+                        kept: [0; KEPT_BYTES],
+                        len: 0,
+                        toggle: false,
+                    },
+                    _ => Upload::Idle,
+                };
+                None
+            }
+            (
+                SCS_UPLOAD_SEGMENT,
+                Upload::Segments {
+                    object,
+                    size,
+                    mut kept,
+                    mut len,
+                    toggle,
+                },
+            ) => {
+                if (cmd & 0x10 != 0) != toggle {
+                    // Out of step: the value cannot be trusted.
+                    *slot = Upload::Idle;
+                    return None;
+                }
+                // n (bits 1-3) bytes of the seven unused.
+                let used = usize::from(7 - ((cmd >> 1) & 0b111));
+                for &b in data.iter().skip(1).take(used) {
+                    if let Some(k) = kept.get_mut(len as usize) {
+                        *k = b;
+                    }
+                    len = len.saturating_add(1);
+                }
+                if cmd & 0x01 == 0 {
+                    *slot = Upload::Segments {
+                        object,
+                        size,
+                        kept,
+                        len,
+                        toggle: !toggle,
+                    };
+                    return None;
+                }
+                *slot = Upload::Idle;
+                if size.is_some_and(|s| s != len) || len as usize > KEPT_BYTES {
+                    return None;
+                }
+                Some(Confirmed {
+                    node: node as NodeId,
+                    object,
+                    value: u32::from_le_bytes(kept),
+                    len,
+                })
+            }
+            // Any other answer of the server ends the upload.
+            _ => {
+                *slot = Upload::Idle;
+                None
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn segmented_upload_of_a_small_value() {
+        let mut u = Uploads::new();
+        // The client asks (nothing to the follower), the server answers
+        // with size 4 (0x41), then one last segment, toggle 0, n = 3: 0x07.
+        assert_eq!(u.feed(0x603, &[0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0]), None);
+        assert_eq!(u.feed(0x583, &[0x41, 0x00, 0x10, 0x00, 4, 0, 0, 0]), None);
+        assert_eq!(u.feed(0x603, &[0x60, 0, 0, 0, 0, 0, 0, 0]), None);
+        let c = u
+            .feed(0x583, &[0x07, 0x91, 0x01, 0x0F, 0x00, 0xEE, 0xEE, 0xEE])
+            .expect("done");
+        assert_eq!(
+            c.object,
+            Object {
+                index: 0x1000,
+                sub: 0
+            }
+        );
+        assert_eq!((c.node, c.value, c.len), (3, 0x000F_0191, 4));
+        assert_eq!(u.feed(0x583, &[0x07, 1, 2, 3, 4, 0, 0, 0]), None, "idle");
+    }
+
+    #[test]
+    fn segmented_upload_in_two_segments_and_out_of_step() {
+        let mut u = Uploads::new();
+        // No size: 7 bytes then 1 (toggle 1, n = 6, last: 0x1D): too long.
+        u.feed(0x583, &[0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0]);
+        assert_eq!(u.feed(0x583, &[0x00, 1, 2, 3, 4, 5, 6, 7]), None);
+        assert_eq!(u.feed(0x583, &[0x1D, 8, 0, 0, 0, 0, 0, 0]), None);
+        // Two bytes in two segments: 0x0D (n = 6, one byte), then 0x1D.
+        u.feed(0x583, &[0x40, 0x00, 0x1A, 0x00, 0, 0, 0, 0]);
+        u.feed(0x583, &[0x0C, 0x02, 0, 0, 0, 0, 0, 0]);
+        let c = u
+            .feed(0x583, &[0x1D, 0x01, 0, 0, 0, 0, 0, 0])
+            .expect("done");
+        assert_eq!((c.value, c.len), (0x0102, 2));
+        // A toggle out of step drops the upload.
+        u.feed(0x583, &[0x40, 0x00, 0x1A, 0x00, 0, 0, 0, 0]);
+        assert_eq!(u.feed(0x583, &[0x1D, 0x01, 0, 0, 0, 0, 0, 0]), None);
+        assert_eq!(u.feed(0x583, &[0x0D, 0x01, 0, 0, 0, 0, 0, 0]), None);
+        // An abort drops it; an expedited answer starts none.
+        u.feed(0x583, &[0x40, 0x00, 0x1A, 0x00, 0, 0, 0, 0]);
+        u.feed(0x603, &[0x80, 0x00, 0x1A, 0x00, 0, 0, 0x04, 0x05]);
+        assert_eq!(u.feed(0x583, &[0x0D, 0x01, 0, 0, 0, 0, 0, 0]), None);
+        u.feed(0x583, &[0x43, 0x00, 0x1A, 0x00, 1, 0, 0, 0]);
+        assert_eq!(u.feed(0x583, &[0x0D, 0x01, 0, 0, 0, 0, 0, 0]), None);
+    }
 
     #[test]
     fn expedited_downloads_count_once_confirmed() {
