@@ -264,7 +264,7 @@ fn write_drives<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result
 fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
     let c = &input.counts;
     let span = match (input.first_time, input.last_time) {
-        (Some(first), Some(last)) => format!(" over {} s", last.since(first)),
+        (Some(first), Some(last)) => format!(" over {}", human_span(last.since(first))),
         _ => String::new(),
     };
     let rate = input
