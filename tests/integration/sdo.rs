@@ -83,3 +83,45 @@ fn block_transfers_read_the_same_on_one_thread_and_two() {
         COPIES as usize
     );
 }
+
+/// A client's abort is the master speaking: to an id that never answered
+/// it makes no node and is said once at its line; to a node that spoke it
+/// is that node's `sdo_abort`.
+#[test]
+fn a_client_abort_to_a_silent_id_makes_no_node() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("aborts.log");
+    fs::write(
+        &trace,
+        "(1.000) can0 705#00\n\
+         (1.100) can0 605#4000100000000000\n\
+         (1.200) can0 605#8000100000000405\n\
+         (1.300) can0 606#4000100000000000\n\
+         (1.400) can0 606#8000100000000405\n",
+    )
+    .expect("write");
+    let out = emcy_decode()
+        .args(["--format", "ndjson"])
+        .arg(&trace)
+        .output()
+        .expect("runs");
+    let objects: Vec<Value> = String::from_utf8(out.stdout)
+        .expect("utf-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect();
+    let nodes: Vec<&Value> = of_type(&objects, "node");
+    assert_eq!(nodes.len(), 1, "{nodes:?}");
+    assert_eq!(nodes[0]["node"], 5);
+    let aborts = of_type(&objects, "sdo_abort");
+    assert_eq!(aborts.len(), 1, "{aborts:?}");
+    assert_eq!(
+        (&aborts[0]["node"], &aborts[0]["by"]),
+        (&5.into(), &"client".into())
+    );
+    let stderr = String::from_utf8(out.stderr).expect("utf-8");
+    assert!(
+        stderr.contains("aborts.log:5: the SDO client aborted its transfer of 0x1000 sub 0 to node 6, which never answered"),
+        "{stderr}"
+    );
+}

@@ -296,6 +296,21 @@ impl SdoMonitor {
         facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
+        // A client's abort is the master speaking: to an id that never
+        // answered it makes no node, only a diagnostic at its line.
+        if !by_server && nodes.known(raw, node).is_none() {
+            emit.diagnostic(
+                at.line,
+                format!(
+                    "the SDO client aborted its transfer of 0x{:04X} sub {} to node {node}, \
+                     which never answered ({}); no node",
+                    object.index,
+                    object.sub,
+                    sdo_abort::describe(code)
+                ),
+            );
+            return Ok(());
+        }
         let slot = nodes.get(raw, node);
         self.events.push((
             at,
