@@ -44,6 +44,9 @@ pub enum Via {
     Command,
     /// The node's boot-up: it entered pre-operational.
     BootUp,
+    /// A PDO the node sent after a start command: CiA 301 nodes send PDOs
+    /// only when operational.
+    Pdo,
 }
 
 impl Via {
@@ -54,6 +57,7 @@ impl Via {
             Via::Guarding => "guarding",
             Via::Command => "command",
             Via::BootUp => "boot_up",
+            Via::Pdo => "pdo",
         }
     }
 }
@@ -196,6 +200,24 @@ impl NodeNmt {
             command: p.command,
             state,
         });
+    }
+
+    /// The node sent a PDO (one it produces): CiA 301 nodes send PDOs only
+    /// when operational, so it answers a waiting start. Without one it
+    /// changes nothing: a PDO queued before a stop or a reset may still
+    /// follow it, and heartbeats or guarding say the state outright.
+    pub fn produced(&mut self) -> Option<NmtChange> {
+        if self.commanded() != Some(NmtState::Operational) {
+            return None;
+        }
+        self.pending = None;
+        self.change(NmtState::Operational, Via::Pdo)
+    }
+
+    /// Whether a PDO from the node would confirm a waiting start
+    /// ([`NodeNmt::produced`]).
+    pub fn awaits_start(&self) -> bool {
+        self.commanded() == Some(NmtState::Operational)
     }
 
     /// A heartbeat at `now` said `state` (not a boot-up: see
@@ -446,6 +468,27 @@ mod tests {
         assert!(w.is_empty(), "within the grace");
         n.heartbeat(NmtState::Operational, ms(3000), &mut w);
         assert_eq!(w.len(), 1);
+    }
+
+    #[test]
+    fn a_pdo_answers_a_waiting_start_and_nothing_else() {
+        let mut n = NodeNmt::default();
+        n.boot_up();
+        // No command waits: a PDO says nothing of the state.
+        assert!(!n.awaits_start());
+        assert_eq!(n.produced(), None);
+        assert_eq!(n.state(), Some(NmtState::PreOperational));
+        // A waiting stop is not answered by a PDO (one may be queued).
+        n.command(Command::Stop, ms(0));
+        assert_eq!(n.produced(), None);
+        assert_eq!(n.commanded(), Some(NmtState::Stopped));
+        // A waiting start is.
+        n.command(Command::Start, ms(10));
+        assert!(n.awaits_start());
+        assert_eq!(n.produced(), change(NmtState::Operational, Via::Pdo));
+        assert_eq!(n.commanded(), None);
+        assert_eq!(n.produced(), None, "answered once");
+        assert_eq!(Via::Pdo.slug(), "pdo");
     }
 
     #[test]

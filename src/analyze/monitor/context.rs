@@ -103,6 +103,8 @@ pub(in crate::analyze) struct Learnt {
     pub(in crate::analyze) read: Option<Fact>,
     pub(in crate::analyze) holds: Option<Fact>,
     pub(in crate::analyze) written: Option<Fact>,
+    /// A PDO the node sent.
+    pub(in crate::analyze) produced: Option<Fact>,
 }
 
 /// A fact about a node that one monitor learnt and others may need.
@@ -130,6 +132,9 @@ pub(in crate::analyze) enum Fact {
         object: Object,
         value: u32,
     },
+    /// `node` sent a PDO while a start command to it waited for an answer
+    /// (only then is it told: PDOs are many).
+    Produced { node: NodeId },
 }
 
 /// The facts about the bus every monitor may read and none owns: which

@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 use std::io::Write;
 
-use super::context::{Emit, Fact, Facts, Monitor, Seen, Step};
+use super::context::{Emit, Fact, Facts, Learnt, Monitor, Seen, Step};
 use crate::analyze::analysis::OutputError;
 use crate::analyze::event::{DriveReport, Health, NodeReport};
 use crate::analyze::nodes::Nodes;
@@ -248,7 +248,10 @@ impl Monitor for DriveMonitor {
         emit: &mut Emit<'_, E>,
     ) -> Result<Step, OutputError> {
         if let Some(slot) = self.slot(frame.id, frame.extended) {
-            self.pdo(
+            let node = slot.node;
+            // A PDO with the statusword is one the drive sends.
+            let sent_by_node = slot.fields.statusword.is_some();
+            let repeat = self.pdo(
                 frame.channel,
                 frame.at,
                 frame.id,
@@ -257,6 +260,20 @@ impl Monitor for DriveMonitor {
                 nodes,
                 emit,
             )?;
+            let mut awaits_start = || {
+                nodes
+                    .known(frame.channel, node)
+                    .and_then(|t| t.health())
+                    .is_some_and(|h| h.nmt.awaits_start())
+            };
+            // Not on a repeat: the folds take repeats without this check,
+            // and the answer must not depend on how the input was split.
+            if sent_by_node && !repeat && awaits_start() {
+                return Ok(Step::Learnt(Learnt {
+                    produced: Some(Fact::Produced { node }),
+                    ..Learnt::default()
+                }));
+            }
             return Ok(Step::Done);
         }
         Ok(Step::Pass)
@@ -505,7 +522,8 @@ impl DriveMonitor {
         emit.wanted.widen(|i| self.add_to(i));
     }
 
-    /// A frame on an id some mapping decodes.
+    /// A frame on an id some mapping decodes; whether it repeated the
+    /// words its id carried last (only its time is kept).
     #[allow(clippy::too_many_arguments)]
     fn pdo<E: Write>(
         &mut self,
@@ -516,14 +534,14 @@ impl DriveMonitor {
         data: &[u8],
         nodes: &mut Nodes,
         emit: &mut Emit<'_, E>,
-    ) -> Result<(), OutputError> {
+    ) -> Result<bool, OutputError> {
         let values = slot.fields.read(data);
         // A repeat on the same channel (in the bits a drive's state reads):
         // only its time is kept.
         if let Some(Some(last)) = self.last.get_mut(cob_id as usize) {
             if last.values.relevant() == values.relevant() && *last.channel == *raw {
                 last.repeat = Some((at, values.statusword));
-                return Ok(());
+                return Ok(true);
             }
             self.flush_repeat(cob_id, slot.node, nodes);
         }
@@ -540,7 +558,8 @@ impl DriveMonitor {
             error_code: values.error_code,
             via: Via::Pdo { cob_id },
         };
-        self.words(raw, slot.node, at, words, nodes, emit)
+        self.words(raw, slot.node, at, words, nodes, emit)?;
+        Ok(false)
     }
 
     /// Whether PDOs the reader folded on `channel` ([`Fold`]) all repeat

@@ -116,7 +116,7 @@ impl Monitor for NmtMonitor {
     fn learn<E: Write>(
         &mut self,
         channel: &[u8],
-        _at: At,
+        at: At,
         fact: Fact,
         nodes: &mut Nodes,
         _facts: &Facts<'_>,
@@ -126,8 +126,16 @@ impl Monitor for NmtMonitor {
         // the confirmation of a write): it spoke, so it is a node. (SDO
         // traffic about objects the decoder does not follow is only timed,
         // never decoded, so those responses make no node.)
-        let (Fact::Read { node, .. } | Fact::Holds { node, .. } | Fact::Written { node, .. }) =
-            fact;
+        if let Fact::Produced { node } = fact {
+            let slot = nodes.get(channel, node);
+            let h = slot.timeline.health_mut(emit.opts.heartbeat_timeout);
+            nmt_event(h.nmt.produced(), at, &mut self.events);
+            return emit.health(slot.channel, node, &mut self.events);
+        }
+        let node = match fact {
+            Fact::Read { node, .. } | Fact::Holds { node, .. } | Fact::Written { node, .. } => node,
+            Fact::Produced { node } => node,
+        };
         nodes.get(channel, node);
         let Fact::Holds {
             node,
