@@ -122,6 +122,38 @@ pub(super) fn sender(id: u32) -> Option<(bool, u32)> {
     }
 }
 
+/// One record per node id (1-127; the slot for 0 is never used): what an
+/// SDO follower keeps of each node's transfer, one small fixed record per
+/// node whatever the trace. A record's default is "no transfer".
+#[derive(Clone, Debug)]
+pub(super) struct PerNode<T>(Box<[T; 128]>);
+
+impl<T: Copy + Default> Default for PerNode<T> {
+    fn default() -> Self {
+        PerNode(Box::new([T::default(); 128]))
+    }
+}
+
+impl<T> PerNode<T> {
+    /// The record of `node`.
+    pub(super) fn get(&self, node: u32) -> Option<&T> {
+        self.0.get(node as usize)
+    }
+
+    /// The record of the node that sends or receives on SDO id `id`, with
+    /// whether the frame is the client's request, and the node.
+    pub(super) fn by_id(&mut self, id: u32) -> Option<(bool, u32, &mut T)> {
+        let (request, node) = sender(id)?;
+        Some((request, node, self.0.get_mut(node as usize)?))
+    }
+
+    /// Whether the node of SDO id `id` has a transfer going on (`going`
+    /// says of a record).
+    pub(super) fn going_on(&self, id: u32, going: impl Fn(&T) -> bool) -> bool {
+        sender(id).is_some_and(|(_, node)| self.get(node).is_some_and(going))
+    }
+}
+
 /// The EMCY id a COB-ID EMCY value (object 0x1014) selects: `(id, extended)`,
 /// or `None` when bit 31 says the node sends no EMCY.
 pub fn cob_id_emcy(value: u32) -> Option<(u32, bool)> {

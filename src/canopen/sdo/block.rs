@@ -23,8 +23,8 @@
 //! is not kept then (the receiver's acknowledgement tells what it took).
 
 use super::access::{
-    CCS_BLOCK_DOWNLOAD, CCS_BLOCK_UPLOAD, CS_ABORT, Object, SCS_BLOCK_DOWNLOAD, SCS_BLOCK_UPLOAD,
-    sender,
+    CCS_BLOCK_DOWNLOAD, CCS_BLOCK_UPLOAD, CS_ABORT, Object, PerNode, SCS_BLOCK_DOWNLOAD,
+    SCS_BLOCK_UPLOAD,
 };
 use super::segmented::Confirmed;
 use crate::canopen::NodeId;
@@ -109,21 +109,12 @@ struct Transfer {
 
 /// Follows the block transfers of every node (ids 1-127): one small fixed
 /// record per node, whatever the trace.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Blocks {
-    transfers: Box<[Transfer; 128]>,
+    transfers: PerNode<Transfer>,
     /// How many nodes have a block transfer going on: the per-frame test
     /// is this one number while none has.
     going: u8,
-}
-
-impl Default for Blocks {
-    fn default() -> Self {
-        Blocks {
-            transfers: Box::new([Transfer::default(); 128]),
-            going: 0,
-        }
-    }
 }
 
 /// Whether a block transfer of `object` keeps its data: the objects some
@@ -138,7 +129,7 @@ impl Blocks {
     /// Feeds one frame on an SDO id; `keeps` says of a transfer's object
     /// whether its data is worth keeping.
     pub fn feed(&mut self, id: u32, data: &[u8], keeps: Keeps) -> BlockStep {
-        let Some((request, node)) = sender(id) else {
+        let Some((request, node, t)) = self.transfers.by_id(id) else {
             return BlockStep::Other;
         };
         let &[cmd, ..] = data else {
@@ -150,9 +141,6 @@ impl Blocks {
         if self.going == 0 && !(request && (cs == CCS_BLOCK_DOWNLOAD || cs == CCS_BLOCK_UPLOAD)) {
             return BlockStep::Other;
         }
-        let Some(t) = self.transfers.get_mut(node as usize) else {
-            return BlockStep::Other;
-        };
         let node = node as NodeId;
         let was_going = t.phase != Phase::Idle;
         let step = step(t, node, request, cmd, data, keeps);
@@ -168,7 +156,7 @@ impl Blocks {
     /// Whether `node` has a block transfer going on.
     pub fn going(&self, node: NodeId) -> bool {
         self.transfers
-            .get(usize::from(node))
+            .get(u32::from(node))
             .is_some_and(|t| t.phase != Phase::Idle)
     }
 }
@@ -642,15 +630,14 @@ mod tests {
         assert!(!b.going(4));
     }
 
-    #[test]
-    fn upload_every_phase() {
-        let mut b = Blocks::new();
-        let value = [0x91, 0x01, 0x0F, 0x00];
+    /// Node 3's block upload of 0x1000 carrying `value`, every phase: the
+    /// client asks (CRC, blksize 127, pst 0), the server answers (CRC, size
+    /// 4), one sub-block of one last segment, its acknowledgement, the
+    /// server's end with the CRC and the client's end response.
+    fn upload_frames(value: [u8; 4]) -> [(u32, [u8; 8]); 7] {
         let crc = crc16(&value).to_le_bytes();
-        let frames: [(u32, [u8; 8]); 7] = [
-            // Client: block upload, CRC, blksize 127, pst 0.
+        [
             (0x603, [0xA4, 0x00, 0x10, 0x00, 127, 0, 0, 0]),
-            // Server: CRC, size 4.
             (0x583, [0xC6, 0x00, 0x10, 0x00, 4, 0, 0, 0]),
             (0x603, [0xA3, 0, 0, 0, 0, 0, 0, 0]),
             (
@@ -660,7 +647,13 @@ mod tests {
             (0x603, [0xA2, 1, 127, 0, 0, 0, 0, 0]),
             (0x583, [0xCD, crc[0], crc[1], 0, 0, 0, 0, 0]),
             (0x603, [0xA1, 0, 0, 0, 0, 0, 0, 0]),
-        ];
+        ]
+    }
+
+    #[test]
+    fn upload_every_phase() {
+        let mut b = Blocks::new();
+        let frames = upload_frames([0x91, 0x01, 0x0F, 0x00]);
         let steps: Vec<BlockStep> = frames.iter().map(|(id, d)| feed(&mut b, *id, d)).collect();
         assert!(steps[..6].iter().all(|s| *s == BlockStep::Part));
         let BlockStep::Done {
@@ -708,20 +701,8 @@ mod tests {
     fn interleaved_nodes_are_followed_apart() {
         let mut b = Blocks::new();
         let value = [0x92, 0x01, 0x02, 0x00];
-        let crc = crc16(&value).to_le_bytes();
         let download = download_frames(value);
-        let upload: [(u32, [u8; 8]); 7] = [
-            (0x603, [0xA4, 0x00, 0x10, 0x00, 127, 0, 0, 0]),
-            (0x583, [0xC6, 0x00, 0x10, 0x00, 4, 0, 0, 0]),
-            (0x603, [0xA3, 0, 0, 0, 0, 0, 0, 0]),
-            (
-                0x583,
-                [0x81, value[0], value[1], value[2], value[3], 0, 0, 0],
-            ),
-            (0x603, [0xA2, 1, 127, 0, 0, 0, 0, 0]),
-            (0x583, [0xCD, crc[0], crc[1], 0, 0, 0, 0, 0]),
-            (0x603, [0xA1, 0, 0, 0, 0, 0, 0, 0]),
-        ];
+        let upload = upload_frames(value);
         let mut done = Vec::new();
         for i in 0..7 {
             for f in [upload.get(i), download.get(i)].into_iter().flatten() {

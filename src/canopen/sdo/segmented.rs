@@ -5,8 +5,8 @@
 //! this assembles.
 
 use super::access::{
-    CCS_DOWNLOAD_INITIATE, CCS_DOWNLOAD_SEGMENT, CS_ABORT, Object, SCS_DOWNLOAD_SEGMENT,
-    SCS_UPLOAD_INITIATE, SCS_UPLOAD_SEGMENT, Sdo, sender,
+    CCS_DOWNLOAD_INITIATE, CCS_DOWNLOAD_SEGMENT, CS_ABORT, Object, PerNode, SCS_DOWNLOAD_SEGMENT,
+    SCS_UPLOAD_INITIATE, SCS_UPLOAD_SEGMENT, Sdo,
 };
 use super::frame::parse;
 use crate::canopen::NodeId;
@@ -65,17 +65,9 @@ struct Segment {
 /// Follows SDO downloads (expedited and segmented) to their confirmation,
 /// per node: the writes a node accepted, of any object. Memory is one small
 /// fixed record per node (ids 1-127), whatever the trace.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Downloads {
-    transfers: Box<[Transfer; 128]>,
-}
-
-impl Default for Downloads {
-    fn default() -> Self {
-        Downloads {
-            transfers: Box::new([Transfer::Idle; 128]),
-        }
-    }
+    transfers: PerNode<Transfer>,
 }
 
 impl Downloads {
@@ -86,18 +78,14 @@ impl Downloads {
     /// Whether the node of SDO id `id` has a download in progress: its
     /// segment frames name no object, so only this says they matter.
     pub fn in_progress(&self, id: u32) -> bool {
-        sender(id).is_some_and(|(_, node)| {
-            self.transfers
-                .get(node as usize)
-                .is_some_and(|t| !matches!(t, Transfer::Idle))
-        })
+        self.transfers
+            .going_on(id, |t| !matches!(t, Transfer::Idle))
     }
 
     /// Feeds one frame on an SDO id (others change nothing); the download
     /// it completes, if it completes one.
     pub fn feed(&mut self, id: u32, data: &[u8]) -> Option<Confirmed> {
-        let (request, node) = sender(id)?;
-        let slot = self.transfers.get_mut(node as usize)?;
+        let (request, node, slot) = self.transfers.by_id(id)?;
         let node = node as NodeId;
         let &[cmd, ..] = data else {
             return None;
@@ -266,17 +254,9 @@ enum Upload {
 /// Follows segmented uploads, per node, to the value the node reported
 /// (expedited uploads carry theirs in one frame: [`parse`] reads them).
 /// Memory is one small fixed record per node (ids 1-127).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Uploads {
-    transfers: Box<[Upload; 128]>,
-}
-
-impl Default for Uploads {
-    fn default() -> Self {
-        Uploads {
-            transfers: Box::new([Upload::Idle; 128]),
-        }
-    }
+    transfers: PerNode<Upload>,
 }
 
 impl Uploads {
@@ -287,11 +267,7 @@ impl Uploads {
     /// Whether the node of SDO id `id` has a segmented upload going on:
     /// its segments name no object, so only this says they matter.
     pub fn in_progress(&self, id: u32) -> bool {
-        sender(id).is_some_and(|(_, node)| {
-            self.transfers
-                .get(node as usize)
-                .is_some_and(|t| !matches!(t, Upload::Idle))
-        })
+        self.transfers.going_on(id, |t| !matches!(t, Upload::Idle))
     }
 
     /// Feeds one frame on an SDO id (others change nothing); the upload it
@@ -299,8 +275,7 @@ impl Uploads {
     /// Only the server's frames matter: its initiate response names the
     /// object, and its segments carry the toggle the client asked for.
     pub fn feed(&mut self, id: u32, data: &[u8]) -> Option<Confirmed> {
-        let (request, node) = sender(id)?;
-        let slot = self.transfers.get_mut(node as usize)?;
+        let (request, node, slot) = self.transfers.by_id(id)?;
         let &[cmd, ..] = data else {
             return None;
         };
