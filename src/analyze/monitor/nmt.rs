@@ -586,13 +586,13 @@ impl NmtMonitor {
 
     /// The facts kept of what was sent to `node` on `raw` before it spoke.
     fn addressed(&mut self, raw: &[u8], node: NodeId) -> &mut Addressed {
-        if !self.addressed.contains_key(raw) {
-            self.addressed.insert(raw.into(), HashMap::new());
-        }
+        // The channel's name is copied for the key on every call: only
+        // commands to ids that never spoke come here, never a hot path.
         self.addressed
-            .get_mut(raw)
-            .map(|ids| ids.entry(node).or_default())
-            .expect("inserted above")
+            .entry(raw.into())
+            .or_default()
+            .entry(node)
+            .or_default()
     }
 
     /// `node` on `raw` spoke for the first time to this monitor (its health
