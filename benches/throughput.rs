@@ -27,8 +27,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use tracegen::{
-    TraceFormat, write_drive_trace, write_ethercat, write_heartbeat_trace, write_mf4_dz,
-    write_trace,
+    BusShape, TraceFormat, write_bus_trace, write_drive_trace, write_ethercat,
+    write_heartbeat_trace, write_mf4_dz, write_trace,
 };
 
 /// The heartbeat case's label (and the word that picks it).
@@ -79,8 +79,39 @@ fn warm(path: &str) {
     }
 }
 
+/// CPU time (user and system) of this process's waited-for children so
+/// far, from `/proc/self/stat` (in clock ticks of 10 ms: the bench's runs
+/// take tenths of seconds, so this is coarse but not useless).
+fn children_cpu() -> Duration {
+    let ticks = std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the command's closing parenthesis; cutime and
+            // cstime are the 16th and 17th of the whole line.
+            let rest = s.rsplit_once(')')?.1.to_string();
+            let fields: Vec<u64> = rest
+                .split_whitespace()
+                .skip(1)
+                .map(|f| f.parse().unwrap_or(0))
+                .collect();
+            Some(fields.get(12)? + fields.get(13)?)
+        })
+        .unwrap_or(0);
+    Duration::from_millis(ticks * 10)
+}
+
+/// The least CPU time of the runs of the last [`measure`] on this thread.
+fn last_cpu() -> Duration {
+    LAST_CPU.with(std::cell::Cell::get)
+}
+
+thread_local! {
+    static LAST_CPU: std::cell::Cell<Duration> = const { std::cell::Cell::new(Duration::ZERO) };
+}
+
 /// Best wall time of `runs` runs of `program` on `input` (warmed before
-/// each run) and the highest peak RSS (KiB) seen.
+/// each run) and the highest peak RSS (KiB) seen; [`last_cpu`] the least
+/// CPU time.
 fn measure(runs: u64, input: &str, program: &str, args: &[&str]) -> (Duration, u64) {
     try_measure(runs, input, program, args).unwrap_or_else(|| panic!("{program} {args:?} failed"))
 }
@@ -89,8 +120,10 @@ fn measure(runs: u64, input: &str, program: &str, args: &[&str]) -> (Duration, u
 fn try_measure(runs: u64, input: &str, program: &str, args: &[&str]) -> Option<(Duration, u64)> {
     let mut best = Duration::MAX;
     let mut peak = 0;
+    let mut cpu = Duration::MAX;
     for _ in 0..runs {
         warm(input);
+        let cpu_before = children_cpu();
         let start = Instant::now();
         let mut child = Command::new(program)
             .args(args)
@@ -118,7 +151,9 @@ fn try_measure(runs: u64, input: &str, program: &str, args: &[&str]) -> Option<(
             std::thread::sleep(Duration::from_millis(2));
         }
         best = best.min(start.elapsed());
+        cpu = cpu.min(children_cpu().saturating_sub(cpu_before));
     }
+    LAST_CPU.with(|c| c.set(cpu));
     Some((best, peak))
 }
 
@@ -136,13 +171,17 @@ fn measure_both(
         return (measure(runs, input, program, args), None);
     };
     let (mut this, mut that) = ((Duration::MAX, 0), Some((Duration::MAX, 0)));
+    let mut cpu = Duration::MAX;
     for _ in 0..runs {
         let (t, peak) = measure(1, input, program, args);
+        cpu = cpu.min(last_cpu());
         this = (this.0.min(t), this.1.max(peak));
         that = that
             .zip(try_measure(1, input, other, args))
             .map(|((best, most), (t, peak))| (best.min(t), most.max(peak)));
     }
+    // This build's, as [`last_cpu`] promises.
+    LAST_CPU.with(|c| c.set(cpu));
     (this, that)
 }
 
@@ -265,6 +304,41 @@ fn main() {
         drop(w);
         std::fs::rename(&tmp, &drives).expect("rename");
     }
+    // Real machine buses (`BusShape`), each measured with and without
+    // --assume-cia402-pdo, on two threads and on one.
+    let shapes = [
+        (
+            "bus: commissioning, 8 drives",
+            BusShape::Commissioning,
+            "commissioning",
+        ),
+        (
+            "bus: firmware, segmented SDO",
+            BusShape::FirmwareSegmented,
+            "firmware-segmented",
+        ),
+        (
+            "bus: firmware, block SDO",
+            BusShape::FirmwareBlock,
+            "firmware-block",
+        ),
+        ("bus: noisy, 4 drives 12 I/O HMI", BusShape::Noisy, "noisy"),
+    ];
+    let shape_files: Vec<(&str, PathBuf)> = shapes
+        .iter()
+        .map(|(label, _, name)| (*label, dir.join(format!("bus-{name}-{mb}MB.log"))))
+        .collect();
+    for ((label, shape, _), (_, file)) in shapes.iter().zip(&shape_files) {
+        if chosen(label) && !file.exists() {
+            eprintln!("generating {} ...", file.display());
+            let tmp = file.with_extension("tmp");
+            let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp).expect("create"));
+            write_bus_trace(&mut w, *shape, mb * 1024 * 1024, 42).expect("write");
+            w.flush().expect("flush");
+            drop(w);
+            std::fs::rename(&tmp, file).expect("rename");
+        }
+    }
     if chosen("MF4 DZ") && !mf4_dz.exists() {
         eprintln!("generating {} ...", mf4_dz.display());
         let tmp = mf4_dz.with_extension("tmp");
@@ -278,22 +352,25 @@ fn main() {
     println!("machine: {}", machine());
     println!("best of {runs} runs, output to /dev/null, warm page cache\n");
     println!(
-        "{:<34} {:>9} {:>9} {:>10} {:>12} {:>9}",
-        "case", "MB", "seconds", "MB/s", "vs ceiling", "peak RSS"
+        "{:<52} {:>9} {:>9} {:>10} {:>12} {:>9} {:>7}",
+        "case", "MB", "seconds", "MB/s", "vs ceiling", "peak RSS", "CPU s"
     );
     let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
     let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
 
+    // The CPU column is the least CPU time of the runs just measured (this
+    // build's, on a BENCH_COMPARE row too: the other's is not kept).
     let row = |name: &str, bytes: u64, t: Duration, ceiling: Option<Duration>, peak: u64| {
         let ratio = ceiling.map_or("ceiling".to_string(), |c| {
             format!("{:.2}x time", t.as_secs_f64() / c.as_secs_f64())
         });
         println!(
-            "{name:<34} {:>9.0} {:>9.3} {:>10.0} {ratio:>12} {:>6} MiB",
+            "{name:<52} {:>9.0} {:>9.3} {:>10.0} {ratio:>12} {:>6} MiB {:>7.2}",
             bytes as f64 / 1e6,
             t.as_secs_f64(),
             mb_per_s(bytes, t),
-            peak / 1024
+            peak / 1024,
+            last_cpu().as_secs_f64()
         );
     };
 
@@ -304,7 +381,8 @@ fn main() {
             (ethercat_label, &ethercat),
             (HEARTBEATS, &heartbeats),
             (DRIVES, &drives),
-        ]);
+        ])
+        .chain(shape_files.iter().map(|(label, file)| (*label, file)));
     for (label, file) in measured {
         if !chosen(label) {
             continue;
@@ -337,7 +415,7 @@ fn main() {
         if !label.starts_with("pcapng") && !label.starts_with("MF4") {
             cases.push(("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]));
         }
-        if label == DRIVES {
+        if label == DRIVES || label.starts_with("bus:") {
             let assume = "--assume-cia402-pdo";
             cases.push(("ndjson axis", vec!["--format", "ndjson", assume, &f]));
             cases.push((

@@ -740,3 +740,385 @@ pub fn write_drive_trace<W: Write>(
     }
     Ok((lines, emcy))
 }
+
+/// The shapes of real machine buses the throughput bench measures (all
+/// candump logs, 1 kHz SYNC, RPDO1 and TPDO1 of every CiA 402 drive,
+/// heartbeats every 100 ms with 2 ms of jitter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BusShape {
+    /// 8 drives; a fault every 40 s or so (EMCY, statusword in fault, the
+    /// master's fault reset and re-enable); one SDO read-out of 1000
+    /// objects of node 1 (its PDO mapping among them) early on.
+    Commissioning,
+    /// 4 drives, flashed one after another by a 2 MB segmented SDO
+    /// download of 0x1F50.
+    FirmwareSegmented,
+    /// The same by SDO block download, 127 segments a block.
+    FirmwareBlock,
+    /// 4 drives, 12 I/O nodes sending event PDOs, an HMI polling objects
+    /// by SDO 20 times a second, one I/O node silent for 1 s a minute.
+    Noisy,
+}
+
+/// The bytes of one firmware image the firmware shapes download.
+const FIRMWARE_BYTES: u64 = 2 * 1024 * 1024;
+
+/// CRC-16 of CiA 301's block transfers (CCITT polynomial 0x1021, start 0),
+/// one byte at a time.
+fn crc16_step(mut crc: u16, byte: u8) -> u16 {
+    crc ^= u16::from(byte) << 8;
+    for _ in 0..8 {
+        crc = if crc & 0x8000 != 0 {
+            crc << 1 ^ 0x1021
+        } else {
+            crc << 1
+        };
+    }
+    crc
+}
+
+/// A firmware download in progress, one SDO frame at a time.
+struct Flash {
+    node: u32,
+    block: bool,
+    sent: u64,
+    toggle: u8,
+    /// Block transfers: the segment's number in its sub-block (1-127).
+    seq: u8,
+    crc: u16,
+    /// The server's answer to the frame just sent, owed next.
+    answer: Option<[u8; 8]>,
+    step: FlashStep,
+}
+
+#[derive(PartialEq)]
+enum FlashStep {
+    Initiate,
+    Data,
+    End,
+    Done,
+}
+
+impl Flash {
+    fn new(node: u32, block: bool) -> Self {
+        Flash {
+            node,
+            block,
+            sent: 0,
+            toggle: 0,
+            seq: 0,
+            crc: 0,
+            answer: None,
+            step: FlashStep::Initiate,
+        }
+    }
+
+    /// The next frame of the transfer, client's or server's.
+    fn next(&mut self, rng: &mut Rng) -> Option<(u32, [u8; 8], usize)> {
+        let (client, server) = (0x600 + self.node, 0x580 + self.node);
+        if let Some(answer) = self.answer.take() {
+            return Some((server, answer, 8));
+        }
+        let size = (FIRMWARE_BYTES as u32).to_le_bytes();
+        let mut d = [0u8; 8];
+        match self.step {
+            FlashStep::Initiate => {
+                d = [
+                    if self.block { 0xC6 } else { 0x21 },
+                    0x50,
+                    0x1F,
+                    0x01,
+                    size[0],
+                    size[1],
+                    size[2],
+                    size[3],
+                ];
+                self.answer = Some(if self.block {
+                    [0xA4, 0x50, 0x1F, 0x01, 127, 0, 0, 0]
+                } else {
+                    [0x60, 0x50, 0x1F, 0x01, 0, 0, 0, 0]
+                });
+                self.step = FlashStep::Data;
+            }
+            FlashStep::Data => {
+                let n = (FIRMWARE_BYTES - self.sent).min(7) as usize;
+                for b in d[1..=n].iter_mut() {
+                    *b = rng.next() as u8;
+                    self.crc = crc16_step(self.crc, *b);
+                }
+                self.sent += n as u64;
+                let last = self.sent == FIRMWARE_BYTES;
+                if self.block {
+                    self.seq += 1;
+                    d[0] = self.seq | if last { 0x80 } else { 0 };
+                    if last || self.seq == 127 {
+                        self.answer = Some([0xA2, self.seq, 127, 0, 0, 0, 0, 0]);
+                        self.seq = 0;
+                    }
+                    if last {
+                        // Unused bytes of the last segment, for the end frame.
+                        self.toggle = (7 - n) as u8;
+                        self.step = FlashStep::End;
+                    }
+                } else {
+                    d[0] = self.toggle << 4 | ((7 - n) as u8) << 1 | u8::from(last);
+                    self.answer = Some([0x20 | self.toggle << 4, 0, 0, 0, 0, 0, 0, 0]);
+                    self.toggle ^= 1;
+                    if last {
+                        self.step = FlashStep::Done;
+                    }
+                }
+            }
+            FlashStep::End => {
+                let crc = self.crc.to_le_bytes();
+                d = [0xC1 | self.toggle << 2, crc[0], crc[1], 0, 0, 0, 0, 0];
+                self.answer = Some([0xA1, 0, 0, 0, 0, 0, 0, 0]);
+                self.step = FlashStep::Done;
+            }
+            FlashStep::Done => return None,
+        }
+        Some((client, d, 8))
+    }
+}
+
+/// Writes about `bytes` bytes of a candump log shaped as `shape`. Returns
+/// the lines written.
+pub fn write_bus_trace<W: Write>(
+    out: &mut W,
+    shape: BusShape,
+    bytes: u64,
+    seed: u64,
+) -> io::Result<u64> {
+    let mut rng = Rng::new(seed);
+    let drives: u32 = if shape == BusShape::Commissioning {
+        8
+    } else {
+        4
+    };
+    // I/O nodes 0x20-0x2B (noisy only).
+    let io_nodes: Vec<u32> = if shape == BusShape::Noisy {
+        (0x20..0x2C).collect()
+    } else {
+        Vec::new()
+    };
+    let mut next_beat: Vec<(u32, u64)> = (1..=drives)
+        .chain(io_nodes.iter().copied())
+        .map(|n| (n, u64::from(n) * 1_000))
+        .collect();
+    let mut io_next: Vec<u64> = io_nodes.iter().map(|_| rng.below(50_000)).collect();
+    let mut io_value: Vec<u8> = io_nodes.iter().map(|_| 0).collect();
+    let mut position = vec![0u32; drives as usize + 1];
+    let mut statusword = vec![0u16; drives as usize + 1];
+    // Every node, as the master reads their device types at the start.
+    let all_nodes: Vec<u32> = (1..=drives).chain(io_nodes.iter().copied()).collect();
+    // Per drive: the cycle its fault began (0: none).
+    let mut fault_at = vec![0u64; drives as usize + 1];
+    let mut next_fault = 40_000 + rng.below(5_000);
+    let mut readout = 0u32;
+    let mut flash: Option<Flash> = None;
+    let mut flashed = 0u32;
+    let mut events: Vec<(u64, u32, [u8; 8], usize)> = Vec::new();
+    let mut line = Vec::with_capacity(64);
+    let (mut written, mut lines) = (0u64, 0u64);
+    let mut cycle = 0u64;
+    while written < bytes {
+        cycle += 1;
+        let t0 = cycle * 1_000;
+        events.clear();
+        events.push((t0, 0x080, [0; 8], 0));
+        if shape == BusShape::Commissioning && cycle == next_fault {
+            let node = 1 + rng.below(u64::from(drives)) as usize;
+            fault_at[node] = cycle;
+            next_fault = cycle + 38_000 + rng.below(4_000);
+        }
+        for node in 1..=drives {
+            let n = node as usize;
+            // The master's controlword: enable operation, a fault reset
+            // 30 ms into a fault, then shutdown and enable again.
+            let since = if fault_at[n] == 0 {
+                u64::MAX
+            } else {
+                cycle - fault_at[n]
+            };
+            let (control, status): (u16, u16) = match since {
+                0..30 => (0x000F, 0x0218),
+                30..32 => (0x0080, 0x0218),
+                32..40 => (0x0006, 0x0240),
+                40..48 => (0x0006, 0x0221),
+                48..56 => (0x0007, 0x0233),
+                _ => (
+                    0x000F,
+                    0x0237 | if cycle % 50 < 25 { 0x0400 } else { 0x1000 },
+                ),
+            };
+            if since == 56 {
+                fault_at[n] = 0;
+            }
+            position[n] = position[n].wrapping_add(100 + rng.below(8) as u32);
+            statusword[n] = status;
+            let p = position[n].to_le_bytes();
+            let (c, s) = (control.to_le_bytes(), status.to_le_bytes());
+            let at = t0 + 30 + u64::from(node) * 40;
+            events.push((
+                at,
+                0x200 + node,
+                [c[0], c[1], p[0], p[1], p[2], p[3], 0, 0],
+                6,
+            ));
+            events.push((
+                at + 20,
+                0x180 + node,
+                [s[0], s[1], p[0], p[1], p[2], p[3], 0, 0],
+                6,
+            ));
+            if since == 0 {
+                events.push((at + 25, 0x080 + node, [0x10, 0x43, 0x09, 0, 0, 0, 0, 0], 8));
+            } else if since == 32 {
+                events.push((at + 25, 0x080 + node, [0; 8], 8));
+            }
+        }
+        // Heartbeats, 100 ms apart with up to 2 ms of jitter; the noisy
+        // bus's first I/O node is silent for a second every minute.
+        for (node, at) in next_beat.iter_mut() {
+            if *at < t0 + 1_000 {
+                let silent =
+                    shape == BusShape::Noisy && *node == 0x20 && (*at / 1_000) % 60_000 >= 59_000;
+                if !silent {
+                    events.push((*at, 0x700 + *node, [0x05, 0, 0, 0, 0, 0, 0, 0], 1));
+                }
+                *at += 98_000 + rng.below(4_001);
+            }
+        }
+        // The master reads every node's device type at the start (a
+        // drive says CiA 402, an I/O node CiA 401), one every 2 ms.
+        if let Some(&node) = all_nodes.get((cycle as usize).wrapping_sub(10) / 2)
+            && cycle >= 10
+            && cycle.is_multiple_of(2)
+        {
+            let device_type: u32 = if node <= drives {
+                0x0002_0192
+            } else {
+                0x000F_0191
+            };
+            let v = device_type.to_le_bytes();
+            events.push((t0 + 700, 0x600 + node, [0x40, 0x00, 0x10, 0, 0, 0, 0, 0], 8));
+            events.push((
+                t0 + 800,
+                0x580 + node,
+                [0x43, 0x00, 0x10, 0, v[0], v[1], v[2], v[3]],
+                8,
+            ));
+        }
+        match shape {
+            BusShape::Commissioning => {
+                // Node 1's read-out, an object every 2 ms from 5 s on.
+                if (5_000..7_000).contains(&cycle) && cycle.is_multiple_of(2) && readout < 1000 {
+                    let (index, sub) = match readout {
+                        0 => (0x1000u16, 0u8),
+                        1..=4 => (0x1018, readout as u8),
+                        5..=7 => (0x1A00, readout as u8 - 5),
+                        8..=10 => (0x1800, readout as u8 - 7),
+                        r => (0x2000 + (r / 16) as u16, (r % 16) as u8),
+                    };
+                    let value: u32 = match (index, sub) {
+                        (0x1000, _) => 0x0002_0192,
+                        (0x1A00, 0) => 2,
+                        (0x1A00, 1) => 0x6041_0010,
+                        (0x1A00, 2) => 0x6064_0020,
+                        (0x1800, 1) => 0x181,
+                        (0x1800, 2) => 1,
+                        _ => rng.next() as u32,
+                    };
+                    let [lo, hi] = index.to_le_bytes();
+                    let v = value.to_le_bytes();
+                    events.push((t0 + 700, 0x601, [0x40, lo, hi, sub, 0, 0, 0, 0], 8));
+                    events.push((
+                        t0 + 800,
+                        0x581,
+                        [0x43, lo, hi, sub, v[0], v[1], v[2], v[3]],
+                        8,
+                    ));
+                    readout += 1;
+                }
+            }
+            BusShape::FirmwareSegmented | BusShape::FirmwareBlock => {
+                // Three SDO frames a cycle after the process data.
+                if flash.is_none() {
+                    flash = Some(Flash::new(
+                        1 + flashed % drives,
+                        shape == BusShape::FirmwareBlock,
+                    ));
+                    flashed += 1;
+                }
+                for k in 0..6 {
+                    match flash.as_mut().and_then(|f| f.next(&mut rng)) {
+                        Some((id, data, len)) => {
+                            events.push((t0 + 400 + k * 100, id, data, len));
+                        }
+                        None => {
+                            flash = None;
+                            break;
+                        }
+                    }
+                }
+            }
+            BusShape::Noisy => {
+                for (k, &node) in io_nodes.iter().enumerate() {
+                    let silent = node == 0x20 && (cycle % 60_000) >= 59_000;
+                    if io_next[k] <= cycle && !silent {
+                        io_value[k] = io_value[k].wrapping_add(1 + rng.below(3) as u8);
+                        let v = io_value[k];
+                        let at = t0 + 400 + k as u64 * 30;
+                        events.push((at, 0x180 + node, [v, v ^ 0x5A, 0, 0, 0, 0, 0, 0], 2));
+                        io_next[k] = cycle + 5 + rng.below(40);
+                    }
+                }
+                // The HMI's poll, 20 times a second: each drive's
+                // statusword and position, two I/O nodes' inputs.
+                if cycle.is_multiple_of(50) {
+                    let polls: [(u32, u16); 10] = [
+                        (1, 0x6041),
+                        (1, 0x6064),
+                        (2, 0x6041),
+                        (2, 0x6064),
+                        (3, 0x6041),
+                        (3, 0x6064),
+                        (4, 0x6041),
+                        (4, 0x6064),
+                        (0x21, 0x6000),
+                        (0x22, 0x2100),
+                    ];
+                    for (k, &(node, index)) in polls.iter().enumerate() {
+                        let [lo, hi] = index.to_le_bytes();
+                        let n = node as usize;
+                        let value = match index {
+                            0x6041 => u32::from(statusword[n]),
+                            0x6064 => position[n],
+                            _ => rng.next() as u32,
+                        };
+                        let v = value.to_le_bytes();
+                        // The statusword is 16 bits: two bytes (0x4B).
+                        let cmd = if index == 0x6041 { 0x4B } else { 0x43 };
+                        let at = t0 + 420 + k as u64 * 50;
+                        events.push((at, 0x600 + node, [0x40, lo, hi, 0, 0, 0, 0, 0], 8));
+                        events.push((
+                            at + 25,
+                            0x580 + node,
+                            [cmd, lo, hi, 0, v[0], v[1], v[2], v[3]],
+                            8,
+                        ));
+                    }
+                }
+            }
+        }
+        events.sort_by_key(|e| e.0);
+        for (micros, id, data, len) in &events {
+            line.clear();
+            candump_line(&mut line, *micros, *id, &data[..*len]);
+            out.write_all(&line)?;
+            written += line.len() as u64;
+            lines += 1;
+        }
+    }
+    Ok(lines)
+}
