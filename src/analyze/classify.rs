@@ -44,6 +44,12 @@ pub(super) trait LineSink {
     /// run's are): a sink that keeps them takes them whole.
     fn block_folds(&mut self, _folds: FoldBuffers) {}
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
+    /// After a line outside a run or the frame that ended a run: `lines`
+    /// lines of the block are read, the next begins at byte `pos`, and the
+    /// detector is as it is there (a worker's recorder marks where the
+    /// consumer may have to read the block's rest again).
+    #[inline]
+    fn line_end(&mut self, _lines: u64, _pos: usize, _detector: &Detector) {}
     fn skipped(&mut self);
     /// Frames a skipped line says were lost before they were logged
     /// (candump `DROPCOUNT`).
@@ -101,14 +107,31 @@ pub(super) fn classify_block(
     detector: &mut Detector,
     sink: &mut impl LineSink,
 ) -> Result<(), OutputError> {
-    let bytes = block.text();
+    classify_text(
+        block.text(),
+        block.too_long_before,
+        max_line,
+        detector,
+        sink,
+    )
+}
+
+/// [`classify_block`] of whole lines `bytes`, after a too-long line of
+/// `too_long_before` bytes if one came right before them.
+pub(super) fn classify_text(
+    bytes: &[u8],
+    too_long_before: Option<u64>,
+    max_line: usize,
+    detector: &mut Detector,
+    sink: &mut impl LineSink,
+) -> Result<(), OutputError> {
     // Read before the block moves the detector on (times may chain).
     let first = detector.first_frame_time(bytes, max_line);
     let mut idx = 0u64;
     let mut pos = 0usize;
     let keep = sink.keeps_folds();
     let mut folds = Folds::with_buffers(sink.fold_buffers(), keep);
-    if let Some(n) = block.too_long_before {
+    if let Some(n) = too_long_before {
         sink.malformed(idx, too_long(n, max_line));
         idx += 1;
     }
@@ -187,6 +210,7 @@ pub(super) fn classify_block(
         if let Some(frame) = run.frame {
             deliver(sink, idx, &frame, None)?;
             idx += 1;
+            sink.line_end(idx, pos, detector);
             continue;
         }
         let Some((raw, next)) = lines::line_at(bytes, pos, max_line) else {
@@ -195,6 +219,7 @@ pub(super) fn classify_block(
         pos = next;
         classify_line(raw, idx, detector, sink, max_line)?;
         idx += 1;
+        sink.line_end(idx, pos, detector);
     }
     let last = detector.last_frame_time(bytes, max_line);
     sink.frame_times(first, last);

@@ -474,6 +474,8 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         // A drive's PDO of unknown mapping is only noted: it moves no time,
         // as when it was not wanted.
         if self.monitors.drive.watched(frame.id, frame.extended) {
+            let drive = &mut self.monitors.drive;
+            self.wanted.narrow(|i| drive.unwatch(i));
             return Ok(());
         }
         if let Some(t) = frame.time {

@@ -46,98 +46,135 @@ pub(crate) fn interest(opts: &Options) -> Interest {
 /// Whether a frame on an NMT error control or SDO id can change more than
 /// the input's first and last time: on 0x700 + node every frame of at most
 /// one byte (boot-up, heartbeat, guarding request and reply: each moves a
-/// node's heartbeat deadline or NMT state); on the SDO ids aborts and
-/// frames naming an object the decoder follows. SDO traffic for other
-/// objects, most frames on those ids, skips all further work.
+/// node's heartbeat deadline or NMT state); on the SDO ids the frames
+/// [`sdo_frame_matters`] keeps. SDO traffic for other objects, and the
+/// segments of every transfer nobody follows (a firmware download's
+/// thousands), skips all further work.
 pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     if emcy::is_nmt_error_control(id) {
         data.len() <= 1
     } else if sdo::is_sdo_id(id) {
-        // What `names_followed_object || is_abort || concerns_drive` say
-        // (a test holds them equal), reading the command and index once:
-        // asked of every SDO frame of a trace.
-        let head = data.head();
-        match *head {
-            [cmd, lo, hi] => {
-                let index = index_of(lo, hi);
-                sdo::is_abort(head) || sdo::is_followed(index) || names_drive_object(id, cmd, index)
-            }
-            _ => sdo::is_abort(head),
+        // Asked of every SDO frame of a trace: the command and index are
+        // read once, from the three bytes the reader parsed.
+        match *data.head() {
+            [cmd, lo, hi] => sdo_frame_matters(id, cmd, Some(index_of(lo, hi))),
+            [cmd, ..] => sdo_frame_matters(id, cmd, None),
+            [] => false,
         }
     } else {
         true
     }
 }
 
-/// Whether an SDO frame can matter to a CiA 402 drive's decoding or to a
-/// transfer: it names a PDO parameter (0x1400-0x1BFF) or one of
-/// 0x6040/0x6041/0x603F, or it is a segment of a segmented download, a
-/// segment's confirmation, or a block transfer's command (their frames
-/// name no object; the SDO monitor keeps only those of a transfer it
-/// follows). A segmented upload's segments are not among them: nearly
-/// every one is of an object nobody learns from (a name, a string), and
-/// decoding them all cost more than twice the instructions on an SDO-heavy
-/// trace; the SDO monitor has its node's responses decoded from the upload
-/// of an object it learns from on.
-pub(super) fn concerns_drive(id: u32, data: &[u8]) -> bool {
-    match *data {
-        [cmd, lo, hi, ..] => names_drive_object(id, cmd, index_of(lo, hi)),
-        _ => false,
+/// Whether an SDO frame with command byte `cmd` (and bytes 1-2 `index`)
+/// can matter to the SDO monitor:
+///
+/// - a command that carries an index (an initiate or its response) of an
+///   object some monitor learns from ([`learns_from`]);
+/// - a command of the block transfers, an abort, or a segment that may be
+///   a sub-block's first: the SDO monitor follows every block transfer
+///   with these alone (a block's segments carry sequence numbers where
+///   other frames carry commands, so it must know where one goes on to
+///   read any frame of its node right).
+///
+/// Segments of segmented transfers never name an object, and their data
+/// bytes are never read as one: the SDO monitor takes a node's SDO ids out
+/// of the filter while it follows a transfer of its, and puts them back
+/// at its end ([`following_changed`](super::monitor)).
+#[inline]
+fn sdo_frame_matters(id: u32, cmd: u8, index: Option<u16>) -> bool {
+    let cs = cmd >> 5;
+    if (4..=6).contains(&cs) || cmd == FIRST_BLOCK_SEGMENT {
+        return true;
     }
+    carries_index(id, cs) && index.is_some_and(learns_from)
+}
+
+/// A block transfer's segment 1 as the only one of its sub-block that is
+/// not the last; the last segments (bit 7 set) have command specifiers 4 to
+/// 7, most of which pass as block commands or aborts anyway.
+const FIRST_BLOCK_SEGMENT: u8 = 0x01;
+
+/// Whether command specifier `cs` on SDO id `id` is an initiate or an
+/// initiate's response (the commands whose bytes 1-2 are an index, besides
+/// aborts and block initiates): the client's download and upload
+/// initiates (1, 2), the server's upload and download initiate responses
+/// (2, 3).
+#[inline]
+fn carries_index(id: u32, cs: u8) -> bool {
+    if id >= sdo::REQUEST_BASE {
+        cs == 1 || cs == 2
+    } else {
+        cs == 2 || cs == 3
+    }
+}
+
+/// Whether command byte `cmd` on SDO id `id` begins a segmented transfer:
+/// the client's download initiate or the server's upload initiate
+/// response with e = 0 (the segments follow).
+#[inline]
+fn begins_segments(id: u32, cmd: u8) -> bool {
+    let cs = if id >= sdo::REQUEST_BASE { 1 } else { 2 };
+    cmd >> 5 == cs && cmd & 0b10 == 0
 }
 
 fn index_of(lo: u8, hi: u8) -> u16 {
     u16::from_le_bytes([lo, hi])
 }
 
-/// Command specifiers of the client's segments and block commands
-/// (download segment 0, block upload 5, block download 6), a bit each.
-const REQUEST_TRANSFER_CS: u8 = 1 << 0 | 1 << 5 | 1 << 6;
-/// Command specifiers of the server's confirmations and block commands
-/// (download segment 1, block download 5, block upload 6).
-const RESPONSE_TRANSFER_CS: u8 = 1 << 1 | 1 << 5 | 1 << 6;
-
-/// [`concerns_drive`] of a frame with command byte `cmd` naming `index`.
+/// Whether some monitor learns from `index`'s value: the followed objects,
+/// PDO parameters, a drive's words. Transfers of others are only counted.
 #[inline]
-fn names_drive_object(id: u32, cmd: u8, index: u16) -> bool {
-    let transfer = if id >= sdo::REQUEST_BASE {
-        REQUEST_TRANSFER_CS
-    } else {
-        RESPONSE_TRANSFER_CS
-    };
-    pdo::PdoId::is_pdo_parameter(index)
-        || cia402::is_decoded(index)
-        || transfer >> (cmd >> 5) & 1 != 0
+pub(super) fn learns_from(index: u16) -> bool {
+    sdo::is_followed(index) || pdo::PdoId::is_pdo_parameter(index) || cia402::is_decoded(index)
 }
 
-/// Whether a frame can widen the interest when the consumer reads it: an
-/// SDO access of 0x1014 (moves an EMCY id), of 0x1000 (a CiA 402 drive's
-/// PDOs get watched), one that can complete a PDO configuration (by any
-/// transfer), or a node's answer that begins a segmented upload of an
-/// object some monitor learns from (its node's answers get decoded). A
-/// worker's block holding one is classified again on the consumer's thread.
-pub(super) fn may_widen(frame: &Frame<'_>) -> bool {
+/// Whether the consumer may widen the interest when it reads `frame`, one
+/// a worker handed over: then the lines after it may hold frames that
+/// interest filtered out, and the consumer reads them again if it did
+/// widen (`parallel::consume_in_order`). Widening comes from SDO alone: a
+/// moved EMCY id (0x1014), a device type (0x1000: a drive's PDOs watched),
+/// a PDO parameter, or a transfer the SDO monitor starts to follow (its
+/// node's segments unfiltered). So: frames naming those objects, every
+/// frame that is not an initiate (aborts, block commands: they may end or
+/// complete a transfer being followed) and every frame on an SDO id out of
+/// the filter (a transfer being followed). An expedited access of any
+/// other object (a poll of a drive's statusword, say) widens nothing.
+pub(super) fn may_widen(frame: &Frame<'_>, interest: &Interest) -> bool {
     if frame.extended || !sdo::is_sdo_id(frame.id) {
         return false;
     }
-    let data = frame.data.as_slice();
-    sdo::names_object(frame.id, data, sdo::COB_ID_EMCY)
-        || sdo::names_object(frame.id, data, sdo::DEVICE_TYPE)
-        || concerns_drive(frame.id, data)
-        || sdo::begins_segmented_upload(frame.id, data)
-            && matches!(*data, [_, lo, hi, ..] if sdo::is_followed(index_of(lo, hi)))
+    if !interest.filters(frame.id) {
+        return true;
+    }
+    match *frame.data.as_slice() {
+        [cmd, lo, hi, ..] if carries_index(frame.id, cmd >> 5) => {
+            let index = index_of(lo, hi);
+            index == sdo::COB_ID_EMCY
+                || index == sdo::DEVICE_TYPE
+                || pdo::PdoId::is_pdo_parameter(index)
+                || begins_segments(frame.id, cmd) && learns_from(index)
+        }
+        _ => true,
+    }
 }
 
 /// The current interest and its generation, shared with workers: a block
 /// parsed with an older generation is parsed again in order.
 pub(super) type SharedInterest = Arc<RwLock<(u64, Interest)>>;
 
-/// The ids the analysis decodes now. They only grow (an EMCY id moved, a
-/// PDO mapping learnt, a drive to watch); each widening is a new
-/// generation, published to the workers while they run.
+/// The ids the analysis decodes now. They grow (an EMCY id moved, a PDO
+/// mapping learnt, a drive to watch) and shrink (a drive watched long
+/// enough); each change is a new generation, published to the workers
+/// while they run.
 pub(super) struct Wanted {
     pub(super) interest: Interest,
     pub(super) generation: u64,
+    /// The generation of the last change that may have added to the
+    /// interest: a worker's block parsed with this one or a later one
+    /// holds every frame the consumer wants (and perhaps some it no longer
+    /// does, which it skips).
+    pub(super) widened: u64,
     /// Set while workers run: where they read the interest from.
     pub(super) shared: Option<SharedInterest>,
 }
@@ -147,6 +184,7 @@ impl Wanted {
         Wanted {
             interest,
             generation: 0,
+            widened: 0,
             shared: None,
         }
     }
@@ -158,6 +196,17 @@ impl Wanted {
         add(&mut self.interest);
         if self.interest != before {
             self.publish();
+            self.widened = self.generation;
+        }
+    }
+
+    /// `remove` may take ids or contents out of the interest, and says
+    /// whether it did (without a copy to compare with: it is asked often
+    /// and nearly always says no). Workers get the narrower interest; what
+    /// they parsed with the wider one stays good.
+    pub(super) fn narrow(&mut self, remove: impl FnOnce(&mut Interest) -> bool) {
+        if remove(&mut self.interest) {
+            self.publish();
         }
     }
 
@@ -166,6 +215,7 @@ impl Wanted {
     pub(super) fn add_emcy_id(&mut self, id: u32, extended: bool) {
         add_emcy_id(&mut self.interest, id, extended);
         self.publish();
+        self.widened = self.generation;
     }
 
     fn publish(&mut self) {
@@ -228,10 +278,21 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// The objects some monitor learns from, listed out.
+    fn learnt(index: u16) -> bool {
+        matches!(
+            index,
+            0x1000 | 0x1003 | 0x100C | 0x100D | 0x1014 | 0x1016 | 0x1017 | 0x1018 | 0x1400
+                ..=0x1BFF | 0x603F | 0x6040 | 0x6041
+        )
+    }
+
     proptest! {
-        /// The one-pass filter says what its three questions say.
+        /// The one-pass filter says what CiA 301's commands say, spelt out
+        /// by direction: initiates of a learnt object, every block
+        /// command, abort and possible first block segment; no segment.
         #[test]
-        fn content_matters_is_its_three_questions(
+        fn content_matters_is_the_command_table(
             id in prop_oneof![0u32..0x800, 0x581u32..0x600, 0x601u32..0x680, 0x701u32..0x780],
             cmd in any::<u8>(),
             index in prop_oneof![
@@ -250,13 +311,111 @@ mod tests {
             let expected = if emcy::is_nmt_error_control(id) {
                 data.len() <= 1
             } else if sdo::is_sdo_id(id) {
-                sdo::names_followed_object(id, &data)
-                    || sdo::is_abort(&data)
-                    || concerns_drive(id, &data)
+                let client = id >= 0x600;
+                let initiate = matches!((client, cmd >> 5), (true, 1 | 2) | (false, 2 | 3));
+                !data.is_empty()
+                    && (matches!(cmd >> 5, 4..=6)
+                        || cmd == 0x01
+                        || initiate && data.len() >= 3 && learnt(index))
             } else {
                 true
             };
             prop_assert_eq!(content_matters(id, DataHead::of(&data)), expected);
         }
+    }
+
+    #[test]
+    fn segments_never_pass_whatever_their_data() {
+        // A download segment whose data reads as 0x1A00, its confirmation,
+        // an upload segment request and a server's upload segment.
+        for (id, data) in [
+            (0x605, [0x00, 0x00, 0x1A, 0x01, 0x10, 0x00, 0x41, 0x60]),
+            (0x605, [0x10, 0x40, 0x60, 0, 0, 0, 0, 0]),
+            (0x585, [0x20, 0x00, 0x1A, 0, 0, 0, 0, 0]),
+            (0x605, [0x60, 0x41, 0x60, 0, 0, 0, 0, 0]),
+            (0x585, [0x0E, 0x00, 0x10, 0, 0, 0, 0, 0]),
+        ] {
+            assert!(
+                !content_matters(id, DataHead::of(&data)),
+                "{id:X} {data:02X?}"
+            );
+        }
+        // The initiates of the same objects pass, an unlearnt one does not.
+        assert!(content_matters(0x605, DataHead::of(&[0x21, 0x00, 0x1A, 1])));
+        assert!(content_matters(0x585, DataHead::of(&[0x4B, 0x41, 0x60, 0])));
+        assert!(!content_matters(
+            0x605,
+            DataHead::of(&[0x21, 0x50, 0x1F, 1])
+        ));
+    }
+
+    #[test]
+    fn widening_frames_are_the_objects_that_move_ids() {
+        let i = interest(&Options::default());
+        let frame = |id: u32, data: &[u8]| Frame {
+            time: None,
+            channel: b"can0",
+            id,
+            extended: false,
+            kind: crate::trace::FrameKind::Data,
+            len: data.len() as u8,
+            data: crate::trace::Payload::from_slice(data).unwrap_or_default(),
+        };
+        // Expedited reads of a drive's statusword and position widen
+        // nothing; of a device type, a PDO mapping or 0x1014 they may.
+        assert!(!may_widen(
+            &frame(0x581, &[0x4B, 0x41, 0x60, 0, 0x37, 0x02, 0, 0]),
+            &i
+        ));
+        assert!(!may_widen(
+            &frame(0x601, &[0x40, 0x41, 0x60, 0, 0, 0, 0, 0]),
+            &i
+        ));
+        assert!(may_widen(
+            &frame(0x581, &[0x43, 0x00, 0x10, 0, 0x92, 1, 2, 0]),
+            &i
+        ));
+        assert!(may_widen(
+            &frame(0x581, &[0x60, 0x00, 0x1A, 1, 0, 0, 0, 0]),
+            &i
+        ));
+        assert!(may_widen(
+            &frame(0x581, &[0x43, 0x14, 0x10, 0, 0x81, 0, 0, 0]),
+            &i
+        ));
+        // A segmented upload of a learnt object begins: followed from here.
+        assert!(may_widen(
+            &frame(0x581, &[0x41, 0x18, 0x10, 1, 4, 0, 0, 0]),
+            &i
+        ));
+        assert!(may_widen(
+            &frame(0x601, &[0x21, 0x41, 0x60, 0, 2, 0, 0, 0]),
+            &i
+        ));
+        assert!(!may_widen(
+            &frame(0x601, &[0x2B, 0x40, 0x60, 0, 0x0F, 0, 0, 0]),
+            &i
+        ));
+        assert!(!may_widen(
+            &frame(0x581, &[0x60, 0x40, 0x60, 0, 0, 0, 0, 0]),
+            &i
+        ));
+        // Aborts and block commands may end a followed transfer.
+        assert!(may_widen(
+            &frame(0x601, &[0x80, 0x41, 0x60, 0, 0, 0, 0, 0]),
+            &i
+        ));
+        assert!(may_widen(
+            &frame(0x581, &[0xA2, 127, 127, 0, 0, 0, 0, 0]),
+            &i
+        ));
+        // Any frame on an id out of the filter: a transfer being followed.
+        let mut followed = i.clone();
+        followed.unfilter(0x581);
+        assert!(may_widen(
+            &frame(0x581, &[0x20, 0, 0, 0, 0, 0, 0, 0]),
+            &followed
+        ));
+        assert!(!may_widen(&frame(0x181, &[0x37, 0x02]), &i));
     }
 }

@@ -10,7 +10,7 @@ use std::sync::mpsc::{self, Receiver};
 use std::sync::{Arc, Mutex, RwLock};
 
 use super::analysis::OutputError;
-use super::classify::{FoldedRun, Foreign, LineSink, RunAt, classify_block};
+use super::classify::{FoldedRun, Foreign, LineSink, RunAt, classify_block, classify_text};
 use super::consumer::Consumer;
 use super::interest::{SharedInterest, may_widen};
 use super::threads::spawn_scoped;
@@ -71,24 +71,14 @@ struct BlockResult {
     start_context: Option<u64>,
     /// The interest generation it was parsed with.
     interest_gen: u64,
-    /// The block holds an SDO access to 0x1014 (COB-ID EMCY): the wanted ids
-    /// may change inside it, so it is classified again in order.
-    moves_emcy_id: bool,
+    /// The frames after which the consumer may widen the interest
+    /// ([`may_widen`]), in line order.
+    cuts: Vec<Cut>,
     end: Detector,
     lines: u64,
-    /// Frames the consumer would ignore (not EMCY/boot candidates), counted only.
-    plain_frames: u64,
+    tally: Tally,
     /// The block's first and last frame times, of any id.
     frame_times: (Option<Timestamp>, Option<Timestamp>),
-    skipped: u64,
-    /// Frames DROPCOUNT lines said were lost.
-    dropped: u64,
-    /// Frame lines with a note after the frame.
-    annotated: u64,
-    /// Malformed lines beyond the diagnostics limit: counted, not reported.
-    unreported: u64,
-    /// Warnings beyond the diagnostics limit: only counted as not shown.
-    unreported_warnings: u64,
     records: Vec<BlockRecord>,
     /// Channel names of the frame records, back to back.
     channels: Vec<u8>,
@@ -99,6 +89,55 @@ struct BlockResult {
     inner: Vec<Inner>,
 }
 
+/// What a worker counted of a block's lines (or of its lines up to a
+/// [`Cut`]) besides its records.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tally {
+    /// Frames the consumer would ignore (not EMCY/boot candidates), counted only.
+    plain_frames: u64,
+    skipped: u64,
+    /// Frames DROPCOUNT lines said were lost.
+    dropped: u64,
+    /// Frame lines with a note after the frame.
+    annotated: u64,
+    /// Malformed lines beyond the diagnostics limit: counted, not reported.
+    unreported: u64,
+    /// Warnings beyond the diagnostics limit: only counted as not shown.
+    unreported_warnings: u64,
+}
+
+impl Tally {
+    /// What `self`, a block's whole tally, counted after `part`, the
+    /// tally up to a cut.
+    fn after(self, part: Tally) -> Tally {
+        Tally {
+            plain_frames: self.plain_frames - part.plain_frames,
+            skipped: self.skipped - part.skipped,
+            dropped: self.dropped.saturating_sub(part.dropped),
+            annotated: self.annotated - part.annotated,
+            unreported: self.unreported - part.unreported,
+            unreported_warnings: self.unreported_warnings - part.unreported_warnings,
+        }
+    }
+}
+
+/// A frame after which the consumer may widen the interest: if it does,
+/// the block's lines after it were filtered with an interest too narrow
+/// and are classified again in order, from `pos`.
+struct Cut {
+    /// The frame's record.
+    record: usize,
+    /// Lines of the block up to and including the frame's.
+    lines: u64,
+    /// Where the line after it begins in the block's text.
+    pos: usize,
+    /// The block's tally up to there.
+    tally: Tally,
+    /// The detector there, when its state is not the block's first
+    /// (a header line changed it before the frame).
+    detector: Option<Detector>,
+}
+
 /// A consumed block's buffers, back to the worker that filled them: it
 /// fills them again without allocating (fresh vectors growing by
 /// `realloc` cost 9.6M instructions on a 20 MB heartbeat trace, 5% of all).
@@ -106,6 +145,7 @@ struct BlockResult {
 struct Spare {
     bytes: Vec<u8>,
     records: Vec<BlockRecord>,
+    cuts: Vec<Cut>,
     channels: Vec<u8>,
     folds: Vec<Fold>,
     folded: Vec<Folded>,
@@ -118,6 +158,7 @@ impl BlockResult {
         let BlockResult {
             block,
             mut records,
+            mut cuts,
             mut channels,
             mut folds,
             mut folded,
@@ -125,6 +166,7 @@ impl BlockResult {
             ..
         } = self;
         records.clear();
+        cuts.clear();
         channels.clear();
         folds.clear();
         folded.clear();
@@ -132,6 +174,7 @@ impl BlockResult {
         Spare {
             bytes: block.bytes,
             records,
+            cuts,
             channels,
             folds,
             folded,
@@ -151,6 +194,9 @@ struct Recorder {
     result: BlockResult,
     /// Malformed lines and warnings kept (they share the limit).
     diagnostics_kept: usize,
+    /// The frame just recorded may widen the interest: its line's end is a
+    /// [`Cut`].
+    cut_pending: bool,
 }
 
 impl LineSink for Recorder {
@@ -159,7 +205,7 @@ impl LineSink for Recorder {
     }
 
     fn plain_frames(&mut self, n: u64) {
-        self.result.plain_frames += n;
+        self.result.tally.plain_frames += n;
     }
 
     fn frame_times(&mut self, first: Option<Timestamp>, last: Option<Timestamp>) {
@@ -167,7 +213,7 @@ impl LineSink for Recorder {
     }
 
     fn timed_frames(&mut self, n: u64, first: Timestamp, last: Timestamp) {
-        self.result.plain_frames += n;
+        self.result.tally.plain_frames += n;
         self.time_only(first);
         self.time_only(last);
     }
@@ -221,15 +267,15 @@ impl LineSink for Recorder {
     }
 
     fn skipped(&mut self) {
-        self.result.skipped += 1;
+        self.result.tally.skipped += 1;
     }
 
     fn dropped(&mut self, n: u64) {
-        self.result.dropped = self.result.dropped.saturating_add(n);
+        self.result.tally.dropped = self.result.tally.dropped.saturating_add(n);
     }
 
     fn annotated(&mut self) {
-        self.result.annotated += 1;
+        self.result.tally.annotated += 1;
     }
 
     fn malformed(&mut self, idx: u64, reason: Reason) {
@@ -241,7 +287,7 @@ impl LineSink for Recorder {
                 .records
                 .push(BlockRecord::Malformed { idx, reason });
         } else {
-            self.result.unreported += 1;
+            self.result.tally.unreported += 1;
         }
     }
 
@@ -252,7 +298,7 @@ impl LineSink for Recorder {
                 .records
                 .push(BlockRecord::Warning { idx, reason });
         } else {
-            self.result.unreported_warnings += 1;
+            self.result.tally.unreported_warnings += 1;
         }
     }
 
@@ -261,9 +307,7 @@ impl LineSink for Recorder {
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         self.flush_time();
-        if may_widen(frame) {
-            self.result.moves_emcy_id = true;
-        }
+        self.cut_pending = may_widen(frame, &self.interest);
         let start = self.result.channels.len();
         self.result.channels.extend_from_slice(frame.channel);
         self.result.records.push(BlockRecord::Frame {
@@ -278,6 +322,22 @@ impl LineSink for Recorder {
             foreign,
         });
         Ok(())
+    }
+
+    #[inline]
+    fn line_end(&mut self, lines: u64, pos: usize, detector: &Detector) {
+        if !self.cut_pending {
+            return;
+        }
+        self.cut_pending = false;
+        let detector = (detector.context() != self.result.start_context).then(|| detector.fork());
+        self.result.cuts.push(Cut {
+            record: self.result.records.len().saturating_sub(1),
+            lines,
+            pos,
+            tally: self.result.tally,
+            detector,
+        });
     }
 }
 
@@ -303,16 +363,42 @@ impl Recorder {
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
-    /// Replays a worker's block result as if its lines had been read here.
-    fn replay(&mut self, mut r: BlockResult) -> Result<Spare, OutputError> {
-        self.counts.frames += r.plain_frames;
+    fn add_tally(&mut self, t: Tally) {
+        self.counts.frames += t.plain_frames;
+        self.counts.skipped += t.skipped;
+        self.counts.dropped = self.counts.dropped.saturating_add(t.dropped);
+        self.counts.annotated += t.annotated;
+        self.counts.malformed += t.unreported;
+        self.diags.suppressed += t.unreported + t.unreported_warnings;
+    }
+
+    fn take_tally(&mut self, t: Tally) {
+        self.counts.frames -= t.plain_frames;
+        self.counts.skipped -= t.skipped;
+        self.counts.dropped = self.counts.dropped.saturating_sub(t.dropped);
+        self.counts.annotated -= t.annotated;
+        self.counts.malformed -= t.unreported;
+        self.diags.suppressed -= t.unreported + t.unreported_warnings;
+    }
+
+    /// Replays a worker's block result as if its lines had been read here,
+    /// up to the first cut after which the interest widened; then the rest
+    /// of the block is classified again here, from the detector `r.end`
+    /// (which the caller swapped for the state the block began in) or the
+    /// one the cut kept. Returns the buffers, and the detector after the
+    /// rest when it was read here.
+    fn replay(
+        &mut self,
+        mut r: BlockResult,
+        max_line: usize,
+    ) -> Result<(Spare, Option<Detector>), OutputError> {
+        self.add_tally(r.tally);
         self.frame_times(r.frame_times.0, r.frame_times.1);
-        self.counts.skipped += r.skipped;
-        self.counts.dropped = self.counts.dropped.saturating_add(r.dropped);
-        self.counts.annotated += r.annotated;
-        self.counts.malformed += r.unreported;
-        self.diags.suppressed += r.unreported + r.unreported_warnings;
-        for record in r.records.drain(..) {
+        let mut cuts = std::mem::take(&mut r.cuts);
+        let mut next_cut = cuts.iter().map(|c| c.record).next();
+        let mut cut_at = 0usize;
+        let mut widened_at = None;
+        for (n, record) in r.records.drain(..).enumerate() {
             match record {
                 BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
                 BlockRecord::Warning { idx, reason } => self.warning(idx, reason),
@@ -368,11 +454,31 @@ impl<E: Write> Consumer<'_, '_, E> {
                         data,
                     };
                     self.frame(idx, &frame, foreign)?;
+                    if next_cut == Some(n) {
+                        if self.wanted.widened > r.interest_gen {
+                            widened_at = Some(cut_at);
+                            break;
+                        }
+                        cut_at += 1;
+                        next_cut = cuts.get(cut_at).map(|c| c.record);
+                    }
                 }
             }
         }
-        self.lines(r.lines);
-        Ok(r.into_spare())
+        let Some(cut) = widened_at.and_then(|i| cuts.get_mut(i)) else {
+            self.lines(r.lines);
+            r.cuts = cuts;
+            return Ok((r.into_spare(), None));
+        };
+        // The rest was filtered for fewer ids than are wanted now: read
+        // it again here, as if the block had ended at the cut.
+        self.take_tally(r.tally.after(cut.tally));
+        self.lines(cut.lines);
+        let mut detector = cut.detector.take().unwrap_or_else(|| r.end.fork());
+        let rest = r.block.text().get(cut.pos..).unwrap_or_default();
+        classify_text(rest, None, max_line, &mut detector, self)?;
+        r.cuts = cuts;
+        Ok((r.into_spare(), Some(detector)))
     }
 }
 
@@ -433,22 +539,18 @@ pub(super) fn run<R: Read + Send, E: Write>(
                         time_kept: false,
                         time_pending: None,
                         diagnostics_kept: 0,
+                        cut_pending: false,
                         result: BlockResult {
                             seq,
                             worker,
                             block: Block::default(),
                             start_context,
                             interest_gen,
-                            moves_emcy_id: false,
+                            cuts: spare.cuts,
                             end: det.fork(),
                             lines: 0,
-                            plain_frames: 0,
+                            tally: Tally::default(),
                             frame_times: (None, None),
-                            skipped: 0,
-                            dropped: 0,
-                            annotated: 0,
-                            unreported: 0,
-                            unreported_warnings: 0,
                             records: spare.records,
                             channels: spare.channels,
                             folds: spare.folds,
@@ -597,14 +699,22 @@ fn consume_in_order<E: Write>(
         }
         while let Some(r) = pending.remove(&next) {
             let r_worker = r.worker;
+            // A block parsed before the interest last widened may lack
+            // frames wanted now; one parsed after a narrowing holds some
+            // frames more, which the consumer skips as the sequential
+            // reader would.
             let valid = r.start_context.is_some()
                 && r.start_context == current.context()
-                && r.interest_gen == consumer.wanted.generation
-                && !r.moves_emcy_id;
+                && r.interest_gen >= consumer.wanted.widened;
             let spare = if valid {
                 let mut r = r;
+                // `r.end` becomes the state the block began in.
                 std::mem::swap(current, &mut r.end);
-                consumer.replay(r)?
+                let (spare, rest) = consumer.replay(r, max_line)?;
+                if let Some(detector) = rest {
+                    *current = detector;
+                }
+                spare
             } else {
                 classify_block(&r.block, max_line, current, consumer)?;
                 r.into_spare()

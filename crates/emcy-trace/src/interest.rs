@@ -166,6 +166,14 @@ impl Interest {
         }
     }
 
+    /// Puts a standard id back under the content filter (after
+    /// [`Interest::unfilter`]); its frames stay unfoldable.
+    pub fn refilter(&mut self, id: u32) {
+        if let Some(word) = self.filtered.get_mut((id >> 6) as usize) {
+            *word |= 1 << (id & 63);
+        }
+    }
+
     /// Lets readers fold frames on the standard ids in `ids` that repeat
     /// the one before on their id.
     pub fn fold(&mut self, ids: std::ops::RangeInclusive<u32>) {
@@ -286,6 +294,16 @@ impl Interest {
         }
     }
 
+    /// No longer wants the standard id `id`: its frames are only counted
+    /// again, as if it had never been added.
+    pub fn remove_standard(&mut self, id: u32) {
+        for set in [&mut self.standard, &mut self.untimed] {
+            if let Some(word) = set.get_mut((id >> 6) as usize) {
+                *word &= !(1 << (id & 63));
+            }
+        }
+    }
+
     /// Wants every standard id in `ids`.
     pub fn add_standard_range(&mut self, ids: std::ops::RangeInclusive<u32>) {
         for id in ids {
@@ -326,5 +344,22 @@ mod tests {
         assert!(i.wants(0x1234_5678, true));
         assert!(!i.wants(0x1234_5679, true));
         assert!(!i.wants(0x78, false));
+    }
+
+    #[test]
+    fn a_removed_id_is_as_never_added() {
+        let mut i = Interest::none();
+        i.add_standard_range(0x181..=0x183);
+        i.untime(0x182);
+        let before = i.clone();
+        i.add_standard(0x185);
+        i.untime(0x185);
+        i.remove_standard(0x185);
+        assert_eq!(i, before);
+        i.remove_standard(0x182);
+        assert!(!i.wants(0x182, false));
+        assert!(i.times(0x182, false));
+        assert!(i.wants(0x181, false) && i.wants(0x183, false));
+        i.remove_standard(5000); // out of range: ignored, no panic
     }
 }

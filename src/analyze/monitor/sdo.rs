@@ -8,11 +8,10 @@ use std::io::Write;
 use super::context::{Emit, Fact, Facts, Learnt, Monitor, Seen, Step};
 use crate::analyze::analysis::OutputError;
 use crate::analyze::event::{Health, HistoryItem, HistoryReport, NodeReport};
+use crate::analyze::interest::learns_from;
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::NodeId;
-use crate::canopen::cia402;
-use crate::canopen::pdo::PdoId;
 use crate::canopen::sdo::abort as sdo_abort;
 use crate::canopen::sdo::{self, BlockStep, Blocks, Confirmed, Downloads, Sdo, Uploads};
 use crate::timeline::At;
@@ -63,6 +62,7 @@ impl Monitor for SdoMonitor {
                 return Ok(Step::Learnt(learnt));
             }
         }
+        let following = self.following(id);
         let mut learnt = Learnt::default();
         if self.downloads.wants(id, data)
             && let Some(c) = self.downloads.feed(id, data)
@@ -73,17 +73,26 @@ impl Monitor for SdoMonitor {
                 value: c.value,
             });
         }
-        if self.uploads_wanted(id, data) {
-            let going = self.uploads.in_progress(id);
-            if let Some(c) = self.uploads.feed(id, data) {
-                completed(&mut learnt, c, true);
-            }
-            if !going && self.uploads.in_progress(id) && sdo::begins_segmented_upload(id, data) {
-                // Its segments name no object, so the content filter
-                // keeps them back: the node's answers are decoded from
-                // here on (a master that uploads such an object in
-                // segments from a node is likely to do so again).
-                emit.wanted.widen(|i| i.unfilter(id));
+        if self.uploads_wanted(id, data)
+            && let Some(c) = self.uploads.feed(id, data)
+        {
+            completed(&mut learnt, c, true);
+        }
+        if following != self.following(id) {
+            // Segments name no object, so the content filter keeps them
+            // back: the node's SDO frames are all read while a transfer
+            // of an object some monitor learns from goes on, and filtered
+            // again after it.
+            let node = id & 0x7F;
+            let ids = [sdo::REQUEST_BASE + node, sdo::RESPONSE_BASE + node];
+            if following {
+                emit.wanted.narrow(|i| {
+                    ids.iter().for_each(|&id| i.refilter(id));
+                    true
+                });
+            } else {
+                emit.wanted
+                    .widen(|i| ids.iter().for_each(|&id| i.unfilter(id)));
             }
         }
         if let Some(access) = sdo::parse(id, data) {
@@ -186,13 +195,6 @@ impl Monitor for SdoMonitor {
     }
 }
 
-/// Whether some monitor learns from `index`'s value: the followed objects,
-/// PDO parameters, a drive's words. Transfers of others are followed only
-/// so that their frames are read right; their data is not kept.
-fn learns_from(index: u16) -> bool {
-    sdo::is_followed(index) || PdoId::is_pdo_parameter(index) || cia402::is_decoded(index)
-}
-
 /// What a segmented or block transfer that completed showed: an upload is
 /// a read, a download a confirmed write; of a followed object, a value the
 /// node holds.
@@ -230,6 +232,12 @@ fn completed(learnt: &mut Learnt, c: Confirmed, upload: bool) {
 }
 
 impl SdoMonitor {
+    /// Whether the node of SDO id `id` has a segmented transfer going on
+    /// that this monitor follows (of an object some monitor learns from).
+    fn following(&self, id: u32) -> bool {
+        self.downloads.in_segments(id) || self.uploads.in_progress(id)
+    }
+
     /// Whether a frame can matter to a segmented upload: the server's
     /// answer naming an object some monitor learns from, or any frame of a
     /// node whose upload is going on.

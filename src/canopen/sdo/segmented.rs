@@ -82,6 +82,15 @@ impl Downloads {
             .going_on(id, |t| !matches!(t, Transfer::Idle))
     }
 
+    /// Whether the node of SDO id `id` has a segmented download going on
+    /// (initiated or in segments; not an expedited one awaiting its
+    /// confirmation, which names its object).
+    pub fn in_segments(&self, id: u32) -> bool {
+        self.transfers.going_on(id, |t| {
+            matches!(t, Transfer::Initiating { .. } | Transfer::Segments { .. })
+        })
+    }
+
     /// Feeds one frame on an SDO id (others change nothing); the download
     /// it completes, if it completes one.
     pub fn feed(&mut self, id: u32, data: &[u8]) -> Option<Confirmed> {
