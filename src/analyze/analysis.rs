@@ -27,6 +27,7 @@ impl Analysis {
             errors_raised: 0,
             frames_with_warnings: 0,
             worst_category: None,
+            reading: Reading::default(),
         }
     }
 }
@@ -45,4 +46,25 @@ pub struct Analysis {
     pub frames_with_warnings: u64,
     /// The lowest (most severe) profile category of a selected error EMCY.
     pub worst_category: Option<u8>,
+    /// How the input was read (for `--verbose`).
+    pub reading: Reading,
+}
+
+/// How an input was read on several threads: what the workers parsed and
+/// what the consumer had to read again in line order because the ids it
+/// decodes widened after a worker had parsed a block (see
+/// `docs/performance.md`). All zero when one thread read it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Reading {
+    /// Workers that parsed blocks.
+    pub workers: usize,
+    /// Blocks the workers parsed.
+    pub blocks: u64,
+    /// Of them, read again whole in order.
+    pub blocks_read_again: u64,
+    /// Of them, read again from a frame on which the interest widened.
+    pub rests_read_again: u64,
+    /// The consumer stopped the workers and read the rest alone, since
+    /// blocks kept being read twice.
+    pub fell_back: bool,
 }

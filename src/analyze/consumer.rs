@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 use std::io::Write;
 
-use super::analysis::{Analysis, OutputError};
+use super::analysis::{Analysis, OutputError, Reading};
 use super::classify::{FoldedRun, Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
 use super::event::{CodeTexts, Counts, InputReport};
@@ -53,6 +53,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     pub(super) rebounds: Vec<(u32, Option<Timestamp>)>,
     /// The last block's fold vectors, for the next.
     spare_folds: FoldBuffers,
+    /// How workers read the input, if they did.
+    pub(super) reading: Reading,
 }
 
 /// The monitors, the node table, the shared facts and an [`Emit`] over the
@@ -115,6 +117,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             taken_as: Vec::new(),
             rebounds: Vec::new(),
             spare_folds: FoldBuffers::default(),
+            reading: Reading::default(),
         }
     }
 
@@ -224,6 +227,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             errors_raised: emcy.errors_raised,
             frames_with_warnings: emcy.frames_with_warnings,
             worst_category: emcy.worst_category,
+            reading: self.reading,
         })
     }
 

@@ -42,7 +42,7 @@ use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::BlockReader;
 use crate::trace::{AnyReader, FrameSource, Next};
 
-pub use analysis::{Analysis, OutputError};
+pub use analysis::{Analysis, OutputError, Reading};
 use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub use diagnostics::DiagnosticLog;

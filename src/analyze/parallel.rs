@@ -514,6 +514,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
         blocks,
         seq: 0,
         done: false,
+        alone: false,
     });
     let feed = &feed_lock;
     let outcome = std::thread::scope(|scope| {
@@ -578,9 +579,11 @@ pub(super) fn run<R: Read + Send, E: Write>(
         if recycle.is_empty() {
             return None;
         }
+        consumer.reading.workers = recycle.len();
         Some(consume_in_order(
             result_rx,
             &recycle,
+            feed,
             &mut current,
             consumer,
             max_line,
@@ -590,8 +593,8 @@ pub(super) fn run<R: Read + Send, E: Write>(
         Some(outcome) => outcome,
         // No worker started, so no block was taken: all are read here.
         None => {
-            let feed = feed_lock.into_inner().unwrap_or_else(|e| e.into_inner());
-            read_here(feed.blocks, &mut current, consumer, max_line)
+            let mut feed = feed_lock.into_inner().unwrap_or_else(|e| e.into_inner());
+            read_here(&mut feed.blocks, &mut current, consumer, max_line)
         }
     };
     consumer.wanted.shared = None;
@@ -600,7 +603,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
 
 /// The whole input on this thread, block by block, as without workers.
 fn read_here<R: Read, E: Write>(
-    mut blocks: BlockReader<R>,
+    blocks: &mut BlockReader<R>,
     current: &mut Detector,
     consumer: &mut Consumer<'_, '_, E>,
     max_line: usize,
@@ -627,6 +630,8 @@ struct Feed<R> {
     blocks: BlockReader<R>,
     seq: u64,
     done: bool,
+    /// The consumer reads the rest alone: workers take no more blocks.
+    alone: bool,
 }
 
 /// Blocks a worker may have out at once: one being parsed, one waiting to
@@ -658,7 +663,7 @@ fn next_job<R: Read>(
     };
     let buf = std::mem::take(&mut spare.bytes);
     let mut feed = feed.lock().ok()?;
-    if feed.done {
+    if feed.done || feed.alone {
         return None;
     }
     match feed.blocks.next_block(buf) {
@@ -680,9 +685,16 @@ fn next_job<R: Read>(
     }
 }
 
-fn consume_in_order<E: Write>(
+/// Of the last 64 blocks, how many may be read twice before the consumer
+/// stops the workers and reads the rest alone: two threads that parse a
+/// block each while the consumer parses one of them again burn twice the
+/// CPU of one and are no faster (slower on a loaded machine).
+const READ_AGAIN_IN_64: u32 = 8;
+
+fn consume_in_order<R: Read, E: Write>(
     results: Receiver<Message>,
     recycle: &[mpsc::Sender<Spare>],
+    feed: &Mutex<Feed<R>>,
     current: &mut Detector,
     consumer: &mut Consumer<'_, '_, E>,
     max_line: usize,
@@ -690,6 +702,9 @@ fn consume_in_order<E: Write>(
     let mut next = 0u64;
     let mut pending: BTreeMap<u64, BlockResult> = BTreeMap::new();
     let mut read_error: Option<(u64, io::Error)> = None;
+    // A bit per block consumed, the latest lowest: set when it was read
+    // again (whole or from a cut).
+    let mut window = 0u64;
     for message in results {
         match message {
             Message::Result(r) => {
@@ -711,19 +726,47 @@ fn consume_in_order<E: Write>(
                 // `r.end` becomes the state the block began in.
                 std::mem::swap(current, &mut r.end);
                 let (spare, rest) = consumer.replay(r, max_line)?;
+                window <<= 1;
                 if let Some(detector) = rest {
                     *current = detector;
+                    consumer.reading.rests_read_again += 1;
+                    window |= 1;
                 }
                 spare
             } else {
                 classify_block(&r.block, max_line, current, consumer)?;
+                consumer.reading.blocks_read_again += 1;
+                window = window << 1 | 1;
                 r.into_spare()
             };
+            consumer.reading.blocks += 1;
+            if consumer.reading.blocks >= 64
+                && window.count_ones() > READ_AGAIN_IN_64
+                && !consumer.reading.fell_back
+                && let Ok(mut feed) = feed.lock()
+            {
+                // Workers take no more blocks; what they took comes in
+                // order as before, and the rest is read here below.
+                feed.alone = true;
+                consumer.reading.fell_back = true;
+            }
             if let Some(worker) = recycle.get(r_worker) {
                 let _ = worker.send(spare);
             }
             next += 1;
         }
     }
-    Ok(read_error.map(|(_, e)| e.to_string()))
+    if let Some((_, e)) = read_error {
+        return Ok(Some(e.to_string()));
+    }
+    if !consumer.reading.fell_back {
+        return Ok(None);
+    }
+    // Every worker has stopped (the results ended): the blocks after
+    // theirs are read on this thread.
+    let mut feed = feed.lock().unwrap_or_else(|e| e.into_inner());
+    if feed.done {
+        return Ok(None);
+    }
+    read_here(&mut feed.blocks, current, consumer, max_line)
 }

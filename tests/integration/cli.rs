@@ -1259,3 +1259,37 @@ fn profiles_toml_prints_a_user_profile_that_decodes_like_the_builtin() {
             "unknown profile 'nope' (known: cia301",
         ));
 }
+
+/// `--verbose` says after each input how it was read; without it, nothing
+/// of the kind; it cannot go with `--quiet`.
+#[test]
+fn verbose_says_how_each_input_was_read() {
+    let out = emcy_decode()
+        .args(["-v", "-j1", "--format", "ndjson", "fixtures/acme-servo.log"])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("fixtures/acme-servo.log: read on one thread"),
+        "{err}"
+    );
+    let out = emcy_decode()
+        .args(["-v", "-j2", "--format", "ndjson", "fixtures/acme-servo.log"])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("blocks parsed by 2 worker threads; read again in order: 0 whole, 0 from"),
+        "{err}"
+    );
+    let out = emcy_decode()
+        .args(["-j2", "--format", "ndjson", "fixtures/acme-servo.log"])
+        .output()
+        .expect("run");
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("worker"));
+    emcy_decode()
+        .args(["-v", "-q", "fixtures/acme-servo.log"])
+        .assert()
+        .code(2);
+}

@@ -520,3 +520,56 @@ fn the_span_reaches_the_frames_nobody_decodes_at_both_ends() {
         }
     }
 }
+
+/// Reads `trace` as [`run_with`] does and gives how it was read too.
+fn reading_of(trace: &[u8], threads: usize, block_size: usize) -> crate::analyze::Reading {
+    let opts = Options {
+        threads,
+        block_size,
+        ..base_options()
+    };
+    let mut renderer = Ndjson::new(Vec::new(), false);
+    let mut log = DiagnosticLog::new(Vec::new());
+    analyze("trace", trace, false, &opts, &mut renderer, &mut log)
+        .expect("output to a Vec cannot fail")
+        .reading
+}
+
+/// A master that uploads node 5's identity in segments over and over: each
+/// transfer takes the node's SDO ids out of the content filter and puts
+/// them back, so blocks the workers parsed before keep being read again.
+/// The consumer stops the workers and reads the rest alone; the output is
+/// still that of one thread.
+#[test]
+fn blocks_read_twice_too_often_fall_back_to_one_thread() {
+    let mut trace = Vec::new();
+    for i in 0..3000u32 {
+        let t = 1000 + i;
+        let frames: &[&str] = match i % 6 {
+            0 => &["605#4018100400000000", "585#4118100404000000"],
+            1 => &["605#6000000000000000", "585#0B11223344000000"],
+            _ if i % 50 == 7 => &["085#1043090000000000"],
+            _ if i % 50 == 8 => &["085#0000000000000000"],
+            _ => &["185#3702"],
+        };
+        for f in frames {
+            trace.extend(format!("({t}.0) can0 {f}\n").bytes());
+        }
+    }
+    let reference = run(&trace, 1, 1 << 20);
+    for (threads, block) in [(2, 300), (3, 64)] {
+        assert_eq!(
+            run(&trace, threads, block),
+            reference,
+            "{threads} threads, {block}"
+        );
+        let reading = reading_of(&trace, threads, block);
+        assert!(reading.fell_back, "{reading:?}");
+        assert!(reading.blocks >= 64, "{reading:?}");
+    }
+    // A trace without such transfers keeps its workers.
+    let calm = candump_trace();
+    let reading = reading_of(&calm, 2, 64);
+    assert!(!reading.fell_back && reading.workers == 2, "{reading:?}");
+    assert_eq!(reading.blocks_read_again + reading.rests_read_again, 0);
+}

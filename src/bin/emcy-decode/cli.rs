@@ -236,6 +236,17 @@ pub struct DecodeArgs {
     /// No progress bar and no per-line diagnostics on stderr (counts stay exact)
     #[arg(long, short = 'q', help_heading = OUTPUT)]
     pub quiet: bool,
+
+    /// Say on stderr how each input was read (threads, blocks read twice)
+    ///
+    /// After each input, a note on stderr: how many worker threads parsed it in
+    /// how many blocks, and how many of them the thread that keeps the
+    /// timelines had to read again because the decoded ids widened after a
+    /// worker had parsed them (a PDO mapping or device type learnt from SDO);
+    /// and whether that happened so often that the rest was read on one
+    /// thread (docs/performance.md)
+    #[arg(long, short = 'v', conflicts_with = "quiet", help_heading = OUTPUT)]
+    pub verbose: bool,
 }
 
 #[derive(Args, Debug)]

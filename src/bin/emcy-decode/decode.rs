@@ -14,7 +14,8 @@ use super::cli::{ColorChoice, DecodeArgs, OutputFormat, View};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use emcy_decode::analyze::fail_on::{self, FailOn, Tally};
 use emcy_decode::analyze::{
-    self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Sink, WithoutEvents, batch,
+    self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Reading, Sink, WithoutEvents,
+    batch,
 };
 use emcy_decode::report::csv::Csv;
 use emcy_decode::report::html::HtmlReport;
@@ -95,6 +96,7 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
             io::stderr().is_terminal(),
             std::env::var_os("CI").as_deref(),
         ),
+        verbose: args.verbose,
     };
 
     let result = decode_all(&inputs, &opts, how, renderer.as_mut(), &mut log);
@@ -300,6 +302,24 @@ struct HowToRead {
     /// A progress bar for big files is allowed (stderr is a terminal, not
     /// CI, not --quiet).
     progress: bool,
+    /// `--verbose`: say how each input was read.
+    verbose: bool,
+}
+
+/// `--verbose`'s note on how `file` was read.
+fn reading_note(file: &str, r: &Reading) -> String {
+    if r.workers == 0 {
+        return format!("{file}: read on one thread");
+    }
+    let mut note = format!(
+        "{file}: {} blocks parsed by {} worker threads; read again in order: {} whole, {} from \
+         a frame that widened the decoded ids",
+        r.blocks, r.workers, r.blocks_read_again, r.rests_read_again
+    );
+    if r.fell_back {
+        note.push_str("; that came so often that the rest was read on one thread");
+    }
+    note
 }
 
 /// Inputs below this size are read on one thread: starting workers costs
@@ -401,7 +421,11 @@ fn decode_all(
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
-        analyses.push(analysis?);
+        let analysis = analysis?;
+        if how.verbose {
+            log.note(&reading_note(&analysis.report.file, &analysis.reading));
+        }
+        analyses.push(analysis);
     }
     let mut tally = Tally::default();
     let reports: Vec<InputReport> = analyses

@@ -1042,8 +1042,10 @@ pub fn write_bus_trace<W: Write>(
                 }
             }
             BusShape::FirmwareSegmented | BusShape::FirmwareBlock => {
-                // Three SDO frames a cycle after the process data.
-                if flash.is_none() {
+                // Six SDO frames a cycle after the process data, once the
+                // device types are read (one transfer at a time on a
+                // node's SDO channel).
+                if flash.is_none() && cycle >= 100 {
                     flash = Some(Flash::new(
                         1 + flashed % drives,
                         shape == BusShape::FirmwareBlock,
