@@ -505,8 +505,28 @@ impl DriveMonitor {
         }
         if !device_profile::is_drive(value) {
             if emit.opts.assume_cia402_pdo && self.table.withdraw_assumed(node) {
+                // Its ids as the assumption decoded them (the slots are
+                // rebuilt below).
+                let assumed: Vec<u32> = (0..STANDARD_IDS as u32)
+                    .filter(|&id| self.slot(id, false).is_some_and(|s| s.node == node))
+                    .collect();
                 self.flush_repeats(nodes);
                 self.rebuild();
+                // No longer decoded, they leave the interest: the reader
+                // folded them for a drive, and a run holding a fold the
+                // consumer cannot take is taken frame by frame (a bus of
+                // I/O modules' event PDOs made every drive PDO a trip to
+                // the consumer).
+                emit.wanted.narrow(|i| {
+                    let mut removed = false;
+                    for &id in &assumed {
+                        if self.slot(id, false).is_none() && !self.watched.contains_key(&id) {
+                            i.remove_standard(id);
+                            removed = true;
+                        }
+                    }
+                    removed
+                });
                 let withdrawn = self.mappings_of(node).is_empty()
                     && nodes
                         .get(raw, node)

@@ -377,3 +377,36 @@ fn pdo_repeats_are_folded_and_give_what_they_give_one_by_one() {
         );
     }
 }
+
+/// With `--assume-cia402-pdo`, an I/O module whose device type says it is
+/// no drive sends event PDOs among the drives' repeats: its ids leave the
+/// interest once its device type is read, so the runs that hold them
+/// fold the drives' repeats as before instead of being refused whole.
+#[test]
+fn an_io_module_among_drives_does_not_refuse_their_folds() {
+    let mut t = Vec::new();
+    let mut line = |micros: u64, frame: &str| {
+        t.extend(format!("(1700000000.{micros:06}) can0 {frame}\n").bytes());
+    };
+    line(0, "081#1043090100000000");
+    // Node 0x21's device type: CiA 401, an I/O module.
+    line(100, "621#4000100000000000");
+    line(200, "5A1#4300100091010F00");
+    for ms in 1..400u64 {
+        for d in 1..=2u64 {
+            line(ms * 1000 + d * 100, &format!("{:03X}#37060000", 0x180 + d));
+        }
+        if ms % 7 == 0 {
+            line(ms * 1000 + 500, &format!("1A1#{:02X}", ms % 251));
+        }
+        if ms % 100 == 50 {
+            line(ms * 1000 + 600, "701#05");
+        }
+    }
+    let opts = Options {
+        assume_cia402_pdo: true,
+        ..base_options()
+    };
+    let (taken, refused) = assert_fold_independent("drives and an I/O module", &t, &opts);
+    assert!(taken > 5 * refused, "{taken} taken, {refused} refused");
+}
