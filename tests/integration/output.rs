@@ -93,6 +93,63 @@ fn profile_texts_cannot_put_control_sequences_on_the_terminal() {
     }
 }
 
+/// A stderr that cannot be written (a full disk) loses the `error:` line
+/// but not the exit code: a usage error, an error of the run and
+/// `check`'s notes exit as they would with a stderr, never panic (101).
+#[cfg(target_os = "linux")]
+#[test]
+fn errors_while_stderr_is_full_keep_their_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let baseline = dir.path().join("b.json");
+    emcy_decode()
+        .args(["baseline", "fixtures/s300.log", "-o"])
+        .arg(&baseline)
+        .assert()
+        .code(0);
+    let baseline = baseline.to_str().unwrap();
+    let runs: [(&[&str], i32); 6] = [
+        (&["--no-such-flag"], 2),
+        (&["--format", "yaml", "fixtures/s300.log"], 2),
+        (&["--tz", "Nowhere/Atlantis", "fixtures/s300.log"], 2),
+        (
+            &[
+                "check",
+                "--baseline",
+                "/nonexistent/b.json",
+                "fixtures/s300.log",
+            ],
+            2,
+        ),
+        // Another trace: the notes that no trace matched and of the update.
+        (
+            &["check", "--baseline", baseline, "fixtures/stoeber.log"],
+            1,
+        ),
+        (
+            &[
+                "check",
+                "--update",
+                "--baseline",
+                baseline,
+                "fixtures/stoeber.log",
+            ],
+            0,
+        ),
+    ];
+    for (args, code) in runs {
+        let full = fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = crate::support::binary()
+            .args(args)
+            .stderr(full)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(code), "{args:?}");
+    }
+}
+
 /// `--help` and `--version` into a full disk fail like any output that
 /// cannot be written; into a reader that goes away they succeed.
 #[cfg(target_os = "linux")]

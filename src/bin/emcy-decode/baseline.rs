@@ -444,7 +444,9 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     if let (Some(recorded), Some(given)) = (old.traces.keys().next(), new.traces.keys().next())
         && !new.traces.keys().any(|k| old.traces.contains_key(k))
     {
-        eprintln!(
+        // A stderr that cannot take a note loses it, never the exit code.
+        let _ = writeln!(
+            io::stderr(),
             "check: no trace matched the baseline: it records traces by their path relative \
              to where it was made ('{}'), this run gave '{}'; run check from that directory or \
              give both the same --root DIR",
@@ -455,7 +457,7 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     if args.update {
         new.traces.extend(kept);
         write_file(&path, &new.to_json()?)?;
-        eprintln!("check: wrote {name}");
+        let _ = writeln!(io::stderr(), "check: wrote {name}");
         return Ok(ExitCode::from(EXIT_OK));
     }
     let code = if diff.summary.regressions > 0 {
