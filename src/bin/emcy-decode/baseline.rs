@@ -128,10 +128,10 @@ enum Dest {
     Stdout,
     /// A regular file or a path that does not exist yet (the link's target
     /// when the path is a symbolic link): replaced atomically with the old
-    /// file's permissions (`None`: a new file).
+    /// file's permissions, owner and group (`None`: a new file).
     Replace {
         path: PathBuf,
-        old: Option<Permissions>,
+        old: Option<fs::Metadata>,
     },
     /// A FIFO or character device (`/dev/null`, `/dev/stdout` to a pipe or
     /// a terminal): written into as it is, as the shell's `>` would.
@@ -173,8 +173,10 @@ fn destination(given: &Path) -> Result<Dest> {
         };
         match Kind::of(meta.file_type()) {
             Kind::File => {
-                let old = Some(meta.permissions());
-                return Ok(Dest::Replace { path, old });
+                return Ok(Dest::Replace {
+                    path,
+                    old: Some(meta),
+                });
             }
             Kind::Stream => return Ok(Dest::Stream(path)),
             Kind::Other(what) => return Err(refuse(&path, what)),
@@ -269,8 +271,9 @@ fn parent_dir(path: &Path) -> &Path {
 }
 
 /// Replaces (or creates) the regular file `path` atomically: a temporary
-/// file in its directory, renamed over it once complete.
-fn replace(path: &Path, old: Option<Permissions>, text: &str) -> io::Result<()> {
+/// file in its directory, renamed over it once complete, with the old
+/// file's permissions, owner and group.
+fn replace(path: &Path, old: Option<fs::Metadata>, text: &str) -> io::Result<()> {
     // Deleted when dropped, so on every error below.
     let mut tmp = tempfile::Builder::new()
         .prefix(".emcy-decode-")
@@ -278,13 +281,50 @@ fn replace(path: &Path, old: Option<Permissions>, text: &str) -> io::Result<()> 
         .tempfile_in(parent_dir(path))?;
     tmp.write_all(text.as_bytes())?;
     // A temporary file is private (0600); a baseline is an ordinary file.
-    if let Some(perms) = old.or_else(default_permissions) {
+    if let Some(perms) = old
+        .as_ref()
+        .map(fs::Metadata::permissions)
+        .or_else(default_permissions)
+    {
         tmp.as_file().set_permissions(perms)?;
+    }
+    if let Some(old) = &old {
+        keep_owner(tmp.as_file(), old)?;
     }
     // On disk before the name points at it: after a crash the baseline is
     // the old one or the new one, never an empty file.
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Gives the new file the old one's owner and group before it takes its
+/// name, so it never shows with another owner (root running `baseline -o`
+/// over a user's file would otherwise make it root's). Only root may give
+/// a file away, and a user only to a group of theirs: where the process may
+/// not, the file stays the process's own, as a copy would.
+#[cfg(unix)]
+fn keep_owner(new: &fs::File, old: &fs::Metadata) -> io::Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let mine = new.metadata()?;
+    if (mine.uid(), mine.gid()) == (old.uid(), old.gid()) {
+        return Ok(());
+    }
+    match std::os::unix::fs::fchown(new, Some(old.uid()), Some(old.gid())) {
+        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => {
+            // The group alone may still be ours to give (a user's shared
+            // group), as `cp -p` keeps what it can.
+            match std::os::unix::fs::fchown(new, None, Some(old.gid())) {
+                Err(e) if e.kind() == io::ErrorKind::PermissionDenied => Ok(()),
+                other => other,
+            }
+        }
+        other => other,
+    }
+}
+
+#[cfg(not(unix))]
+fn keep_owner(_: &fs::File, _: &fs::Metadata) -> io::Result<()> {
     Ok(())
 }
 
