@@ -42,7 +42,7 @@ fn read_traces(
     // Directories (-r) become their traces, in name order; a part that
     // cannot be listed is an unreadable trace.
     let mut traces: Vec<PathBuf> = Vec::new();
-    let walk = Walk::new(args.recursive, &args.glob)?;
+    let walk = Walk::new(args.recursive, args.follow_links, &args.glob)?;
     let mut unlisted = false;
     for input in walk.expand(&args.traces, &opts.cancel, &mut log) {
         match input {
