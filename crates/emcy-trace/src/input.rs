@@ -72,6 +72,16 @@ pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Open
             Box::new(Interruptible::new(Box::new(io::stdin()), cancel.clone())),
             None,
         ),
+        // Opening a FIFO waits for a writer, and reading one waits as long as
+        // the bus is quiet: both happen on a reading thread of their own, so
+        // a signal (a service manager's SIGTERM) ends the input at once.
+        Source::Path(path) if mode != ReadMode::Follow && is_stream(path) => (
+            Box::new(Interruptible::new(
+                Box::new(OpenOnRead::new(path.clone())),
+                cancel.clone(),
+            )),
+            None,
+        ),
         Source::Path(path) => {
             let file = File::open(path)?;
             let meta = file.metadata()?;
@@ -105,6 +115,48 @@ pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Open
     };
     opened.size = size;
     Ok(opened)
+}
+
+/// True when `path` names a FIFO, a character device (a terminal, a serial
+/// port) or a socket: a stream that may wait for data, as a pipe does.
+/// Asked of the file's metadata, which never waits (opening a FIFO does).
+pub fn is_stream(path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(path).is_ok_and(|m| {
+            let t = m.file_type();
+            t.is_fifo() || t.is_char_device() || t.is_socket()
+        })
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        false
+    }
+}
+
+/// A file opened at its first read, so on the thread that reads it (see
+/// [`Interruptible`]): there a FIFO's open may wait for its writer.
+struct OpenOnRead {
+    path: PathBuf,
+    file: Option<File>,
+}
+
+impl OpenOnRead {
+    fn new(path: PathBuf) -> Self {
+        OpenOnRead { path, file: None }
+    }
+}
+
+impl Read for OpenOnRead {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let file = match &mut self.file {
+            Some(file) => file,
+            None => self.file.insert(File::open(&self.path)?),
+        };
+        file.read(buf)
+    }
 }
 
 /// True when stdin is a pipe, terminal or socket (a live stream), false for a
@@ -325,5 +377,36 @@ mod tests {
             Ok(_) => panic!("opened a directory"),
         };
         assert_eq!(err.to_string(), "is a directory");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_streams_files_and_directories_are_not() {
+        assert!(is_stream(Path::new("/dev/null")));
+        assert!(!is_stream(Path::new(".")));
+        assert!(!is_stream(Path::new("Cargo.toml")));
+        assert!(!is_stream(Path::new("no such file")));
+    }
+
+    /// A stream given by name is read on its own thread: a cancel ends it
+    /// while its read waits, and what came before the wait is kept.
+    #[cfg(unix)]
+    #[test]
+    fn a_stream_given_by_name_is_read_until_its_end_or_a_cancel() {
+        let cancel = Cancel::new();
+        let mut opened = open(
+            &Source::Path(PathBuf::from("/dev/null")),
+            ReadMode::Finite,
+            &cancel,
+        )
+        .expect("opened");
+        assert_eq!(opened.size, None);
+        assert_eq!(opened.reader.read(&mut [0; 8]).unwrap(), 0);
+        let missing = open(
+            &Source::Path(PathBuf::from("/dev/null/x")),
+            ReadMode::Finite,
+            &cancel,
+        );
+        assert!(missing.is_err());
     }
 }

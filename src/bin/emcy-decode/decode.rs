@@ -40,12 +40,15 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
     }
     let caught = signals::catch(&opts.cancel);
-    // Reading a live stream (`candump -L can0 | emcy-decode -`, a followed
-    // file): each event must show up when its line arrives, not when a
-    // buffer fills.
+    // Reading a live stream (`candump -L can0 | emcy-decode -`, a FIFO
+    // candump writes into, a followed file): each event must show up when
+    // its line arrives, not when a buffer fills.
     let live = args.follow
-        || (matches!(inputs.as_slice(), [Input::Source(Source::Stdin)])
-            && input::stdin_is_stream());
+        || match inputs.as_slice() {
+            [Input::Source(Source::Stdin)] => input::stdin_is_stream(),
+            [Input::Source(Source::Path(path))] => input::is_stream(path),
+            _ => false,
+        };
     let mode = if args.follow {
         ReadMode::Follow
     } else if live {
