@@ -21,9 +21,10 @@ use super::cli::{BaselineArgs, CheckArgs, CheckFormat, TraceArgs};
 use super::decode::{Input, Walk, auto_threads};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use emcy_decode::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
-use emcy_decode::baseline::Baseline;
 use emcy_decode::baseline::compare::{Allow, compare};
 use emcy_decode::baseline::key::trace_key_under;
+use emcy_decode::baseline::{self, Baseline};
+use emcy_decode::small_file;
 use emcy_decode::trace::input::{self, ReadMode, Source};
 
 /// Reads every trace through the decode pipeline. `Ok(Err(status))` when a
@@ -420,7 +421,8 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     let old = {
         // Dropped once parsed: the text of a big baseline is not kept while
         // the traces are read.
-        let text = fs::read_to_string(&path).map_err(|e| anyhow!("{name}: {}", describe_io(&e)))?;
+        let text = small_file::read_to_string(&path, baseline::MAX_BYTES, "a baseline")
+            .map_err(|e| anyhow!("{name}: {}", describe_io(&e)))?;
         Baseline::from_json(&text).with_context(|| name.to_string())?
     };
     if args.update {
