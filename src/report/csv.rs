@@ -6,6 +6,11 @@
 //! spaces (`0x4310 0x3120`, `0x4310:2 0x3120:1` for counts); the profile's
 //! fields are the JSON object the JSON formats give them (their texts can
 //! hold any separator).
+//!
+//! Text from outside (file and channel names, a user profile's texts) is
+//! made harmless as in every other output: control characters escaped,
+//! and a text a spreadsheet would run as a formula neutralised as OWASP's
+//! CSV injection advice says ([`text`]). Numbers are written as numbers.
 
 use std::io::{self, Write};
 
@@ -19,6 +24,7 @@ use crate::analyze::{
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
 use crate::canopen::register::Register;
+use crate::text::printable;
 use crate::trace::Timestamp;
 
 /// The columns of an event row, in order.
@@ -150,10 +156,10 @@ impl<W: Write> Csv<W> {
         node: u16,
     ) {
         if self.file.0 != file || self.file.1.is_empty() {
-            self.file = (file.to_string(), encode([file]));
+            self.file = (file.to_string(), text(file));
         }
         if self.channel.0 != channel || self.channel.1.is_empty() {
-            self.channel = (channel.to_string(), encode([channel]));
+            self.channel = (channel.to_string(), text(channel));
         }
         let row = &mut self.row;
         row.clear();
@@ -253,9 +259,9 @@ impl<W: Write> Csv<W> {
             .device_type
             .map(device_profile::describe)
             .unwrap_or_default();
-        let mut line = encode([
-            input.file.as_bytes(),
-            n.channel.as_bytes(),
+        let mut line = join([
+            &text(&input.file)[..],
+            &text(&n.channel),
             node.as_bytes(),
             n.state.slug().as_bytes(),
             &active,
@@ -268,10 +274,10 @@ impl<W: Write> Csv<W> {
             &first_text,
             &last,
             &last_text,
-            n.profile.name().as_bytes(),
+            &text(n.profile.name()),
             n.profile_source.slug().as_bytes(),
             device_type.as_bytes(),
-            device_profile.as_bytes(),
+            &text(&device_profile),
         ]);
         line.push(b'\n');
         self.out.write_all(&line)
@@ -298,6 +304,56 @@ where
     bytes
 }
 
+/// Characters that make a spreadsheet read a cell as a formula (OWASP, CSV
+/// injection) when they come first. OWASP also names tab and carriage
+/// return, which some spreadsheets skip before looking: those are control
+/// characters, escaped before this is asked (`\t`), so a cell never starts
+/// with them.
+const FORMULA_FIRST: [char; 4] = ['=', '+', '-', '@'];
+
+/// One text cell from outside (a file or channel name, a profile's
+/// texts), encoded. Control characters are escaped as the table escapes
+/// them: `cat events.csv` must not run a terminal sequence hidden in a
+/// channel name. A text a spreadsheet would take for a formula (`=cmd|'/C
+/// calc'!A0`, `@SUM(1+1)`, `-2+3`) gets a `'` in front, which shows it as
+/// text, and is quoted, as OWASP recommends; a reader that wants the name
+/// drops a leading `'` of such a cell. An empty text is an empty cell.
+fn text(value: &str) -> Vec<u8> {
+    let shown = printable(value);
+    if !shown.starts_with(FORMULA_FIRST) {
+        return if shown.is_empty() {
+            Vec::new()
+        } else {
+            encode([shown.as_bytes()])
+        };
+    }
+    let mut cell = Vec::with_capacity(shown.len() + 4);
+    cell.extend_from_slice(b"\"'");
+    for b in shown.bytes() {
+        if b == b'"' {
+            cell.push(b'"');
+        }
+        cell.push(b);
+    }
+    cell.push(b'"');
+    cell
+}
+
+/// Cells already encoded, as one row (without its line end).
+fn join<'a, I>(cells: I) -> Vec<u8>
+where
+    I: IntoIterator<Item = &'a [u8]>,
+{
+    let mut row = Vec::with_capacity(256);
+    for (i, cell) in cells.into_iter().enumerate() {
+        if i > 0 {
+            row.push(b',');
+        }
+        row.extend_from_slice(cell);
+    }
+    row
+}
+
 /// The payload columns of an EMCY, encoded (see [`Csv::payload`]).
 fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
     let mut code = Vec::new();
@@ -317,16 +373,21 @@ fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
         push_decoded(json, ev.decoded);
     }
     let register = itoa::Buffer::new().format(ev.emcy.register.0).to_string();
-    encode([
+    let json = if json.is_empty() {
+        Vec::new()
+    } else {
+        encode([&json[..]])
+    };
+    join([
         &code[..],
         ev.info.class.slug().as_bytes(),
-        ev.description.as_bytes(),
+        &text(ev.description),
         register.as_bytes(),
         &bits,
         &data,
         &manufacturer,
-        ev.profile.profile.name().as_bytes(),
-        json,
+        &text(ev.profile.profile.name()),
+        &json,
     ])
 }
 
@@ -398,7 +459,7 @@ impl<W: Write> Sink for Csv<W> {
         // cob_id .. class empty, description, register .. warnings empty.
         self.row.extend_from_slice(b",,,");
         // Two fields the crate may quote; health events are few.
-        let description = encode([description.as_bytes()]);
+        let description = text(&description);
         let details = encode([&self.json]);
         self.row.extend_from_slice(&description);
         self.row.extend_from_slice(&[b','; 11]);
@@ -416,5 +477,46 @@ impl<W: Write> Sink for Csv<W> {
             }
         }
         self.out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell(value: &str) -> String {
+        String::from_utf8(text(value)).unwrap()
+    }
+
+    #[test]
+    fn plain_names_are_encoded_as_the_crate_encodes_them() {
+        assert_eq!(cell("can0"), "can0");
+        assert_eq!(cell("rig 3, bench"), "\"rig 3, bench\"");
+        assert_eq!(cell("say \"hi\""), "\"say \"\"hi\"\"\"");
+        assert_eq!(cell(""), "");
+        // Inside a name, the characters are harmless.
+        assert_eq!(cell("a=b-c+d@e"), "a=b-c+d@e");
+    }
+
+    #[test]
+    fn formulas_get_a_quote_mark_in_front_and_are_quoted() {
+        assert_eq!(cell("=1+1"), "\"'=1+1\"");
+        assert_eq!(cell("+1"), "\"'+1\"");
+        assert_eq!(cell("-1"), "\"'-1\"");
+        assert_eq!(cell("@SUM(A1)"), "\"'@SUM(A1)\"");
+        assert_eq!(
+            cell("=HYPERLINK(\"http://x\")"),
+            "\"'=HYPERLINK(\"\"http://x\"\")\""
+        );
+    }
+
+    /// Tab and carriage return first are formulas to OWASP; escaped as
+    /// control characters they start with a backslash and are no longer.
+    #[test]
+    fn control_characters_are_escaped_tab_and_cr_first_included() {
+        assert_eq!(cell("\u{1b}[2J"), "\\u{1b}[2J");
+        assert_eq!(cell("\t=1"), "\\t=1");
+        assert_eq!(cell("\r=1"), "\\r=1");
+        assert_eq!(cell("a\u{85}b"), "a\\u{85}b");
     }
 }
