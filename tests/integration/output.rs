@@ -171,3 +171,44 @@ fn help_and_version_that_cannot_be_written_exit_2() {
         emcy_decode().arg(flag).assert().code(0);
     }
 }
+
+/// U+FFFE and U+FFFF (and C0 controls) cannot be in XML at all: a channel
+/// name or a profile's text holding them made the chart a file no viewer
+/// opens. The SVG and HTML charts put U+FFFD there, as JUnit does, and
+/// stay well-formed XML.
+#[test]
+fn noncharacters_in_names_and_profile_texts_keep_the_chart_valid_xml() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("odd.toml");
+    fs::write(
+        &profile,
+        "name = \"odd\"\nbase = \"cia402\"\n[codes]\n\"0x4310\" = { text = \"hot\\uFFFF drive\\uFFFE\" }\n",
+    )
+    .unwrap();
+    let trace = dir.path().join("t.log");
+    fs::write(
+        &trace,
+        "(1.000000) can\u{FFFE}0 081#1043090000000000\n\
+         (2.000000) \u{FFFF} 082#1043090000000000\n",
+    )
+    .unwrap();
+    for format in ["svg", "html"] {
+        let out = emcy_decode()
+            .args(["--format", format, "--profile-file"])
+            .arg(&profile)
+            .arg(&trace)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{format}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(
+            !text.contains(['\u{FFFE}', '\u{FFFF}']),
+            "{format}: a noncharacter is left"
+        );
+        assert!(text.contains("can\u{FFFD}0"), "{format}");
+        assert!(text.contains("hot\u{FFFD} drive\u{FFFD}"), "{format}");
+        if format == "svg" {
+            roxmltree::Document::parse(&text).expect("the SVG is XML");
+        }
+    }
+}
