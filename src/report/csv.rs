@@ -87,10 +87,11 @@ pub struct Csv<W: Write> {
     text: String,
     /// The row being built.
     row: Vec<u8>,
-    /// `,file,` of the last event's file, and `,channel,` of its channel,
-    /// encoded once.
-    file: (String, Vec<u8>),
-    channel: (String, Vec<u8>),
+    /// The last event's file and its cell, and its channel and its cell,
+    /// encoded once (`None` before the first event; an empty name is an
+    /// empty cell, so emptiness cannot mean "not yet").
+    file: Option<(String, Vec<u8>)>,
+    channel: Option<(String, Vec<u8>)>,
     /// `code,...,profile_fields` per payload and profile, encoded once: a
     /// trace repeats a few payloads millions of times.
     payloads: Cache<PayloadKey, Vec<u8>, 64>,
@@ -122,8 +123,8 @@ impl<W: Write> Csv<W> {
             times: TimeFormat::new(TimeStyle::Auto),
             text: String::new(),
             row: Vec::with_capacity(512),
-            file: (String::new(), Vec::new()),
-            channel: (String::new(), Vec::new()),
+            file: None,
+            channel: None,
             payloads: Cache::default(),
             json: Vec::new(),
             jsonw: JsonWriter::new(),
@@ -155,17 +156,13 @@ impl<W: Write> Csv<W> {
         channel: &str,
         node: u16,
     ) {
-        if self.file.0 != file || self.file.1.is_empty() {
-            self.file = (file.to_string(), text(file));
-        }
-        if self.channel.0 != channel || self.channel.1.is_empty() {
-            self.channel = (channel.to_string(), text(channel));
-        }
+        let file = cached_cell(&mut self.file, file);
+        let channel = cached_cell(&mut self.channel, channel);
         let row = &mut self.row;
         row.clear();
         row.extend_from_slice(kind.as_bytes());
         row.push(b',');
-        row.extend_from_slice(&self.file.1);
+        row.extend_from_slice(file);
         row.push(b',');
         push_u64(row, line);
         row.push(b',');
@@ -180,7 +177,7 @@ impl<W: Write> Csv<W> {
             row.push(b',');
         }
         row.push(b',');
-        row.extend_from_slice(&self.channel.1);
+        row.extend_from_slice(channel);
         row.push(b',');
         push_u64(row, u64::from(node));
         row.push(b',');
@@ -339,6 +336,51 @@ fn text(value: &str) -> Vec<u8> {
     cell
 }
 
+/// A JSON object as a cell (`details`, `profile_fields`), encoded; empty
+/// for none. JSON escapes only the C0 controls, so a name with DEL or a C1
+/// control (U+0080-U+009F, where U+009B is a terminal's CSI) would reach
+/// the terminal through it: those become `\u007f`, `\u009b`, the same JSON
+/// value, as every other cell escapes them.
+fn json_cell(json: &[u8]) -> Vec<u8> {
+    if json.is_empty() {
+        return Vec::new();
+    }
+    let control = |i: usize| match json[i] {
+        0x7F => Some((0x7F, 1)),
+        0xC2 => json
+            .get(i + 1)
+            .filter(|&&b| (0x80..0xA0).contains(&b))
+            .map(|&b| (b, 2)),
+        _ => None,
+    };
+    if !(0..json.len()).any(|i| control(i).is_some()) {
+        return encode([json]);
+    }
+    let mut escaped = Vec::with_capacity(json.len() + 16);
+    let mut i = 0;
+    while i < json.len() {
+        match control(i) {
+            Some((c, len)) => {
+                escaped.extend_from_slice(format!("\\u{c:04x}").as_bytes());
+                i += len;
+            }
+            None => {
+                escaped.push(json[i]);
+                i += 1;
+            }
+        }
+    }
+    encode([escaped])
+}
+
+/// The cell of `value`, encoded again only when it differs from the last.
+fn cached_cell<'c>(last: &'c mut Option<(String, Vec<u8>)>, value: &str) -> &'c [u8] {
+    if last.as_ref().is_none_or(|(name, _)| name != value) {
+        *last = Some((value.to_string(), text(value)));
+    }
+    last.as_ref().map_or(&[], |(_, cell)| cell)
+}
+
 /// Cells already encoded, as one row (without its line end).
 fn join<'a, I>(cells: I) -> Vec<u8>
 where
@@ -373,11 +415,7 @@ fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
         push_decoded(json, ev.decoded);
     }
     let register = itoa::Buffer::new().format(ev.emcy.register.0).to_string();
-    let json = if json.is_empty() {
-        Vec::new()
-    } else {
-        encode([&json[..]])
-    };
+    let json = json_cell(json);
     join([
         &code[..],
         ev.info.class.slug().as_bytes(),
@@ -460,7 +498,7 @@ impl<W: Write> Sink for Csv<W> {
         self.row.extend_from_slice(b",,,");
         // Two fields the crate may quote; health events are few.
         let description = text(&description);
-        let details = encode([&self.json]);
+        let details = json_cell(&self.json);
         self.row.extend_from_slice(&description);
         self.row.extend_from_slice(&[b','; 11]);
         self.row.extend_from_slice(&details);
@@ -496,6 +534,19 @@ mod tests {
         assert_eq!(cell(""), "");
         // Inside a name, the characters are harmless.
         assert_eq!(cell("a=b-c+d@e"), "a=b-c+d@e");
+    }
+
+    #[test]
+    fn json_cells_escape_del_and_c1_controls_as_json_does_c0() {
+        let cell = |json: &str| String::from_utf8(json_cell(json.as_bytes())).unwrap();
+        assert_eq!(cell(""), "");
+        assert_eq!(cell(r#"{"a":"b"}"#), r#""{""a"":""b""}""#);
+        assert_eq!(
+            cell("{\"a\":\"x\u{7f}y\u{9b}z\u{a0}·\"}"),
+            r#""{""a"":""x\u007fy\u009bz"#.to_string() + "\u{a0}·\"\"}\""
+        );
+        let value: serde_json::Value = serde_json::from_str(r#"{"a":"x\u007fy\u009b"}"#).unwrap();
+        assert_eq!(value["a"], "x\u{7f}y\u{9b}");
     }
 
     #[test]

@@ -187,6 +187,9 @@ fn names_can_neither_run_formulas_nor_reach_the_terminal() {
     }
     // A clock going backwards: the can0 node's durations are negative.
     trace.push_str("(1700000009.000000) can0 085#0000000000000000\n");
+    // A boot-up: an NMT event, whose details cell is JSON with the
+    // channel (DEL and a C1 CSI in it).
+    trace.push_str("(1700000009.500000) can\u{7f}\u{9b}1 705#00\n");
     std::fs::write(dir.path().join("=1+1.log"), trace).unwrap();
     for summary in [false, true] {
         let mut args = vec!["--format", "csv", "=1+1.log"];
@@ -210,8 +213,8 @@ fn names_can_neither_run_formulas_nor_reach_the_terminal() {
         let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
         let (file, channel) = (1 - usize::from(summary), 5 - 4 * usize::from(summary));
         let mut shown: Vec<&str> = rows.iter().map(|r| &r[channel]).collect();
-        shown.dedup();
         shown.sort_unstable();
+        shown.dedup();
         assert_eq!(
             shown,
             [
@@ -222,6 +225,7 @@ fn names_can_neither_run_formulas_nor_reach_the_terminal() {
                 r"\u{1b}[2J",
                 r"\u{1b}]2;owned\u{7}",
                 "can0",
+                r"can\u{7f}\u{9b}1",
             ]
         );
         assert!(rows.iter().all(|r| &r[file] == "'=1+1.log"));
