@@ -334,8 +334,8 @@ fn symbolic_links_under_r_are_named_without_l_and_followed_with_it() {
         assert_eq!(
             stderr,
             format!(
-                "{t}: did not follow 1 symbolic link back to a directory above it (a loop; \
-                 what is there was read once): {t}/rig/up\n\
+                "{t}: did not follow 1 symbolic link that points back to a directory above \
+                 it, a loop (the files there were read once): {t}/rig/up\n\
                  {t}: skipped 1 file that links reach again (read once, under its first \
                  path): {t}/z-again.log\n"
             )

@@ -381,7 +381,8 @@ impl LeftOut {
             (
                 &self.loops,
                 "symbolic link",
-                "back to a directory above {it} (a loop; what {is} there was read once)",
+                "that point{s} back to a directory above {it}, a loop (the files there were \
+                 read once)",
                 "did not follow",
             ),
             (
@@ -400,7 +401,8 @@ impl LeftOut {
                     .replace("{is}", if one { "is" } else { "are" })
                     .replace("{it}", if one { "it" } else { "them" })
                     .replace("{its}", if one { "its" } else { "their" })
-                    .replace("{them}", if one { "it" } else { "them" });
+                    .replace("{them}", if one { "it" } else { "them" })
+                    .replace("{s}", if one { "s" } else { "" });
                 format!(
                     "{}: {verb} {} {why}: {}",
                     dir.display(),
@@ -706,6 +708,54 @@ fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi:
 mod tests {
     use super::*;
     use std::ffi::OsStr;
+
+    fn names(n: usize) -> Vec<String> {
+        (1..=n).map(|i| format!("d/{i}.log")).collect()
+    }
+
+    #[test]
+    fn a_directory_that_yields_nothing_says_every_reason() {
+        let globs = ["*.lgo".to_string(), "!old/**".to_string()];
+        assert_eq!(
+            LeftOut::default().why_nothing(&[]),
+            "no trace under it (no file in it)"
+        );
+        let left = LeftOut {
+            unselected: 12,
+            no_trace: names(1),
+            links: names(2),
+            ..LeftOut::default()
+        };
+        assert_eq!(
+            left.why_nothing(&globs),
+            "no trace under it (12 files not selected by --glob '*.lgo' --glob '!old/**', \
+             1 file with no known format, 2 symbolic links not followed without -L)"
+        );
+    }
+
+    #[test]
+    fn one_note_per_kind_left_out_naming_three_at_most() {
+        assert!(LeftOut::default().notes(Path::new("d")).is_empty());
+        let left = LeftOut {
+            unselected: 5,
+            no_trace: names(4),
+            links: names(1),
+            loops: names(2),
+            twice: names(1),
+        };
+        assert_eq!(
+            left.notes(Path::new("d")),
+            [
+                "d: skipped 4 files that are no trace (no known format in the first lines): \
+                 d/1.log, d/2.log, d/3.log, ...",
+                "d: skipped 1 symbolic link (-L follows it): d/1.log",
+                "d: did not follow 2 symbolic links that point back to a directory above \
+                 them, a loop (the files there were read once): d/1.log, d/2.log",
+                "d: skipped 1 file that links reach again (read once, under its first path): \
+                 d/1.log",
+            ]
+        );
+    }
 
     #[test]
     fn progress_only_for_big_files_on_a_terminal_outside_ci_without_quiet() {
