@@ -565,6 +565,45 @@ mod tests {
         assert_eq!(value["a"], "x\u{7f}y\u{9b}");
     }
 
+    /// The one cell of a row, as the csv crate reads it back.
+    fn read_back(row: &[u8]) -> String {
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(row);
+        let record = reader.records().next().expect("a row").expect("valid CSV");
+        assert_eq!(record.len(), 1, "one cell: {row:?}");
+        record[0].to_string()
+    }
+
+    proptest::proptest! {
+        /// Any text reads back as what the table shows, with a `'` in
+        /// front of a formula, and never holds a control character.
+        #[test]
+        fn any_text_reads_back_escaped_and_neutralised(value in "(\\PC|[\\x00-\\x1f\\x7f-\\x9f\",=+@-]){0,40}") {
+            let mut row = text(&value);
+            let shown = printable(&value).into_owned();
+            proptest::prop_assert!(!String::from_utf8_lossy(&row).chars().any(char::is_control));
+            row.extend_from_slice(b",x\n");
+            let want = if shown.starts_with(FORMULA_FIRST) { format!("'{shown}") } else { shown };
+            let mut reader = csv::ReaderBuilder::new().has_headers(false).from_reader(&row[..]);
+            let record = reader.records().next().expect("a row").expect("valid CSV");
+            proptest::prop_assert_eq!(&record[0], want.as_str());
+            proptest::prop_assert_eq!(&record[1], "x");
+        }
+
+        /// Any JSON object reads back as the same JSON value, without a
+        /// control character in the cell.
+        #[test]
+        fn any_json_reads_back_as_the_same_value(value in "(\\PC|[\\x00-\\x1f\\x7f-\\x9f\",·]){0,40}") {
+            let json = serde_json::json!({ "name": value }).to_string();
+            let mut cell = Vec::new();
+            push_json(&mut cell, json.as_bytes());
+            proptest::prop_assert!(!String::from_utf8_lossy(&cell).chars().any(char::is_control));
+            let back: serde_json::Value = serde_json::from_str(&read_back(&cell)).expect("JSON");
+            proptest::prop_assert_eq!(back["name"].as_str(), Some(value.as_str()));
+        }
+    }
+
     #[test]
     fn formulas_get_a_quote_mark_in_front_and_are_quoted() {
         assert_eq!(cell("=1+1"), "\"'=1+1\"");
