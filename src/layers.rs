@@ -21,8 +21,8 @@
 //! reader) and is checked here like the rest of `src`; the last test below
 //! checks that the trace crate stays without this one.
 //!
-//! `cache` and `text` are utilities below everything (they import nothing
-//! of ours);
+//! `cache`, `small_file` and `text` are utilities below everything (they
+//! import nothing of ours);
 //! `fuzzing` is the fuzz harness, which may use anything and which nothing
 //! uses. A module may use its own layer and the layers below it. Tests are
 //! not part of the house: a `tests` module (inline at the end of a file,
@@ -50,8 +50,10 @@ fn violation(from: &str, to: &str) -> Option<String> {
     match (from, to) {
         (_, "fuzzing") => Some("nothing may use the fuzz harness".into()),
         ("fuzzing", _) => None,
-        ("cache" | "text", _) => Some(format!("{from} is below everything and imports nothing")),
-        (_, "cache" | "text") => None,
+        ("cache" | "small_file" | "text", _) => {
+            Some(format!("{from} is below everything and imports nothing"))
+        }
+        (_, "cache" | "small_file" | "text") => None,
         _ => match (rank(from), rank(to)) {
             (Some(f), Some(t)) if t > f => Some(format!("{from} is below {to}")),
             (Some(_), Some(_)) => None,

@@ -70,6 +70,8 @@ mod layers;
 #[doc(hidden)]
 pub mod report;
 #[doc(hidden)]
+pub mod small_file;
+#[doc(hidden)]
 pub mod text;
 #[doc(hidden)]
 pub mod timeline;

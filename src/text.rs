@@ -33,9 +33,41 @@ pub fn printable(s: &str) -> Cow<'_, str> {
     Cow::Owned(out)
 }
 
+/// Whether XML 1.0 can hold `c` at all, even as a character reference
+/// (its `Char` production): not the C0 controls but tab, line feed and
+/// carriage return, and not U+FFFE and U+FFFF (surrogates are no `char`).
+/// An SVG or JUnit file with one of them is no XML: no viewer or CI opens
+/// it. The XML outputs replace them with U+FFFD.
+pub fn is_xml_char(c: char) -> bool {
+    matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' | '\u{10000}'..)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn xml_holds_every_char_but_c0_controls_and_two_nonchars() {
+        for c in [
+            '\t',
+            '\n',
+            '\r',
+            ' ',
+            'a',
+            '\u{7f}',
+            '\u{85}',
+            '\u{D7FF}',
+            '\u{E000}',
+            '\u{FFFD}',
+            '\u{10000}',
+            '\u{10FFFF}',
+        ] {
+            assert!(is_xml_char(c), "{c:?}");
+        }
+        for c in ['\0', '\u{1b}', '\u{1f}', '\u{FFFE}', '\u{FFFF}'] {
+            assert!(!is_xml_char(c), "{c:?}");
+        }
+    }
 
     #[test]
     fn control_characters_are_escaped() {

@@ -26,6 +26,12 @@ use crate::canopen::NodeId;
 /// The `baseline_version` this build writes and reads.
 pub const VERSION: u32 = 1;
 
+/// The largest baseline `check` reads: about 200 bytes per node of each
+/// trace, so room for a fleet of hundreds of thousands of trace nodes; a
+/// file beyond this (`/dev/zero`, a trace given by mistake) is an error,
+/// not memory.
+pub const MAX_BYTES: u64 = 64 << 20;
+
 /// A baseline file. Serialized with sorted keys (struct fields are declared
 /// in alphabetical order, maps are `BTreeMap`s) so the same traces always
 /// give the same bytes.

@@ -3,7 +3,7 @@
 use anyhow::Result;
 
 use super::compare::{Diff, Finding, Severity};
-use crate::text::printable;
+use crate::text::{is_xml_char, printable};
 
 /// The word a finding's line starts with.
 fn severity_word(f: &Finding) -> &'static str {
@@ -74,7 +74,7 @@ fn xml(text: &str) -> String {
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&apos;"),
             '\t' | '\n' => out.push(c),
-            c if c.is_control() || matches!(c, '\u{FFFE}' | '\u{FFFF}') => out.push('\u{FFFD}'),
+            c if c.is_control() || !is_xml_char(c) => out.push('\u{FFFD}'),
             c => out.push(c),
         }
     }

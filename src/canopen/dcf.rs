@@ -16,7 +16,6 @@
 //! entry elsewhere in a vendor's file does not matter.
 
 use std::collections::BTreeMap;
-use std::io::Read;
 use std::path::Path;
 
 use super::NodeId;
@@ -273,18 +272,8 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
 
 /// Reads the file at `path` (at most [`MAX_BYTES`]) for `node`.
 pub fn load(path: &Path, node: NodeId) -> Result<Dcf, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut bytes = Vec::new();
-    file.take(MAX_BYTES + 1)
-        .read_to_end(&mut bytes)
+    let bytes = crate::small_file::read(path, MAX_BYTES, "a DCF")
         .map_err(|e| format!("{}: {e}", path.display()))?;
-    if bytes.len() as u64 > MAX_BYTES {
-        return Err(format!(
-            "{}: larger than {} MiB: not a DCF",
-            path.display(),
-            MAX_BYTES >> 20
-        ));
-    }
     Ok(parse(&bytes, node))
 }
 

@@ -330,6 +330,16 @@ pub fn detect(data: &[u8]) {
         .map(|r| r.expect("the CSV output parses"))
         .collect();
     assert_eq!(rows.len(), 1 + events.len(), "a row per event");
+    // Names from the trace reach neither the terminal nor a spreadsheet's
+    // formula engine.
+    no_control_characters("csv", &csv_run.out);
+    for row in rows.iter().skip(1) {
+        let channel = row.get(5).unwrap_or_default();
+        assert!(
+            !channel.starts_with(['=', '+', '-', '@']),
+            "a CSV channel cell a spreadsheet runs: {channel:?}"
+        );
+    }
     for (row, ev) in rows.iter().skip(1).zip(&events) {
         assert_eq!(row.len(), crate::report::csv::EVENT_COLUMNS.len());
         assert_eq!(row.get(0), ev["type"].as_str());

@@ -1,11 +1,17 @@
 //! `--format csv`: one row per event, or with `--view summary` one row per
 //! node, under a header row, for spreadsheets and data tools. The columns
-//! are a contract ([`EVENT_COLUMNS`], [`NODE_COLUMNS`], README); written
-//! with the `csv` crate (RFC 4180: a field with a comma, a quote or a line
-//! break is quoted). A cell with several values separates them with
+//! are a contract ([`EVENT_COLUMNS`], [`NODE_COLUMNS`], README); quoted as
+//! the `csv` crate quotes (RFC 4180: a field with a comma, a quote or a
+//! line break is quoted; the tests read every output back with the crate).
+//! A cell with several values separates them with
 //! spaces (`0x4310 0x3120`, `0x4310:2 0x3120:1` for counts); the profile's
 //! fields are the JSON object the JSON formats give them (their texts can
 //! hold any separator).
+//!
+//! Text from outside (file and channel names, a user profile's texts) is
+//! made harmless as in every other output: control characters escaped,
+//! and a text a spreadsheet would run as a formula neutralised as OWASP's
+//! CSV injection advice says ([`text`]). Numbers are written as numbers.
 
 use std::io::{self, Write};
 
@@ -19,6 +25,7 @@ use crate::analyze::{
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
 use crate::canopen::register::Register;
+use crate::text::printable;
 use crate::trace::Timestamp;
 
 /// The columns of an event row, in order.
@@ -81,10 +88,11 @@ pub struct Csv<W: Write> {
     text: String,
     /// The row being built.
     row: Vec<u8>,
-    /// `,file,` of the last event's file, and `,channel,` of its channel,
-    /// encoded once.
-    file: (String, Vec<u8>),
-    channel: (String, Vec<u8>),
+    /// The last event's file and its cell, and its channel and its cell,
+    /// encoded once (`None` before the first event; an empty name is an
+    /// empty cell, so emptiness cannot mean "not yet").
+    file: Option<(String, Vec<u8>)>,
+    channel: Option<(String, Vec<u8>)>,
     /// `code,...,profile_fields` per payload and profile, encoded once: a
     /// trace repeats a few payloads millions of times.
     payloads: Cache<PayloadKey, Vec<u8>, 64>,
@@ -116,8 +124,8 @@ impl<W: Write> Csv<W> {
             times: TimeFormat::new(TimeStyle::Auto),
             text: String::new(),
             row: Vec::with_capacity(512),
-            file: (String::new(), Vec::new()),
-            channel: (String::new(), Vec::new()),
+            file: None,
+            channel: None,
             payloads: Cache::default(),
             json: Vec::new(),
             jsonw: JsonWriter::new(),
@@ -149,17 +157,13 @@ impl<W: Write> Csv<W> {
         channel: &str,
         node: u16,
     ) {
-        if self.file.0 != file || self.file.1.is_empty() {
-            self.file = (file.to_string(), encode([file]));
-        }
-        if self.channel.0 != channel || self.channel.1.is_empty() {
-            self.channel = (channel.to_string(), encode([channel]));
-        }
+        let file = cached_cell(&mut self.file, file);
+        let channel = cached_cell(&mut self.channel, channel);
         let row = &mut self.row;
         row.clear();
         row.extend_from_slice(kind.as_bytes());
         row.push(b',');
-        row.extend_from_slice(&self.file.1);
+        row.extend_from_slice(file);
         row.push(b',');
         push_u64(row, line);
         row.push(b',');
@@ -174,7 +178,7 @@ impl<W: Write> Csv<W> {
             row.push(b',');
         }
         row.push(b',');
-        row.extend_from_slice(&self.channel.1);
+        row.extend_from_slice(channel);
         row.push(b',');
         push_u64(row, u64::from(node));
         row.push(b',');
@@ -253,9 +257,9 @@ impl<W: Write> Csv<W> {
             .device_type
             .map(device_profile::describe)
             .unwrap_or_default();
-        let mut line = encode([
-            input.file.as_bytes(),
-            n.channel.as_bytes(),
+        let mut line = join([
+            &text(&input.file)[..],
+            &text(&n.channel),
             node.as_bytes(),
             n.state.slug().as_bytes(),
             &active,
@@ -268,21 +272,20 @@ impl<W: Write> Csv<W> {
             &first_text,
             &last,
             &last_text,
-            n.profile.name().as_bytes(),
+            &text(n.profile.name()),
             n.profile_source.slug().as_bytes(),
             device_type.as_bytes(),
-            device_profile.as_bytes(),
+            &text(&device_profile),
         ]);
         line.push(b'\n');
         self.out.write_all(&line)
     }
 }
 
-/// `fields` as the crate writes a record, without its line end. The
-/// crate quotes every field that may need it (texts, names); rows are
-/// assembled from its output and from numbers, codes and slugs, which
-/// never need quoting. Only on a cache miss (a new file, channel or
-/// payload) and for the few node rows.
+/// `fields` as the crate writes a record, without its line end: the
+/// header row. Event and node rows are assembled from numbers, codes and
+/// slugs, which never need quoting, and text and JSON cells quoted by
+/// [`push_text`] and [`push_json`] as the crate would quote them.
 fn encode<I, F>(fields: I) -> Vec<u8>
 where
     I: IntoIterator<Item = F>,
@@ -298,36 +301,147 @@ where
     bytes
 }
 
+/// Characters that make a spreadsheet read a cell as a formula (OWASP, CSV
+/// injection) when they come first. OWASP also names tab and carriage
+/// return, which some spreadsheets skip before looking: those are control
+/// characters, escaped before this is asked (`\t`), so a cell never starts
+/// with them.
+const FORMULA_FIRST: [char; 4] = ['=', '+', '-', '@'];
+
+/// One text cell from outside (a file or channel name, a profile's
+/// texts), appended to `out`. Control characters are escaped as the table
+/// escapes them: `cat events.csv` must not run a terminal sequence hidden
+/// in a channel name. A text a spreadsheet would take for a formula
+/// (`=cmd|'/C calc'!A0`, `@SUM(1+1)`, `-2+3`) gets a `'` in front, which
+/// shows it as text, and is quoted, as OWASP recommends; a reader that
+/// wants the name drops a leading `'` of such a cell. An empty text is an
+/// empty cell. Quoted as the `csv` crate quotes (a comma, a quote or a line
+/// break), written straight into the row: a text cell is encoded for most
+/// EMCYs of a trace whose payloads vary, and a crate writer per cell cost
+/// 5% of a CSV run (callgrind, 30% EMCY).
+fn push_text(out: &mut Vec<u8>, value: &str) {
+    let shown = printable(value);
+    let formula = shown.starts_with(FORMULA_FIRST);
+    let special = |b: &u8| matches!(b, b',' | b'"' | b'\r' | b'\n');
+    if !formula && !shown.as_bytes().iter().any(special) {
+        out.extend_from_slice(shown.as_bytes());
+        return;
+    }
+    out.push(b'"');
+    if formula {
+        out.push(b'\'');
+    }
+    push_quoted(out, shown.as_bytes());
+    out.push(b'"');
+}
+
+/// `bytes` inside a quoted cell: each `"` doubled.
+fn push_quoted(out: &mut Vec<u8>, bytes: &[u8]) {
+    for part in bytes.split_inclusive(|&b| b == b'"') {
+        out.extend_from_slice(part);
+        if part.last() == Some(&b'"') {
+            out.push(b'"');
+        }
+    }
+}
+
+/// [`push_text`] as a cell of its own.
+fn text(value: &str) -> Vec<u8> {
+    let mut cell = Vec::with_capacity(value.len() + 4);
+    push_text(&mut cell, value);
+    cell
+}
+
+/// A JSON object as a cell (`details`, `profile_fields`), appended to
+/// `out`; nothing for none. JSON escapes only the C0 controls, so a name
+/// with DEL or a C1 control (U+0080-U+009F, where U+009B is a terminal's
+/// CSI) would reach the terminal through it: those become `\u007f`,
+/// `\u009b`, the same JSON value, as every other cell escapes them. An
+/// object always holds quotes, so the cell is always quoted.
+fn push_json(out: &mut Vec<u8>, json: &[u8]) {
+    if json.is_empty() {
+        return;
+    }
+    out.push(b'"');
+    let mut rest = json;
+    while let Some(i) = rest.iter().position(|&b| b == 0x7F || b == 0xC2) {
+        push_quoted(out, &rest[..i]);
+        let c1 = rest
+            .get(i + 1)
+            .filter(|&&b| rest[i] == 0xC2 && (0x80..0xA0).contains(&b));
+        match (rest[i], c1) {
+            (0x7F, _) => {
+                out.extend_from_slice(b"\\u007f");
+                rest = &rest[i + 1..];
+            }
+            (_, Some(&c)) => {
+                out.extend_from_slice(format!("\\u{c:04x}").as_bytes());
+                rest = &rest[i + 2..];
+            }
+            // 0xC2 starting another character (`·` is 0xC2 0xB7).
+            _ => {
+                out.push(0xC2);
+                rest = &rest[i + 1..];
+            }
+        }
+    }
+    push_quoted(out, rest);
+    out.push(b'"');
+}
+
+/// The cell of `value`, encoded again only when it differs from the last.
+fn cached_cell<'c>(last: &'c mut Option<(String, Vec<u8>)>, value: &str) -> &'c [u8] {
+    if last.as_ref().is_none_or(|(name, _)| name != value) {
+        *last = Some((value.to_string(), text(value)));
+    }
+    last.as_ref().map_or(&[], |(_, cell)| cell)
+}
+
+/// Cells already encoded, as one row (without its line end).
+fn join<'a, I>(cells: I) -> Vec<u8>
+where
+    I: IntoIterator<Item = &'a [u8]>,
+{
+    let mut row = Vec::with_capacity(256);
+    for (i, cell) in cells.into_iter().enumerate() {
+        if i > 0 {
+            row.push(b',');
+        }
+        row.extend_from_slice(cell);
+    }
+    row
+}
+
 /// The payload columns of an EMCY, encoded (see [`Csv::payload`]).
 fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
-    let mut code = Vec::new();
-    push_code(&mut code, ev.emcy.code);
-    let mut bits = Vec::new();
+    let mut row = Vec::with_capacity(256);
+    push_code(&mut row, ev.emcy.code);
+    row.push(b',');
+    row.extend_from_slice(ev.info.class.slug().as_bytes());
+    row.push(b',');
+    push_text(&mut row, ev.description);
+    row.push(b',');
+    push_u64(&mut row, u64::from(ev.emcy.register.0));
+    row.push(b',');
     for (i, name) in Register(ev.emcy.register.0).names().enumerate() {
         if i > 0 {
-            bits.push(b' ');
+            row.push(b' ');
         }
-        bits.extend_from_slice(name.as_bytes());
+        row.extend_from_slice(name.as_bytes());
     }
-    let (mut data, mut manufacturer) = (Vec::new(), Vec::new());
-    push_hex(&mut data, ev.data);
-    push_hex(&mut manufacturer, ev.emcy.manufacturer());
+    row.push(b',');
+    push_hex(&mut row, ev.data);
+    row.push(b',');
+    push_hex(&mut row, ev.emcy.manufacturer());
+    row.push(b',');
+    push_text(&mut row, ev.profile.profile.name());
+    row.push(b',');
     json.clear();
     if ev.decoded.is_some() {
         push_decoded(json, ev.decoded);
     }
-    let register = itoa::Buffer::new().format(ev.emcy.register.0).to_string();
-    encode([
-        &code[..],
-        ev.info.class.slug().as_bytes(),
-        ev.description.as_bytes(),
-        register.as_bytes(),
-        &bits,
-        &data,
-        &manufacturer,
-        ev.profile.profile.name().as_bytes(),
-        json,
-    ])
+    push_json(&mut row, json);
+    row
 }
 
 impl<W: Write> Sink for Csv<W> {
@@ -397,12 +511,9 @@ impl<W: Write> Sink for Csv<W> {
         self.jsonw.health(&mut self.json, ev);
         // cob_id .. class empty, description, register .. warnings empty.
         self.row.extend_from_slice(b",,,");
-        // Two fields the crate may quote; health events are few.
-        let description = encode([description.as_bytes()]);
-        let details = encode([&self.json]);
-        self.row.extend_from_slice(&description);
+        push_text(&mut self.row, &description);
         self.row.extend_from_slice(&[b','; 11]);
-        self.row.extend_from_slice(&details);
+        push_json(&mut self.row, &self.json);
         self.end_row()
     }
 
@@ -416,5 +527,102 @@ impl<W: Write> Sink for Csv<W> {
             }
         }
         self.out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell(value: &str) -> String {
+        String::from_utf8(text(value)).unwrap()
+    }
+
+    #[test]
+    fn plain_names_are_encoded_as_the_crate_encodes_them() {
+        assert_eq!(cell("can0"), "can0");
+        assert_eq!(cell("rig 3, bench"), "\"rig 3, bench\"");
+        assert_eq!(cell("say \"hi\""), "\"say \"\"hi\"\"\"");
+        assert_eq!(cell(""), "");
+        // Inside a name, the characters are harmless.
+        assert_eq!(cell("a=b-c+d@e"), "a=b-c+d@e");
+    }
+
+    #[test]
+    fn json_cells_escape_del_and_c1_controls_as_json_does_c0() {
+        let cell = |json: &str| {
+            let mut cell = Vec::new();
+            push_json(&mut cell, json.as_bytes());
+            String::from_utf8(cell).unwrap()
+        };
+        assert_eq!(cell(""), "");
+        assert_eq!(cell(r#"{"a":"b"}"#), r#""{""a"":""b""}""#);
+        assert_eq!(
+            cell("{\"a\":\"x\u{7f}y\u{9b}z\u{a0}·\"}"),
+            r#""{""a"":""x\u007fy\u009bz"#.to_string() + "\u{a0}·\"\"}\""
+        );
+        let value: serde_json::Value = serde_json::from_str(r#"{"a":"x\u007fy\u009b"}"#).unwrap();
+        assert_eq!(value["a"], "x\u{7f}y\u{9b}");
+    }
+
+    /// The one cell of a row, as the csv crate reads it back.
+    fn read_back(row: &[u8]) -> String {
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(row);
+        let record = reader.records().next().expect("a row").expect("valid CSV");
+        assert_eq!(record.len(), 1, "one cell: {row:?}");
+        record[0].to_string()
+    }
+
+    proptest::proptest! {
+        /// Any text reads back as what the table shows, with a `'` in
+        /// front of a formula, and never holds a control character.
+        #[test]
+        fn any_text_reads_back_escaped_and_neutralised(value in "(\\PC|[\\x00-\\x1f\\x7f-\\x9f\",=+@-]){0,40}") {
+            let mut row = text(&value);
+            let shown = printable(&value).into_owned();
+            proptest::prop_assert!(!String::from_utf8_lossy(&row).chars().any(char::is_control));
+            row.extend_from_slice(b",x\n");
+            let want = if shown.starts_with(FORMULA_FIRST) { format!("'{shown}") } else { shown };
+            let mut reader = csv::ReaderBuilder::new().has_headers(false).from_reader(&row[..]);
+            let record = reader.records().next().expect("a row").expect("valid CSV");
+            proptest::prop_assert_eq!(&record[0], want.as_str());
+            proptest::prop_assert_eq!(&record[1], "x");
+        }
+
+        /// Any JSON object reads back as the same JSON value, without a
+        /// control character in the cell.
+        #[test]
+        fn any_json_reads_back_as_the_same_value(value in "(\\PC|[\\x00-\\x1f\\x7f-\\x9f\",·]){0,40}") {
+            let json = serde_json::json!({ "name": value }).to_string();
+            let mut cell = Vec::new();
+            push_json(&mut cell, json.as_bytes());
+            proptest::prop_assert!(!String::from_utf8_lossy(&cell).chars().any(char::is_control));
+            let back: serde_json::Value = serde_json::from_str(&read_back(&cell)).expect("JSON");
+            proptest::prop_assert_eq!(back["name"].as_str(), Some(value.as_str()));
+        }
+    }
+
+    #[test]
+    fn formulas_get_a_quote_mark_in_front_and_are_quoted() {
+        assert_eq!(cell("=1+1"), "\"'=1+1\"");
+        assert_eq!(cell("+1"), "\"'+1\"");
+        assert_eq!(cell("-1"), "\"'-1\"");
+        assert_eq!(cell("@SUM(A1)"), "\"'@SUM(A1)\"");
+        assert_eq!(
+            cell("=HYPERLINK(\"http://x\")"),
+            "\"'=HYPERLINK(\"\"http://x\"\")\""
+        );
+    }
+
+    /// Tab and carriage return first are formulas to OWASP; escaped as
+    /// control characters they start with a backslash and are no longer.
+    #[test]
+    fn control_characters_are_escaped_tab_and_cr_first_included() {
+        assert_eq!(cell("\u{1b}[2J"), "\\u{1b}[2J");
+        assert_eq!(cell("\t=1"), "\\t=1");
+        assert_eq!(cell("\r=1"), "\\r=1");
+        assert_eq!(cell("a\u{85}b"), "a\\u{85}b");
     }
 }

@@ -773,6 +773,45 @@ fn a_symlink_given_to_o_is_written_through_to_its_target_with_its_permissions() 
     check(&dir, &[]).code(0);
 }
 
+/// Root replacing another user's baseline (a CI job run as root, a `sudo`)
+/// keeps the file that user's: owner and group as they were, for both
+/// `baseline -o` and `check --update`. Needs root to give a file away;
+/// skipped otherwise.
+#[cfg(unix)]
+#[test]
+fn root_replacing_a_users_baseline_keeps_its_owner_and_group() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = workspace("rig.log");
+    let path = dir.path().join("baseline.json");
+    fs::write(&path, "old\n").expect("write");
+    if fs::metadata(&path).expect("stat").uid() != 0 {
+        eprintln!("note: not root, a file cannot be given away; skipped");
+        return;
+    }
+    let nobody = 65534;
+    std::os::unix::fs::chown(&path, Some(nobody), Some(nobody)).expect("chown");
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "-o", "baseline.json"])
+        .assert()
+        .code(0);
+    let owner = |path: &Path| {
+        let meta = fs::metadata(path).expect("stat");
+        (meta.uid(), meta.gid())
+    };
+    assert_eq!(owner(&path), (nobody, nobody), "baseline -o");
+    assert_ne!(fs::read(&path).expect("read"), b"old\n");
+    put(&dir, "new-error.log");
+    check(&dir, &["--update"]).code(0);
+    assert_eq!(owner(&path), (nobody, nobody), "check --update");
+    // A new file is the process's own.
+    cmd_in(&dir)
+        .args(["baseline", "traces/rig.log", "-o", "new.json"])
+        .assert()
+        .code(0);
+    assert_eq!(owner(&dir.path().join("new.json")), (0, 0));
+    assert_eq!(listing(dir.path()), ["baseline.json", "new.json", "traces"]);
+}
+
 #[cfg(unix)]
 #[test]
 fn a_dangling_symlink_given_to_o_gets_its_target_created() {

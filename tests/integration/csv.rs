@@ -160,3 +160,79 @@ fn a_trace_without_events_still_has_the_header() {
     let rows = rows(&["fixtures/no-frame.asc".as_ref()]);
     assert_eq!(rows.len(), 1);
 }
+
+/// Names from a trace or the file system cannot attack whoever opens the
+/// CSV: control characters are escaped as in every other output (no
+/// terminal sequence reaches `cat events.csv`), and a cell a spreadsheet
+/// would run as a formula (`=`, `@`, `+`, `-` first) starts with `'` and
+/// is quoted, as OWASP recommends; numbers, negative ones included, stay
+/// numbers.
+#[test]
+fn names_can_neither_run_formulas_nor_reach_the_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let channels = [
+        "=cmd|'/Ccalc'!A0",
+        "@SUM(1+1)",
+        "+1+1",
+        "-2+3",
+        "\u{1b}]2;owned\u{7}",
+        "\u{1b}[2J",
+        "can0",
+    ];
+    let mut trace = String::new();
+    for (i, channel) in channels.iter().enumerate() {
+        trace.push_str(&format!(
+            "(1700000010.{i}00000) {channel} 085#1043090000000000\n"
+        ));
+    }
+    // A clock going backwards: the can0 node's durations are negative.
+    trace.push_str("(1700000009.000000) can0 085#0000000000000000\n");
+    // A boot-up: an NMT event, whose details cell is JSON with the
+    // channel (DEL and a C1 CSI in it).
+    trace.push_str("(1700000009.500000) can\u{7f}\u{9b}1 705#00\n");
+    std::fs::write(dir.path().join("=1+1.log"), trace).unwrap();
+    for summary in [false, true] {
+        let mut args = vec!["--format", "csv", "=1+1.log"];
+        if summary {
+            args.extend(["--view", "summary"]);
+        }
+        let out = emcy_decode()
+            .current_dir(dir.path())
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(
+            !text.chars().any(|c| c.is_control() && c != '\n'),
+            "a control character in {text}"
+        );
+        assert!(text.contains(r#""'=cmd|'/Ccalc'!A0""#), "{text}");
+        assert!(text.contains(r#""'@SUM(1+1)""#), "{text}");
+        let mut reader = csv::ReaderBuilder::new().from_reader(text.as_bytes());
+        let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
+        let (file, channel) = (1 - usize::from(summary), 5 - 4 * usize::from(summary));
+        let mut shown: Vec<&str> = rows.iter().map(|r| &r[channel]).collect();
+        shown.sort_unstable();
+        shown.dedup();
+        assert_eq!(
+            shown,
+            [
+                "'+1+1",
+                "'-2+3",
+                "'=cmd|'/Ccalc'!A0",
+                "'@SUM(1+1)",
+                r"\u{1b}[2J",
+                r"\u{1b}]2;owned\u{7}",
+                "can0",
+                r"can\u{7f}\u{9b}1",
+            ]
+        );
+        assert!(rows.iter().all(|r| &r[file] == "'=1+1.log"));
+        if summary {
+            let can0 = rows.iter().find(|r| &r[1] == "can0").unwrap();
+            assert_eq!(&can0[7], "-1.600000", "time_in_error, a number");
+            assert_eq!(&can0[9], "-1.600000", "longest_error_duration");
+        }
+    }
+}

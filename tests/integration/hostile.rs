@@ -21,6 +21,7 @@
 //! | `forbid(unsafe_code)` | `the_library_and_the_binary_forbid_unsafe_code` |
 //! | diagnostics name file:line, bounded | `every_diagnostic_names_file_and_line`, `max_diagnostics_bounds_printing_never_counting` |
 //! | codes raised and never cleared | `never_cleared_codes_keep_every_event_bounded` |
+//! | endless files that are no trace (`/dev/zero` as baseline, profile, DCF) | `files_that_are_no_trace_are_read_with_a_bound_in_the_error` |
 //! | regressions found here | `many_distinct_channels_stay_linear_in_time_and_memory`, `channel_names_cannot_put_control_sequences_on_the_terminal`, `channel_names_that_read_the_same_are_one_channel` (fuzzing) |
 //!
 //! That no EMCY is lost or invented among garbage is a property test:
@@ -1471,5 +1472,57 @@ fn never_cleared_codes_keep_every_event_bounded() {
             node["errors"].as_array().map(Vec::len),
             Some(CODES as usize)
         );
+    }
+}
+
+/// A baseline, profile or DCF given as `/dev/zero` (or any endless or huge
+/// file) is read up to its bound, then one `error:` line naming the bound,
+/// exit 2; never gigabytes. Run under a 1 GiB address-space limit (the
+/// shell's `ulimit -v`), so reading without a bound fails fast here instead
+/// of filling the machine.
+#[cfg(target_os = "linux")]
+#[test]
+fn files_that_are_no_trace_are_read_with_a_bound_in_the_error() {
+    let program = binary().get_program().to_owned();
+    let runs: [(&[&str], &str); 5] = [
+        (
+            &["check", "--baseline", "/dev/zero", "fixtures/s300.log"],
+            "error: /dev/zero: larger than 64 MiB: not a baseline",
+        ),
+        (
+            &[
+                "check",
+                "--update",
+                "--baseline",
+                "/dev/zero",
+                "fixtures/s300.log",
+            ],
+            "error: /dev/zero: larger than 64 MiB: not a baseline",
+        ),
+        (
+            &["--profile-file", "/dev/zero", "fixtures/s300.log"],
+            "error: /dev/zero: larger than 16 MiB: not a profile",
+        ),
+        (
+            &["explain", "--profile-file", "/dev/zero", "4310"],
+            "error: /dev/zero: larger than 16 MiB: not a profile",
+        ),
+        (
+            &["--dcf", "5=/dev/zero", "fixtures/s300.log"],
+            "error: --dcf /dev/zero: larger than 16 MiB: not a DCF",
+        ),
+    ];
+    for (args, message) in runs {
+        let out = assert_cmd::Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 1048576 && exec \"$0\" \"$@\"")
+            .arg(&program)
+            .args(args)
+            .timeout(Duration::from_secs(60))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().collect::<Vec<_>>(), [message], "{args:?}");
     }
 }

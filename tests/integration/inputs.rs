@@ -232,3 +232,138 @@ fn glob_selects_files_under_r_and_a_bang_excludes() {
         .assert()
         .code(2);
 }
+
+/// A `-r` directory that yields nothing to read (a `--glob` with a typo, an
+/// empty directory, only files that are no trace) must not pass a CI step
+/// by reading nothing: an `error:` line that says why, an input object with
+/// that error, exit 2; other inputs are still read. `baseline` and `check`
+/// write and compare nothing.
+#[test]
+fn a_directory_under_r_that_yields_no_trace_is_an_error_that_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for name in ["rig/a.log", "rig/b.log", "empty/.keep", "scripts/make.py"] {
+        std::fs::create_dir_all(d.join(name).parent().unwrap()).unwrap();
+    }
+    std::fs::write(d.join("rig/a.log"), emcy_line(1)).unwrap();
+    std::fs::write(d.join("rig/b.log"), emcy_line(2)).unwrap();
+    std::fs::write(d.join("scripts/make.py"), "import struct\n").unwrap();
+    std::fs::remove_dir(d.join("empty/.keep")).ok();
+    let rig = d.join("rig");
+    let rig = rig.to_str().unwrap();
+    let (code, inputs, events, stderr) = run(&["-r", "--glob", "*.lgo", "--fail-on", "any", rig]);
+    assert_eq!((code, events), (2, 0), "{stderr}");
+    let why = "no trace under it (2 files not selected by --glob '*.lgo')";
+    assert_eq!(stderr, format!("error: {rig}: {why}\n"));
+    assert_eq!(inputs.len(), 1);
+    assert_eq!(inputs[0]["file"], rig);
+    assert_eq!(inputs[0]["error"], why);
+
+    for (sub, why) in [
+        ("empty", "no trace under it (no file in it)"),
+        ("scripts", "no trace under it (1 file with no known format)"),
+    ] {
+        let path = d.join(sub);
+        let path = path.to_str().unwrap();
+        let (code, inputs, events, stderr) = run(&["-r", path, rig]);
+        assert_eq!(
+            (code, events),
+            (2, 2),
+            "the other directory is read: {stderr}"
+        );
+        assert!(
+            stderr.contains(&format!("error: {path}: {why}\n")),
+            "{stderr}"
+        );
+        assert_eq!(inputs[0]["error"], why);
+    }
+
+    // A glob that selects something is fine.
+    let (code, _, events, stderr) = run(&["-r", "--glob", "*.log", rig]);
+    assert_eq!((code, events), (0, 2), "{stderr}");
+
+    let out = emcy_decode()
+        .args(["baseline", "-r", "--glob", "*.lgo", rig])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr),
+        format!(
+            "error: {rig}: no trace under it (2 files not selected by --glob '*.lgo'); no \
+             baseline written\n"
+        )
+    );
+}
+
+/// Symbolic links under `-r` are not followed unless `-L` says so, as in
+/// ripgrep and find, but never skipped silently: one note per directory
+/// names them. With `-L` a link to a file outside is read, a loop back up
+/// is named and not followed again, and a file two paths reach is read once.
+#[cfg(unix)]
+#[test]
+fn symbolic_links_under_r_are_named_without_l_and_followed_with_it() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("run.log"), emcy_line(1)).unwrap();
+    let traces = d.join("traces");
+    std::fs::create_dir_all(traces.join("rig")).unwrap();
+    std::fs::write(traces.join("rig/a.log"), emcy_line(2)).unwrap();
+    symlink("../run.log", traces.join("latest.log")).unwrap();
+    symlink("rig/a.log", traces.join("z-again.log")).unwrap();
+    symlink("..", traces.join("rig/up")).unwrap();
+    let t = traces.to_str().unwrap();
+
+    let (code, inputs, events, stderr) = run(&["-r", t]);
+    assert_eq!((code, events), (0, 1), "{stderr}");
+    assert_eq!(names(&inputs, &traces), ["rig/a.log"]);
+    assert_eq!(
+        stderr,
+        format!(
+            "{t}: skipped 3 symbolic links (-L follows them): {t}/latest.log, {t}/rig/up, \
+             {t}/z-again.log\n"
+        )
+    );
+
+    for flag in ["-L", "--follow-links"] {
+        let (code, inputs, events, stderr) = run(&["-r", flag, t]);
+        assert_eq!((code, events), (0, 2), "{stderr}");
+        assert_eq!(names(&inputs, &traces), ["latest.log", "rig/a.log"]);
+        assert_eq!(
+            stderr,
+            format!(
+                "{t}: did not follow 1 symbolic link that points back to a directory above \
+                 it, a loop (the files there were read once): {t}/rig/up\n\
+                 {t}: skipped 1 file that links reach again (read once, under its first \
+                 path): {t}/z-again.log\n"
+            )
+        );
+    }
+
+    // baseline and check read the same traces.
+    let out = emcy_decode()
+        .current_dir(d)
+        .args(["baseline", "-r", "-L", "traces", "-o", "b.json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let baseline: Value =
+        serde_json::from_slice(&std::fs::read(d.join("b.json")).unwrap()).expect("a baseline");
+    let keys: Vec<&String> = baseline["traces"].as_object().unwrap().keys().collect();
+    assert_eq!(keys, ["traces/latest.log", "traces/rig/a.log"]);
+    emcy_decode()
+        .current_dir(d)
+        .args(["check", "-b", "b.json", "-r", "-L", "traces"])
+        .assert()
+        .code(0);
+    // Without -L the link is missing from the traces: a regression.
+    emcy_decode()
+        .current_dir(d)
+        .args(["check", "-b", "b.json", "-r", "traces"])
+        .assert()
+        .code(1);
+    // -L means nothing without -r.
+    emcy_decode().args(["-L", t]).assert().code(2);
+}

@@ -651,3 +651,83 @@ fn a_signal_while_baseline_or_check_reads_writes_nothing() {
         );
     }
 }
+
+/// A FIFO made in a temporary directory.
+#[cfg(unix)]
+fn mkfifo(path: &Path) {
+    let status = Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(status.success());
+}
+
+/// A FIFO given by name is a live stream too, and may be quiet for as long
+/// as the bus is: SIGTERM from a service manager ends the wait at once with
+/// the report and exit 143, whether a writer holds the FIFO open (events
+/// came and were printed as they came) or none ever opened it (opening it
+/// waits). `baseline` stops the same way, writing nothing.
+#[cfg(target_os = "linux")]
+#[test]
+fn sigterm_ends_an_idle_fifo_at_once_with_the_report() {
+    const SIGTERM: u32 = 15;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("can0.fifo");
+    mkfifo(&fifo);
+    let name = fifo.to_str().unwrap();
+
+    // A writer that wrote one EMCY and holds the FIFO open, silent.
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut w = std::fs::OpenOptions::new().write(true).open(fifo).unwrap();
+            w.write_all(emcy_line(1, "1043090000000000").as_bytes())
+                .unwrap();
+            w
+        })
+    };
+    let mut child = spawn(&["--format", "ndjson", name]);
+    let out = lines_of(child.stdout.take().unwrap());
+    let err = lines_of(child.stderr.take().unwrap());
+    assert_eq!(next_json(&out)["type"], "emcy", "printed as it came");
+    let held = writer.join().unwrap();
+    wait_until_caught(&child, SIGTERM);
+    signal(&child, "TERM");
+    assert_eq!(exit_within_wait(&mut child, "idle FIFO"), Some(143));
+    let rest: Vec<Value> = out
+        .iter()
+        .map(|l| serde_json::from_str(&l).unwrap())
+        .collect();
+    let node = rest.iter().find(|o| o["type"] == "node").expect("a node");
+    assert_eq!(node["active"][0], "0x4310");
+    assert_eq!(rest.last().unwrap()["lines"], 1);
+    assert_eq!(
+        err.iter().collect::<Vec<_>>(),
+        ["interrupted: the report covers what was read before SIGTERM"]
+    );
+    drop(held);
+
+    // No writer ever: the open itself waits.
+    let mut child = spawn(&["--format", "ndjson", name]);
+    let out = lines_of(child.stdout.take().unwrap());
+    wait_until_caught(&child, SIGTERM);
+    signal(&child, "TERM");
+    assert_eq!(exit_within_wait(&mut child, "unopened FIFO"), Some(143));
+    let input: Value = serde_json::from_str(&out.iter().last().expect("a report")).unwrap();
+    assert_eq!(
+        (input["type"].as_str(), input["lines"].as_u64()),
+        (Some("input"), Some(0))
+    );
+
+    let mut child = spawn(&["baseline", name]);
+    let err = lines_of(child.stderr.take().unwrap());
+    wait_until_caught(&child, SIGTERM);
+    signal(&child, "TERM");
+    assert_eq!(exit_within_wait(&mut child, "baseline"), Some(143));
+    assert_eq!(
+        err.iter().collect::<Vec<_>>(),
+        [format!(
+            "error: stopped by SIGTERM while reading {name}; no baseline written"
+        )]
+    );
+}

@@ -93,6 +93,63 @@ fn profile_texts_cannot_put_control_sequences_on_the_terminal() {
     }
 }
 
+/// A stderr that cannot be written (a full disk) loses the `error:` line
+/// but not the exit code: a usage error, an error of the run and
+/// `check`'s notes exit as they would with a stderr, never panic (101).
+#[cfg(target_os = "linux")]
+#[test]
+fn errors_while_stderr_is_full_keep_their_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let baseline = dir.path().join("b.json");
+    emcy_decode()
+        .args(["baseline", "fixtures/s300.log", "-o"])
+        .arg(&baseline)
+        .assert()
+        .code(0);
+    let baseline = baseline.to_str().unwrap();
+    let runs: [(&[&str], i32); 6] = [
+        (&["--no-such-flag"], 2),
+        (&["--format", "yaml", "fixtures/s300.log"], 2),
+        (&["--tz", "Nowhere/Atlantis", "fixtures/s300.log"], 2),
+        (
+            &[
+                "check",
+                "--baseline",
+                "/nonexistent/b.json",
+                "fixtures/s300.log",
+            ],
+            2,
+        ),
+        // Another trace: the notes that no trace matched and of the update.
+        (
+            &["check", "--baseline", baseline, "fixtures/stoeber.log"],
+            1,
+        ),
+        (
+            &[
+                "check",
+                "--update",
+                "--baseline",
+                baseline,
+                "fixtures/stoeber.log",
+            ],
+            0,
+        ),
+    ];
+    for (args, code) in runs {
+        let full = fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = crate::support::binary()
+            .args(args)
+            .stderr(full)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(code), "{args:?}");
+    }
+}
+
 /// `--help` and `--version` into a full disk fail like any output that
 /// cannot be written; into a reader that goes away they succeed.
 #[cfg(target_os = "linux")]
@@ -112,5 +169,46 @@ fn help_and_version_that_cannot_be_written_exit_2() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.starts_with("error: writing output: "), "{stderr}");
         emcy_decode().arg(flag).assert().code(0);
+    }
+}
+
+/// U+FFFE and U+FFFF (and C0 controls) cannot be in XML at all: a channel
+/// name or a profile's text holding them made the chart a file no viewer
+/// opens. The SVG and HTML charts put U+FFFD there, as JUnit does, and
+/// stay well-formed XML.
+#[test]
+fn noncharacters_in_names_and_profile_texts_keep_the_chart_valid_xml() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile = dir.path().join("odd.toml");
+    fs::write(
+        &profile,
+        "name = \"odd\"\nbase = \"cia402\"\n[codes]\n\"0x4310\" = { text = \"hot\\uFFFF drive\\uFFFE\" }\n",
+    )
+    .unwrap();
+    let trace = dir.path().join("t.log");
+    fs::write(
+        &trace,
+        "(1.000000) can\u{FFFE}0 081#1043090000000000\n\
+         (2.000000) \u{FFFF} 082#1043090000000000\n",
+    )
+    .unwrap();
+    for format in ["svg", "html"] {
+        let out = emcy_decode()
+            .args(["--format", format, "--profile-file"])
+            .arg(&profile)
+            .arg(&trace)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{format}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(
+            !text.contains(['\u{FFFE}', '\u{FFFF}']),
+            "{format}: a noncharacter is left"
+        );
+        assert!(text.contains("can\u{FFFD}0"), "{format}");
+        assert!(text.contains("hot\u{FFFD} drive\u{FFFD}"), "{format}");
+        if format == "svg" {
+            roxmltree::Document::parse(&text).expect("the SVG is XML");
+        }
     }
 }

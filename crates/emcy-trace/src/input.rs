@@ -72,6 +72,16 @@ pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Open
             Box::new(Interruptible::new(Box::new(io::stdin()), cancel.clone())),
             None,
         ),
+        // Opening a FIFO waits for a writer, and reading one waits as long as
+        // the bus is quiet: both happen on a reading thread of their own, so
+        // a signal (a service manager's SIGTERM) ends the input at once.
+        Source::Path(path) if mode != ReadMode::Follow && is_stream(path) => (
+            Box::new(Interruptible::new(
+                Box::new(OpenOnRead::new(path.clone())),
+                cancel.clone(),
+            )),
+            None,
+        ),
         Source::Path(path) => {
             let file = File::open(path)?;
             let meta = file.metadata()?;
@@ -105,6 +115,48 @@ pub fn open(source: &Source, mode: ReadMode, cancel: &Cancel) -> io::Result<Open
     };
     opened.size = size;
     Ok(opened)
+}
+
+/// True when `path` names a FIFO, a character device (a terminal, a serial
+/// port) or a socket: a stream that may wait for data, as a pipe does.
+/// Asked of the file's metadata, which never waits (opening a FIFO does).
+pub fn is_stream(path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(path).is_ok_and(|m| {
+            let t = m.file_type();
+            t.is_fifo() || t.is_char_device() || t.is_socket()
+        })
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        false
+    }
+}
+
+/// A file opened at its first read, so on the thread that reads it (see
+/// [`Interruptible`]): there a FIFO's open may wait for its writer.
+struct OpenOnRead {
+    path: PathBuf,
+    file: Option<File>,
+}
+
+impl OpenOnRead {
+    fn new(path: PathBuf) -> Self {
+        OpenOnRead { path, file: None }
+    }
+}
+
+impl Read for OpenOnRead {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let file = match &mut self.file {
+            Some(file) => file,
+            None => self.file.insert(File::open(&self.path)?),
+        };
+        file.read(buf)
+    }
 }
 
 /// True when stdin is a pipe, terminal or socket (a live stream), false for a
@@ -325,5 +377,42 @@ mod tests {
             Ok(_) => panic!("opened a directory"),
         };
         assert_eq!(err.to_string(), "is a directory");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_streams_files_and_directories_are_not() {
+        assert!(is_stream(Path::new("/dev/null")));
+        assert!(!is_stream(Path::new(".")));
+        assert!(!is_stream(Path::new("Cargo.toml")));
+        assert!(!is_stream(Path::new("no such file")));
+    }
+
+    /// A FIFO given by name is opened and read on a thread of its own: a
+    /// cancel ends the input while the open still waits for a writer (the
+    /// input is then empty, nothing was cut).
+    #[cfg(unix)]
+    #[test]
+    fn a_cancel_ends_a_fifo_that_no_writer_opened() {
+        let dir = tempfile::tempdir().expect("a temp dir");
+        let fifo = dir.path().join("can0.fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+        let cancel = Cancel::new();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let reading = cancel.clone();
+        std::thread::spawn(move || {
+            let read = open(&Source::Path(fifo), ReadMode::Finite, &reading).and_then(|mut o| {
+                let mut all = Vec::new();
+                o.reader.read_to_end(&mut all).map(|_| all)
+            });
+            let _ = tx.send(read.map_err(|e| e.to_string()));
+        });
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        cancel.cancel();
+        let read = rx
+            .recv_timeout(std::time::Duration::from_secs(10))
+            .expect("the open ended by the cancel");
+        assert_eq!(read, Ok(Vec::new()));
     }
 }

@@ -21,9 +21,10 @@ use super::cli::{BaselineArgs, CheckArgs, CheckFormat, TraceArgs};
 use super::decode::{Input, Walk, auto_threads};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use emcy_decode::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
-use emcy_decode::baseline::Baseline;
 use emcy_decode::baseline::compare::{Allow, compare};
 use emcy_decode::baseline::key::trace_key_under;
+use emcy_decode::baseline::{self, Baseline};
+use emcy_decode::small_file;
 use emcy_decode::trace::input::{self, ReadMode, Source};
 
 /// Reads every trace through the decode pipeline. `Ok(Err(status))` when a
@@ -42,7 +43,7 @@ fn read_traces(
     // Directories (-r) become their traces, in name order; a part that
     // cannot be listed is an unreadable trace.
     let mut traces: Vec<PathBuf> = Vec::new();
-    let walk = Walk::new(args.recursive, &args.glob)?;
+    let walk = Walk::new(args.recursive, args.follow_links, &args.glob)?;
     let mut unlisted = false;
     for input in walk.expand(&args.traces, &opts.cancel, &mut log) {
         match input {
@@ -128,10 +129,10 @@ enum Dest {
     Stdout,
     /// A regular file or a path that does not exist yet (the link's target
     /// when the path is a symbolic link): replaced atomically with the old
-    /// file's permissions (`None`: a new file).
+    /// file's permissions, owner and group (`None`: a new file).
     Replace {
         path: PathBuf,
-        old: Option<Permissions>,
+        old: Option<fs::Metadata>,
     },
     /// A FIFO or character device (`/dev/null`, `/dev/stdout` to a pipe or
     /// a terminal): written into as it is, as the shell's `>` would.
@@ -173,8 +174,10 @@ fn destination(given: &Path) -> Result<Dest> {
         };
         match Kind::of(meta.file_type()) {
             Kind::File => {
-                let old = Some(meta.permissions());
-                return Ok(Dest::Replace { path, old });
+                return Ok(Dest::Replace {
+                    path,
+                    old: Some(meta),
+                });
             }
             Kind::Stream => return Ok(Dest::Stream(path)),
             Kind::Other(what) => return Err(refuse(&path, what)),
@@ -269,8 +272,9 @@ fn parent_dir(path: &Path) -> &Path {
 }
 
 /// Replaces (or creates) the regular file `path` atomically: a temporary
-/// file in its directory, renamed over it once complete.
-fn replace(path: &Path, old: Option<Permissions>, text: &str) -> io::Result<()> {
+/// file in its directory, renamed over it once complete, with the old
+/// file's permissions, owner and group.
+fn replace(path: &Path, old: Option<fs::Metadata>, text: &str) -> io::Result<()> {
     // Deleted when dropped, so on every error below.
     let mut tmp = tempfile::Builder::new()
         .prefix(".emcy-decode-")
@@ -278,13 +282,50 @@ fn replace(path: &Path, old: Option<Permissions>, text: &str) -> io::Result<()> 
         .tempfile_in(parent_dir(path))?;
     tmp.write_all(text.as_bytes())?;
     // A temporary file is private (0600); a baseline is an ordinary file.
-    if let Some(perms) = old.or_else(default_permissions) {
+    if let Some(perms) = old
+        .as_ref()
+        .map(fs::Metadata::permissions)
+        .or_else(default_permissions)
+    {
         tmp.as_file().set_permissions(perms)?;
+    }
+    if let Some(old) = &old {
+        keep_owner(tmp.as_file(), old)?;
     }
     // On disk before the name points at it: after a crash the baseline is
     // the old one or the new one, never an empty file.
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Gives the new file the old one's owner and group before it takes its
+/// name, so it never shows with another owner (root running `baseline -o`
+/// over a user's file would otherwise make it root's). Only root may give
+/// a file away, and a user only to a group of theirs: where the process may
+/// not, the file stays the process's own, as a copy would.
+#[cfg(unix)]
+fn keep_owner(new: &fs::File, old: &fs::Metadata) -> io::Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let mine = new.metadata()?;
+    if (mine.uid(), mine.gid()) == (old.uid(), old.gid()) {
+        return Ok(());
+    }
+    match std::os::unix::fs::fchown(new, Some(old.uid()), Some(old.gid())) {
+        Err(e) if e.kind() == io::ErrorKind::PermissionDenied => {
+            // The group alone may still be ours to give (a user's shared
+            // group), as `cp -p` keeps what it can.
+            match std::os::unix::fs::fchown(new, None, Some(old.gid())) {
+                Err(e) if e.kind() == io::ErrorKind::PermissionDenied => Ok(()),
+                other => other,
+            }
+        }
+        other => other,
+    }
+}
+
+#[cfg(not(unix))]
+fn keep_owner(_: &fs::File, _: &fs::Metadata) -> io::Result<()> {
     Ok(())
 }
 
@@ -380,7 +421,8 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     let old = {
         // Dropped once parsed: the text of a big baseline is not kept while
         // the traces are read.
-        let text = fs::read_to_string(&path).map_err(|e| anyhow!("{name}: {}", describe_io(&e)))?;
+        let text = small_file::read_to_string(&path, baseline::MAX_BYTES, "a baseline")
+            .map_err(|e| anyhow!("{name}: {}", describe_io(&e)))?;
         Baseline::from_json(&text).with_context(|| name.to_string())?
     };
     if args.update {
@@ -444,7 +486,9 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     if let (Some(recorded), Some(given)) = (old.traces.keys().next(), new.traces.keys().next())
         && !new.traces.keys().any(|k| old.traces.contains_key(k))
     {
-        eprintln!(
+        // A stderr that cannot take a note loses it, never the exit code.
+        let _ = writeln!(
+            io::stderr(),
             "check: no trace matched the baseline: it records traces by their path relative \
              to where it was made ('{}'), this run gave '{}'; run check from that directory or \
              give both the same --root DIR",
@@ -455,7 +499,7 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     if args.update {
         new.traces.extend(kept);
         write_file(&path, &new.to_json()?)?;
-        eprintln!("check: wrote {name}");
+        let _ = writeln!(io::stderr(), "check: wrote {name}");
         return Ok(ExitCode::from(EXIT_OK));
     }
     let code = if diff.summary.regressions > 0 {

@@ -233,6 +233,15 @@ pub struct DecodeArgs {
     #[arg(long, value_name = "GLOB", requires = "recursive", help_heading = INPUT)]
     pub glob: Vec<String>,
 
+    /// Under -r, follow symbolic links (not followed by default: each is named in a note)
+    ///
+    /// Under -r, follow symbolic links to files and directories. Without it they are
+    /// not read, and one note per directory names them. A link back to a directory
+    /// above it (a loop) is named in a note and not followed again; a file that links
+    /// reach twice is read once
+    #[arg(long, short = 'L', requires = "recursive", help_heading = INPUT)]
+    pub follow_links: bool,
+
     /// No progress bar and no per-line diagnostics on stderr (counts stay exact)
     #[arg(long, short = 'q', help_heading = OUTPUT)]
     pub quiet: bool,
@@ -588,6 +597,10 @@ pub struct TraceArgs {
     /// excludes; repeatable), as for decoding
     #[arg(long, value_name = "GLOB", requires = "recursive")]
     pub glob: Vec<String>,
+
+    /// Under -r, follow symbolic links, as for decoding
+    #[arg(long, short = 'L', requires = "recursive")]
+    pub follow_links: bool,
 }
 
 #[derive(Args, Debug)]

@@ -33,7 +33,7 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
     let opts = args.options()?;
     // Before any input is read: an unknown --tz is a usage error.
     let time_style = args.time_style()?;
-    let walk = Walk::new(args.recursive, &args.glob)?;
+    let walk = Walk::new(args.recursive, args.follow_links, &args.glob)?;
     let mut log = DiagnosticLog::new(io::stderr());
     log.quiet = args.quiet;
     let inputs = walk.expand(&args.files, &opts.cancel, &mut log);
@@ -41,12 +41,15 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
     }
     let caught = signals::catch(&opts.cancel);
-    // Reading a live stream (`candump -L can0 | emcy-decode -`, a followed
-    // file): each event must show up when its line arrives, not when a
-    // buffer fills.
+    // Reading a live stream (`candump -L can0 | emcy-decode -`, a FIFO
+    // candump writes into, a followed file): each event must show up when
+    // its line arrives, not when a buffer fills.
     let live = args.follow
-        || (matches!(inputs.as_slice(), [Input::Source(Source::Stdin)])
-            && input::stdin_is_stream());
+        || match inputs.as_slice() {
+            [Input::Source(Source::Stdin)] => input::stdin_is_stream(),
+            [Input::Source(Source::Path(path))] => input::is_stream(path),
+            _ => false,
+        };
     let mode = if args.follow {
         ReadMode::Follow
     } else if live {
@@ -147,21 +150,43 @@ pub(super) enum Input {
     },
 }
 
-/// How FILE arguments become inputs: `-r` and its `--glob` patterns.
+/// How FILE arguments become inputs: `-r`, `-L` and the `--glob` patterns.
 pub(super) struct Walk {
     recursive: bool,
+    /// `-L`: symbolic links under a directory are followed (walkdir stops
+    /// at a loop); without it they are named in a note, as ripgrep and
+    /// find leave them by default.
+    follow_links: bool,
     /// Files under a directory are read when they match one of these (or
     /// there are none)...
     include: Option<GlobSet>,
     /// ...and none of these (`--glob '!*.py'`, as in ripgrep).
     exclude: Option<GlobSet>,
+    /// The patterns as given, for the error of a directory none selects.
+    globs: Vec<String>,
 }
 
-/// How many skipped files a note names; the count is always exact.
+/// How many names a note names; the count is always exact.
 const SKIPPED_NAMED: usize = 3;
 
+/// What walking one directory left out, for its notes and, when nothing
+/// was left to read, its error.
+#[derive(Default)]
+struct LeftOut {
+    /// Files no `--glob` selects (counted only: usually most of them).
+    unselected: usize,
+    /// Files with no known format in their first lines.
+    no_trace: Vec<String>,
+    /// Symbolic links not followed (no `-L`).
+    links: Vec<String>,
+    /// With `-L`: links back to a directory above them, not followed again.
+    loops: Vec<String>,
+    /// With `-L`: files read already under another path.
+    twice: Vec<String>,
+}
+
 impl Walk {
-    pub(super) fn new(recursive: bool, globs: &[String]) -> Result<Walk> {
+    pub(super) fn new(recursive: bool, follow_links: bool, globs: &[String]) -> Result<Walk> {
         let mut include = GlobSetBuilder::new();
         let mut exclude = GlobSetBuilder::new();
         let (mut includes, mut excludes) = (0, 0);
@@ -180,21 +205,39 @@ impl Walk {
         };
         Ok(Walk {
             recursive,
+            follow_links,
             include: build(include, includes)?,
             exclude: build(exclude, excludes)?,
+            globs: globs.to_vec(),
         })
     }
 
     /// `path` (relative to the directory walked) passes the `--glob`s.
     fn selects(&self, path: &Path) -> bool {
-        self.include.as_ref().is_none_or(|g| g.is_match(path))
-            && !self.exclude.as_ref().is_some_and(|g| g.is_match(path))
+        self.include.as_ref().is_none_or(|g| g.is_match(path)) && !self.excludes(path)
+    }
+
+    fn excludes(&self, path: &Path) -> bool {
+        self.exclude.as_ref().is_some_and(|g| g.is_match(path))
+    }
+
+    /// Whether a link not followed is worth naming: one to a file the
+    /// `--glob`s would select (or a dangling one they would), one to a
+    /// directory no `!GLOB` excludes (what is in it is unknown).
+    fn names_link(&self, relative: &Path, path: &Path) -> bool {
+        match std::fs::metadata(path) {
+            Ok(meta) if meta.is_dir() => !self.excludes(relative),
+            _ => self.selects(relative),
+        }
     }
 
     /// FILE arguments to inputs: `-` is stdin, none is stdin; a directory
     /// is walked with `--recursive` (its files in name order, those
     /// `--glob` selects, files that are no trace skipped with one note per
-    /// directory) and otherwise an error that names `-r`.
+    /// directory, symbolic links followed with `-L` and otherwise named in
+    /// a note) and otherwise an error that names `-r`. A directory that
+    /// yields no trace is an error that says why, so a `--glob` with a typo
+    /// cannot pass a CI step by reading nothing.
     pub(super) fn expand(
         &self,
         files: &[PathBuf],
@@ -217,37 +260,97 @@ impl Walk {
                 });
                 continue;
             }
-            let mut skipped = Vec::new();
-            for entry in walkdir::WalkDir::new(f).sort_by_file_name() {
-                match entry {
-                    Ok(entry) if entry.file_type().is_file() => {
-                        let relative = entry.path().strip_prefix(f).unwrap_or(entry.path());
-                        if !self.selects(relative) {
-                            continue;
-                        }
-                        let source = Source::Path(entry.into_path());
-                        if is_no_trace(&source, cancel) {
-                            skipped.push(source.display_name());
-                        } else {
-                            inputs.push(Input::Source(source));
-                        }
-                    }
-                    Ok(_) => {}
-                    Err(e) => inputs.push(Input::Unlisted {
-                        name: e.path().unwrap_or(f).display().to_string(),
-                        error: match e.io_error() {
-                            Some(io) => analyze::describe_io(io),
-                            None => e.to_string(),
-                        },
-                    }),
-                }
-            }
-            if let Some(note) = skipped_note(f, &skipped) {
+            let before = inputs.len();
+            let left = self.walk(f, cancel, &mut inputs);
+            for note in left.notes(f) {
                 log.note(&note);
+            }
+            if inputs.len() == before {
+                inputs.push(Input::Unlisted {
+                    name: f.display().to_string(),
+                    error: left.why_nothing(&self.globs),
+                });
             }
         }
         inputs
     }
+
+    /// The inputs under the directory `dir`, pushed in name order, and what
+    /// was left out.
+    fn walk(&self, dir: &Path, cancel: &Cancel, inputs: &mut Vec<Input>) -> LeftOut {
+        let mut left = LeftOut::default();
+        // With -L, the files read so far (device and inode), so a file two
+        // links reach is read once.
+        let mut seen = std::collections::HashSet::new();
+        let walker = walkdir::WalkDir::new(dir)
+            .follow_links(self.follow_links)
+            .sort_by_file_name();
+        for entry in walker {
+            let entry = match entry {
+                Ok(entry) => entry,
+                Err(e) => {
+                    let name = e.path().unwrap_or(dir);
+                    match e.loop_ancestor() {
+                        // Every file was read on the way down: nothing is
+                        // lost by not going round again.
+                        Some(_) => left.loops.push(shown(name)),
+                        None => inputs.push(Input::Unlisted {
+                            name: name.display().to_string(),
+                            error: match e.io_error() {
+                                Some(io) => analyze::describe_io(io),
+                                None => e.to_string(),
+                            },
+                        }),
+                    }
+                    continue;
+                }
+            };
+            let relative = entry.path().strip_prefix(dir).unwrap_or(entry.path());
+            // The directory given may itself be a link: it was asked for.
+            if entry.depth() > 0 && entry.path_is_symlink() && !self.follow_links {
+                if self.names_link(relative, entry.path()) {
+                    left.links.push(shown(entry.path()));
+                }
+                continue;
+            }
+            if !entry.file_type().is_file() {
+                continue;
+            }
+            if !self.selects(relative) {
+                left.unselected += 1;
+                continue;
+            }
+            if self.follow_links && file_id(&entry).is_some_and(|id| !seen.insert(id)) {
+                left.twice.push(shown(entry.path()));
+                continue;
+            }
+            let source = Source::Path(entry.into_path());
+            if is_no_trace(&source, cancel) {
+                left.no_trace.push(source.display_name());
+            } else {
+                inputs.push(Input::Source(source));
+            }
+        }
+        left
+    }
+}
+
+/// A path under a walked directory as a note shows it: as the files read
+/// are named, the directory given included.
+fn shown(path: &Path) -> String {
+    path.display().to_string()
+}
+
+/// The file an entry is (its device and inode), links followed.
+#[cfg(unix)]
+fn file_id(entry: &walkdir::DirEntry) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    entry.metadata().ok().map(|m| (m.dev(), m.ino()))
+}
+
+#[cfg(not(unix))]
+fn file_id(_: &walkdir::DirEntry) -> Option<(u64, u64)> {
+    None
 }
 
 /// A file under a `-r` directory with no known format in its first lines
@@ -259,28 +362,108 @@ fn is_no_trace(source: &Source, cancel: &Cancel) -> bool {
         .is_ok_and(|trace| !trace)
 }
 
-/// `DIR: skipped 5 files that are no trace (no known format in their first
-/// lines): a.py, b.toml, c.md, ...`; nothing when none was skipped.
-fn skipped_note(dir: &Path, skipped: &[String]) -> Option<String> {
-    let (first, rest) = (
-        skipped.get(..SKIPPED_NAMED).unwrap_or(skipped),
-        skipped.len(),
-    );
-    if skipped.is_empty() {
-        return None;
+impl LeftOut {
+    /// One note per kind of thing left out: `DIR: skipped 5 files that are
+    /// no trace (no known format in the first lines): a.py, b.toml, c.md,
+    /// ...`, `DIR: skipped 1 symbolic link (-L follows it): DIR/latest.log`.
+    fn notes(&self, dir: &Path) -> Vec<String> {
+        let kinds: [(&[String], &str, &str, &str); 4] = [
+            (
+                &self.no_trace,
+                "file",
+                "that {is} no trace (no known format in the first lines)",
+                "skipped",
+            ),
+            (
+                &self.links,
+                "symbolic link",
+                "(-L follows {them})",
+                "skipped",
+            ),
+            (
+                &self.loops,
+                "symbolic link",
+                "that point{s} back to a directory above {it}, a loop (the files there were \
+                 read once)",
+                "did not follow",
+            ),
+            (
+                &self.twice,
+                "file",
+                "that links reach again (read once, under {its} first path)",
+                "skipped",
+            ),
+        ];
+        kinds
+            .into_iter()
+            .filter(|(names, ..)| !names.is_empty())
+            .map(|(names, noun, why, verb)| {
+                let one = names.len() == 1;
+                let why = why
+                    .replace("{is}", if one { "is" } else { "are" })
+                    .replace("{it}", if one { "it" } else { "them" })
+                    .replace("{its}", if one { "its" } else { "their" })
+                    .replace("{them}", if one { "it" } else { "them" })
+                    .replace("{s}", if one { "s" } else { "" });
+                format!(
+                    "{}: {verb} {} {why}: {}",
+                    dir.display(),
+                    counted(names.len(), noun),
+                    named(names)
+                )
+            })
+            .collect()
     }
-    let more = if rest > first.len() { ", ..." } else { "" };
-    Some(format!(
-        "{}: skipped {} that {} no trace (no known format in the first lines): {}{more}",
-        dir.display(),
-        if rest == 1 {
-            "1 file".to_string()
-        } else {
-            format!("{rest} files")
-        },
-        if rest == 1 { "is" } else { "are" },
-        first.join(", "),
-    ))
+
+    /// Why a directory gave no trace to read: `no trace under it (3 files
+    /// not selected by --glob '*.lgo')`.
+    fn why_nothing(&self, globs: &[String]) -> String {
+        let mut why = Vec::new();
+        if self.unselected > 0 {
+            let patterns: Vec<String> = globs.iter().map(|g| format!("--glob '{g}'")).collect();
+            why.push(format!(
+                "{} not selected by {}",
+                counted(self.unselected, "file"),
+                patterns.join(" ")
+            ));
+        }
+        if !self.no_trace.is_empty() {
+            why.push(format!(
+                "{} with no known format",
+                counted(self.no_trace.len(), "file")
+            ));
+        }
+        if !self.links.is_empty() {
+            why.push(format!(
+                "{} not followed without -L",
+                counted(self.links.len(), "symbolic link")
+            ));
+        }
+        if why.is_empty() {
+            why.push("no file in it".into());
+        }
+        format!("no trace under it ({})", why.join(", "))
+    }
+}
+
+/// `1 file`, `3 files`.
+fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
+/// The first [`SKIPPED_NAMED`] names, `, ...` when there are more.
+fn named(names: &[String]) -> String {
+    let first = names.get(..SKIPPED_NAMED).unwrap_or(names);
+    let more = if names.len() > first.len() {
+        ", ..."
+    } else {
+        ""
+    };
+    format!("{}{more}", first.join(", "))
 }
 
 /// What all inputs amounted to, in argument order (inputs that could not
@@ -549,6 +732,54 @@ fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi:
 mod tests {
     use super::*;
     use std::ffi::OsStr;
+
+    fn names(n: usize) -> Vec<String> {
+        (1..=n).map(|i| format!("d/{i}.log")).collect()
+    }
+
+    #[test]
+    fn a_directory_that_yields_nothing_says_every_reason() {
+        let globs = ["*.lgo".to_string(), "!old/**".to_string()];
+        assert_eq!(
+            LeftOut::default().why_nothing(&[]),
+            "no trace under it (no file in it)"
+        );
+        let left = LeftOut {
+            unselected: 12,
+            no_trace: names(1),
+            links: names(2),
+            ..LeftOut::default()
+        };
+        assert_eq!(
+            left.why_nothing(&globs),
+            "no trace under it (12 files not selected by --glob '*.lgo' --glob '!old/**', \
+             1 file with no known format, 2 symbolic links not followed without -L)"
+        );
+    }
+
+    #[test]
+    fn one_note_per_kind_left_out_naming_three_at_most() {
+        assert!(LeftOut::default().notes(Path::new("d")).is_empty());
+        let left = LeftOut {
+            unselected: 5,
+            no_trace: names(4),
+            links: names(1),
+            loops: names(2),
+            twice: names(1),
+        };
+        assert_eq!(
+            left.notes(Path::new("d")),
+            [
+                "d: skipped 4 files that are no trace (no known format in the first lines): \
+                 d/1.log, d/2.log, d/3.log, ...",
+                "d: skipped 1 symbolic link (-L follows it): d/1.log",
+                "d: did not follow 2 symbolic links that point back to a directory above \
+                 them, a loop (the files there were read once): d/1.log, d/2.log",
+                "d: skipped 1 file that links reach again (read once, under its first path): \
+                 d/1.log",
+            ]
+        );
+    }
 
     #[test]
     fn progress_only_for_big_files_on_a_terminal_outside_ci_without_quiet() {

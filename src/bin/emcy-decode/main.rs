@@ -38,7 +38,7 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {}", printable(&format!("{e:#}")));
+            error_line(&format!("{e:#}"));
             ExitCode::from(EXIT_ERROR)
         }
     }
@@ -64,11 +64,18 @@ fn usage(e: &clap::Error) -> ExitCode {
     let code = u8::try_from(e.exit_code()).unwrap_or(EXIT_ERROR);
     match e.print() {
         Err(io) if e.use_stderr() || io.kind() != io::ErrorKind::BrokenPipe => {
-            eprintln!("error: writing output: {io}");
+            error_line(&format!("writing output: {io}"));
             ExitCode::from(EXIT_ERROR)
         }
         _ => ExitCode::from(code),
     }
+}
+
+/// Writes `error: MESSAGE` on stderr. A stderr that cannot take it (a full
+/// disk, a closed descriptor) loses the line, never the exit code:
+/// `eprintln!` would panic there and turn exit 2 into 101.
+fn error_line(message: &str) {
+    let _ = writeln!(io::stderr(), "error: {}", printable(message));
 }
 
 /// Writes a whole short output; a reader that went away is not an error.

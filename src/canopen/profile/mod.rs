@@ -28,6 +28,11 @@ use loader::parse_with;
 /// The profile a node gets when nothing else chooses one.
 pub const DEFAULT_PROFILE: &str = "cia402";
 
+/// The largest user profile read: the built-ins are a few KiB of TOML; a
+/// file beyond this is something else (`/dev/zero`, a trace given by
+/// mistake) and an error, not memory.
+pub const MAX_BYTES: u64 = 16 << 20;
+
 /// The first and last EMCY byte a manufacturer field may use.
 const FIRST_BYTE: u8 = 3;
 const LAST_BYTE: u8 = 7;
@@ -231,15 +236,18 @@ impl Profile {
         BUILTIN_FILES.get(i).map(|(_, text)| *text)
     }
 
-    /// Reads and parses a user profile file (TOML, see the README); errors
-    /// name the path and line.
+    /// Reads and parses a user profile file (TOML, see the README; at most
+    /// [`MAX_BYTES`]); errors name the path and line.
     pub fn load(path: &Path) -> Result<Profile, ProfileError> {
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
-            origin: origin.clone(),
-            line: None,
-            message: e.to_string(),
-        })?;
+        let text =
+            crate::small_file::read_to_string(path, MAX_BYTES, "a profile").map_err(|e| {
+                ProfileError {
+                    origin: origin.clone(),
+                    line: None,
+                    message: e.to_string(),
+                }
+            })?;
         Profile::parse(&origin, &text)
     }
 

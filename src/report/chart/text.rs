@@ -6,12 +6,17 @@
 use std::borrow::Cow;
 use std::fmt;
 
-/// Text from a trace (channel and file names) made safe for XML and HTML:
-/// markup characters become entities, control characters (not allowed in
-/// XML 1.0 at all, even as references) become visible escapes. Line breaks
-/// and tabs stay (tooltips are multi-line).
+use crate::text::is_xml_char;
+
+/// Text from a trace or a user's profile (channel and file names, error
+/// descriptions) made safe for XML and HTML: markup characters become
+/// entities, control characters (not allowed in XML 1.0 at all, even as
+/// references) become visible escapes, and the other characters XML cannot
+/// hold (U+FFFE, U+FFFF) U+FFFD, as in the JUnit report. Line breaks and
+/// tabs stay (tooltips are multi-line).
 pub(in crate::report) fn esc(s: &str) -> Cow<'_, str> {
-    let special = |c: char| matches!(c, '&' | '<' | '>' | '"' | '\'') || is_bad_control(c);
+    let special =
+        |c: char| matches!(c, '&' | '<' | '>' | '"' | '\'') || is_bad_control(c) || !is_xml_char(c);
     if !s.chars().any(special) {
         return Cow::Borrowed(s);
     }
@@ -24,6 +29,7 @@ pub(in crate::report) fn esc(s: &str) -> Cow<'_, str> {
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&#39;"),
             c if is_bad_control(c) => out.extend(c.escape_default()),
+            c if !is_xml_char(c) => out.push('\u{FFFD}'),
             c => out.push(c),
         }
     }
@@ -92,6 +98,7 @@ mod tests {
         assert_eq!(esc("can0"), "can0");
         assert_eq!(esc("a<b>&\"'"), "a&lt;b&gt;&amp;&quot;&#39;");
         assert_eq!(esc("x\u{1b}y\nz"), "x\\u{1b}y\nz");
+        assert_eq!(esc("a\u{FFFE}b\u{FFFF}\r"), "a\u{FFFD}b\u{FFFD}\\r");
         assert_eq!(clip("abcdef", 4), "abc…");
     }
 }
