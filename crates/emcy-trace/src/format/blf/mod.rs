@@ -30,7 +30,7 @@
 
 use std::io::{self, Read};
 
-use crate::read::read_full;
+use crate::read::{read_full, read_until_stopped};
 use crate::time::{SECS_PER_DAY, days_from_civil};
 use crate::{
     Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed, Payload,
@@ -147,6 +147,10 @@ pub struct BlfReader<R> {
     /// Look for the next `LOBJ` instead of expecting one at `pos`.
     resync: bool,
     eof: bool,
+    /// A cancel cut the input (`--follow`, a live pipe, then Ctrl-C): the
+    /// objects read are reported to the end as at the end of a file, then
+    /// this error; an object the stop cut is not reported.
+    stopped: Option<io::Error>,
     /// The warning of the last frame returned, until taken.
     warning: Option<Reason>,
     channel: NumberedChannel,
@@ -202,6 +206,7 @@ impl<R: Read> BlfReader<R> {
             cut: None,
             resync: false,
             eof: false,
+            stopped: None,
             warning: None,
             channel: NumberedChannel::default(),
         })
@@ -221,7 +226,7 @@ impl<R: Read> BlfReader<R> {
                 Some(o) => o,
                 None if self.eof => match self.leftover() {
                     Some(o) => o,
-                    None => return Ok(None),
+                    None => return self.stopped.take().map_or(Ok(None), Err),
                 },
                 None => match self.top()? {
                     Some(o) => o,
@@ -346,7 +351,7 @@ impl<R: Read> BlfReader<R> {
         self.pos = 0;
         self.cut = None;
         self.pad = None;
-        if rest == 0 || self.resync {
+        if rest == 0 || self.resync || self.stopped.is_some() {
             return None;
         }
         Some(Object::Malformed(
@@ -367,6 +372,9 @@ impl<R: Read> BlfReader<R> {
         }
         if got < BASE_HEADER {
             self.eof = true;
+            if self.stopped.is_some() {
+                return Ok(None);
+            }
             return Ok(Some(Object::Malformed(
                 format!("the file ends inside an object header at byte {at}").into(),
             )));
@@ -393,6 +401,9 @@ impl<R: Read> BlfReader<R> {
         let got = self.read(&mut body)?;
         if got < body.len() {
             self.eof = true;
+            if self.stopped.is_some() {
+                return Ok(None);
+            }
             return Ok(Some(Object::Malformed(
                 format!(
                     "the file ends inside the object at byte {at} ({} of {} bytes read)",
@@ -503,7 +514,13 @@ impl<R: Read> BlfReader<R> {
             self.back.drain(..k);
             n = k;
         }
-        n += read_full(&mut self.input, buf.get_mut(n..).unwrap_or_default())?;
+        // After a stop, nothing more is read: the bytes held are the end.
+        if self.stopped.is_none() {
+            let (got, stopped) =
+                read_until_stopped(&mut self.input, buf.get_mut(n..).unwrap_or_default())?;
+            n += got;
+            self.stopped = stopped;
+        }
         self.offset += n as u64;
         Ok(n)
     }

@@ -69,7 +69,7 @@ use std::collections::{HashMap, VecDeque};
 use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
-use crate::read::read_full;
+use crate::read::{read_full, read_until_stopped};
 use crate::{
     Counted, Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed,
     Payload, Reason, Timestamp,
@@ -201,6 +201,12 @@ struct Input<R> {
     at: usize,
     offset: u64,
     eof: bool,
+    /// A cancel cut the input (`--follow`, a live pipe, then Ctrl-C): it
+    /// ends there, as a file ends, so what was read is decoded (the spooled
+    /// blocks too: data written before its metadata, as CANedge, asammdf
+    /// and python-can write, would otherwise all be lost), then this error
+    /// comes after the last record. A block the stop cut is not reported.
+    stopped: Option<io::Error>,
 }
 
 impl<R: Read> Read for Input<R> {
@@ -219,8 +225,12 @@ impl<R: Read> Input<R> {
             }
             self.at += n;
             n
+        } else if self.stopped.is_some() {
+            0
         } else {
-            read_full(&mut self.inner, buf)?
+            let (n, stopped) = read_until_stopped(&mut self.inner, buf)?;
+            self.stopped = stopped;
+            n
         };
         if n == 0 && !buf.is_empty() {
             self.eof = true;
@@ -407,6 +417,7 @@ impl<R: Read> Mf4Reader<R> {
             at: 0,
             offset: 0,
             eof: false,
+            stopped: None,
         };
         let mut id = [0u8; ID_LEN];
         let got = input.full(&mut id)?;
@@ -572,11 +583,10 @@ impl<R: Read> Mf4Reader<R> {
                 }));
             }
             if self.finished {
-                return Ok(if notes {
-                    self.take_note().map(Next::Note)
-                } else {
-                    None
-                });
+                if notes && let Some(note) = self.take_note() {
+                    return Ok(Some(Next::Note(note)));
+                }
+                return self.input.stopped.take().map_or(Ok(None), Err);
             }
             self.step(interest)?;
         }
@@ -636,7 +646,7 @@ impl<R: Read> Mf4Reader<R> {
         let n = self.input.full(&mut head)?;
         let got = head.get(..n).unwrap_or_default();
         if n < HEADER {
-            if got.iter().any(|b| *b != 0) {
+            if got.iter().any(|b| *b != 0) && self.input.stopped.is_none() {
                 self.queue.push_back(Out::Malformed(
                     format!("{n} bytes at byte offset {at} at the end are no MDF block").into(),
                 ));
@@ -660,6 +670,9 @@ impl<R: Read> Mf4Reader<R> {
                     .input
                     .full(bytes.get_mut(HEADER..).unwrap_or_default())?;
                 if (k as u64) < body {
+                    if self.input.stopped.is_some() {
+                        return Ok(());
+                    }
                     self.queue.push_back(Out::Malformed(
                         format!(
                             "{} block at byte offset {at} cut off by the end",
@@ -909,9 +922,11 @@ impl<R: Read> Mf4Reader<R> {
         self.zbuf = bytes;
         let n = n?;
         if (n as u64) < body {
-            self.queue.push_back(Out::Malformed(
-                format!("DZ block at byte offset {at} cut off by the end").into(),
-            ));
+            if self.input.stopped.is_none() {
+                self.queue.push_back(Out::Malformed(
+                    format!("DZ block at byte offset {at} cut off by the end").into(),
+                ));
+            }
             return Ok(false);
         }
         Ok(true)
