@@ -260,6 +260,19 @@ impl<R: Read> Input<R> {
         self.eof = false;
     }
 
+    /// Skips `n` bytes, keeping the first `keep` of them in `kept`; how
+    /// many there were.
+    fn skip_keeping(&mut self, n: u64, keep: u64, kept: &mut Vec<u8>) -> io::Result<u64> {
+        let first = n.min(keep) as usize;
+        kept.resize(first, 0);
+        let got = self.full(kept)?;
+        kept.truncate(got);
+        if got < first {
+            return Ok(got as u64);
+        }
+        Ok(got as u64 + self.skip(n - first as u64)?)
+    }
+
     /// Skips `n` bytes; how many there were.
     fn skip(&mut self, n: u64) -> io::Result<u64> {
         let mut left = n;
@@ -673,13 +686,9 @@ impl<R: Read> Mf4Reader<R> {
                     if self.input.stopped.is_some() {
                         return Ok(());
                     }
-                    self.queue.push_back(Out::Malformed(
-                        format!(
-                            "{} block at byte offset {at} cut off by the end",
-                            id(&header)
-                        )
-                        .into(),
-                    ));
+                    bytes.truncate(HEADER + k);
+                    bytes.drain(..HEADER);
+                    self.past_the_end(at, &header, k as u64, bytes);
                     return Ok(());
                 }
                 if self.meta.bytes + bytes.len() > MAX_META {
@@ -698,10 +707,62 @@ impl<R: Read> Mf4Reader<R> {
             }
             b"DT" | b"DZ" | b"SD" | b"DV" => self.data_block(at, header),
             _ => {
-                self.input.skip(body)?;
+                // Its first bytes are kept: should the file end inside it,
+                // its length was wrong, and the blocks after its real end
+                // are read from them.
+                let mut kept = Vec::new();
+                let got = self.input.skip_keeping(body, MAX_META_BLOCK, &mut kept)?;
+                if got < body && self.input.stopped.is_none() {
+                    self.past_the_end(at, &header, got, kept);
+                    return Ok(());
+                }
                 self.meta.read_up_to = self.input.offset;
                 Ok(())
             }
+        }
+    }
+
+    /// A block at `at` whose length runs past the end of the file (a
+    /// comment claiming 1 MiB in a file of 1.5 KB, a CG claiming 2^62
+    /// bytes): `got` bytes of its body were there, and `kept` holds the
+    /// first of them. Reading all of them as the block would swallow the
+    /// blocks after its real end in silence, so it is malformed, and reading
+    /// goes on at the first block header in what was kept.
+    fn past_the_end(&mut self, at: u64, header: &Header, got: u64, kept: Vec<u8>) {
+        let body_at = at + HEADER as u64;
+        let next = memchr::memmem::find_iter(&kept, b"##").find(|&p| {
+            kept.get(p..)
+                .and_then(Header::read)
+                .is_some_and(|h| h.sane())
+        });
+        let lost = got - kept.len() as u64;
+        let then = match next {
+            Some(p) if lost == 0 => format!(
+                "read on from the block at byte offset {}",
+                body_at + p as u64
+            ),
+            Some(p) => format!(
+                "read on from the block at byte offset {} (the {lost} bytes after the first {} of it are not read)",
+                body_at + p as u64,
+                kept.len()
+            ),
+            None => format!("no block after it ({got} bytes not read)"),
+        };
+        self.queue.push_back(Out::Malformed(
+            format!(
+                "{} block at byte offset {at} declares {} bytes, but the file ends {got} bytes \
+                 into its body: {then}",
+                id(header),
+                header.len
+            )
+            .into(),
+        ));
+        match next {
+            Some(p) => {
+                self.input.unread(kept.get(p..).unwrap_or_default());
+                self.meta.read_up_to = body_at + p as u64;
+            }
+            None => self.meta.read_up_to = self.input.offset,
         }
     }
 
