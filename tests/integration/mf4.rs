@@ -9,6 +9,7 @@
 //! and a damaged file.
 
 use std::io::Write;
+use std::path::Path;
 
 use emcy_decode::{Format, FrameKind, Record, TraceReader};
 use serde_json::Value;
@@ -329,4 +330,37 @@ fn a_block_longer_than_the_file_is_malformed_and_reading_goes_on() {
         )),
         "{stderr}"
     );
+}
+
+/// A file whose data comes before its metadata keeps that data in a
+/// temporary file: when none can be made, the message blames the
+/// temporary directory, not the trace (before: `error: s300.mf4: No such
+/// file or directory`, as if the trace were missing), gzip or not.
+#[test]
+fn without_a_temporary_directory_the_message_blames_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("gone");
+    let gz = dir.path().join("s300.mf4.gz");
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    enc.write_all(&std::fs::read("fixtures/s300.mf4").unwrap())
+        .unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    for trace in [Path::new("fixtures/s300.mf4"), gz.as_path()] {
+        let out = emcy_decode()
+            .env("TMPDIR", &missing)
+            .arg(trace)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{}", trace.display());
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            stderr.contains(&format!(
+                "{}: cannot create a temporary file in {} (TMPDIR) for the MF4 data written \
+                 before its metadata: No such file or directory",
+                trace.display(),
+                missing.display()
+            )),
+            "{stderr}"
+        );
+    }
 }

@@ -297,7 +297,10 @@ fn a_start_time_that_is_no_time_is_a_malformed_line() {
             serde_json::from_str(text.lines().last().expect("input")).expect("JSON");
         // The fixture's own malformed line, and this one.
         assert_eq!(input["malformed"], 2, "{bad}: {input}");
-        assert_eq!(input["first_time_text"], "80.000000", "{bad}: since the start");
+        assert_eq!(
+            input["first_time_text"], "80.000000",
+            "{bad}: since the start"
+        );
     }
     // The start time on the first line, before anything says TRC (a 1.0
     // file has no `$FILEVERSION`): the line tells the format, and is still

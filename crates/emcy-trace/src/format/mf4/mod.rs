@@ -83,6 +83,12 @@ pub use block::is_magic;
 pub const MAX_META: usize = 64 * 1024 * 1024;
 /// Largest metadata block kept.
 const MAX_META_BLOCK: u64 = 16 * 1024 * 1024;
+/// The most the temporary file of data blocks that wait for their
+/// metadata may hold. Real files written data first (CANedge finalized,
+/// asammdf, python-can) are split at tens to hundreds of MB; a gzip input
+/// of a few MB can inflate to anything, and the temporary directory is
+/// often memory (tmpfs), so it is bounded.
+pub const MAX_SPOOL: u64 = 4 << 30;
 /// Largest record (a VLSD record's length field is 32 bits).
 pub const MAX_RECORD: usize = 16 * 1024 * 1024;
 /// VLSD records of a group kept for the records that point back to them
@@ -293,6 +299,8 @@ impl<R: Read> Input<R> {
 struct Spool {
     file: File,
     end: u64,
+    /// The most it may hold ([`MAX_SPOOL`]).
+    limit: u64,
     /// DT and DZ blocks in file order: (block offset, kind, position, length).
     items: Vec<(u64, [u8; 2], u64, u64)>,
     /// SD blocks (inflated when zipped): block offset -> (position, length).
@@ -300,16 +308,40 @@ struct Spool {
 }
 
 impl Spool {
-    fn new() -> io::Result<Spool> {
+    fn new(limit: u64) -> io::Result<Spool> {
+        // The error names the temporary directory: it is what failed, and
+        // the caller puts the trace's name in front of the message.
+        let file = tempfile::tempfile().map_err(|e| {
+            io::Error::new(
+                e.kind(),
+                format!(
+                    "cannot create a temporary file in {} (TMPDIR) for the MF4 data written \
+                     before its metadata: {e}",
+                    std::env::temp_dir().display()
+                ),
+            )
+        })?;
         Ok(Spool {
-            file: tempfile::tempfile()?,
+            file,
             end: 0,
+            limit,
             items: Vec::new(),
             sd: HashMap::new(),
         })
     }
 
     fn append(&mut self, bytes: &[u8]) -> io::Result<()> {
+        if self.end.saturating_add(bytes.len() as u64) > self.limit {
+            let limit = if self.limit.is_multiple_of(1 << 20) {
+                format!("{} MiB", self.limit >> 20)
+            } else {
+                format!("{} bytes", self.limit)
+            };
+            return Err(io::Error::other(format!(
+                "the MF4 data written before its metadata (kept in a temporary file until the \
+                 metadata comes) is over {limit}: not read further"
+            )));
+        }
         self.file.seek(SeekFrom::Start(self.end))?;
         self.file.write_all(bytes)?;
         self.end += bytes.len() as u64;
@@ -383,6 +415,8 @@ pub struct Mf4Reader<R> {
     owners_stale: bool,
     states: Vec<DgState>,
     spool: Option<Spool>,
+    /// The most the spool may hold ([`MAX_SPOOL`]; smaller in tests).
+    spool_limit: u64,
     /// The spooled DZ blocks inflated ahead on another thread, while they
     /// are replayed ([`ahead`]).
     #[cfg(unix)]
@@ -490,6 +524,7 @@ impl<R: Read> Mf4Reader<R> {
             owners_stale: false,
             states: Vec::new(),
             spool: None,
+            spool_limit: MAX_SPOOL,
             #[cfg(unix)]
             ahead: None,
             spooling: false,
@@ -942,7 +977,7 @@ impl<R: Read> Mf4Reader<R> {
 
     fn spool(&mut self) -> io::Result<&mut Spool> {
         if self.spool.is_none() {
-            self.spool = Some(Spool::new()?);
+            self.spool = Some(Spool::new(self.spool_limit)?);
         }
         self.spool
             .as_mut()

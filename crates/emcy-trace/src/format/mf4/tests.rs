@@ -381,6 +381,37 @@ fn dl_and_hl_lists_of_dt_and_dz_blocks_with_records_across_them() {
     assert_eq!(read(&sorted(true)).0, want);
 }
 
+/// The temporary file of data waiting for its metadata is bounded: past
+/// the bound, reading stops with an error that says the bound (a gzip
+/// input of a few MB filled 1.18 GB of the temporary directory).
+#[test]
+fn the_spool_of_data_before_its_metadata_is_bounded() {
+    let bytes = sorted(true);
+    let read_with_limit = |limit: u64| {
+        let mut r = Mf4Reader::new(&bytes[..]).expect("an MDF 4 file");
+        r.spool_limit = limit;
+        let mut frames = 0;
+        loop {
+            match r.next_record() {
+                Ok(Some(Parsed::Frame(_))) => frames += 1,
+                Ok(Some(_)) => {}
+                Ok(None) => return Ok(frames),
+                Err(e) => return Err(e.to_string()),
+            }
+        }
+    };
+    assert_eq!(read_with_limit(MAX_SPOOL), Ok(10));
+    // The DT block's 30 bytes fit, the first DZ block does not.
+    assert_eq!(
+        read_with_limit(40),
+        Err(
+            "the MF4 data written before its metadata (kept in a temporary file until the \
+             metadata comes) is over 40 bytes: not read further"
+                .into()
+        )
+    );
+}
+
 #[test]
 fn times_exact_and_the_local_time_flag_is_noted() {
     let mut file = unsorted(b"UnFinMF ", 0x25, false, true, &three());
