@@ -1021,6 +1021,52 @@ mod tests {
         }
     }
 
+    /// `bytes`, then the error of a cancel (Ctrl-C under `--follow`).
+    struct ThenCancelled<'a>(&'a [u8]);
+
+    impl io::Read for ThenCancelled<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            if self.0.is_empty() {
+                return Err(crate::cancel::cancelled());
+            }
+            let n = self.0.read(buf)?;
+            Ok(n)
+        }
+    }
+
+    /// A cancel after the whole file: every object, as at the end of the
+    /// file (the last container was lost waiting for the bytes after its
+    /// padding), then the cancel's error; an object it cut is not reported.
+    #[test]
+    fn a_cancel_after_the_last_container_loses_nothing() {
+        let mut stream = emcy(0x4310);
+        stream.extend(emcy(0x0000));
+        let whole = file(&container(&stream));
+        let mut r = BlfReader::new(ThenCancelled(&whole)).expect("a BLF header");
+        let mut frames = 0;
+        let err = loop {
+            match r.next_object() {
+                Ok(Some(Parsed::Frame(_))) => frames += 1,
+                Ok(Some(_)) => {}
+                Ok(None) => panic!("the cancel is not the end of the file"),
+                Err(e) => break e,
+            }
+        };
+        assert_eq!(frames, 2);
+        assert!(crate::cancel::is_cancelled(&err), "{err}");
+        // Cut inside the container: no malformed object for the cut.
+        let cut = &whole[..whole.len() - 10];
+        let mut r = BlfReader::new(ThenCancelled(cut)).expect("a BLF header");
+        loop {
+            match r.next_object() {
+                Ok(Some(Parsed::Malformed(m))) => panic!("{m}"),
+                Ok(Some(_)) => {}
+                Ok(None) => panic!("the cancel is not the end of the file"),
+                Err(e) => break assert!(crate::cancel::is_cancelled(&e), "{e}"),
+            }
+        }
+    }
+
     #[test]
     fn bytes_past_the_padding_window_are_still_reported() {
         // 5 bytes after an object padded by the rule to 4: the next LOBJ
