@@ -770,7 +770,7 @@ impl<R: Read> Mf4Reader<R> {
                 .and_then(Header::read)
                 .is_some_and(|h| h.sane())
         });
-        let lost = got - kept.len() as u64;
+        let lost = got.saturating_sub(kept.len() as u64);
         let then = match next {
             Some(p) if lost == 0 => format!(
                 "read on from the block at byte offset {}",
