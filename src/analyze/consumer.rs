@@ -111,7 +111,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             last_time: None,
             frame_times: (None, None),
             wanted: Wanted::new(ids),
-            nodes: Nodes::new(opts.spill_at),
+            nodes: Nodes::new(opts.spill_at, opts.max_nodes),
             facts: Facts::new(opts),
             monitors,
             taken_as: Vec::new(),
@@ -154,7 +154,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
                 ));
             }
         }
-        let nodes_taken = std::mem::replace(&mut self.nodes, Nodes::new(1));
+        let nodes_taken = std::mem::replace(&mut self.nodes, Nodes::new(1, 0));
         let monitors = &self.monitors;
         let (mut nodes, history, unmatched) =
             nodes_taken.into_reports(self.opts, |report, health| {

@@ -50,7 +50,8 @@ pub use event::{
     BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, GuardingReport, Health, HealthEvent,
     HeartbeatReport, HistoryReport, InputReport, NodeReport, Unanswered,
 };
-pub use options::{EmcyId, Options};
+use nodes::Capped;
+pub use options::{EmcyId, MAX_NODES, Options};
 pub use sink::{Discard, Sink, WithoutEvents};
 
 /// Opens one source and reads it to the end ([`analyze`]); what stops it
@@ -116,6 +117,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         None => Detector::auto(),
     };
     let mut consumer = Consumer::new(file, opts, sink, log, detector.format().is_some());
+    let reader = Capped::new(reader, &consumer.nodes);
 
     // BLF, pcap, pcapng and MDF 4 are binary: known by their magic (or forced),
     // read record by record.

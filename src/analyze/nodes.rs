@@ -6,7 +6,9 @@
 use std::borrow::Borrow;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
+use std::io::{self, Read};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::event::{CodeTexts, NodeReport};
 use super::options::Options;
@@ -32,6 +34,49 @@ pub(super) struct Nodes {
     last: Option<usize>,
     /// Closed intervals of every node (timelines keep only active ones).
     history: History,
+    /// Nodes in the table (pairs of channel and node id), and the most it
+    /// may hold (`Options::max_nodes`).
+    count: usize,
+    limit: usize,
+    /// Set once the table holds more than `limit`: the input's reader
+    /// ([`Capped`]) then ends reading.
+    full: Arc<AtomicBool>,
+}
+
+/// The input's bytes, until the node table is full: then reading ends with
+/// an error that says the bound, as a read error does (one `error:` line,
+/// the report of what was read). Checked once per read of the input (a
+/// block of lines or a chunk of a binary file), never per frame; the lines
+/// already read when the table fills are still analysed, a bounded
+/// overshoot of at most the blocks in flight.
+pub(super) struct Capped<R> {
+    inner: R,
+    full: Arc<AtomicBool>,
+    limit: usize,
+}
+
+impl<R> Capped<R> {
+    pub(super) fn new(inner: R, nodes: &Nodes) -> Self {
+        Capped {
+            inner,
+            full: Arc::clone(&nodes.full),
+            limit: nodes.limit,
+        }
+    }
+}
+
+impl<R: Read> Read for Capped<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        if self.full.load(Ordering::Relaxed) {
+            return Err(io::Error::other(format!(
+                "more than {} nodes (pairs of channel and node id): reading stopped there \
+                 (the node table is bounded; a trace names that many only when it is damaged \
+                 or hostile)",
+                self.limit
+            )));
+        }
+        self.inner.read(buf)
+    }
 }
 
 struct ChannelNodes {
@@ -113,12 +158,15 @@ pub(super) struct NodeSlot<'n> {
 }
 
 impl Nodes {
-    pub(super) fn new(spill_at: usize) -> Self {
+    pub(super) fn new(spill_at: usize, limit: usize) -> Self {
         Nodes {
             channels: Vec::new(),
             index: HashMap::new(),
             last: None,
             history: History::new(spill_at),
+            count: 0,
+            limit,
+            full: Arc::new(AtomicBool::new(false)),
         }
     }
 
@@ -134,7 +182,12 @@ impl Nodes {
         };
         self.last = Some(idx);
         let Nodes {
-            channels, history, ..
+            channels,
+            history,
+            count,
+            limit,
+            full,
+            ..
         } = self;
         let ch = &mut channels[idx];
         let slot = match ch.position(node) {
@@ -149,6 +202,10 @@ impl Nodes {
                     ch.nodes.reserve_exact(1);
                 }
                 ch.nodes.insert(i, (node, NodeTimeline::new()));
+                *count += 1;
+                if *count > *limit {
+                    full.store(true, Ordering::Relaxed);
+                }
                 i
             }
         };
@@ -157,6 +214,16 @@ impl Nodes {
             channel_id: ch.id,
             timeline: &mut ch.nodes[slot].1,
             history,
+        }
+    }
+
+    /// One more pair of channel and node id kept outside the table (the NMT
+    /// monitor's ids addressed before they spoke): counted against the
+    /// same bound, which is about memory per pair wherever it is kept.
+    pub(super) fn count_kept_elsewhere(&mut self) {
+        self.count += 1;
+        if self.count > self.limit {
+            self.full.store(true, Ordering::Relaxed);
         }
     }
 
@@ -409,7 +476,7 @@ mod tests {
     /// station addresses, searched).
     #[test]
     fn node_places_match_the_sorted_list() {
-        let mut nodes = Nodes::new(1 << 20);
+        let mut nodes = Nodes::new(1 << 20, 1 << 20);
         let ids: [NodeId; 9] = [127, 5, 64, 300, 1, 63, 65_535, 100, 128];
         for &n in &ids {
             nodes.get(b"can0", n);

@@ -13,6 +13,15 @@ use crate::trace::cancel::Cancel;
 use crate::trace::deltas::TimeMode;
 use crate::trace::lines::{DEFAULT_BLOCK, DEFAULT_MAX_LINE};
 
+/// The most nodes (pairs of channel and node id) one input may name. A real
+/// network has 127 CANopen nodes (or some hundreds of EtherCAT slaves) on a
+/// few channels; a hostile trace naming a million channels took 1.03 GB
+/// and aborted under a 768 MB address-space limit. Each node costs about a
+/// KiB (its timeline, report and history), so this bounds the table at
+/// about 100 MB; past it, reading stops with an error and what was read is
+/// reported.
+pub const MAX_NODES: usize = 100_000;
+
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -37,6 +46,9 @@ pub struct Options {
     pub block_size: usize,
     /// Closed error intervals kept in memory before they go to a temporary file.
     pub spill_at: usize,
+    /// Nodes (pairs of channel and node id) one input may name before
+    /// reading stops with an error ([`MAX_NODES`]; smaller in tests).
+    pub max_nodes: usize,
     /// `--emcy-id`: EMCY COB-IDs moved by object 0x1014, to the node they belong to.
     pub emcy_ids: Vec<EmcyId>,
     /// `--profile`, `--profile-file`: which profile decodes which node.
@@ -75,6 +87,7 @@ impl Default for Options {
             threads: 1,
             block_size: DEFAULT_BLOCK,
             spill_at: DEFAULT_SPILL_AT,
+            max_nodes: MAX_NODES,
             emcy_ids: Vec::new(),
             profiles: ProfileChoice::default(),
             cancel: Cancel::new(),

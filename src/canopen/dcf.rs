@@ -139,18 +139,26 @@ fn integer(text: &str, node: NodeId) -> Result<u32, String> {
         let value = if term.eq_ignore_ascii_case("$NODEID") {
             u32::from(node)
         } else if let Some(hex) = term.strip_prefix("0x").or_else(|| term.strip_prefix("0X")) {
-            u32::from_str_radix(hex, 16).map_err(|_| format!("`{term}` is not a hex number"))?
+            u32::from_str_radix(hex, 16).map_err(|e| not_u32(term, "a hex number", &e))?
         } else if let Some(octal) = term.strip_prefix('0').filter(|o| !o.is_empty()) {
-            u32::from_str_radix(octal, 8).map_err(|_| format!("`{term}` is not an octal number"))?
+            u32::from_str_radix(octal, 8).map_err(|e| not_u32(term, "an octal number", &e))?
         } else {
             term.parse::<u32>()
-                .map_err(|_| format!("`{term}` is not a number"))?
+                .map_err(|e| not_u32(term, "a number", &e))?
         };
         sum = sum
             .checked_add(value)
             .ok_or_else(|| format!("`{text}` is above 32 bits"))?;
     }
     Ok(sum)
+}
+
+/// Why `term` is no 32-bit value: too large, or not `what` at all.
+fn not_u32(term: &str, what: &str, e: &std::num::ParseIntError) -> String {
+    match e.kind() {
+        std::num::IntErrorKind::PosOverflow => format!("`{term}` is above 32 bits"),
+        _ => format!("`{term}` is not {what}"),
+    }
 }
 
 /// Notes a problem (the first [`MAX_PROBLEMS`] kept).
@@ -231,24 +239,39 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
             _ => {}
         }
     }
-    let eval = |dcf: &mut Dcf, raw: Option<&Raw>| -> Option<u32> {
+    // A value that is no number is left out, as if the file did not set
+    // it, and the problem says so: a PDO whose COB-ID is left out keeps
+    // the predefined one, which must not happen unsaid.
+    let eval = |dcf: &mut Dcf, raw: Option<&Raw>, what: &str| -> Option<u32> {
         let raw = raw?;
         match integer(&raw.text, node) {
             Ok(v) => Some(v),
             Err(reason) => {
-                problem(dcf, raw.line, reason);
+                problem(dcf, raw.line, format!("{reason}: {what}"));
                 None
             }
         }
     };
     let identity = |sub| entries.get(&(IDENTITY, sub));
     let vendor = info.get("vendor").or(identity(1).and_then(Entry::value));
-    dcf.vendor_id = eval(&mut dcf, vendor);
+    dcf.vendor_id = eval(&mut dcf, vendor, "the vendor id is not read from this file");
     let product = info.get("product").or(identity(2).and_then(Entry::value));
-    dcf.product_code = eval(&mut dcf, product);
-    dcf.node_id = eval(&mut dcf, info.get("node"));
+    dcf.product_code = eval(
+        &mut dcf,
+        product,
+        "the product code is not read from this file",
+    );
+    dcf.node_id = eval(
+        &mut dcf,
+        info.get("node"),
+        "the node id is not read from this file",
+    );
     let device_type = entries.get(&(DEVICE_TYPE, 0)).and_then(Entry::value);
-    dcf.device_type = eval(&mut dcf, device_type);
+    dcf.device_type = eval(
+        &mut dcf,
+        device_type,
+        "the device type (0x1000) is not read from this file",
+    );
     // The declared values, applied as if the node had confirmed them in
     // index order: the same rules as a mapping learnt from the trace.
     let mut learner = Learner::new();
@@ -256,7 +279,17 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
         if index == IDENTITY || index == DEVICE_TYPE {
             continue;
         }
-        if let Some(value) = eval(&mut dcf, entry.value()) {
+        // Communication parameters: 0x1400-0x15FF (receive), 0x1800-0x19FF (transmit).
+        let cob_id = sub == 1 && matches!(index, 0x1400..=0x15FF | 0x1800..=0x19FF);
+        let what = if cob_id {
+            format!(
+                "0x{index:04X} sub {sub} is not read from this file: the PDO keeps its \
+                 predefined COB-ID"
+            )
+        } else {
+            format!("0x{index:04X} sub {sub} is not read from this file")
+        };
+        if let Some(value) = eval(&mut dcf, entry.value(), &what) {
             learner.confirmed(node, Object { index, sub }, value);
         }
     }
@@ -428,6 +461,32 @@ DefaultValue=0x60640020
         assert!(integer("", 1).unwrap_err().contains("not a number"));
         assert!(integer("-1", 1).is_err());
         assert!(integer("0xFFFFFFFF+1", 1).unwrap_err().contains("32 bits"));
+        assert_eq!(
+            integer("$NODEID+0xFFFFFFFFFFFFFFFF", 1),
+            Err("`0xFFFFFFFFFFFFFFFF` is above 32 bits".into())
+        );
+        assert_eq!(
+            integer("99999999999", 1),
+            Err("`99999999999` is above 32 bits".into())
+        );
+    }
+
+    /// A COB-ID that is no number leaves the PDO on its predefined COB-ID:
+    /// the problem says so, with its line.
+    #[test]
+    fn a_cob_id_that_is_no_number_is_a_problem_that_says_what_it_means() {
+        let text = "[1800sub1]\nParameterValue=$NODEID+0xFFFFFFFFFFFFFFFF\n\
+                    [1A00sub0]\nParameterValue=1\n[1A00sub1]\nParameterValue=0x60410010\n";
+        let dcf = parse(text.as_bytes(), 5);
+        let problems: Vec<String> = dcf.problems.iter().map(|p| p.to_string()).collect();
+        assert_eq!(
+            problems,
+            [
+                "line 2: `0xFFFFFFFFFFFFFFFF` is above 32 bits: 0x1800 sub 1 is not read from \
+              this file: the PDO keeps its predefined COB-ID"
+            ]
+        );
+        assert_eq!(dcf.problem_count, 1);
     }
 
     #[test]
@@ -441,7 +500,7 @@ DefaultValue=0x60640020
             [
                 "line 3: `this line is junk` is not a [section], a key=value or a ; comment",
                 "line 4: a section name without `]`",
-                "line 8: `0xZZ` is not a hex number",
+                "line 8: `0xZZ` is not a hex number: 0x1A00 sub 1 is not read from this file",
             ]
         );
         // Reading went on: CRLF lines, the vendor read.

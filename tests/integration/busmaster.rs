@@ -310,3 +310,38 @@ proptest! {
         }
     }
 }
+
+/// A start date that is no date (30 February): before, dropped in silence
+/// and every system time read as seconds since midnight. Now the header
+/// line is malformed, with its line number, and `--strict` fails.
+#[test]
+fn a_start_date_that_is_no_date_is_a_malformed_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("feb30.busmaster.log");
+    let text = std::fs::read_to_string("fixtures/s300.busmaster.log").expect("fixture");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("***START DATE AND TIME"))
+        .expect("a start date")
+        + 1;
+    let text = text.replace(
+        "***START DATE AND TIME 14:11:2023 22:13:19:500***",
+        "***START DATE AND TIME 30:02:2023 22:13:19:500***",
+    );
+    std::fs::write(&path, text).expect("write");
+    let out = crate::support::emcy_decode()
+        .arg("--strict")
+        .arg(&path)
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).expect("utf-8");
+    assert!(
+        stderr.contains(&format!(
+            "feb30.busmaster.log:{line}: '30:02:2023 22:13:19:500' is not a start date and time \
+             (d:m:yyyy h:m:s:ms, from 1970 to 9999): the session's system times are seconds \
+             since midnight"
+        )),
+        "{stderr}"
+    );
+}

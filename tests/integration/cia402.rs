@@ -451,3 +451,57 @@ fn a_mapping_read_back_decodes_the_tpdo() {
     assert_eq!(objects_mapped, ["0x6041:16", "0x603F:16"]);
     assert_eq!(source, "sdo");
 }
+
+/// Value errors in an otherwise usable DCF: before, exit 0 and nothing on
+/// stderr, the COB-ID that overflows silently the predefined one. Now one
+/// `warning:` line each, with the file and line, before the report.
+#[test]
+fn value_errors_in_a_usable_dcf_are_warnings_with_their_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("bad.dcf");
+    let text = fs::read_to_string("fixtures/cia402-drive.dcf")
+        .expect("fixture")
+        .replace(
+            "ParameterValue=$NODEID+0x180\n",
+            "ParameterValue=$NODEID+0xFFFFFFFFFFFFFFFF\n",
+        )
+        .replace("ParameterValue=0x60410010\n", "ParameterValue=0x6041001O\n");
+    let line_of = |needle: &str| {
+        text.lines()
+            .position(|l| l.ends_with(needle))
+            .expect("edited")
+            + 1
+    };
+    let (cob, entry) = (line_of("0xFFFFFFFFFFFFFFFF"), line_of("0x6041001O"));
+    fs::write(&path, &text).expect("write");
+    let out = emcy_decode()
+        .arg("--dcf")
+        .arg(format!("5={}", path.display()))
+        .args(["--format", "ndjson", DCF_TRACE])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(0));
+    let stderr = String::from_utf8(out.stderr).expect("utf-8");
+    let name = path.display();
+    assert!(
+        stderr.contains(&format!(
+            "warning: --dcf {name}:{cob}: `0xFFFFFFFFFFFFFFFF` is above 32 bits: 0x1800 sub 1 \
+             is not read from this file: the PDO keeps its predefined COB-ID\n"
+        )),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(&format!(
+            "warning: --dcf {name}:{entry}: `0x6041001O` is not a hex number: 0x1A00 sub 1 is \
+             not read from this file\n"
+        )),
+        "{stderr}"
+    );
+    assert_eq!(stderr.matches("warning: --dcf").count(), 2, "{stderr}");
+    // The fixture itself has none.
+    let out = emcy_decode()
+        .args(["--dcf", "5=fixtures/cia402-drive.dcf", DCF_TRACE])
+        .output()
+        .expect("runs");
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+}

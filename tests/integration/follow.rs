@@ -96,31 +96,7 @@ impl Followed {
     /// newline prints nothing to wait for.
     #[cfg(target_os = "linux")]
     fn wait_read_to_end(&self) {
-        let want = fs::metadata(&self.path).unwrap().len();
-        let target = fs::canonicalize(&self.path).unwrap();
-        let pid = self.child.id();
-        let deadline = std::time::Instant::now() + WAIT;
-        loop {
-            for fd in fs::read_dir(format!("/proc/{pid}/fd")).unwrap().flatten() {
-                if fs::read_link(fd.path()).ok().as_deref() != Some(target.as_path()) {
-                    continue;
-                }
-                let info = format!("/proc/{pid}/fdinfo/{}", fd.file_name().to_string_lossy());
-                let pos = fs::read_to_string(info).unwrap_or_default();
-                let pos = pos
-                    .lines()
-                    .find_map(|l| l.strip_prefix("pos:"))
-                    .and_then(|p| p.trim().parse::<u64>().ok());
-                if pos == Some(want) {
-                    return;
-                }
-            }
-            assert!(
-                std::time::Instant::now() < deadline,
-                "the file was never read to byte {want}"
-            );
-            std::thread::sleep(std::time::Duration::from_millis(5));
-        }
+        wait_read_to_end(&self.child, &self.path);
     }
 
     /// Ctrl-C; the whole output, stderr lines, and the input object.
@@ -133,6 +109,37 @@ impl Followed {
         let input = self.objects.last().cloned().unwrap();
         assert_eq!(input["type"], "input");
         (self.objects, self.notes, input)
+    }
+}
+
+/// On Linux, waits until `child` has read the file at `path` to its current
+/// end (its offset in /proc/PID/fdinfo).
+#[cfg(target_os = "linux")]
+fn wait_read_to_end(child: &Child, path: &Path) {
+    let want = fs::metadata(path).unwrap().len();
+    let target = fs::canonicalize(path).unwrap();
+    let pid = child.id();
+    let deadline = std::time::Instant::now() + WAIT;
+    loop {
+        for fd in fs::read_dir(format!("/proc/{pid}/fd")).unwrap().flatten() {
+            if fs::read_link(fd.path()).ok().as_deref() != Some(target.as_path()) {
+                continue;
+            }
+            let info = format!("/proc/{pid}/fdinfo/{}", fd.file_name().to_string_lossy());
+            let pos = fs::read_to_string(info).unwrap_or_default();
+            let pos = pos
+                .lines()
+                .find_map(|l| l.strip_prefix("pos:"))
+                .and_then(|p| p.trim().parse::<u64>().ok());
+            if pos == Some(want) {
+                return;
+            }
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the file was never read to byte {want}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
     }
 }
 
@@ -293,4 +300,50 @@ fn ctrl_c_while_a_followed_line_is_unfinished_does_not_decode_it() {
         )),
         "{notes:?}"
     );
+}
+
+/// `--follow` on a binary capture already complete, then Ctrl-C: the
+/// report is the one of reading the file to its end. Before, the cancel's
+/// error threw away what the reader held: a BLF's last log container (it
+/// waited for the bytes after the container's padding), and everything of
+/// an MF4 whose data comes before its metadata (CANedge, asammdf and
+/// python-can write them so): 0 frames of 22.
+#[cfg(target_os = "linux")]
+#[test]
+fn ctrl_c_on_a_followed_binary_capture_reports_all_of_it() {
+    for fixture in [
+        "s300.blf",
+        "s300.plain.blf",
+        "edge.blf",
+        "canedge.mf4",
+        "sorted-sd.mf4",
+        "s300.dz.mf4",
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(fixture);
+        fs::copy(Path::new("fixtures").join(fixture), &path).unwrap();
+        let whole = crate::support::emcy_decode()
+            .args(["--format", "ndjson", path.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let mut child = spawn(&["--follow", "--format", "ndjson", path.to_str().unwrap()]);
+        let out = lines_of(child.stdout.take().unwrap());
+        wait_read_to_end(&child, &path);
+        interrupt(&child);
+        assert_eq!(
+            exit_within_wait(&mut child, "ctrl-c"),
+            Some(130),
+            "{fixture}"
+        );
+        let followed: Vec<String> = out.iter().collect();
+        let want: Vec<&str> = std::str::from_utf8(&whole.stdout)
+            .unwrap()
+            .lines()
+            .collect();
+        assert!(
+            want.iter().any(|l| l.contains("\"type\":\"emcy\"")),
+            "{fixture}"
+        );
+        assert_eq!(followed, want, "{fixture}");
+    }
 }

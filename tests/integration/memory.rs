@@ -160,3 +160,65 @@ fn check_reads_a_big_baseline_in_bounded_memory() {
         "peak RSS {peak} KiB exceeds {BASELINE_LIMIT_KIB} KiB"
     );
 }
+
+/// A candump log naming a million channels (49 MB) under a 768 MiB
+/// address-space limit: before, 1.03 GB and an abort (`memory allocation of
+/// 352000000 bytes failed`, no report, no `error:` line). Now the node
+/// table's bound ends reading with one `error:` line, exit 2, and the
+/// report of what was read. Skipped where `prlimit` is missing.
+#[test]
+fn a_million_channels_end_in_an_error_and_a_report_under_a_memory_limit() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("channels.log");
+    {
+        let mut w = BufWriter::new(std::fs::File::create(&path).expect("create"));
+        for i in 0..1_000_000u32 {
+            writeln!(
+                w,
+                "(1700000000.{:06}) c{i:07} 081#1043080100000000",
+                i % 1_000_000
+            )
+            .expect("write");
+        }
+        w.flush().expect("flush");
+    }
+    // The binary's neutral environment, under prlimit.
+    let plain = binary();
+    let mut cmd = std::process::Command::new("prlimit");
+    cmd.arg(format!("--as={}", 768u64 << 20))
+        .arg(plain.get_program())
+        .args(plain.get_args())
+        .args(["--format", "ndjson"])
+        .arg(&path);
+    for (key, value) in plain.get_envs() {
+        match value {
+            Some(v) => cmd.env(key, v),
+            None => cmd.env_remove(key),
+        };
+    }
+    let out = match cmd.output() {
+        Ok(out) => out,
+        Err(e) => {
+            eprintln!("skipped: prlimit cannot run ({e})");
+            return;
+        }
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if stderr.starts_with("prlimit:") {
+        eprintln!("skipped: {stderr}");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(!stderr.contains("memory allocation"), "{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(
+        errors[0].contains("more than 100000 nodes (pairs of channel and node id)"),
+        "{stderr}"
+    );
+    let stdout = String::from_utf8(out.stdout).expect("utf-8");
+    let input: serde_json::Value =
+        serde_json::from_str(stdout.lines().last().expect("the report")).expect("JSON");
+    assert_eq!(input["type"], "input");
+    assert!(input["emcy"].as_u64().expect("count") > 100_000, "{input}");
+}

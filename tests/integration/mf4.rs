@@ -9,6 +9,7 @@
 //! and a damaged file.
 
 use std::io::Write;
+use std::path::Path;
 
 use emcy_decode::{Format, FrameKind, Record, TraceReader};
 use serde_json::Value;
@@ -261,4 +262,105 @@ fn many_spooled_dz_blocks_read_in_order_and_whole() {
     assert!(lines.windows(2).all(|w| w[0] < w[1]), "in record order");
     let (one, _, _) = run(&["--format", "ndjson", "-j", "1", path], b"");
     assert_eq!(one, out);
+}
+
+/// `fixtures/s300.mf4` with the length of its first `##<id>` block set to
+/// `len`, in a temporary file; and that block's offset.
+fn with_block_length(id: &[u8; 2], len: u64) -> (tempfile::TempDir, std::path::PathBuf, usize) {
+    let mut bytes = std::fs::read("fixtures/s300.mf4").unwrap();
+    let sig = [b'#', b'#', id[0], id[1]];
+    let at = bytes.windows(4).position(|w| w == sig).unwrap();
+    bytes[at + 8..at + 16].copy_from_slice(&len.to_le_bytes());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("long.mf4");
+    std::fs::write(&path, bytes).unwrap();
+    (dir, path, at)
+}
+
+/// A block whose length runs past the end of the file: before, it was
+/// skipped to the end in silence, with everything after it (`lines 0,
+/// malformed 0`, exit 0 even with `--strict`). Now it is malformed, with
+/// where, and reading goes on at the first block in it.
+#[test]
+fn a_block_longer_than_the_file_is_malformed_and_reading_goes_on() {
+    // The comment before the data block, claiming 1 MiB: every record is
+    // still read.
+    let (_dir, path, at) = with_block_length(b"MD", 1 << 20);
+    let out = emcy_decode()
+        .args(["--format", "ndjson", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains(&format!(
+            "long.mf4:1: ##MD block at byte offset {at} declares 1048576 bytes, but the file ends"
+        )),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(": read on from the block at byte offset"),
+        "{stderr}"
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let input: Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+    assert_eq!(
+        (
+            input["frames"].as_u64(),
+            input["emcy"].as_u64(),
+            input["malformed"].as_u64()
+        ),
+        (Some(19), Some(7), Some(1)),
+        "{input}"
+    );
+    emcy_decode()
+        .args(["--strict", path.to_str().unwrap()])
+        .assert()
+        .code(2);
+    // A channel group claiming 2^62 bytes: its group is lost, and said so.
+    let (_dir, path, at) = with_block_length(b"CG", 1 << 62);
+    let out = emcy_decode()
+        .args(["--strict", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains(&format!(
+            "##CG block at byte offset {at} declares 4611686018427387904 bytes, but the file ends"
+        )),
+        "{stderr}"
+    );
+}
+
+/// A file whose data comes before its metadata keeps that data in a
+/// temporary file: when none can be made, the message blames the
+/// temporary directory, not the trace (before: `error: s300.mf4: No such
+/// file or directory`, as if the trace were missing), gzip or not.
+#[test]
+fn without_a_temporary_directory_the_message_blames_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("gone");
+    let gz = dir.path().join("s300.mf4.gz");
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    enc.write_all(&std::fs::read("fixtures/s300.mf4").unwrap())
+        .unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    for trace in [Path::new("fixtures/s300.mf4"), gz.as_path()] {
+        let out = emcy_decode()
+            .env("TMPDIR", &missing)
+            .arg(trace)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{}", trace.display());
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            stderr.contains(&format!(
+                "{}: cannot create a temporary file in {} (TMPDIR) for the MF4 data written \
+                 before its metadata: No such file or directory",
+                trace.display(),
+                missing.display()
+            )),
+            "{stderr}"
+        );
+    }
 }

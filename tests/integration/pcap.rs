@@ -365,3 +365,83 @@ fn a_followed_capture_prints_events_as_it_grows() {
     let notes: Vec<String> = err.try_iter().collect();
     assert!(!notes.iter().any(|n| n.contains("line")), "{notes:?}");
 }
+
+/// `--follow` on a libpcap capture whose writer starts again (a restarted
+/// tcpdump truncates the file and writes a new 24-byte header; `-C`/`-G`
+/// rotation renames it and starts a new one). Before, the new header was
+/// read as a record and the next record's time as a captured length
+/// ("declares 1700000000 captured bytes"): every packet of the new file
+/// was skipped. Now the header starts the new file over, with a note.
+#[cfg(unix)]
+fn follow_a_capture_started_again(start_again: fn(&std::path::Path, &[u8])) {
+    use crate::live::{WAIT, exit_within_wait, interrupt, lines_of, spawn};
+
+    let whole = std::fs::read("fixtures/s300.pcap").expect("fixture");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("live.pcap");
+    std::fs::write(&path, &whole).expect("write");
+    let mut child = spawn(&[
+        "--follow",
+        "--format",
+        "ndjson",
+        path.to_str().expect("utf-8"),
+    ]);
+    let out = lines_of(child.stdout.take().expect("stdout"));
+    let err = lines_of(child.stderr.take().expect("stderr"));
+    let mut objects: Vec<Value> = Vec::new();
+    let wait_emcys = |n: usize, objects: &mut Vec<Value>| {
+        while objects.iter().filter(|o| o["type"] == "emcy").count() < n {
+            let line = out.recv_timeout(WAIT).unwrap_or_else(|_| {
+                panic!(
+                    "{n} EMCYs never came: {objects:?}, stderr {:?}",
+                    err.try_iter().collect::<Vec<_>>()
+                )
+            });
+            objects.push(serde_json::from_str(&line).expect("JSON"));
+        }
+    };
+    wait_emcys(7, &mut objects);
+    // The new capture's packets are those of the first 100 s later (the
+    // same bytes at the same place would be no truncation to see).
+    let mut later = whole.clone();
+    let mut at = 24;
+    while at + 16 <= later.len() {
+        let secs = u32::from_le_bytes(later[at..at + 4].try_into().expect("4 bytes")) + 100;
+        later[at..at + 4].copy_from_slice(&secs.to_le_bytes());
+        at += 16 + u32::from_le_bytes(later[at + 8..at + 12].try_into().expect("4 bytes")) as usize;
+    }
+    start_again(&path, &later);
+    wait_emcys(14, &mut objects);
+    interrupt(&child);
+    assert_eq!(exit_within_wait(&mut child, "--follow"), Some(130));
+    objects.extend(out.iter().map(|l| serde_json::from_str(&l).expect("JSON")));
+    let input = objects.last().expect("the input object");
+    assert_eq!(input["type"], "input");
+    assert_eq!(
+        (input["frames"].as_u64(), input["malformed"].as_u64()),
+        (Some(38), Some(0)),
+        "{input}"
+    );
+    let notes: Vec<String> = err.iter().collect();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("a new pcap file header at byte 598")),
+        "{notes:?}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn a_followed_capture_truncated_by_a_restarted_writer_is_read_on_from_its_new_header() {
+    follow_a_capture_started_again(|path, whole| std::fs::write(path, whole).expect("rewrite"));
+}
+
+#[cfg(unix)]
+#[test]
+fn a_followed_capture_rotated_to_a_new_file_is_read_on_from_its_new_header() {
+    follow_a_capture_started_again(|path, whole| {
+        std::fs::rename(path, path.with_extension("pcap.1")).expect("rename");
+        std::fs::write(path, whole).expect("new file");
+    });
+}

@@ -265,3 +265,58 @@ proptest! {
         fuzzing::trc(&text);
     }
 }
+
+/// A start time that cannot be a time: before, the header line was taken
+/// for a comment while the format was still being detected, and every time
+/// became seconds since the start without a word. Now the line is
+/// malformed, with its line number, and `--strict` fails.
+#[test]
+fn a_start_time_that_is_no_time_is_a_malformed_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for bad in ["99999999999999", "999999999", "x"] {
+        let path = dir.path().join("start.trc");
+        let text = std::fs::read_to_string("fixtures/edge.trc")
+            .expect("fixture")
+            .replace(";$STARTTIME=45244.925", &format!(";$STARTTIME={bad}"));
+        std::fs::write(&path, text).expect("write");
+        let out = crate::support::emcy_decode()
+            .args(["--format", "ndjson"])
+            .arg(&path)
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8(out.stderr).expect("utf-8");
+        assert!(
+            stderr.contains(&format!(
+                "start.trc:2: '{bad}' is not a start time in days (since 1899-12-30, up to the \
+                 year 9999): times are seconds since the start of the measurement"
+            )),
+            "{bad}: {stderr}"
+        );
+        let text = String::from_utf8(out.stdout).expect("utf-8");
+        let input: serde_json::Value =
+            serde_json::from_str(text.lines().last().expect("input")).expect("JSON");
+        // The fixture's own malformed line, and this one.
+        assert_eq!(input["malformed"], 2, "{bad}: {input}");
+        assert_eq!(
+            input["first_time_text"], "80.000000",
+            "{bad}: since the start"
+        );
+    }
+    // The start time on the first line, before anything says TRC (a 1.0
+    // file has no `$FILEVERSION`): the line tells the format, and is still
+    // reported.
+    let path = dir.path().join("first.trc");
+    let text = std::fs::read_to_string("fixtures/s300.v1_0.trc").expect("fixture");
+    std::fs::write(&path, format!(";$STARTTIME=99999999999999\n{text}")).expect("write");
+    let out = crate::support::emcy_decode()
+        .args(["--strict"])
+        .arg(&path)
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).expect("utf-8");
+    assert!(
+        stderr.contains("first.trc:1: '99999999999999' is not a start time in days"),
+        "{stderr}"
+    );
+}

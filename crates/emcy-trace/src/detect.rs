@@ -371,6 +371,10 @@ impl Detector {
 
     fn parse_undecided<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         let mut skipped = false;
+        // A line that tells its format (a PEAK `;$STARTTIME=`) but that the
+        // format cannot read: reported, even if another format would take
+        // it for a comment.
+        let mut told = None;
         for (i, parser) in self.parsers.iter_mut().enumerate() {
             match parser.parse(line, interest) {
                 Parsed::Frame(frame) => {
@@ -379,11 +383,20 @@ impl Detector {
                     return Parsed::Frame(frame);
                 }
                 Parsed::Skipped => skipped = true,
-                Parsed::Malformed(_) => {}
+                Parsed::Malformed(reason) => {
+                    if told.is_none() && parser.identified() {
+                        told = Some((i, reason));
+                    }
+                }
             }
         }
         if let Some(i) = self.parsers.iter().position(|p| p.identified()) {
             self.primary = Some(i);
+        }
+        if let Some((i, reason)) = told {
+            self.primary = Some(i);
+            self.reader = i;
+            return Parsed::Malformed(reason);
         }
         if skipped {
             Parsed::Skipped

@@ -161,7 +161,7 @@ impl Monitor for NmtMonitor {
                 } else {
                     // A producer that has not spoken is no node yet: the
                     // time waits for it.
-                    self.addressed(channel, producer).consumer_ms = Some(ms);
+                    self.addressed(channel, producer, nodes).consumer_ms = Some(ms);
                 }
             }
             sdo::GUARD_TIME if object.sub == 0 => {
@@ -576,7 +576,7 @@ impl NmtMonitor {
                 h.nmt.guard_request(line, &mut self.warnings);
             }
             None => {
-                let a = self.addressed(raw, node);
+                let a = self.addressed(raw, node, nodes);
                 a.sent_at(GUARD_REQUESTS, line);
                 a.guard_asked = Some(line);
             }
@@ -585,14 +585,17 @@ impl NmtMonitor {
     }
 
     /// The facts kept of what was sent to `node` on `raw` before it spoke.
-    fn addressed(&mut self, raw: &[u8], node: NodeId) -> &mut Addressed {
+    /// Each id kept counts against the node table's bound: a trace that
+    /// addresses a million silent ids on a million channels grows this
+    /// table as one that names them grows the node table.
+    fn addressed(&mut self, raw: &[u8], node: NodeId, nodes: &mut Nodes) -> &mut Addressed {
         // The channel's name is copied for the key on every call: only
         // commands to ids that never spoke come here, never a hot path.
-        self.addressed
-            .entry(raw.into())
-            .or_default()
-            .entry(node)
-            .or_default()
+        let ids = self.addressed.entry(raw.into()).or_default();
+        if !ids.contains_key(&node) {
+            nodes.count_kept_elsewhere();
+        }
+        ids.entry(node).or_default()
     }
 
     /// `node` on `raw` spoke for the first time to this monitor (its health
@@ -759,7 +762,8 @@ impl NmtMonitor {
             }
             if nodes.known(raw, node).is_none() {
                 // Addressed, not heard: no node (see `Addressed`).
-                self.addressed(raw, node).sent_at(command.index(), at.line);
+                self.addressed(raw, node, nodes)
+                    .sent_at(command.index(), at.line);
                 continue;
             }
             let slot = nodes.get(raw, node);

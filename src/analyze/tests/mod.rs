@@ -7,7 +7,8 @@
 //!   many threads read it;
 //! - [`threads`]: nor on how many threads the system would start;
 //! - [`active`]: an event's size does not grow with its node's active errors;
-//! - [`folds`]: nor on the reader folding steady heartbeats.
+//! - [`folds`]: nor on the reader folding steady heartbeats;
+//! - [`nodes_cap`]: the node table is bounded, and its end is an error.
 //!
 //! The random frames and their renderings are the integration tests'
 //! (`tests/integration/support/frames.rs`), one file compiled in both.
@@ -18,5 +19,6 @@ mod frames;
 mod active;
 mod conservation;
 mod folds;
+mod nodes_cap;
 mod parallel;
 mod threads;

@@ -500,6 +500,34 @@ fn parse_dcf(s: &str) -> Result<(NodeId, PathBuf), String> {
     emcy_decode::canopen::dcf::parse_option(s)
 }
 
+/// A usable DCF's problems, one `warning:` line each with its file and
+/// line, and how many were not shown: a value that is no number is left out
+/// (a PDO's COB-ID then stays the predefined one), which must not pass
+/// unsaid. Written before any trace is read; a failing stderr does not stop
+/// the run.
+fn warn_dcf_problems(path: &std::path::Path, dcf: &emcy_decode::canopen::dcf::Dcf) {
+    use std::io::Write;
+    let mut err = std::io::stderr().lock();
+    let shown = path.display().to_string();
+    let name = emcy_decode::text::printable(&shown);
+    for p in &dcf.problems {
+        let _ = writeln!(
+            err,
+            "warning: --dcf {name}:{}: {}",
+            p.line,
+            emcy_decode::text::printable(&p.reason)
+        );
+    }
+    let more = dcf.problem_count.saturating_sub(dcf.problems.len() as u64);
+    if more > 0 {
+        let _ = writeln!(
+            err,
+            "warning: --dcf {name}: {more} more problems not shown ({} in all)",
+            dcf.problem_count
+        );
+    }
+}
+
 impl DriveArgs {
     /// Sets the drive options: DCFs read here (a missing or unreadable one
     /// is an error before any trace is read).
@@ -521,6 +549,7 @@ impl DriveArgs {
                         .unwrap_or_default()
                 );
             }
+            warn_dcf_problems(path, &dcf);
             opts.dcf.push((*node, dcf));
         }
         opts.assume_cia402_pdo = self.assume_cia402_pdo;

@@ -30,7 +30,7 @@
 
 use std::io::{self, Read};
 
-use crate::read::read_full;
+use crate::read::{read_full, read_until_stopped};
 use crate::time::{SECS_PER_DAY, days_from_civil};
 use crate::{
     Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed, Payload,
@@ -147,6 +147,10 @@ pub struct BlfReader<R> {
     /// Look for the next `LOBJ` instead of expecting one at `pos`.
     resync: bool,
     eof: bool,
+    /// A cancel cut the input (`--follow`, a live pipe, then Ctrl-C): the
+    /// objects read are reported to the end as at the end of a file, then
+    /// this error; an object the stop cut is not reported.
+    stopped: Option<io::Error>,
     /// The warning of the last frame returned, until taken.
     warning: Option<Reason>,
     channel: NumberedChannel,
@@ -202,6 +206,7 @@ impl<R: Read> BlfReader<R> {
             cut: None,
             resync: false,
             eof: false,
+            stopped: None,
             warning: None,
             channel: NumberedChannel::default(),
         })
@@ -221,7 +226,7 @@ impl<R: Read> BlfReader<R> {
                 Some(o) => o,
                 None if self.eof => match self.leftover() {
                     Some(o) => o,
-                    None => return Ok(None),
+                    None => return self.stopped.take().map_or(Ok(None), Err),
                 },
                 None => match self.top()? {
                     Some(o) => o,
@@ -346,7 +351,7 @@ impl<R: Read> BlfReader<R> {
         self.pos = 0;
         self.cut = None;
         self.pad = None;
-        if rest == 0 || self.resync {
+        if rest == 0 || self.resync || self.stopped.is_some() {
             return None;
         }
         Some(Object::Malformed(
@@ -367,6 +372,9 @@ impl<R: Read> BlfReader<R> {
         }
         if got < BASE_HEADER {
             self.eof = true;
+            if self.stopped.is_some() {
+                return Ok(None);
+            }
             return Ok(Some(Object::Malformed(
                 format!("the file ends inside an object header at byte {at}").into(),
             )));
@@ -393,6 +401,9 @@ impl<R: Read> BlfReader<R> {
         let got = self.read(&mut body)?;
         if got < body.len() {
             self.eof = true;
+            if self.stopped.is_some() {
+                return Ok(None);
+            }
             return Ok(Some(Object::Malformed(
                 format!(
                     "the file ends inside the object at byte {at} ({} of {} bytes read)",
@@ -503,7 +514,13 @@ impl<R: Read> BlfReader<R> {
             self.back.drain(..k);
             n = k;
         }
-        n += read_full(&mut self.input, buf.get_mut(n..).unwrap_or_default())?;
+        // After a stop, nothing more is read: the bytes held are the end.
+        if self.stopped.is_none() {
+            let (got, stopped) =
+                read_until_stopped(&mut self.input, buf.get_mut(n..).unwrap_or_default())?;
+            n += got;
+            self.stopped = stopped;
+        }
         self.offset += n as u64;
         Ok(n)
     }
@@ -1001,6 +1018,52 @@ mod tests {
                 !got.iter().any(|g| matches!(g, Got::Malformed(_))),
                 "{got:?}"
             );
+        }
+    }
+
+    /// `bytes`, then the error of a cancel (Ctrl-C under `--follow`).
+    struct ThenCancelled<'a>(&'a [u8]);
+
+    impl io::Read for ThenCancelled<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            if self.0.is_empty() {
+                return Err(crate::cancel::cancelled());
+            }
+            let n = self.0.read(buf)?;
+            Ok(n)
+        }
+    }
+
+    /// A cancel after the whole file: every object, as at the end of the
+    /// file (the last container was lost waiting for the bytes after its
+    /// padding), then the cancel's error; an object it cut is not reported.
+    #[test]
+    fn a_cancel_after_the_last_container_loses_nothing() {
+        let mut stream = emcy(0x4310);
+        stream.extend(emcy(0x0000));
+        let whole = file(&container(&stream));
+        let mut r = BlfReader::new(ThenCancelled(&whole)).expect("a BLF header");
+        let mut frames = 0;
+        let err = loop {
+            match r.next_object() {
+                Ok(Some(Parsed::Frame(_))) => frames += 1,
+                Ok(Some(_)) => {}
+                Ok(None) => panic!("the cancel is not the end of the file"),
+                Err(e) => break e,
+            }
+        };
+        assert_eq!(frames, 2);
+        assert!(crate::cancel::is_cancelled(&err), "{err}");
+        // Cut inside the container: no malformed object for the cut.
+        let cut = &whole[..whole.len() - 10];
+        let mut r = BlfReader::new(ThenCancelled(cut)).expect("a BLF header");
+        loop {
+            match r.next_object() {
+                Ok(Some(Parsed::Malformed(m))) => panic!("{m}"),
+                Ok(Some(_)) => {}
+                Ok(None) => panic!("the cancel is not the end of the file"),
+                Err(e) => break assert!(crate::cancel::is_cancelled(&e), "{e}"),
+            }
         }
     }
 

@@ -261,8 +261,10 @@ impl LineParser for BusmasterParser {
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         let t = trim_start(line);
         if let Some(header) = t.strip_prefix(b"***") {
-            self.header(header);
-            return Parsed::Skipped;
+            return match self.header(header) {
+                Ok(()) => Parsed::Skipped,
+                Err(reason) => Parsed::Malformed(reason),
+            };
         }
         if is_blank(t) || t == b"\r" {
             return Parsed::Skipped;
@@ -418,8 +420,10 @@ struct Common<'a> {
 type Failed = (Option<Written>, Reason);
 
 impl BusmasterParser {
-    /// A `***` line (the `***` removed): session boundaries and settings.
-    fn header(&mut self, header: &[u8]) {
+    /// A `***` line (the `***` removed): session boundaries and settings;
+    /// why a start date cannot be read (the line is then malformed: the
+    /// session's times are read without a date, which must not pass unsaid).
+    fn header(&mut self, header: &[u8]) -> Result<(), Reason> {
         let text = header.strip_suffix(b"\r").unwrap_or(header);
         let text = crate::trim_end(text);
         let text = text.strip_suffix(b"***").unwrap_or(text);
@@ -432,7 +436,7 @@ impl BusmasterParser {
             // read every such line, and so holds the same start.
             self.start = None;
             self.dates = self.dates.saturating_add(1);
-            return;
+            return Ok(());
         }
         match text {
             b"[START LOGGING SESSION]" => self.new_session(),
@@ -453,11 +457,21 @@ impl BusmasterParser {
                     self.protocol = Protocol::Other;
                 } else if let Some(when) = text.strip_prefix(b"START DATE AND TIME") {
                     // An unreadable date leaves the session without one.
-                    self.start = start_date(trim_start(when));
+                    let when = trim_start(when);
+                    self.start = start_date(when);
                     self.dates = self.dates.saturating_add(1);
+                    if self.start.is_none() {
+                        return Err(format!(
+                            "'{}' is not a start date and time (d:m:yyyy h:m:s:ms, from 1970 \
+                             to 9999): the session's system times are seconds since midnight",
+                            show(when)
+                        )
+                        .into());
+                    }
                 }
             }
         }
+        Ok(())
     }
 
     /// The shape BUSMASTER writes for a data frame, read in one pass

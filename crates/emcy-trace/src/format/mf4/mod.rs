@@ -69,7 +69,7 @@ use std::collections::{HashMap, VecDeque};
 use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
-use crate::read::read_full;
+use crate::read::{read_full, read_until_stopped};
 use crate::{
     Counted, Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed,
     Payload, Reason, Timestamp,
@@ -83,6 +83,12 @@ pub use block::is_magic;
 pub const MAX_META: usize = 64 * 1024 * 1024;
 /// Largest metadata block kept.
 const MAX_META_BLOCK: u64 = 16 * 1024 * 1024;
+/// The most the temporary file of data blocks that wait for their
+/// metadata may hold. Real files written data first (CANedge finalized,
+/// asammdf, python-can) are split at tens to hundreds of MB; a gzip input
+/// of a few MB can inflate to anything, and the temporary directory is
+/// often memory (tmpfs), so it is bounded.
+pub const MAX_SPOOL: u64 = 4 << 30;
 /// Largest record (a VLSD record's length field is 32 bits).
 pub const MAX_RECORD: usize = 16 * 1024 * 1024;
 /// VLSD records of a group kept for the records that point back to them
@@ -201,6 +207,12 @@ struct Input<R> {
     at: usize,
     offset: u64,
     eof: bool,
+    /// A cancel cut the input (`--follow`, a live pipe, then Ctrl-C): it
+    /// ends there, as a file ends, so what was read is decoded (the spooled
+    /// blocks too: data written before its metadata, as CANedge, asammdf
+    /// and python-can write, would otherwise all be lost), then this error
+    /// comes after the last record. A block the stop cut is not reported.
+    stopped: Option<io::Error>,
 }
 
 impl<R: Read> Read for Input<R> {
@@ -219,8 +231,12 @@ impl<R: Read> Input<R> {
             }
             self.at += n;
             n
+        } else if self.stopped.is_some() {
+            0
         } else {
-            read_full(&mut self.inner, buf)?
+            let (n, stopped) = read_until_stopped(&mut self.inner, buf)?;
+            self.stopped = stopped;
+            n
         };
         if n == 0 && !buf.is_empty() {
             self.eof = true;
@@ -250,6 +266,19 @@ impl<R: Read> Input<R> {
         self.eof = false;
     }
 
+    /// Skips `n` bytes, keeping the first `keep` of them in `kept`; how
+    /// many there were.
+    fn skip_keeping(&mut self, n: u64, keep: u64, kept: &mut Vec<u8>) -> io::Result<u64> {
+        let first = n.min(keep) as usize;
+        kept.resize(first, 0);
+        let got = self.full(kept)?;
+        kept.truncate(got);
+        if got < first {
+            return Ok(got as u64);
+        }
+        Ok(got as u64 + self.skip(n - first as u64)?)
+    }
+
     /// Skips `n` bytes; how many there were.
     fn skip(&mut self, n: u64) -> io::Result<u64> {
         let mut left = n;
@@ -270,6 +299,8 @@ impl<R: Read> Input<R> {
 struct Spool {
     file: File,
     end: u64,
+    /// The most it may hold ([`MAX_SPOOL`]).
+    limit: u64,
     /// DT and DZ blocks in file order: (block offset, kind, position, length).
     items: Vec<(u64, [u8; 2], u64, u64)>,
     /// SD blocks (inflated when zipped): block offset -> (position, length).
@@ -277,16 +308,40 @@ struct Spool {
 }
 
 impl Spool {
-    fn new() -> io::Result<Spool> {
+    fn new(limit: u64) -> io::Result<Spool> {
+        // The error names the temporary directory: it is what failed, and
+        // the caller puts the trace's name in front of the message.
+        let file = tempfile::tempfile().map_err(|e| {
+            io::Error::new(
+                e.kind(),
+                format!(
+                    "cannot create a temporary file in {} (TMPDIR) for the MF4 data written \
+                     before its metadata: {e}",
+                    std::env::temp_dir().display()
+                ),
+            )
+        })?;
         Ok(Spool {
-            file: tempfile::tempfile()?,
+            file,
             end: 0,
+            limit,
             items: Vec::new(),
             sd: HashMap::new(),
         })
     }
 
     fn append(&mut self, bytes: &[u8]) -> io::Result<()> {
+        if self.end.saturating_add(bytes.len() as u64) > self.limit {
+            let limit = if self.limit.is_multiple_of(1 << 20) {
+                format!("{} MiB", self.limit >> 20)
+            } else {
+                format!("{} bytes", self.limit)
+            };
+            return Err(io::Error::other(format!(
+                "the MF4 data written before its metadata (kept in a temporary file until the \
+                 metadata comes) is over {limit}: not read further"
+            )));
+        }
         self.file.seek(SeekFrom::Start(self.end))?;
         self.file.write_all(bytes)?;
         self.end += bytes.len() as u64;
@@ -360,6 +415,8 @@ pub struct Mf4Reader<R> {
     owners_stale: bool,
     states: Vec<DgState>,
     spool: Option<Spool>,
+    /// The most the spool may hold ([`MAX_SPOOL`]; smaller in tests).
+    spool_limit: u64,
     /// The spooled DZ blocks inflated ahead on another thread, while they
     /// are replayed ([`ahead`]).
     #[cfg(unix)]
@@ -407,6 +464,7 @@ impl<R: Read> Mf4Reader<R> {
             at: 0,
             offset: 0,
             eof: false,
+            stopped: None,
         };
         let mut id = [0u8; ID_LEN];
         let got = input.full(&mut id)?;
@@ -466,6 +524,7 @@ impl<R: Read> Mf4Reader<R> {
             owners_stale: false,
             states: Vec::new(),
             spool: None,
+            spool_limit: MAX_SPOOL,
             #[cfg(unix)]
             ahead: None,
             spooling: false,
@@ -572,11 +631,10 @@ impl<R: Read> Mf4Reader<R> {
                 }));
             }
             if self.finished {
-                return Ok(if notes {
-                    self.take_note().map(Next::Note)
-                } else {
-                    None
-                });
+                if notes && let Some(note) = self.take_note() {
+                    return Ok(Some(Next::Note(note)));
+                }
+                return self.input.stopped.take().map_or(Ok(None), Err);
             }
             self.step(interest)?;
         }
@@ -636,7 +694,7 @@ impl<R: Read> Mf4Reader<R> {
         let n = self.input.full(&mut head)?;
         let got = head.get(..n).unwrap_or_default();
         if n < HEADER {
-            if got.iter().any(|b| *b != 0) {
+            if got.iter().any(|b| *b != 0) && self.input.stopped.is_none() {
                 self.queue.push_back(Out::Malformed(
                     format!("{n} bytes at byte offset {at} at the end are no MDF block").into(),
                 ));
@@ -660,13 +718,12 @@ impl<R: Read> Mf4Reader<R> {
                     .input
                     .full(bytes.get_mut(HEADER..).unwrap_or_default())?;
                 if (k as u64) < body {
-                    self.queue.push_back(Out::Malformed(
-                        format!(
-                            "{} block at byte offset {at} cut off by the end",
-                            id(&header)
-                        )
-                        .into(),
-                    ));
+                    if self.input.stopped.is_some() {
+                        return Ok(());
+                    }
+                    bytes.truncate(HEADER + k);
+                    bytes.drain(..HEADER);
+                    self.past_the_end(at, &header, k as u64, bytes);
                     return Ok(());
                 }
                 if self.meta.bytes + bytes.len() > MAX_META {
@@ -685,10 +742,62 @@ impl<R: Read> Mf4Reader<R> {
             }
             b"DT" | b"DZ" | b"SD" | b"DV" => self.data_block(at, header),
             _ => {
-                self.input.skip(body)?;
+                // Its first bytes are kept: should the file end inside it,
+                // its length was wrong, and the blocks after its real end
+                // are read from them.
+                let mut kept = Vec::new();
+                let got = self.input.skip_keeping(body, MAX_META_BLOCK, &mut kept)?;
+                if got < body && self.input.stopped.is_none() {
+                    self.past_the_end(at, &header, got, kept);
+                    return Ok(());
+                }
                 self.meta.read_up_to = self.input.offset;
                 Ok(())
             }
+        }
+    }
+
+    /// A block at `at` whose length runs past the end of the file (a
+    /// comment claiming 1 MiB in a file of 1.5 KB, a CG claiming 2^62
+    /// bytes): `got` bytes of its body were there, and `kept` holds the
+    /// first of them. Reading all of them as the block would swallow the
+    /// blocks after its real end in silence, so it is malformed, and reading
+    /// goes on at the first block header in what was kept.
+    fn past_the_end(&mut self, at: u64, header: &Header, got: u64, kept: Vec<u8>) {
+        let body_at = at + HEADER as u64;
+        let next = memchr::memmem::find_iter(&kept, b"##").find(|&p| {
+            kept.get(p..)
+                .and_then(Header::read)
+                .is_some_and(|h| h.sane())
+        });
+        let lost = got.saturating_sub(kept.len() as u64);
+        let then = match next {
+            Some(p) if lost == 0 => format!(
+                "read on from the block at byte offset {}",
+                body_at + p as u64
+            ),
+            Some(p) => format!(
+                "read on from the block at byte offset {} (the {lost} bytes after the first {} of it are not read)",
+                body_at + p as u64,
+                kept.len()
+            ),
+            None => format!("no block after it ({got} bytes not read)"),
+        };
+        self.queue.push_back(Out::Malformed(
+            format!(
+                "{} block at byte offset {at} declares {} bytes, but the file ends {got} bytes \
+                 into its body: {then}",
+                id(header),
+                header.len
+            )
+            .into(),
+        ));
+        match next {
+            Some(p) => {
+                self.input.unread(kept.get(p..).unwrap_or_default());
+                self.meta.read_up_to = body_at + p as u64;
+            }
+            None => self.meta.read_up_to = self.input.offset,
         }
     }
 
@@ -868,7 +977,7 @@ impl<R: Read> Mf4Reader<R> {
 
     fn spool(&mut self) -> io::Result<&mut Spool> {
         if self.spool.is_none() {
-            self.spool = Some(Spool::new()?);
+            self.spool = Some(Spool::new(self.spool_limit)?);
         }
         self.spool
             .as_mut()
@@ -909,9 +1018,11 @@ impl<R: Read> Mf4Reader<R> {
         self.zbuf = bytes;
         let n = n?;
         if (n as u64) < body {
-            self.queue.push_back(Out::Malformed(
-                format!("DZ block at byte offset {at} cut off by the end").into(),
-            ));
+            if self.input.stopped.is_none() {
+                self.queue.push_back(Out::Malformed(
+                    format!("DZ block at byte offset {at} cut off by the end").into(),
+                ));
+            }
             return Ok(false);
         }
         Ok(true)

@@ -381,6 +381,70 @@ fn dl_and_hl_lists_of_dt_and_dz_blocks_with_records_across_them() {
     assert_eq!(read(&sorted(true)).0, want);
 }
 
+/// `bytes`, then the error of a cancel (Ctrl-C under `--follow`).
+struct ThenCancelled<'a>(&'a [u8]);
+
+impl io::Read for ThenCancelled<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        if self.0.is_empty() {
+            return Err(crate::cancel::cancelled());
+        }
+        self.0.read(buf)
+    }
+}
+
+/// A cancel after the whole file, whose data comes before its metadata: the
+/// spooled data is decoded as at the end of the file (before, nothing was),
+/// then the cancel's error comes.
+#[test]
+fn a_cancel_after_data_before_its_metadata_loses_nothing() {
+    let bytes = sorted(true);
+    let mut r = Mf4Reader::new(ThenCancelled(&bytes)).expect("an MDF 4 file");
+    let mut frames = 0;
+    let err = loop {
+        match r.next_record() {
+            Ok(Some(Parsed::Frame(_))) => frames += 1,
+            Ok(Some(Parsed::Malformed(m))) => panic!("{m}"),
+            Ok(Some(_)) => {}
+            Ok(None) => panic!("the cancel is not the end of the file"),
+            Err(e) => break e,
+        }
+    };
+    assert_eq!(frames, 10);
+    assert!(crate::cancel::is_cancelled(&err), "{err}");
+}
+
+/// The temporary file of data waiting for its metadata is bounded: past
+/// the bound, reading stops with an error that says the bound (a gzip
+/// input of a few MB filled 1.18 GB of the temporary directory).
+#[test]
+fn the_spool_of_data_before_its_metadata_is_bounded() {
+    let bytes = sorted(true);
+    let read_with_limit = |limit: u64| {
+        let mut r = Mf4Reader::new(&bytes[..]).expect("an MDF 4 file");
+        r.spool_limit = limit;
+        let mut frames = 0;
+        loop {
+            match r.next_record() {
+                Ok(Some(Parsed::Frame(_))) => frames += 1,
+                Ok(Some(_)) => {}
+                Ok(None) => return Ok(frames),
+                Err(e) => return Err(e.to_string()),
+            }
+        }
+    };
+    assert_eq!(read_with_limit(MAX_SPOOL), Ok(10));
+    // The DT block's 30 bytes fit, the first DZ block does not.
+    assert_eq!(
+        read_with_limit(40),
+        Err(
+            "the MF4 data written before its metadata (kept in a temporary file until the \
+             metadata comes) is over 40 bytes: not read further"
+                .into()
+        )
+    );
+}
+
 #[test]
 fn times_exact_and_the_local_time_flag_is_noted() {
     let mut file = unsorted(b"UnFinMF ", 0x25, false, true, &three());

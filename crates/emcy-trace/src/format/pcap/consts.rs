@@ -66,6 +66,16 @@ pub(super) fn bom(shb: &[u8]) -> Option<Order> {
         .find(|o| o.u32(shb, 8) == Some(BOM))
 }
 
+/// The byte order and time unit (nanoseconds or not) of a pcap file header
+/// at `head`: one of the magics, then version 2.4 or older 2.x, as every
+/// writer since libpcap 0.4 puts there. A record whose time happened to
+/// match a magic has a fraction of a second where the version is.
+pub(super) fn file_header(head: &[u8]) -> Option<(Order, bool)> {
+    let magic = head.get(..4)?;
+    let &(_, order, nanos) = PCAP_MAGICS.iter().find(|(m, _, _)| m == magic)?;
+    (order.u16(head, 4)? == 2 && order.u16(head, 6)? <= 4).then_some((order, nanos))
+}
+
 pub(super) fn sane_block(len: usize) -> bool {
     (12..=MAX_BLOCK).contains(&len) && len.is_multiple_of(4)
 }

@@ -16,7 +16,7 @@ use crate::{Format, Frame, FrameSource, Interest, Next, Parsed, Timestamp};
 use super::clock::Clock;
 use super::consts::{
     BUFFER, CHANNEL, EPB, MAX_BLOCK, MAX_HELD, MAX_HELD_BYTES, MAX_PACKET, PCAP_MAGICS, PLAIN_RUN,
-    SAMPLE, bom, is_pcapng_block_type, sane_block,
+    SAMPLE, bom, file_header, is_pcapng_block_type, sane_block,
 };
 use super::counted::{Counted, Hot, RawTime};
 use super::decode::{Candidate, Decoder, Outcome};
@@ -634,9 +634,15 @@ impl<R: Read> PcapReader<R> {
 
     /// The next pcap record.
     fn read_record(&mut self, interest: Option<&Interest>) -> io::Result<Option<Item>> {
-        let at = self.stream.it().consumed() as u64;
+        let mut at = self.stream.it().consumed() as u64;
         if !self.fill(16)? {
             return Ok(self.cut_off("a packet record header", at, 16));
+        }
+        while self.restart_at_file_header(at)? {
+            at = self.stream.it().consumed() as u64;
+            if !self.fill(16)? {
+                return Ok(self.cut_off("a packet record header", at, 16));
+            }
         }
         let header = self.stream.it().data();
         let caplen = self.decoder.order.u32(header, 8).unwrap_or(0) as usize;
@@ -655,8 +661,14 @@ impl<R: Read> PcapReader<R> {
             return Ok(self.cut_off("the packet", at, need));
         }
         let it = self.stream.it();
-        let item = match it.next() {
-            Ok((_, PcapBlockOwned::Legacy(b))) => self.decoder.packet(
+        // In the decoder's byte order, not the crate reader's: a new file
+        // header (`restart_at_file_header`) may have changed it.
+        let parsed = match self.decoder.order {
+            Order::Little => pcap_parser::parse_pcap_frame(it.data()),
+            Order::Big => pcap_parser::parse_pcap_frame_be(it.data()),
+        };
+        let item = match parsed {
+            Ok((_, b)) => self.decoder.packet(
                 0,
                 Ts::Legacy {
                     secs: b.ts_sec,
@@ -666,13 +678,51 @@ impl<R: Read> PcapReader<R> {
                 b.origlen,
                 interest,
             ),
-            Ok(_) => Item::Skipped,
-            Err(e) => {
+            Err(pcap_parser::nom::Err::Error(e) | pcap_parser::nom::Err::Failure(e)) => {
                 Item::Malformed(format!("packet record at byte {at}: {}", describe(&e)).into())
             }
+            Err(pcap_parser::nom::Err::Incomplete(_)) => Item::Malformed(
+                format!("packet record at byte {at}: a field of it runs past its end").into(),
+            ),
         };
         it.consume_noshift(need);
         Ok(Some(item))
+    }
+
+    /// A pcap file header where a record should start: the file was
+    /// truncated or replaced under `--follow` (a restarted tcpdump writes a
+    /// new header), so reading goes on with the new file's byte order,
+    /// time unit and link type, after a note. Read as a record, the header
+    /// would be an empty packet from 2055 and its last 8 bytes the start of
+    /// a record whose captured length is the first packet's time: every
+    /// packet after it would be lost to the resync. pcapng needs none of
+    /// this, as a new section header is a block like any other.
+    fn restart_at_file_header(&mut self, at: u64) -> io::Result<bool> {
+        let magic = self.stream.it().data().get(..4).unwrap_or_default();
+        if !PCAP_MAGICS.iter().any(|(m, _, _)| m == magic) {
+            return Ok(false);
+        }
+        // Only now, as a followed file's last record may be shorter than a
+        // header and is not to wait for more.
+        if !self.fill(24)? {
+            return Ok(false);
+        }
+        let head = self.stream.it().data();
+        let Some((order, nanos)) = file_header(head) else {
+            return Ok(false);
+        };
+        let linktype = order.u32(head, 20).unwrap_or(0) & 0xFFFF;
+        self.stream.it().consume_noshift(24);
+        self.decoder.order = order;
+        self.decoder.nanos = nanos;
+        if let Some(interface) = self.decoder.interfaces.first_mut() {
+            interface.linktype = linktype as u16;
+        }
+        self.decoder.notes.push_back(format!(
+            "a new pcap file header at byte {at} (the file was truncated or replaced, as by a \
+             restarted capture): reading on with it"
+        ));
+        Ok(true)
     }
 
     /// The next pcapng block that is a line.
@@ -759,6 +809,9 @@ impl<R: Read> PcapReader<R> {
             for p in from..data.len() {
                 let rest = data.get(p..).unwrap_or_default();
                 let candidate = match self.format {
+                    // A record cut short by a truncation ends where the
+                    // new file's header starts.
+                    Format::Pcap if file_header(rest).is_some() => Candidate::Yes,
                     Format::Pcap => self.decoder.record_at(rest, end),
                     _ => self.decoder.block_at(rest, end),
                 };

@@ -729,6 +729,51 @@ fn a_pcap_record_too_long_to_be_one_is_skipped_to_the_next_record() {
     assert_eq!(got[2], frame("3.000000", "0", 0x81, &EMCY));
 }
 
+/// A followed capture truncated or replaced by a restarted writer: the new
+/// file's header where a record should be starts it over, in its own byte
+/// order, time unit and link type.
+#[test]
+fn a_new_file_header_in_the_stream_starts_a_new_file() {
+    let mut f = pcap_header(Order::Big, false, 227);
+    f.extend(record(Order::Big, 1, 0, &can(Order::Big, 0x81, &EMCY)));
+    let at = f.len();
+    f.extend(pcap_header(Order::Little, true, 113));
+    f.extend(record(
+        Order::Little,
+        1_700_000_000,
+        5,
+        &sll(0x0C, &can(Order::Little, 0x82, &EMCY)),
+    ));
+    let (got, notes) = read(&f);
+    assert_eq!(
+        got,
+        [
+            frame("1.000000", "0", 0x81, &EMCY),
+            frame("1700000000.000000005", "0", 0x82, &EMCY)
+        ]
+    );
+    assert_eq!(
+        notes,
+        [format!(
+            "a new pcap file header at byte {at} (the file was truncated or replaced, as by a \
+             restarted capture): reading on with it"
+        )]
+    );
+    // A file cut inside a record: the record is damage, and the resync
+    // stops at the new header.
+    let mut cut = pcap_header(Order::Little, false, 227);
+    let mut half = record(Order::Little, 1, 0, &can(Order::Big, 0x81, &EMCY));
+    half[8..12].copy_from_slice(&300_000u32.to_le_bytes());
+    cut.extend(&half[..20]);
+    cut.extend(pcap_header(Order::Little, false, 227));
+    cut.extend(record(Order::Little, 2, 0, &can(Order::Big, 0x82, &EMCY)));
+    let (got, notes) = read(&cut);
+    assert_eq!(got.len(), 2, "{got:?}");
+    assert!(malformed(&got[0]).contains("20 bytes skipped"), "{got:?}");
+    assert_eq!(got[1], frame("2.000000", "0", 0x82, &EMCY));
+    assert_eq!(notes.len(), 1, "{notes:?}");
+}
+
 #[test]
 fn a_truncated_file_reports_the_cut_packet() {
     let o = Order::Little;

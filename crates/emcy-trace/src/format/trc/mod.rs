@@ -174,6 +174,10 @@ pub struct TrcParser {
     start: Option<(u128, u8)>,
     /// Header lines that changed the state (the parallel reader's context).
     changes: u16,
+    /// A `;$FILEVERSION`, `;$STARTTIME` or `;$COLUMNS` line was read: only
+    /// PEAK writes them, so the file is a TRC before its first frame, and a
+    /// header it cannot read is reported rather than taken for a comment.
+    identified: bool,
 }
 
 impl TrcParser {
@@ -184,6 +188,7 @@ impl TrcParser {
             columns: Columns::V2_1,
             start: None,
             changes: 0,
+            identified: false,
         }
     }
 
@@ -208,6 +213,10 @@ impl LineParser for TrcParser {
     /// count of changes tells forks apart exactly (until it saturates).
     fn context(&self) -> Option<u8> {
         u8::try_from(self.changes).ok().filter(|c| *c < u8::MAX)
+    }
+
+    fn identified(&self) -> bool {
+        self.identified
     }
 
     #[inline]
@@ -253,6 +262,9 @@ const MAX_FIELDS: usize = 80;
 
 /// Days from 1899-12-30 (the TRC epoch) to 1970-01-01.
 const UNIX_EPOCH_DAY: u64 = 25569;
+/// Days from 1899-12-30 to 9999-12-31, the last day a start may be (as in
+/// spreadsheets, whose day count TRC uses).
+const LAST_DAY: u64 = 2_958_465;
 const ATTO: u128 = 1_000_000_000_000_000_000;
 
 impl TrcParser {
@@ -268,6 +280,9 @@ impl TrcParser {
         // `;$STARTTIME=39878.6772258947;` occurs (PEAK's own example).
         let value = crate::trim_end(trim_start(value));
         let value = value.strip_suffix(b";").unwrap_or(value);
+        if matches!(key, b"FILEVERSION" | b"STARTTIME" | b"COLUMNS") {
+            self.identified = true;
+        }
         match key {
             b"FILEVERSION" => {
                 let v = Version::parse(value).ok_or_else(|| {
@@ -547,7 +562,14 @@ fn dlc_to_len(dlc: u32) -> Option<u8> {
 /// `;$STARTTIME=` days since 1899-12-30 (decimal) to attoseconds since the
 /// Unix epoch and the digits they need; `None` before 1970.
 fn start_time(value: &[u8]) -> Result<Option<(u128, u8)>, Reason> {
-    let bad = || -> Reason { format!("'{}' is not a start time in days", show(value)).into() };
+    let bad = || -> Reason {
+        format!(
+            "'{}' is not a start time in days (since 1899-12-30, up to the year 9999): times are \
+             seconds since the start of the measurement",
+            show(value)
+        )
+        .into()
+    };
     let (int, frac) = match memchr::memchr(b'.', value) {
         Some(dot) => (&value[..dot], &value[dot + 1..]),
         None => (value, &b""[..]),
@@ -561,6 +583,11 @@ fn start_time(value: &[u8]) -> Result<Option<(u128, u8)>, Reason> {
     let days = crate::scan::decimal_u64(int);
     if days < UNIX_EPOCH_DAY {
         return Ok(None);
+    }
+    // A start after the year 9999 is no date any trace was written on, and
+    // no time could show it as one.
+    if days > LAST_DAY {
+        return Err(bad());
     }
     // frac < 10^18, so frac * 86400 * 10^(18 - n) < 86400 * 10^18: fits.
     let frac_atto =
