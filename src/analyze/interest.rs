@@ -79,8 +79,8 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
 ///
 /// Segments of segmented transfers never name an object, and their data
 /// bytes are never read as one: the SDO monitor takes a node's SDO ids out
-/// of the filter while it follows a transfer of its, and puts them back
-/// at its end ([`following_changed`](super::monitor)).
+/// of the filter while it follows a segmented transfer of an object some
+/// monitor learns from, and puts them back at its end.
 #[inline]
 fn sdo_frame_matters(id: u32, cmd: u8, index: Option<u16>) -> bool {
     let cs = cmd >> 5;
@@ -90,9 +90,10 @@ fn sdo_frame_matters(id: u32, cmd: u8, index: Option<u16>) -> bool {
     carries_index(id, cs) && index.is_some_and(learns_from)
 }
 
-/// A block transfer's segment 1 as the only one of its sub-block that is
-/// not the last; the last segments (bit 7 set) have command specifiers 4 to
-/// 7, most of which pass as block commands or aborts anyway.
+/// A sub-block's segment 1 when it is not the transfer's last: the block
+/// monitor learns from it where a sub-block begins (and a kept value fits
+/// in it). A last segment has bit 7 set, so command specifiers 4 to 7,
+/// which pass as aborts and block commands but for 7.
 const FIRST_BLOCK_SEGMENT: u8 = 0x01;
 
 /// Whether command specifier `cs` on SDO id `id` is an initiate or an
