@@ -110,13 +110,17 @@ impl Tally {
     /// What `self`, a block's whole tally, counted after `part`, the
     /// tally up to a cut.
     fn after(self, part: Tally) -> Tally {
+        // The part's counts were taken from the same counters earlier, so
+        // none is larger; saturating all the same.
         Tally {
-            plain_frames: self.plain_frames - part.plain_frames,
-            skipped: self.skipped - part.skipped,
+            plain_frames: self.plain_frames.saturating_sub(part.plain_frames),
+            skipped: self.skipped.saturating_sub(part.skipped),
             dropped: self.dropped.saturating_sub(part.dropped),
-            annotated: self.annotated - part.annotated,
-            unreported: self.unreported - part.unreported,
-            unreported_warnings: self.unreported_warnings - part.unreported_warnings,
+            annotated: self.annotated.saturating_sub(part.annotated),
+            unreported: self.unreported.saturating_sub(part.unreported),
+            unreported_warnings: self
+                .unreported_warnings
+                .saturating_sub(part.unreported_warnings),
         }
     }
 }
@@ -363,6 +367,7 @@ impl Recorder {
 }
 
 impl<E: Write> Consumer<'_, '_, E> {
+    /// Counts what a worker counted of a block's lines besides records.
     fn add_tally(&mut self, t: Tally) {
         self.counts.frames += t.plain_frames;
         self.counts.skipped += t.skipped;
@@ -372,13 +377,19 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.diags.suppressed += t.unreported + t.unreported_warnings;
     }
 
+    /// Takes back what [`Consumer::add_tally`] added of a block's lines
+    /// that are to be read again.
     fn take_tally(&mut self, t: Tally) {
-        self.counts.frames -= t.plain_frames;
-        self.counts.skipped -= t.skipped;
-        self.counts.dropped = self.counts.dropped.saturating_sub(t.dropped);
-        self.counts.annotated -= t.annotated;
-        self.counts.malformed -= t.unreported;
-        self.diags.suppressed -= t.unreported + t.unreported_warnings;
+        let c = &mut self.counts;
+        c.frames = c.frames.saturating_sub(t.plain_frames);
+        c.skipped = c.skipped.saturating_sub(t.skipped);
+        c.dropped = c.dropped.saturating_sub(t.dropped);
+        c.annotated = c.annotated.saturating_sub(t.annotated);
+        c.malformed = c.malformed.saturating_sub(t.unreported);
+        self.diags.suppressed = self
+            .diags
+            .suppressed
+            .saturating_sub(t.unreported + t.unreported_warnings);
     }
 
     /// Replays a worker's block result as if its lines had been read here,
