@@ -190,3 +190,62 @@ fn the_first_example_output_is_what_the_binary_prints() {
         from = at + run.len();
     }
 }
+
+/// The README's test command is the one CI runs: a new user who runs it
+/// builds against the same Cargo.lock versions the CI tested.
+#[test]
+fn the_readme_test_command_is_the_one_ci_runs() {
+    let text = readme();
+    let commands: Vec<String> = blocks(&text, "sh")
+        .into_iter()
+        .flatten()
+        .filter(|l| l.starts_with("cargo test"))
+        .collect();
+    assert!(!commands.is_empty(), "no `cargo test` in the README");
+    let ci = std::fs::read_to_string(".ci/run").expect(".ci/run");
+    for command in commands {
+        assert!(
+            ci.lines().any(|l| l.trim() == command.trim()),
+            "`{command}` is not a line of .ci/run"
+        );
+    }
+    for line in [
+        "cargo fmt --check",
+        "cargo clippy --all-targets -- -D warnings",
+    ] {
+        assert!(
+            ci.lines().any(|l| l.trim() == line),
+            ".ci/run lacks `{line}`"
+        );
+    }
+}
+
+/// Every install line installs from the lock file: without `--locked`,
+/// `cargo install` resolves the newest compatible versions, which no test
+/// ran with.
+#[test]
+fn every_install_line_uses_the_lock_file() {
+    let mut docs = vec![PathBuf::from("README.md")];
+    let mut dirs = vec![PathBuf::from("docs")];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).expect("docs dir").flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "md") {
+                docs.push(path);
+            }
+        }
+    }
+    for doc in docs {
+        let text = std::fs::read_to_string(&doc).expect("doc");
+        for (i, line) in text.lines().enumerate() {
+            assert!(
+                !line.contains("cargo install --path"),
+                "{}:{}: `cargo install` without --locked: {line}",
+                doc.display(),
+                i + 1
+            );
+        }
+    }
+}
