@@ -1,7 +1,7 @@
-//! The README is true: every option of every command's `--help` is in its
-//! option tables, every example command in its `sh` blocks runs on the
-//! repository's fixtures, and the first example's output is what the
-//! binary prints.
+//! The README and the guide (docs/guide/) are true: every option of every
+//! command's `--help` is in their option tables, every example command in
+//! their `sh` blocks runs on the repository's fixtures, and the README's
+//! first example output is what the binary prints.
 
 use std::path::{Path, PathBuf};
 
@@ -9,6 +9,16 @@ use crate::support::emcy_decode;
 
 fn readme() -> String {
     std::fs::read_to_string("README.md").expect("README.md")
+}
+
+/// The README and every page of the guide, one after another: the manual
+/// that the README's front door leads to is held to the same checks.
+fn readme_and_guide() -> String {
+    crate::support::documentation()
+        .iter()
+        .map(|path| std::fs::read_to_string(path).expect("documentation page"))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// The bodies of the README's fenced blocks of `lang`, each as its lines.
@@ -57,7 +67,7 @@ fn options(subcommand: Option<&str>) -> Vec<String> {
 
 #[test]
 fn every_option_of_every_command_is_in_the_readme_option_tables() {
-    let text = readme();
+    let text = readme_and_guide();
     let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| `")).collect();
     let mut missing = Vec::new();
     for sub in [
@@ -89,7 +99,7 @@ fn every_option_of_every_command_is_in_the_readme_option_tables() {
     }
     assert!(
         missing.is_empty(),
-        "not in a README option table: {missing:?}"
+        "not in an option table of the README or the guide: {missing:?}"
     );
 }
 
@@ -134,7 +144,7 @@ fn needs_more_than_fixtures(line: &str) -> bool {
 
 #[test]
 fn every_example_command_runs_on_the_fixtures() {
-    let text = readme();
+    let text = readme_and_guide();
     let dir = workdir();
     let mut ran = 0;
     for block in blocks(&text, "sh") {
@@ -225,18 +235,11 @@ fn the_readme_test_command_is_the_one_ci_runs() {
 /// ran with.
 #[test]
 fn every_install_line_uses_the_lock_file() {
-    let mut docs = vec![PathBuf::from("README.md")];
-    let mut dirs = vec![PathBuf::from("docs")];
-    while let Some(dir) = dirs.pop() {
-        for entry in std::fs::read_dir(&dir).expect("docs dir").flatten() {
-            let path = entry.path();
-            if path.is_dir() {
-                dirs.push(path);
-            } else if path.extension().is_some_and(|e| e == "md") {
-                docs.push(path);
-            }
-        }
-    }
+    let mut docs = vec![
+        PathBuf::from("docs/fleet.md"),
+        PathBuf::from("CONTRIBUTING.md"),
+    ];
+    docs.extend(crate::support::documentation());
     for doc in docs {
         let text = std::fs::read_to_string(&doc).expect("doc");
         for (i, line) in text.lines().enumerate() {
