@@ -271,3 +271,90 @@ fn every_install_line_uses_the_lock_file() {
         }
     }
 }
+
+/// GitHub's anchor of a heading: lower case, punctuation other than `-`
+/// and `_` dropped, spaces as `-`.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | ' '))
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The text of a Markdown file outside its fenced code blocks.
+fn prose(text: &str) -> Vec<&str> {
+    let mut fenced = false;
+    text.lines()
+        .filter(|l| {
+            if l.starts_with("```") {
+                fenced = !fenced;
+                return false;
+            }
+            !fenced
+        })
+        .collect()
+}
+
+/// Every relative link of the README, the guide and the contributor
+/// documents reaches a file, and a `#fragment` a heading of it: the manual
+/// is split over pages, and a section that moves must take its links along.
+#[test]
+fn every_link_between_the_documents_resolves() {
+    let mut docs = crate::support::documentation();
+    docs.extend(
+        [
+            "ARCHITECTURE.md",
+            "CONTRIBUTING.md",
+            "docs/fleet.md",
+            "docs/performance.md",
+        ]
+        .map(PathBuf::from),
+    );
+    let mut broken = Vec::new();
+    let mut checked = 0;
+    for doc in &docs {
+        let text = std::fs::read_to_string(doc).expect("document");
+        let dir = doc.parent().expect("a directory");
+        for line in prose(&text) {
+            for (at, _) in line.match_indices("](") {
+                let rest = &line[at + 2..];
+                let Some(end) = rest.find(')') else { continue };
+                let target = &rest[..end];
+                if target.contains("://") || target.starts_with("mailto:") {
+                    continue;
+                }
+                let (path, fragment) = target.split_once('#').unwrap_or((target, ""));
+                let file = if path.is_empty() {
+                    doc.clone()
+                } else {
+                    dir.join(path)
+                };
+                checked += 1;
+                if !file.exists() {
+                    broken.push(format!("{}: {target}: no such file", doc.display()));
+                    continue;
+                }
+                if fragment.is_empty() || file.extension().is_none_or(|e| e != "md") {
+                    continue;
+                }
+                let page = std::fs::read_to_string(&file).expect("linked page");
+                let known = prose(&page)
+                    .into_iter()
+                    .filter_map(|l| {
+                        l.trim_start_matches('#')
+                            .strip_prefix(' ')
+                            .filter(|_| l.starts_with('#'))
+                    })
+                    .any(|h| anchor(h) == fragment);
+                if !known {
+                    broken.push(format!("{}: {target}: no such heading", doc.display()));
+                }
+            }
+        }
+    }
+    assert!(checked >= 20, "only {checked} links found");
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+}
