@@ -3,8 +3,14 @@
 as a fleet's daily run would on its traces, and prints their results (the
 outputs shown in docs/fleet.md come from this script).
 
-Needs the release binary (cargo build --release) and DuckDB's Python
-package (pip install duckdb). Run from the repository root:
+Needs two things the tests do not:
+- the release binary, target/release/emcy-decode (cargo build --release
+  --locked): a debug build decodes the fixtures too, but this script runs
+  the binary at that path only, as a fleet's image would;
+- DuckDB's Python package (pip install duckdb), which runs the queries.
+Without either it says which on one line and exits 2. Run from the
+repository root:
+    cargo build --release --locked && pip install duckdb
     python3 scripts/fleet_queries.py
 """
 
@@ -15,7 +21,17 @@ import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
-import duckdb
+
+def missing(what):
+    """Says what the script needs on one line and exits 2, as a usage error."""
+    print(f"fleet_queries: needs {what}", file=sys.stderr)
+    sys.exit(2)
+
+
+try:
+    import duckdb
+except ImportError:
+    missing("DuckDB's Python package: pip install duckdb")
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BINARY = os.path.join(ROOT, "target", "release", "emcy-decode")
@@ -56,6 +72,8 @@ def decode(trace, out):
 
 
 def main():
+    if not os.access(BINARY, os.X_OK):
+        missing(f"the release binary {BINARY}: cargo build --release --locked")
     os.chdir(ROOT)
     traces = sorted(
         t

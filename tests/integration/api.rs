@@ -1,5 +1,5 @@
 //! The library's public API (`emcy_decode::*`), checked against what the
-//! program reports for the same fixtures, and the README's example.
+//! program reports for the same fixtures, and the guide's example (docs/guide/library.md).
 
 use std::fs::File;
 
@@ -9,8 +9,8 @@ use serde_json::Value;
 use crate::support::golden::fixtures;
 use crate::support::{ndjson, readme_block};
 
-/// The README's "As a library" block is examples/node_timeline.rs, which
-/// `cargo test` builds: the README cannot show code that does not compile.
+/// The guide's "As a library" block is examples/node_timeline.rs, which
+/// `cargo test` builds: the guide cannot show code that does not compile.
 #[test]
 fn the_readme_library_example_is_the_example_file() {
     let example = std::fs::read_to_string(

@@ -475,9 +475,9 @@ fn the_json_diff_parses_and_every_finding_has_the_same_keys() {
     assert_eq!(json["summary"]["allowed"], 1);
 }
 
-// ---- the README's CI example --------------------------------------------------------------
+// ---- the guide's CI example (docs/guide/ci.md) -------------------------------------------------
 
-/// Runs a README command line with `sh` in `dir`, the built binary first on
+/// Runs a guide command line with `sh` in `dir`, the built binary first on
 /// PATH (so `emcy-decode` and shell globs work as in CI).
 #[cfg(unix)]
 fn sh(dir: &Path, line: &str) -> std::process::Output {
@@ -540,7 +540,7 @@ fn the_readme_baseline_example_is_what_baseline_writes() {
     let actual = String::from_utf8_lossy(&out.get_output().stdout);
     assert!(
         actual == expected,
-        "README baseline example is stale:\n{}",
+        "baseline example of docs/guide/ci.md is stale:\n{}",
         first_difference(&expected, &actual)
     );
 }

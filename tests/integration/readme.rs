@@ -1,6 +1,7 @@
-//! The README is true: every option of every command's `--help` is in its
-//! option tables, every example command in its `sh` blocks runs on the
-//! repository's fixtures, and the first example's output is what the
+//! The README and the guide (docs/guide/) are true: every option of every
+//! command's `--help` is in their option tables, every example command in
+//! their `sh` blocks runs on the repository's fixtures, every jq recipe
+//! prints something, and the README's first example output is what the
 //! binary prints.
 
 use std::path::{Path, PathBuf};
@@ -9,6 +10,16 @@ use crate::support::emcy_decode;
 
 fn readme() -> String {
     std::fs::read_to_string("README.md").expect("README.md")
+}
+
+/// The README and every page of the guide, one after another: the manual
+/// that the README's front door leads to is held to the same checks.
+fn readme_and_guide() -> String {
+    crate::support::documentation()
+        .iter()
+        .map(|path| std::fs::read_to_string(path).expect("documentation page"))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// The bodies of the README's fenced blocks of `lang`, each as its lines.
@@ -57,7 +68,7 @@ fn options(subcommand: Option<&str>) -> Vec<String> {
 
 #[test]
 fn every_option_of_every_command_is_in_the_readme_option_tables() {
-    let text = readme();
+    let text = readme_and_guide();
     let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| `")).collect();
     let mut missing = Vec::new();
     for sub in [
@@ -89,7 +100,7 @@ fn every_option_of_every_command_is_in_the_readme_option_tables() {
     }
     assert!(
         missing.is_empty(),
-        "not in a README option table: {missing:?}"
+        "not in an option table of the README or the guide: {missing:?}"
     );
 }
 
@@ -129,12 +140,15 @@ fn bash(dir: &Path, line: &str) -> std::process::Output {
 fn needs_more_than_fixtures(line: &str) -> bool {
     // A bus (candump, tcpdump), a file still being written (--follow waits
     // for more), the build or the fuzzer.
-    !line.starts_with("emcy-decode ") || line.contains("--follow") || line.contains("> ~/")
+    // `mkdir -p` runs: HOME is the work directory, where the completions
+    // example must make the directories it writes into.
+    !(line.starts_with("emcy-decode ") || line.starts_with("mkdir -p "))
+        || line.contains("--follow")
 }
 
 #[test]
 fn every_example_command_runs_on_the_fixtures() {
-    let text = readme();
+    let text = readme_and_guide();
     let dir = workdir();
     let mut ran = 0;
     for block in blocks(&text, "sh") {
@@ -149,6 +163,21 @@ fn every_example_command_runs_on_the_fixtures() {
                 "`{line}` exits {:?}:\n{}",
                 out.status.code(),
                 String::from_utf8_lossy(&out.stderr)
+            );
+            // Exit 1 is a met `--fail-on` or a `check` regression, but a
+            // shell that cannot open a redirection's file exits 1 too: a
+            // line that writes a file must succeed.
+            assert!(
+                !line.contains("> ") || out.status.code() == Some(0),
+                "`{line}` exits {:?}:\n{}",
+                out.status.code(),
+                String::from_utf8_lossy(&out.stderr)
+            );
+            // A recipe that prints nothing on the fixture it names teaches
+            // nothing: the reader cannot tell a wrong filter from no match.
+            assert!(
+                !line.contains("| jq") || !out.stdout.is_empty(),
+                "`{line}` prints nothing"
             );
             ran += 1;
         }
@@ -189,4 +218,143 @@ fn the_first_example_output_is_what_the_binary_prints() {
         };
         from = at + run.len();
     }
+}
+
+/// The README's test command is the one CI runs: a new user who runs it
+/// builds against the same Cargo.lock versions the CI tested.
+#[test]
+fn the_readme_test_command_is_the_one_ci_runs() {
+    let text = readme();
+    let commands: Vec<String> = blocks(&text, "sh")
+        .into_iter()
+        .flatten()
+        .filter(|l| l.starts_with("cargo test"))
+        .collect();
+    assert!(!commands.is_empty(), "no `cargo test` in the README");
+    let ci = std::fs::read_to_string(".ci/run").expect(".ci/run");
+    for command in commands {
+        assert!(
+            ci.lines().any(|l| l.trim() == command.trim()),
+            "`{command}` is not a line of .ci/run"
+        );
+    }
+    for line in [
+        "cargo fmt --check",
+        "cargo clippy --all-targets -- -D warnings",
+    ] {
+        assert!(
+            ci.lines().any(|l| l.trim() == line),
+            ".ci/run lacks `{line}`"
+        );
+    }
+}
+
+/// Every install line installs from the lock file: without `--locked`,
+/// `cargo install` resolves the newest compatible versions, which no test
+/// ran with.
+#[test]
+fn every_install_line_uses_the_lock_file() {
+    let mut docs = vec![
+        PathBuf::from("docs/fleet.md"),
+        PathBuf::from("CONTRIBUTING.md"),
+    ];
+    docs.extend(crate::support::documentation());
+    for doc in docs {
+        let text = std::fs::read_to_string(&doc).expect("doc");
+        for (i, line) in text.lines().enumerate() {
+            assert!(
+                !line.contains("cargo install --path"),
+                "{}:{}: `cargo install` without --locked: {line}",
+                doc.display(),
+                i + 1
+            );
+        }
+    }
+}
+
+/// GitHub's anchor of a heading: lower case, punctuation other than `-`
+/// and `_` dropped, spaces as `-`.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | ' '))
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The text of a Markdown file outside its fenced code blocks.
+fn prose(text: &str) -> Vec<&str> {
+    let mut fenced = false;
+    text.lines()
+        .filter(|l| {
+            if l.starts_with("```") {
+                fenced = !fenced;
+                return false;
+            }
+            !fenced
+        })
+        .collect()
+}
+
+/// Every relative link of the README, the guide and the contributor
+/// documents reaches a file, and a `#fragment` a heading of it: the manual
+/// is split over pages, and a section that moves must take its links along.
+#[test]
+fn every_link_between_the_documents_resolves() {
+    let mut docs = crate::support::documentation();
+    docs.extend(
+        [
+            "ARCHITECTURE.md",
+            "CONTRIBUTING.md",
+            "docs/fleet.md",
+            "docs/performance.md",
+        ]
+        .map(PathBuf::from),
+    );
+    let mut broken = Vec::new();
+    let mut checked = 0;
+    for doc in &docs {
+        let text = std::fs::read_to_string(doc).expect("document");
+        let dir = doc.parent().expect("a directory");
+        for line in prose(&text) {
+            for (at, _) in line.match_indices("](") {
+                let rest = &line[at + 2..];
+                let Some(end) = rest.find(')') else { continue };
+                let target = &rest[..end];
+                if target.contains("://") || target.starts_with("mailto:") {
+                    continue;
+                }
+                let (path, fragment) = target.split_once('#').unwrap_or((target, ""));
+                let file = if path.is_empty() {
+                    doc.clone()
+                } else {
+                    dir.join(path)
+                };
+                checked += 1;
+                if !file.exists() {
+                    broken.push(format!("{}: {target}: no such file", doc.display()));
+                    continue;
+                }
+                if fragment.is_empty() || file.extension().is_none_or(|e| e != "md") {
+                    continue;
+                }
+                let page = std::fs::read_to_string(&file).expect("linked page");
+                let known = prose(&page)
+                    .into_iter()
+                    .filter_map(|l| {
+                        l.trim_start_matches('#')
+                            .strip_prefix(' ')
+                            .filter(|_| l.starts_with('#'))
+                    })
+                    .any(|h| anchor(h) == fragment);
+                if !known {
+                    broken.push(format!("{}: {target}: no such heading", doc.display()));
+                }
+            }
+        }
+    }
+    assert!(checked >= 20, "only {checked} links found");
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
 }

@@ -123,14 +123,31 @@ pub fn read_last(lines: &[String]) -> Result<(CanFrame, Option<Format>), TestCas
     }
 }
 
-/// The lines of the README's code block between `<!-- NAME:start -->` and
-/// `<!-- NAME:end -->`, without the fences.
+/// The README, then the guide's pages (docs/guide/*.md) in name order.
+pub fn documentation() -> Vec<std::path::PathBuf> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut guide: Vec<_> = std::fs::read_dir(root.join("docs/guide"))
+        .expect("docs/guide")
+        .map(|e| e.expect("docs/guide entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    guide.sort();
+    std::iter::once(root.join("README.md"))
+        .chain(guide)
+        .collect()
+}
+
+/// The lines of the code block between `<!-- NAME:start -->` and
+/// `<!-- NAME:end -->` in the README or a page of the guide, without the
+/// fences.
 pub fn readme_block(name: &str) -> Vec<String> {
-    let readme =
-        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
-            .expect("README.md");
     let start = format!("<!-- {name}:start -->");
     let end = format!("<!-- {name}:end -->");
+    let readme = documentation()
+        .iter()
+        .map(|p| std::fs::read_to_string(p).expect("documentation page"))
+        .find(|text| text.contains(&start))
+        .expect("start marker");
     let from = readme.find(&start).expect("start marker") + start.len();
     let to = readme[from..].find(&end).expect("end marker") + from;
     readme[from..to]
