@@ -1,7 +1,7 @@
 //! What the analysis reports: one event per decoded EMCY or boot-up, and
 //! per input its counts, node states and error history. Renderers receive
 //! these through [`Sink`](super::Sink); the JSON key names derived from
-//! them are a public contract (README).
+//! them are a public contract (docs/guide/output.md).
 
 use std::borrow::Cow;
 use std::sync::Arc;
@@ -130,7 +130,7 @@ pub enum Health {
 }
 
 impl Health {
-    /// The event's JSON `type` (README, JSON contract).
+    /// The event's JSON `type` (docs/guide/output.md, the JSON contract).
     pub fn slug(&self) -> &'static str {
         match self {
             Health::Nmt { .. } => "nmt",

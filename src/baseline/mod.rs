@@ -3,7 +3,7 @@
 //! were still active at the end, plus the trace's line counts. `check`
 //! compares a new record with a recorded one ([`compare`]) and prints one
 //! finding per line ([`text`]). The file format and the rules for what is a
-//! regression are in the README ("Use in CI"); this module is their single
+//! regression are in docs/guide/ci.md; this module is their single
 //! implementation. No command line and no process I/O here: the
 //! application reads the traces and writes the files.
 

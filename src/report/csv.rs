@@ -1,6 +1,6 @@
 //! `--format csv`: one row per event, or with `--view summary` one row per
 //! node, under a header row, for spreadsheets and data tools. The columns
-//! are a contract ([`EVENT_COLUMNS`], [`NODE_COLUMNS`], README); quoted as
+//! are a contract ([`EVENT_COLUMNS`], [`NODE_COLUMNS`], docs/guide/output.md); quoted as
 //! the `csv` crate quotes (RFC 4180: a field with a comma, a quote or a
 //! line break is quoted; the tests read every output back with the crate).
 //! A cell with several values separates them with

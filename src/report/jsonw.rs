@@ -295,7 +295,7 @@ impl JsonWriter {
         out.push(b']');
     }
 
-    /// A time's `_text` (README, JSON contract), the time's number just
+    /// A time's `_text` (docs/guide/output.md, the JSON contract), the time's number just
     /// written at `number` in `out`: a JSON string of ISO-8601 UTC for a
     /// Unix time, else the number's own digits; `null` for none. Exact
     /// where a JSON number read as a double is not. The fraction is copied
@@ -460,7 +460,7 @@ impl JsonWriter {
         out.push(b'"');
         key!(self, out, "active");
         self.array(out, ev.active, |_, out, c| push_code(out, c));
-        // `active` was cut (README, JSON contract): how many are active.
+        // `active` was cut (docs/guide/output.md, the JSON contract): how many are active.
         if ev.active_total > ev.active.len() {
             key!(self, out, "active_truncated");
             push_u64(out, ev.active_total as u64);
@@ -487,7 +487,7 @@ impl JsonWriter {
         o.end();
     }
 
-    /// An NMT, heartbeat, SDO abort or error history event (README, JSON
+    /// An NMT, heartbeat, SDO abort or error history event (docs/guide/output.md, JSON
     /// contract): rare next to EMCYs, written plainly.
     pub fn health(&mut self, out: &mut Vec<u8>, ev: &HealthEvent<'_>) {
         let mut o = Obj::new(out);

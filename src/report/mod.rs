@@ -1,6 +1,6 @@
 //! The renderers: each implements the analysis's [`Sink`] trait and prints
 //! what a run reports in one format (table, JSON, NDJSON, SVG, HTML). The
-//! JSON key names are a public contract (README).
+//! JSON key names are a public contract (docs/guide/output.md).
 //!
 //! [`Sink`]: crate::analyze::Sink
 

@@ -20,7 +20,7 @@ pub(super) fn run(args: &ProfilesArgs) -> Result<ExitCode> {
             "# The built-in profile \"{name}\" as emcy-decode ships it (emcy-decode profiles \
              --toml {name}).\n# Edit it and load it with --profile-file FILE: a user profile \
              named like a built-in replaces it;\n# rename it (name = \"...\") to keep both. \
-             The format is in the README, \"Vendor profiles\".\n\n{text}"
+             The format is in docs/guide/profiles.md (\"Vendor profiles\").\n\n{text}"
         ));
     }
     let mut text = String::new();

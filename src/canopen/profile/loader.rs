@@ -1,4 +1,4 @@
-//! The profile file format (TOML, documented in the README under "Vendor
+//! The profile file format (TOML, documented in docs/guide/profiles.md, "Vendor
 //! profiles") and its loader: reading a file into a [`Profile`], checking
 //! it as it goes, and answering every mistake with its line.
 

@@ -6,7 +6,7 @@
 //! Built-in profiles and user profiles share one TOML format and one loader:
 //! the built-ins are the files in `src/canopen/profiles/`, compiled in, and
 //! a user file names a built-in as its `base` and overrides or extends it.
-//! The format is documented in the README ("Vendor profiles"); `loader`
+//! The format is documented in docs/guide/profiles.md; `loader`
 //! reads it. This file holds what a profile is and what it answers.
 
 use std::collections::BTreeMap;
@@ -236,7 +236,7 @@ impl Profile {
         BUILTIN_FILES.get(i).map(|(_, text)| *text)
     }
 
-    /// Reads and parses a user profile file (TOML, see the README; at most
+    /// Reads and parses a user profile file (TOML, see docs/guide/profiles.md; at most
     /// [`MAX_BYTES`]); errors name the path and line.
     pub fn load(path: &Path) -> Result<Profile, ProfileError> {
         let origin = path.display().to_string();

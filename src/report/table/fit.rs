@@ -1,4 +1,4 @@
-//! How the table gives way to a terminal's width (`--width`, README): the
+//! How the table gives way to a terminal's width (`--width`, docs/guide/usage.md): the
 //! end tables drop their least useful columns and cut the widest cells
 //! ([`fit_columns`]); the event rows give up columns in the order
 //! `EventLines::layout_for` states. A cut cell ends in `…`.
