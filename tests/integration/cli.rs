@@ -845,6 +845,35 @@ fn table_has_no_colour_unless_asked() {
         .stdout(predicate::str::contains("\u{1b}["));
 }
 
+/// At a terminal (a pseudo-terminal from util-linux's `script`; skipped
+/// where it is missing), auto colour is on unless `TERM` is `dumb`.
+#[test]
+fn a_dumb_terminal_gets_no_colour() {
+    let binary = assert_cmd::cargo::cargo_bin("emcy-decode");
+    let at_terminal = |term: &str| {
+        let command = format!("{} fixtures/s300.log", binary.display());
+        std::process::Command::new("script")
+            .args(["-qc", &command, "/dev/null"])
+            .env("TERM", term)
+            .env_remove("NO_COLOR")
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    let Some(xterm) = at_terminal("xterm") else {
+        eprintln!("skipped: no `script` to run the program at a terminal");
+        return;
+    };
+    assert!(
+        xterm.contains("\u{1b}["),
+        "a terminal is coloured:\n{xterm}"
+    );
+    let dumb = at_terminal("dumb").expect("script ran once");
+    assert!(!dumb.contains("\u{1b}["), "TERM=dumb is coloured:\n{dumb}");
+    assert!(dumb.contains("0x4310"));
+}
+
 #[test]
 fn ndjson_order_is_events_then_nodes_then_inputs() {
     let out = emcy_decode()
