@@ -147,13 +147,14 @@ section.input{margin-bottom:36px}
 .chart{overflow-x:auto}
 .chart svg{display:block}
 .ec g.lane{cursor:pointer}
-table.ev{border-collapse:collapse;font-size:12px}
+table.ev{border-collapse:collapse;font-size:12px;max-width:100%}
 table.ev th{background:#eceef1;text-align:left;padding:4px 8px;cursor:pointer;position:sticky;top:0;user-select:none}
 table.ev th[data-dir=asc]::after{content:' \\25B2'}
 table.ev th[data-dir=desc]::after{content:' \\25BC'}
-table.ev td{padding:2px 8px;border-bottom:1px solid #eee;white-space:nowrap}
+table.ev td{padding:2px 8px;border-bottom:1px solid #eee;overflow-wrap:anywhere}
 table.ev td.n{text-align:right;font-variant-numeric:tabular-nums}
-table.ev td.t{white-space:normal;min-width:14em;max-width:36em}
+table.ev td.t{min-width:8em;max-width:36em}
+@media (max-width:760px){table.ev,table.ev thead,table.ev tbody,table.ev tr{display:block}table.ev th,table.ev td{display:inline-block;border:0}table.ev tr{border-bottom:1px solid #ddd;padding:2px 0}table.ev th{position:static}table.ev tr[hidden]{display:none}}
 table.ev tr.boot td{color:#2c4f9e}
 table.ev tr.reset td{color:#1b7837}
 table.ev tr.nmt td,table.ev tr.error_history td,table.ev tr.error_history_cleared td{color:#555}
@@ -215,8 +216,13 @@ function utc(t){var d=new Date(Math.floor(t*1000));return isNaN(d.getTime())?nul
 function el(t,a,txt){var e=document.createElementNS(SVGNS,t);for(var k in a)e.setAttribute(k,a[k]);if(txt)e.textContent=txt;return e;}
 function clampRect(e,a,b){var x=Math.max(px(a),X0-1),y=Math.min(px(b),X1+8);e.style.display=y<X0-1||x>X1+8?'none':'';e.setAttribute('x',x.toFixed(1));e.setAttribute('width',Math.max(y-x,1).toFixed(1));}
 function layout(){
-W=Math.max(640,box.clientWidth);X1=W-(960-B1);
+W=Math.max(320,box.clientWidth);X1=W-(960-B1);
 svg.setAttribute('width',W);
+// Title and subtitle cut to the width, the whole text in a tooltip.
+p.querySelectorAll('text.t1,text.t2').forEach(function(t){var n=t.firstChild;if(!n||n.nodeType!==3)return;
+if(!t.hasAttribute('data-full')){t.setAttribute('data-full',n.nodeValue);t.appendChild(el('title',{},n.nodeValue));}
+var s=t.getAttribute('data-full'),room=W-(+t.getAttribute('x'))-8;n.nodeValue=s;
+while(s.length>1&&t.getComputedTextLength()>room){s=s.slice(0,-1);n.nodeValue=s+'\u2026';}});
 p.querySelectorAll('rect.bg').forEach(function(r){r.setAttribute('width',W);});
 axl.setAttribute('x2',X1);cap.setAttribute('x',X1);
 items.forEach(function(it){var e=it[0];

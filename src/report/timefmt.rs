@@ -38,7 +38,17 @@ pub struct TimeFormat {
     iso_second: Cell<Option<(u64, [u8; 19])>>,
     /// The text being built by [`TimeFormat::push`], kept for its capacity.
     scratch: RefCell<Vec<u8>>,
+    /// Dated times without their date (`22:13:21.250000Z`): a table whose
+    /// times all fall on one day says the day once, in its title
+    /// ([`SameDay`]), and gives the columns to what differs.
+    pub without_date: bool,
 }
+
+/// 9999-12-31T23:59:59Z: the last second the calendar writes.
+const LAST_ISO_SECOND: u64 = 253_402_300_799;
+
+/// `YYYY-MM-DDT`: what a dated time loses without its date.
+pub const DATE_WIDTH: usize = 11;
 
 impl TimeFormat {
     pub fn new(style: TimeStyle) -> Self {
@@ -47,6 +57,29 @@ impl TimeFormat {
             origin: None,
             iso_second: Cell::new(None),
             scratch: RefCell::new(Vec::new()),
+            without_date: false,
+        }
+    }
+
+    /// The day `t` is shown on, numbered from 1970-01-01 in the style's
+    /// zone; `None` when the style shows it with no date (seconds).
+    pub fn day(&self, t: Timestamp) -> Option<u64> {
+        let secs = t.secs();
+        if secs > LAST_ISO_SECOND {
+            return None;
+        }
+        match self.style {
+            TimeStyle::Absolute | TimeStyle::Relative => None,
+            TimeStyle::Auto | TimeStyle::Local(_) if secs < UNIX_FROM => None,
+            TimeStyle::Auto | TimeStyle::Iso => Some(secs / SECS_PER_DAY),
+            TimeStyle::Local(zone) => {
+                let unix = i64::try_from(secs).ok()?;
+                let offset = zone
+                    .to_offset(jiff::Timestamp::from_second(unix).ok()?)
+                    .seconds();
+                let local = u64::try_from(unix.checked_add(i64::from(offset))?).ok()?;
+                Some(local / SECS_PER_DAY)
+            }
         }
     }
 
@@ -97,6 +130,11 @@ impl TimeFormat {
                 None => t.push_decimal(text),
             },
         }
+        // Only a dated time has a `T` at DATE_WIDTH - 1: seconds never do.
+        let text = match text.get(DATE_WIDTH - 1) {
+            Some(b'T') if self.without_date => &text[DATE_WIDTH..],
+            _ => &text[..],
+        };
         // Digits, `-`, `.`, `:`, `T` and `Z` only.
         out.push_str(std::str::from_utf8(text).unwrap_or_default());
     }
@@ -104,8 +142,6 @@ impl TimeFormat {
     /// The columns [`TimeFormat::show`] takes for `t`, counted without
     /// writing it where the style allows (ISO-8601 UTC: a fixed shape).
     pub fn width(&self, t: Timestamp) -> usize {
-        /// 9999-12-31T23:59:59Z: the last second the calendar writes.
-        const LAST_ISO_SECOND: u64 = 253_402_300_799;
         let iso = match self.style {
             TimeStyle::Iso => true,
             TimeStyle::Auto => t.secs() >= UNIX_FROM,
@@ -115,7 +151,8 @@ impl TimeFormat {
             let (_, _, digits) = t.to_raw();
             let digits = usize::from(digits).min(crate::trace::time::MAX_FRACTION_DIGITS);
             // `YYYY-MM-DDTHH:MM:SS`, `.` and the digits, `Z`.
-            return 19 + if digits == 0 { 0 } else { digits + 1 } + 1;
+            let date = if self.without_date { 0 } else { DATE_WIDTH };
+            return date + 8 + if digits == 0 { 0 } else { digits + 1 } + 1;
         }
         let mut s = String::new();
         self.push(&mut s, t);
@@ -180,6 +217,35 @@ fn push_zoned(out: &mut Vec<u8>, t: Timestamp, zone: &jiff::tz::TimeZone) -> boo
     let abs = offset.unsigned_abs();
     let _ = write!(out, "{sign}{:02}:{:02}", abs / 3600, abs / 60 % 60);
     true
+}
+
+/// Whether every time a table shows falls on one day, and which: the
+/// table then says the day once in its title and shows times of day.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SameDay {
+    /// The day and a time on it, while every time seen was on it.
+    day: Option<(u64, Timestamp)>,
+    /// A time on another day, or one shown without a date, was seen.
+    mixed: bool,
+}
+
+impl SameDay {
+    pub fn see(&mut self, times: &TimeFormat, t: Timestamp) {
+        match (times.day(t), self.day) {
+            (None, _) => self.mixed = true,
+            (Some(d), None) => self.day = Some((d, t)),
+            (Some(d), Some((seen, _))) => self.mixed |= d != seen,
+        }
+    }
+
+    /// `2023-11-14` when every time seen (at least one) was on that day.
+    pub fn day(&self, times: &TimeFormat) -> Option<String> {
+        let (_, t) = self.day.filter(|_| !self.mixed)?;
+        let mut full = TimeFormat::new(times.style);
+        full.origin = times.origin;
+        let text = full.show(t);
+        text.get(..DATE_WIDTH - 1).map(str::to_string)
+    }
 }
 
 /// `YYYY-MM-DDTHH:MM:SS` of a Unix second; `None` beyond the calendar.
@@ -270,6 +336,41 @@ mod tests {
     }
 
     #[test]
+    fn one_day_shows_times_without_the_date_and_the_day_once() {
+        let mut f = TimeFormat::new(TimeStyle::Auto);
+        let mut day = SameDay::default();
+        day.see(&f, ts("1700000001.250000"));
+        day.see(&f, ts("1700003600"));
+        assert_eq!(day.day(&f).as_deref(), Some("2023-11-14"));
+        f.without_date = true;
+        assert_eq!(f.show(ts("1700000001.250000")), "22:13:21.250000Z");
+        assert_eq!(f.width(ts("1700000001.250000")), 16);
+        // Seconds, which have no date, are shown whole.
+        assert_eq!(f.show(ts("12.5")), "12.5");
+        // The next day, or a time without a date: no one day.
+        let mut two = day;
+        two.see(&f, ts("1700100000"));
+        assert_eq!(two.day(&f), None);
+        let mut seconds = day;
+        seconds.see(&f, ts("12.5"));
+        assert_eq!(seconds.day(&f), None);
+        assert_eq!(SameDay::default().day(&f), None);
+        let relative = TimeFormat::new(TimeStyle::Relative);
+        let mut none = SameDay::default();
+        none.see(&relative, ts("1700000001"));
+        assert_eq!(none.day(&relative), None);
+        // A zone's day: 23:30 UTC is the next day in Berlin.
+        let berlin: &'static jiff::tz::TimeZone =
+            Box::leak(Box::new(jiff::tz::TimeZone::get("Europe/Berlin").unwrap()));
+        let mut local = TimeFormat::new(TimeStyle::Local(berlin));
+        let mut day = SameDay::default();
+        day.see(&local, ts("1700004600"));
+        assert_eq!(day.day(&local).as_deref(), Some("2023-11-15"));
+        local.without_date = true;
+        assert_eq!(local.show(ts("1700004600")), "00:30:00+01:00");
+    }
+
+    #[test]
     fn widths_are_the_shown_lengths() {
         let times = [
             "1700000001.250000",
@@ -288,10 +389,17 @@ mod tests {
             TimeStyle::Relative,
             TimeStyle::Iso,
         ] {
-            let mut f = TimeFormat::new(style);
-            f.set_origin(Some(ts("1.0")));
-            for t in times {
-                assert_eq!(f.width(ts(t)), f.show(ts(t)).len(), "{style:?} {t}");
+            for without_date in [false, true] {
+                let mut f = TimeFormat::new(style);
+                f.set_origin(Some(ts("1.0")));
+                f.without_date = without_date;
+                for t in times {
+                    assert_eq!(
+                        f.width(ts(t)),
+                        f.show(ts(t)).len(),
+                        "{style:?} {t} without_date {without_date}"
+                    );
+                }
             }
         }
     }

@@ -870,6 +870,69 @@ fn chromium_lays_the_chart_out_to_the_window() {
     assert!(wide.ticks.len() > narrow.ticks.len());
 }
 
+/// In a narrow window (600 px; 500 px, headless Chromium's narrowest) the
+/// page is no wider than the window: the chart scales down, to a phone's
+/// 320 px too, without clipping its plot, titles or legend, and the events
+/// table wraps its cells.
+#[test]
+fn chromium_fits_narrow_windows_without_a_horizontal_scroll() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("minute.log");
+    fs::write(&trace, minute_trace()).expect("write trace");
+    let html = render("html", &[&trace, Path::new("fixtures/s300.log")]);
+    // The page's width after its layout ran (a timer: layouts wait a frame).
+    // And how far the charts' titles reach past their chart's width.
+    let measure = "setTimeout(function(){document.body.setAttribute('data-scroll-width',\
+                   document.documentElement.scrollWidth);var over=0;\
+                   document.querySelectorAll('svg').forEach(function(svg){\
+                   svg.querySelectorAll('text.t1,text.t2').forEach(function(t){var b=t.getBBox();\
+                   over=Math.max(over,b.x+b.width-(+svg.getAttribute('width')));});});\
+                   document.body.setAttribute('data-title-over',Math.ceil(over));},1000);";
+    // A phone's width, given to the chart's box as a narrower window would.
+    let phone = "document.querySelectorAll('.chart').forEach(function(b){b.style.width='320px';});\
+                 window.dispatchEvent(new Event('resize'));";
+    for (window, chart) in [(600u32, None), (500, Some(320.0))] {
+        let extra = match chart {
+            Some(_) => format!("{phone}{measure}"),
+            None => measure.to_string(),
+        };
+        let dom = browser_dom(browser, &html, &extra, window, 700);
+        let scroll: f64 = dom
+            .split("data-scroll-width=\"")
+            .nth(1)
+            .and_then(|rest| rest.split('"').next())
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("{window}: not measured"));
+        assert!(
+            scroll <= f64::from(window),
+            "a {window} px window: the page is {scroll} px wide"
+        );
+        let over: f64 = dom
+            .split("data-title-over=\"")
+            .nth(1)
+            .and_then(|rest| rest.split('"').next())
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("{window}: titles not measured"));
+        assert!(
+            over <= 0.0,
+            "a {window} px window: a title is clipped by {over} px"
+        );
+        let laid = laid_out(&dom);
+        let expected = chart.unwrap_or(f64::from(window) - 32.0);
+        assert!(
+            (laid.width - expected).abs() <= 1.0,
+            "a {window} px window: chart {} px wide",
+            laid.width
+        );
+        assert_eq!(laid.plot_end, laid.width - 28.0);
+        assert!(laid.legend_right <= laid.width, "{window}: legend clipped");
+        for &(x0, x1) in &laid.bars {
+            assert!(x0 >= 169.0 && x1 <= laid.plot_end + 8.0, "bar {x0}-{x1}");
+        }
+    }
+}
+
 /// Wheel events over the plot (as a user's wheel sends them) narrow the
 /// visible range around the pointer: ticks get finer, the events table
 /// hides rows outside the range and keeps those inside; a double-click

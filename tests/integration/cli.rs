@@ -372,6 +372,138 @@ fn short_help_is_brief_and_long_help_complete_both_grouped() {
     assert!(short.lines().count() * 2 < long.lines().count());
 }
 
+/// The help text's sections by heading (`Options:`, `Input options:`...):
+/// each heading with the lines below it up to the next heading.
+fn help_sections(help: &str) -> Vec<(String, String)> {
+    let mut sections: Vec<(String, String)> = Vec::new();
+    for line in help.lines() {
+        if !line.starts_with(' ') && line.ends_with(':') {
+            sections.push((line.to_string(), String::new()));
+        } else if let Some((_, body)) = sections.last_mut() {
+            body.push_str(line);
+            body.push('\n');
+        }
+    }
+    sections
+}
+
+#[test]
+fn short_help_names_every_fail_on_condition() {
+    let out = emcy_decode().arg("-h").output().unwrap();
+    let short = String::from_utf8(out.stdout).unwrap();
+    // The option's line and the lines its summary wraps to.
+    let line: String = short
+        .lines()
+        .skip_while(|l| !l.contains("--fail-on"))
+        .enumerate()
+        .take_while(|(i, l)| *i == 0 || !l.trim_start().starts_with('-'))
+        .map(|(_, l)| l.trim())
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(line.contains("--fail-on"), "-h lists --fail-on:\n{short}");
+    for condition in [
+        "any",
+        "active",
+        "warning",
+        "lost",
+        "fault",
+        "code=",
+        "category<=",
+        "never",
+    ] {
+        assert!(
+            line.contains(condition),
+            "-h --fail-on lacks {condition}: {line}"
+        );
+    }
+}
+
+#[test]
+fn long_help_and_man_page_name_the_environment_variables() {
+    let out = emcy_decode().arg("--help").output().unwrap();
+    let long = String::from_utf8(out.stdout).unwrap();
+    let sections = help_sections(&long);
+    let (_, environment) = sections
+        .iter()
+        .find(|(heading, _)| heading == "Environment:")
+        .unwrap_or_else(|| panic!("--help has no Environment section:\n{long}"));
+    let man = emcy_decode().arg("man").output().unwrap();
+    let man = String::from_utf8(man.stdout).unwrap();
+    assert!(man.contains(".SH ENVIRONMENT"), "{man}");
+    for variable in ["NO_COLOR", "TERM", "COLUMNS", "CI", "TZ"] {
+        assert!(
+            environment
+                .lines()
+                .any(|l| l.trim_start().starts_with(&format!("{variable} "))),
+            "--help Environment lacks {variable}:\n{environment}"
+        );
+        assert!(
+            man.contains(&format!("\n{variable} ")),
+            "man lacks {variable}"
+        );
+    }
+}
+
+#[test]
+fn check_help_puts_every_option_under_a_heading() {
+    for flag in ["-h", "--help"] {
+        let out = emcy_decode().args(["check", flag]).output().unwrap();
+        let help = String::from_utf8(out.stdout).unwrap();
+        let sections = help_sections(&help);
+        let plain = sections
+            .iter()
+            .find(|(heading, _)| heading == "Options:")
+            .map(|(_, body)| body.as_str())
+            .unwrap_or_default();
+        for option in [
+            "--heartbeat-timeout",
+            "--recursive",
+            "--glob",
+            "--follow-links",
+            "--root",
+            "--only-given",
+        ] {
+            assert!(
+                !plain.contains(option),
+                "check {flag} leaves {option} under plain Options:\n{plain}"
+            );
+            assert!(help.contains(option), "check {flag} lacks {option}");
+        }
+        // What is left under the plain heading is help and version only.
+        assert!(!plain.contains("--baseline") && !plain.contains("--profile"));
+    }
+}
+
+#[test]
+fn bash_completes_profile_names_after_profile() {
+    let out = emcy_decode()
+        .args(["completions", "bash"])
+        .output()
+        .unwrap();
+    let script = String::from_utf8(out.stdout).unwrap();
+    // Every `--profile)` case of the script (decode, explain, baseline,
+    // check) offers the built-in names, not `compgen -f` (file names).
+    let cases: Vec<&str> = script
+        .split("--profile)")
+        .skip(1)
+        .map(|rest| rest.split(";;").next().unwrap_or_default())
+        .collect();
+    assert!(cases.len() >= 4, "{} --profile cases", cases.len());
+    for case in cases {
+        assert!(
+            case.contains("compgen -W \"cia301 cia402 kollmorgen"),
+            "--profile completes no profile names:\n{case}"
+        );
+        assert!(!case.contains("compgen -f"), "{case}");
+    }
+    // The names are offered, not imposed: a user profile's name still works.
+    emcy_decode()
+        .args(["--profile", "nonesuch", "fixtures/s300.log"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("nonesuch"));
+}
+
 #[test]
 fn man_all_writes_a_page_per_subcommand_and_man_cmd_prints_one() {
     let dir = tempfile::tempdir().unwrap();
@@ -713,6 +845,35 @@ fn table_has_no_colour_unless_asked() {
         .stdout(predicate::str::contains("\u{1b}["));
 }
 
+/// At a terminal (a pseudo-terminal from util-linux's `script`; skipped
+/// where it is missing), auto colour is on unless `TERM` is `dumb`.
+#[test]
+fn a_dumb_terminal_gets_no_colour() {
+    let binary = assert_cmd::cargo::cargo_bin("emcy-decode");
+    let at_terminal = |term: &str| {
+        let command = format!("{} fixtures/s300.log", binary.display());
+        std::process::Command::new("script")
+            .args(["-qc", &command, "/dev/null"])
+            .env("TERM", term)
+            .env_remove("NO_COLOR")
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    let Some(xterm) = at_terminal("xterm") else {
+        eprintln!("skipped: no `script` to run the program at a terminal");
+        return;
+    };
+    assert!(
+        xterm.contains("\u{1b}["),
+        "a terminal is coloured:\n{xterm}"
+    );
+    let dumb = at_terminal("dumb").expect("script ran once");
+    assert!(!dumb.contains("\u{1b}["), "TERM=dumb is coloured:\n{dumb}");
+    assert!(dumb.contains("0x4310"));
+}
+
 #[test]
 fn ndjson_order_is_events_then_nodes_then_inputs() {
     let out = emcy_decode()
@@ -969,6 +1130,10 @@ fn profiles_lists_every_builtin_once_with_the_default_marked() {
     assert!(
         text.lines()
             .any(|l| l.starts_with("cia402") && l.ends_with("(default)"))
+    );
+    assert!(
+        text.lines().all(|l| l.matches("(default)").count() <= 1),
+        "a line says (default) twice:\n{text}"
     );
 }
 

@@ -721,14 +721,14 @@ fn timestamps_going_backwards_get_a_diagnostic_and_a_negative_duration() {
     assert!(text.contains("\"duration\":-5.500000,"), "{text}");
     let objects = ndjson(text.as_bytes());
     assert_eq!(emcy_lines(&objects), [1, 2, 3, 4]);
-    // The table shows the same signed duration.
+    // The table shows the same signed duration, with its unit.
     emcy_decode()
         .arg("-")
         .write_stdin(input)
         .timeout(TIMEOUT)
         .assert()
         .code(0)
-        .stdout(predicates::str::contains("-5.500000"));
+        .stdout(predicates::str::contains("-5.5 s"));
 }
 
 // ---- gzip ------------------------------------------------------------------------------

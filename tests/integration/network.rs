@@ -218,8 +218,8 @@ fn node_guarding_is_supervised_by_its_life_time() {
     let summary = stdout_of(&["--view", "summary", GUARDING]);
     assert!(
         summary.contains(
-            "guarding 100 ms x 3, period 100 ms, timeout 300 ms (life_time), lost 1x, \
-             7 unanswered, 1 toggle error"
+            "lost 1x, 7 unanswered, 1 toggle error, guarding 100 ms x 3, period 100 ms, \
+             timeout 300 ms (life_time)"
         ),
         "{summary}"
     );

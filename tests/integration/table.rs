@@ -249,3 +249,90 @@ fn the_summary_names_each_code_by_the_nodes_profile() {
     // No events in the summary.
     assert!(!text.contains("TIME "));
 }
+
+/// The lines of a section of the end tables: its title line (which may
+/// carry the day) up to the blank line after it.
+fn section<'t>(table: &'t str, title: &str) -> Vec<&'t str> {
+    let mut lines = table.lines().skip_while(|l| !l.starts_with(title));
+    let mut out: Vec<&str> = lines.next().into_iter().collect();
+    out.extend(lines.take_while(|l| !l.is_empty()));
+    out
+}
+
+#[test]
+fn end_tables_keep_status_units_and_one_date_at_80_and_120_columns() {
+    // Several nodes, outages (one still open at the end), guarding, an
+    // error history, errors and a drive.
+    for width in ["80", "120"] {
+        let text = table(&[
+            "--width",
+            width,
+            "fixtures/commissioning.log",
+            "fixtures/cia402-commissioning.log",
+        ]);
+        let health = section(&text, "Node health");
+        // The day once, in the title; no row repeats it.
+        assert_eq!(health[0], "Node health (2023-11-14)", "{width}");
+        let row = |node: &str| {
+            health
+                .iter()
+                .find(|l| l.split_whitespace().nth(1) == Some(node))
+                .copied()
+                .unwrap_or_else(|| panic!("{width}: no health row of node {node}:\n{text}"))
+        };
+        // The outcome before the settings: a cut cell keeps it.
+        assert!(row("2").contains("lost 1x"), "{width}: {}", row("2"));
+        assert!(row("3").contains("lost 1x, sile"), "{width}: {}", row("3"));
+        assert!(row("4").contains("never lost, 1"), "{width}: {}", row("4"));
+        if width == "120" {
+            assert!(row("3").contains("lost 1x, silent at end"), "{}", row("3"));
+            assert!(
+                row("4").contains("never lost, 1 toggle error"),
+                "{}",
+                row("4")
+            );
+        }
+        // The outage's duration is kept, its start shown without the date.
+        assert!(row("2").contains("848 ms"), "{width}: {}", row("2"));
+        for section_title in ["Nodes", "Node health", "Error timeline"] {
+            for line in section(&text, section_title).iter().skip(1) {
+                assert!(
+                    !line.contains("2023-11-14T"),
+                    "{width} {section_title}: a date on a row: {line}"
+                );
+            }
+        }
+        let timeline = section(&text, "Error timeline");
+        assert_eq!(timeline[0], "Error timeline (2023-11-14)");
+        assert!(
+            timeline.iter().any(|l| l.contains("22:13:20.800000Z")),
+            "{width}: {timeline:?}"
+        );
+        // Durations carry their unit.
+        assert!(
+            timeline.iter().any(|l| l.contains(" 100 ms")),
+            "{width}: {timeline:?}"
+        );
+        let nodes = section(&text, "Nodes");
+        assert!(
+            nodes.iter().any(|l| l.contains("0x3120 x1")),
+            "{width}: {nodes:?}"
+        );
+        for line in text.lines() {
+            assert!(line.width() <= width.parse().unwrap(), "{width}: {line}");
+        }
+    }
+    // A column that is `-` in every row is left out: the drive's trace
+    // has no error history.
+    let drive = table(&["--width", "120", "fixtures/cia402-commissioning.log"]);
+    let health = section(&drive, "Node health");
+    assert!(!health[1].contains("ERROR HISTORY"), "{health:?}");
+    assert!(!health[1].contains("OUTAGES"), "{health:?}");
+    assert!(section(&drive, "Nodes")[1].contains("IN ERROR"));
+    assert!(
+        section(&drive, "Nodes")
+            .iter()
+            .any(|l| l.contains("211 ms")),
+        "{drive}"
+    );
+}

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
+use clap::builder::{PossibleValue, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use emcy_decode::analyze::fail_on::FailOn;
@@ -47,13 +48,24 @@ Exit status:
   143  stopped by SIGTERM
        (what was read is still reported; a second signal ends at once, without it)";
 
+/// The variables the program reads, for `--help` and the man page's
+/// ENVIRONMENT section: a person whose table looks wrong in one terminal
+/// and right in another needs to know that these change it.
+pub(super) const ENVIRONMENT: &str =
+    "  NO_COLOR  set and not empty: no colour in the table (--color always still colours)
+  TERM      dumb: no colour in the table, as for NO_COLOR
+  COLUMNS   the table's width at a terminal, before the terminal's own size (--width
+            overrides both; in a pipe the table keeps full lines)
+  CI        set and not empty: no progress bar
+  TZ        the zone of --time local when --tz is not given (else /etc/localtime)";
+
 #[derive(Parser, Debug)]
 #[command(
     name = "emcy-decode",
     version,
     about = "Decode CANopen emergency (EMCY) frames in CAN traces and rebuild each node's error timeline",
     after_help = SHORT_AFTER_HELP,
-    after_long_help = EXAMPLES_AND_EXIT_CODES,
+    after_long_help = format!("{EXAMPLES_AND_EXIT_CODES}\n\nEnvironment:\n{ENVIRONMENT}"),
     args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
@@ -141,7 +153,7 @@ pub struct DecodeArgs {
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable, a node's
     /// own wins. Without one, the trace's SDO identity answers choose, else cia402.
     /// `emcy-decode profiles` lists them
-    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME", help_heading = DECODING)]
+    #[arg(long, value_parser = ProfileNames(parse_profile_arg), hide_possible_values = true, value_name = "[NODE=]NAME", help_heading = DECODING)]
     pub profile: Vec<ProfileRequest>,
 
     /// A user profile (TOML, see the manual); repeatable
@@ -158,7 +170,7 @@ pub struct DecodeArgs {
     #[arg(long, short = 'f', value_enum, default_value_t = OutputFormat::Table, help_heading = OUTPUT)]
     pub format: OutputFormat,
 
-    /// Exit 1 when a condition is met: any, active, warning, code=..., category<=N
+    /// Exit 1 when a condition is met: any, active, warning, lost, fault, code=..., category<=N, never
     ///
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
@@ -273,7 +285,7 @@ pub struct ExplainArgs {
     pub format: ExplainFormat,
 
     /// Read the code and payload with this profile (default cia402)
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_parser = ProfileNames(clap::builder::NonEmptyStringValueParser::new()), hide_possible_values = true, value_name = "NAME")]
     pub profile: Option<String>,
 
     /// A user profile (TOML); --profile defaults to its name
@@ -598,11 +610,11 @@ pub struct TraceArgs {
     pub max_diagnostics: usize,
 
     /// Heartbeat timeout for every node in seconds, as for decoding
-    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS")]
+    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub heartbeat_timeout: Option<Span>,
 
     /// Vendor profile for every node (NAME) or one node (NODE=NAME), as for decoding
-    #[arg(long, value_parser = parse_profile_arg, value_name = "[NODE=]NAME", help_heading = DECODING)]
+    #[arg(long, value_parser = ProfileNames(parse_profile_arg), hide_possible_values = true, value_name = "[NODE=]NAME", help_heading = DECODING)]
     pub profile: Vec<ProfileRequest>,
 
     /// A user profile (TOML), as for decoding
@@ -614,21 +626,21 @@ pub struct TraceArgs {
 
     /// Record and look up traces by their path relative to DIR, not to the current directory
     /// (the same keys wherever baseline and check run)
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", help_heading = INPUT)]
     pub root: Option<PathBuf>,
 
     /// Read directories given as TRACE recursively, as for decoding (files that are no trace
     /// skipped with a note)
-    #[arg(long, short = 'r')]
+    #[arg(long, short = 'r', help_heading = INPUT)]
     pub recursive: bool,
 
     /// Under -r, read only files whose path below the directory matches GLOB (`!GLOB`
     /// excludes; repeatable), as for decoding
-    #[arg(long, value_name = "GLOB", requires = "recursive")]
+    #[arg(long, value_name = "GLOB", requires = "recursive", help_heading = INPUT)]
     pub glob: Vec<String>,
 
     /// Under -r, follow symbolic links, as for decoding
-    #[arg(long, short = 'L', requires = "recursive")]
+    #[arg(long, short = 'L', requires = "recursive", help_heading = INPUT)]
     pub follow_links: bool,
 }
 
@@ -695,7 +707,7 @@ pub struct CheckArgs {
 
     /// Compare only the traces given: the baseline's other traces are not "not given"
     /// regressions (with --update, only the given traces' records are replaced)
-    #[arg(long)]
+    #[arg(long, help_heading = CI)]
     pub only_given: bool,
 }
 
@@ -883,6 +895,33 @@ fn parse_seconds(s: &str) -> Result<Span, String> {
 fn fail_on_code(s: &str) -> Result<u16, String> {
     emcy_decode::trace::hex::parse_code(s)
         .ok_or_else(|| format!("'{s}' is not an error code (1-4 hex digits)"))
+}
+
+/// A parser of a profile argument that also offers the built-in profiles'
+/// names, so shell completion of `--profile` completes names, not files.
+/// It accepts any name: a `--profile-file` may define more.
+#[derive(Clone)]
+struct ProfileNames<P>(P);
+
+impl<P: TypedValueParser> TypedValueParser for ProfileNames<P> {
+    type Value = P::Value;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<Self::Value, clap::Error> {
+        self.0.parse_ref(cmd, arg, value)
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(
+            Profile::builtins()
+                .iter()
+                .map(|p| PossibleValue::new(p.name())),
+        ))
+    }
 }
 
 /// `--profile NAME` or `--profile NODE=NAME`.

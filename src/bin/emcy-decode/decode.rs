@@ -68,7 +68,13 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
     let mut renderer: Box<dyn Sink> = match args.format {
         OutputFormat::Table => {
             let no_color = std::env::var_os("NO_COLOR");
-            let color = use_color(args.color, io::stdout().is_terminal(), no_color.as_deref());
+            let term = std::env::var_os("TERM");
+            let color = use_color(
+                args.color,
+                io::stdout().is_terminal(),
+                no_color.as_deref(),
+                term.as_deref(),
+            );
             let width = table_width(
                 args.width,
                 io::stdout().is_terminal(),
@@ -630,11 +636,26 @@ fn progress_bar(how: HowToRead, size: Option<u64>) -> Option<indicatif::Progress
     let size = size.filter(|&s| wants_progress(how.progress, s))?;
     let bar = indicatif::ProgressBar::new(size);
     if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{bar:40} {bytes}/{total_bytes} {bytes_per_sec} eta {eta}",
+        "{bar:40} {bytes}/{total_bytes} {bytes_per_sec}{eta}",
     ) {
-        bar.set_style(style);
+        bar.set_style(style.with_key(
+            "eta",
+            |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                if eta_is_known(state.elapsed(), state.fraction()) {
+                    let _ = write!(w, " eta {}", indicatif::HumanDuration(state.eta()));
+                }
+            },
+        ));
     }
     Some(bar)
+}
+
+/// Whether the rate seen so far predicts the end: the first blocks are
+/// read while the disk cache and the threads warm up, and an estimate from
+/// them said "eta 31h" for a file read in a minute. So the bar shows an
+/// estimate only after a second and a twentieth of the file.
+fn eta_is_known(elapsed: std::time::Duration, fraction: f32) -> bool {
+    elapsed >= std::time::Duration::from_secs(1) && fraction >= 0.05
 }
 
 /// Progress bars only for a person at a terminal: not with --quiet, not
@@ -718,13 +739,22 @@ fn table_width(
     }
 }
 
-/// Whether to colour: `--color always|never`, or auto = a terminal and no
-/// (non-empty) `NO_COLOR`, per no-color.org.
-fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi::OsStr>) -> bool {
+/// Whether to colour: `--color always|never`, or auto = a terminal, no
+/// (non-empty) `NO_COLOR` (per no-color.org) and a `TERM` that is not
+/// `dumb`: a dumb terminal (Emacs' shell, some CI consoles) prints escape
+/// codes as text, and ripgrep does not colour there either.
+fn use_color(
+    choice: ColorChoice,
+    is_terminal: bool,
+    no_color: Option<&std::ffi::OsStr>,
+    term: Option<&std::ffi::OsStr>,
+) -> bool {
     match choice {
         ColorChoice::Always => true,
         ColorChoice::Never => false,
-        ColorChoice::Auto => is_terminal && no_color.is_none_or(|v| v.is_empty()),
+        ColorChoice::Auto => {
+            is_terminal && no_color.is_none_or(|v| v.is_empty()) && term != Some("dumb".as_ref())
+        }
     }
 }
 
@@ -797,6 +827,18 @@ mod tests {
     }
 
     #[test]
+    fn the_eta_waits_for_a_second_and_a_twentieth_of_the_file() {
+        use std::time::Duration;
+        assert!(!eta_is_known(Duration::from_millis(300), 0.5), "too soon");
+        assert!(
+            !eta_is_known(Duration::from_secs(5), 0.01),
+            "too little read"
+        );
+        assert!(eta_is_known(Duration::from_secs(1), 0.05));
+        assert!(eta_is_known(Duration::from_secs(30), 0.9));
+    }
+
+    #[test]
     fn the_table_fits_a_terminal_only() {
         let none = || None;
         let term = || Some(132);
@@ -820,12 +862,31 @@ mod tests {
     }
 
     #[test]
-    fn colour_only_on_a_terminal_without_no_color() {
-        assert!(use_color(ColorChoice::Auto, true, None));
-        assert!(!use_color(ColorChoice::Auto, false, None));
-        assert!(!use_color(ColorChoice::Auto, true, Some(OsStr::new("1"))));
-        assert!(use_color(ColorChoice::Auto, true, Some(OsStr::new(""))));
-        assert!(use_color(ColorChoice::Always, false, Some(OsStr::new("1"))));
-        assert!(!use_color(ColorChoice::Never, true, None));
+    fn colour_only_on_a_terminal_without_no_color_or_a_dumb_term() {
+        let xterm = Some(OsStr::new("xterm-256color"));
+        let dumb = Some(OsStr::new("dumb"));
+        assert!(use_color(ColorChoice::Auto, true, None, xterm));
+        assert!(use_color(ColorChoice::Auto, true, None, None));
+        assert!(!use_color(ColorChoice::Auto, false, None, xterm));
+        assert!(!use_color(
+            ColorChoice::Auto,
+            true,
+            Some(OsStr::new("1")),
+            xterm
+        ));
+        assert!(use_color(
+            ColorChoice::Auto,
+            true,
+            Some(OsStr::new("")),
+            xterm
+        ));
+        assert!(!use_color(ColorChoice::Auto, true, None, dumb), "TERM=dumb");
+        assert!(use_color(
+            ColorChoice::Always,
+            false,
+            Some(OsStr::new("1")),
+            dumb
+        ));
+        assert!(!use_color(ColorChoice::Never, true, None, xterm));
     }
 }

@@ -10,7 +10,7 @@ use clap::CommandFactory;
 use clap_mangen::Man;
 use clap_mangen::roff::{Roff, roman};
 
-use super::cli::{Cli, ManArgs};
+use super::cli::{Cli, ENVIRONMENT, ManArgs};
 use super::{EXIT_OK, write_stdout};
 
 /// A completion script for `shell`.
@@ -90,6 +90,7 @@ fn render(cmd: &clap::Command, main: bool) -> Result<Vec<u8>> {
         section(&mut roff, "EXAMPLES", EXAMPLES);
         section(&mut roff, "FORMATS", FORMATS);
         section(&mut roff, "EXIT STATUS", EXIT_STATUS);
+        section(&mut roff, "ENVIRONMENT", ENVIRONMENT);
     } else if let Some(after) = cmd.get_after_long_help() {
         section(&mut roff, "DETAILS", &after.to_string());
     }
@@ -274,11 +275,22 @@ mod tests {
     #[test]
     fn the_main_page_has_the_formats_and_exit_codes_and_no_readme_pointer() {
         let main = text(&render(&built(), true).unwrap());
-        for heading in [".SH FORMATS", ".SH \"EXIT STATUS\"", ".SH EXAMPLES"] {
+        for heading in [
+            ".SH FORMATS",
+            ".SH \"EXIT STATUS\"",
+            ".SH EXAMPLES",
+            ".SH ENVIRONMENT",
+        ] {
             assert!(main.contains(heading), "{heading}");
         }
         assert!(main.contains("PEAK TRC") && main.contains("MDF 4"));
         assert!(main.contains("143"));
+        for variable in ["NO_COLOR", "TERM", "COLUMNS", "CI", "TZ"] {
+            assert!(
+                main.contains(&format!("\n{variable} ")),
+                "ENVIRONMENT lacks {variable}"
+            );
+        }
         assert!(!main.contains("README"), "the README is not installed");
         assert!(!main.contains(".SH EXTRA"));
     }

@@ -12,7 +12,7 @@ use super::page::{BOLD, Page};
 use super::timeline::{NodeTexts, write_timeline};
 use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport};
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
-use crate::report::timefmt::{TimeFormat, human_span};
+use crate::report::timefmt::{SameDay, TimeFormat, human_span};
 use crate::text::printable;
 use crate::timeline::heartbeat::Supervision;
 
@@ -96,7 +96,8 @@ pub(super) fn write_inputs<W: Write>(page: &mut Page<W>, inputs: &[InputReport])
 /// million rows is held: `rows` gives the rows again for each pass and
 /// `fill` puts a row's cells in `cells`, returning their display widths.
 /// `title` is written first (after a blank line with `blank`); no rows:
-/// nothing is written.
+/// nothing is written. A column that is `-` in every row says nothing and
+/// is left out: a terminal's width goes to the columns that say something.
 fn write_in_two_passes<W: Write, T, I, const N: usize>(
     page: &mut Page<W>,
     (title, blank): (&str, bool),
@@ -110,16 +111,20 @@ where
     let mut cells: [String; N] = std::array::from_fn(|_| String::new());
     let mut widths = header.map(str::len);
     let mut any = false;
+    let mut said = [false; N];
     for row in rows() {
         any = true;
         for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
             *w = (*w).max(c);
         }
+        for (s, c) in said.iter_mut().zip(&cells) {
+            *s |= c != "-";
+        }
     }
     if !any {
         return Ok(());
     }
-    let shown = page.fit(&mut widths, header, fit);
+    let shown = page.fit_shown(&mut widths, header, fit, said);
     if blank {
         writeln!(page.out)?;
     }
@@ -141,10 +146,21 @@ fn write_nodes<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<
     // a trace can name a million nodes, and a table holding them all
     // took about 2.5 KB per node on top of the reports.
     page.times.set_origin(input.first_time);
-    let times = page.times.clone();
+    let mut day = SameDay::default();
+    for n in &input.nodes {
+        for at in [n.stats.first_emcy, n.stats.last_emcy]
+            .into_iter()
+            .flatten()
+        {
+            if let Some(t) = at.time {
+                day.see(&page.times, t);
+            }
+        }
+    }
+    let (title, times) = titled("Nodes", &page.times, day);
     write_in_two_passes(
         page,
-        ("Nodes", false),
+        (&title, false),
         (&NODES_HEADER, &NODES_RIGHT, &NODES_FIT),
         || input.nodes.iter(),
         |cells, n| node_cells(cells, &times, input, n),
@@ -195,14 +211,35 @@ fn write_health<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result
     if !input.nodes.iter().any(|n| told(&n)) {
         return Ok(());
     }
-    let times = page.times.clone();
+    let mut day = SameDay::default();
+    for n in input.nodes.iter().filter(told) {
+        let outages = n.heartbeat.iter().flat_map(|h| &h.outages);
+        for o in outages.take(OUTAGES_SHOWN) {
+            day.see(&page.times, o.start);
+        }
+    }
+    let (title, times) = titled("Node health", &page.times, day);
     write_in_two_passes(
         page,
-        ("Node health", true),
+        (&title, true),
         (&HEALTH_HEADER, &HEALTH_RIGHT, &HEALTH_FIT),
         || input.nodes.iter().filter(told),
         |cells, n| health_cells(cells, &times, n),
     )
+}
+
+/// A section's title and the times it shows: when they all fall on one
+/// day, the title says it (`Nodes (2023-11-14)`) and the times leave it
+/// out, so a date is not repeated on every row of a narrow terminal.
+fn titled(title: &str, times: &TimeFormat, day: SameDay) -> (String, TimeFormat) {
+    let mut times = times.clone();
+    match day.day(&times) {
+        Some(day) => {
+            times.without_date = true;
+            (format!("{title} ({day})"), times)
+        }
+        None => (title.to_string(), times),
+    }
 }
 
 /// The CiA 402 drives (none: no section): state at the end,
@@ -242,12 +279,16 @@ fn write_drives<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result
         })
         .collect();
     let mut widths = DRIVES_HEADER.map(str::len);
+    let mut said = [false; 7];
     for row in &rows {
         for (w, c) in widths.iter_mut().zip(row) {
             *w = (*w).max(display_width(c));
         }
+        for (s, c) in said.iter_mut().zip(row) {
+            *s |= c != "-";
+        }
     }
-    let shown = page.fit(&mut widths, &DRIVES_HEADER, &DRIVES_FIT);
+    let shown = page.fit_shown(&mut widths, &DRIVES_HEADER, &DRIVES_FIT, said);
     writeln!(page.out)?;
     writeln!(page.out, "{}", page.paint(BOLD, "Drive axes (CiA 402)"))?;
     write_comfy_table(
@@ -407,14 +448,35 @@ fn nmt_text(n: &NodeReport) -> String {
     }
 }
 
-/// `period 1.44 s (configured 1.4 s: drifts), timeout 2.1 s (producer),
-/// lost 1x, silent at end`; a guarded node's starts `guarding 100 ms x 3`
-/// and counts its unanswered requests and toggle errors.
+/// `lost 1x, silent at end, period 1.44 s (configured 1.4 s: drifts),
+/// timeout 2.1 s (producer)`: what happened first, then the supervision's
+/// settings, so a cell cut to a terminal's width keeps the outcome. A
+/// guarded node's counts its unanswered requests and toggle errors with
+/// the outcome and says `guarding 100 ms x 3` with the settings.
 fn heartbeat_text(n: &NodeReport) -> String {
     let Some(h) = &n.heartbeat else {
         return "-".to_string();
     };
     let mut parts = Vec::new();
+    parts.push(if h.lost == 0 {
+        "never lost".to_string()
+    } else {
+        format!("lost {}x", h.lost)
+    });
+    if h.silent_at_end {
+        parts.push("silent at end".to_string());
+    }
+    if let Some(g) = &h.guarding {
+        let c = g.counts;
+        if c.unanswered > 0 {
+            parts.push(format!("{} unanswered", c.unanswered));
+        }
+        match c.toggle_errors {
+            0 => {}
+            1 => parts.push("1 toggle error".to_string()),
+            e => parts.push(format!("{e} toggle errors")),
+        }
+    }
     if let Some(g) = &h.guarding {
         let mut text = "guarding".to_string();
         if h.via == Supervision::Guarding
@@ -440,25 +502,6 @@ fn heartbeat_text(n: &NodeReport) -> String {
         Some((t, source)) => parts.push(format!("timeout {} ({})", human_span(t), source.slug())),
         None => parts.push("no timeout known".to_string()),
     }
-    parts.push(if h.lost == 0 {
-        "never lost".to_string()
-    } else {
-        format!("lost {}x", h.lost)
-    });
-    if h.silent_at_end {
-        parts.push("silent at end".to_string());
-    }
-    if let Some(g) = &h.guarding {
-        let c = g.counts;
-        if c.unanswered > 0 {
-            parts.push(format!("{} unanswered", c.unanswered));
-        }
-        match c.toggle_errors {
-            0 => {}
-            1 => parts.push("1 toggle error".to_string()),
-            e => parts.push(format!("{e} toggle errors")),
-        }
-    }
     parts.join(", ")
 }
 
@@ -471,9 +514,15 @@ const CODES_FIT: Fit = Fit {
     flex: &[(4, usize::MAX, 12), (0, CHANNEL_MAX, 7)],
 };
 
-/// The first outages: `start-end (duration s)`, then how many more.
+/// Outages a node health cell lists; the rest are counted.
+const OUTAGES_SHOWN: usize = 3;
+
+/// The first outages, each `848 ms from START` (one still open at the end:
+/// `open since START`), then how many more: the duration first, as
+/// it is what a cut cell must keep, and no end time, as start and
+/// duration give it.
 fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
-    const SHOWN: usize = 3;
+    const SHOWN: usize = OUTAGES_SHOWN;
     let Some(h) = &n.heartbeat else {
         return "-".to_string();
     };
@@ -484,14 +533,9 @@ fn outages_text(times: &TimeFormat, n: &NodeReport) -> String {
         .outages
         .iter()
         .take(SHOWN)
-        .map(|o| match (o.end, o.duration()) {
-            (Some(end), Some(d)) => format!(
-                "{}-{} ({})",
-                times.show(o.start),
-                times.show(end),
-                human_span(d)
-            ),
-            _ => format!("{}-end", times.show(o.start)),
+        .map(|o| match o.duration() {
+            Some(d) => format!("{} from {}", human_span(d), times.show(o.start)),
+            None => format!("open since {}", times.show(o.start)),
         })
         .collect();
     let more = h.lost.saturating_sub(SHOWN as u64);
@@ -572,16 +616,17 @@ fn node_cells(
         n.profile.name(),
         n.profile_source.slug()
     );
+    // Durations with their unit, to the millisecond (JSON keeps the
+    // trace's digits): `1963.059 s` says what `1963.058675` did not.
     match n.time_in_error(input.last_time) {
-        Some(span) => {
-            let _ = write!(in_error, "{span}");
-        }
+        Some(span) => in_error.push_str(&human_span(span)),
         None => in_error.push('-'),
     }
     match n.stats.longest {
         Some((code, span)) => {
             push_code(longest, code);
-            let _ = write!(longest, " {span}");
+            longest.push(' ');
+            longest.push_str(&human_span(span));
         }
         None => longest.push('-'),
     }

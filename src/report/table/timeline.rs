@@ -12,19 +12,27 @@ use super::fit::{CHANNEL_MAX, Fit, display_width, push_row, write_row};
 use super::page::{BOLD, Page};
 use crate::analyze::{InputReport, NodeReport};
 use crate::report::format::push_code;
-use crate::report::timefmt::TimeFormat;
+use crate::report::timefmt::{SameDay, TimeFormat, human_span};
 use crate::text::printable;
 use crate::timeline::Interval;
 
 /// The error timeline under its title; nothing when no node erred.
 pub(super) fn write_timeline<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
-    let times = page.times.clone();
-    let Some(mut widths) = timeline_widths(input, &times)? else {
+    let mut times = page.times.clone();
+    let Some(measured) = timeline_widths(input, &times)? else {
         return Ok(());
+    };
+    // All on one day: the title says it once and the rows leave it out.
+    let (mut widths, title) = match measured.day.day(&times) {
+        Some(day) => {
+            times.without_date = true;
+            (measured.without_date, format!("Error timeline ({day})"))
+        }
+        None => (measured.dated, "Error timeline".to_string()),
     };
     let shown = page.fit(&mut widths, &TIMELINE_HEADER, &TIMELINE_FIT);
     writeln!(page.out)?;
-    writeln!(page.out, "{}", page.paint(BOLD, "Error timeline"))?;
+    writeln!(page.out, "{}", page.paint(BOLD, &title))?;
     write_row(
         &mut page.out,
         &TIMELINE_HEADER,
@@ -108,9 +116,7 @@ fn timeline_cells(
         }
         (Some(_), Some(s), Some(e)) => {
             times.push(end, e);
-            let mut text = Vec::with_capacity(32);
-            e.push_since(s, &mut text);
-            duration.push_str(std::str::from_utf8(&text).unwrap_or_default());
+            duration.push_str(&human_span(e.since(s)));
         }
         (Some(e), _, _) => {
             end.push_str("line ");
@@ -131,14 +137,26 @@ fn timeline_cells(
     widths
 }
 
+/// The timeline's column widths, with the times' dates and without them,
+/// and whether all its times fall on one day: measured in one pass, as
+/// the day decides which widths hold.
+struct Measured {
+    dated: [usize; 8],
+    without_date: [usize; 8],
+    day: SameDay,
+}
+
 /// The timeline's column widths (`None`: no rows), measured without
 /// writing the rows: the first of two passes over millions of errors, it
 /// cost as much as writing them.
-fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option<[usize; 8]>> {
+fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option<Measured>> {
     let mut widths = TIMELINE_HEADER.map(str::len);
+    let mut without_date = widths;
+    let mut short = times.clone();
+    short.without_date = true;
+    let mut day = SameDay::default();
     let mut any = false;
     let mut merge = input.history.merge();
-    let mut scratch = Vec::with_capacity(32);
     for n in &input.nodes {
         let texts = NodeTexts::of(n);
         let channel = display_width(&printable(&n.channel));
@@ -147,18 +165,20 @@ fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option
             any = true;
             let end_time = iv.end.and_then(|e| e.time);
             let line_width = |line: u64| 5 + itoa::Buffer::new().format(line).len();
-            let start = match iv.start.time {
-                Some(t) => times.width(t),
-                None => line_width(iv.start.line),
-            };
-            let (end, duration) = match (iv.end, iv.start.time, end_time) {
-                (None, _, _) => ("active".len(), 1),
-                (Some(_), Some(s), Some(e)) => {
-                    scratch.clear();
-                    e.push_since(s, &mut scratch);
-                    (times.width(e), scratch.len())
+            let (start, short_start) = match iv.start.time {
+                Some(t) => {
+                    day.see(times, t);
+                    (times.width(t), short.width(t))
                 }
-                (Some(e), _, _) => (line_width(e.line), 1),
+                None => (line_width(iv.start.line), line_width(iv.start.line)),
+            };
+            let (end, short_end, duration) = match (iv.end, iv.start.time, end_time) {
+                (None, _, _) => ("active".len(), "active".len(), 1),
+                (Some(_), Some(s), Some(e)) => {
+                    day.see(times, e);
+                    (times.width(e), short.width(e), human_span(e.since(s)).len())
+                }
+                (Some(e), _, _) => (line_width(e.line), line_width(e.line), 1),
             };
             let cleared_by = iv.cleared_by.map_or(1, |c| c.slug().len());
             let row = [
@@ -174,9 +194,20 @@ fn timeline_widths(input: &InputReport, times: &TimeFormat) -> io::Result<Option
             for (w, c) in widths.iter_mut().zip(row) {
                 *w = (*w).max(c);
             }
+            let mut row = row;
+            row[4] = short_start;
+            row[5] = short_end;
+            for (w, c) in without_date.iter_mut().zip(row) {
+                *w = (*w).max(c);
+            }
         }
     }
-    merge.take_error().map_or(Ok(any.then_some(widths)), Err)
+    let measured = Measured {
+        dated: widths,
+        without_date,
+        day,
+    };
+    merge.take_error().map_or(Ok(any.then_some(measured)), Err)
 }
 
 /// Calls `row` for every error of the selected nodes, in report order,
