@@ -6,16 +6,7 @@ use std::io::{self, Read};
 /// `Read::read_exact` cannot say how much a short input held, which every
 /// reader needs to report a cut-off header.
 pub fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
-    let mut n = 0;
-    while n < buf.len() {
-        match input.read(buf.get_mut(n..).unwrap_or_default()) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(n)
+    fill(input, buf, false).map(|(n, _)| n)
 }
 
 /// [`read_full`] for a reader that a cancel may stop (`--follow`, a live
@@ -28,13 +19,23 @@ pub fn read_until_stopped(
     input: &mut impl Read,
     buf: &mut [u8],
 ) -> io::Result<(usize, Option<io::Error>)> {
+    fill(input, buf, true)
+}
+
+/// Reads until `buf` is full or the input ends; when `stoppable`, a
+/// cancel ends it too, its error returned beside the bytes read.
+fn fill(
+    input: &mut impl Read,
+    buf: &mut [u8],
+    stoppable: bool,
+) -> io::Result<(usize, Option<io::Error>)> {
     let mut n = 0;
     while n < buf.len() {
         match input.read(buf.get_mut(n..).unwrap_or_default()) {
             Ok(0) => break,
             Ok(k) => n += k,
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) if crate::cancel::is_cancelled(&e) => return Ok((n, Some(e))),
+            Err(e) if stoppable && crate::cancel::is_cancelled(&e) => return Ok((n, Some(e))),
             Err(e) => return Err(e),
         }
     }
