@@ -64,11 +64,15 @@ fn fail_on_active_exits_1_only_when_an_error_is_still_active() {
 
 #[test]
 fn fail_on_respects_the_node_filter() {
-    // In s300 only node 1 has errors.
+    // In edge.log node 3 ends without an active error, node 4 with three.
     emcy_decode()
-        .args(["--fail-on", "active", "--node", "2", "fixtures/s300.log"])
+        .args(["--fail-on", "active", "--node", "3", "fixtures/edge.log"])
         .assert()
         .code(0);
+    emcy_decode()
+        .args(["--fail-on", "active", "--node", "4", "fixtures/edge.log"])
+        .assert()
+        .code(1);
 }
 
 #[test]
@@ -1292,4 +1296,72 @@ fn verbose_says_how_each_input_was_read() {
         .args(["-v", "-q", "fixtures/acme-servo.log"])
         .assert()
         .code(2);
+}
+
+#[test]
+fn a_node_over_127_on_a_trace_without_ethercat_is_a_usage_error() {
+    let out = emcy_decode()
+        .args([
+            "-q",
+            "--node",
+            "200",
+            "--fail-on",
+            "any",
+            "fixtures/acme-servo.log",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("error: --node 200 is no CANopen node id (1-127)"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+}
+
+#[test]
+fn a_filter_that_selects_nothing_fails_a_fail_on_gate_even_with_quiet() {
+    let run = |args: &[&str]| {
+        let out = emcy_decode().args(args).output().unwrap();
+        (out.status.code(), String::from_utf8(out.stderr).unwrap())
+    };
+    for filter in [["--node", "9"], ["--channel", "can7"]] {
+        let mut args = vec!["-q", "--fail-on", "any", "fixtures/acme-servo.log"];
+        args.extend(filter);
+        let (code, stderr) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}");
+        assert_eq!(
+            stderr,
+            format!(
+                "error: {} {} matches no node in the input, so --fail-on checked nothing\n",
+                filter[0], filter[1]
+            )
+        );
+    }
+    // Node 7 is there: the gate decides as before (its errors fail it).
+    let (code, stderr) = run(&[
+        "-q",
+        "--node",
+        "7",
+        "--fail-on",
+        "any",
+        "fixtures/acme-servo.log",
+    ]);
+    assert_eq!((code, stderr.as_str()), (Some(1), ""));
+    // Without a gate a filter that matches nothing stays a note.
+    let (code, _) = run(&["-q", "--node", "9", "fixtures/acme-servo.log"]);
+    assert_eq!(code, Some(0));
+    // A --glob that selects nothing under a directory was already an error.
+    let (code, stderr) = run(&[
+        "-q",
+        "-r",
+        "--glob",
+        "*.nope",
+        "--fail-on",
+        "any",
+        "fixtures/profiles",
+    ]);
+    assert_eq!(code, Some(2));
+    assert!(stderr.starts_with("error: "), "{stderr}");
 }

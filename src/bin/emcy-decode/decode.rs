@@ -17,6 +17,7 @@ use emcy_decode::analyze::{
     self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Reading, Sink, WithoutEvents,
     batch,
 };
+use emcy_decode::canopen::NodeId;
 use emcy_decode::report::csv::Csv;
 use emcy_decode::report::html::HtmlReport;
 use emcy_decode::report::json::JsonDocument;
@@ -668,6 +669,11 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
         return EXIT_ERROR;
     }
     let fail_on = FailOn::combine(&args.fail_on);
+    let gate = fail_on != FailOn::default();
+    if let Some(problem) = filter_problem(&args.node, &args.channel, gate, &outcome.reports) {
+        log.error(&problem);
+        return EXIT_ERROR;
+    }
     if let Some(bound) = fail_on.category_at_most {
         let nodes = || outcome.reports.iter().flat_map(|r| &r.nodes);
         if !nodes().any(|n| n.profile.has_categories()) {
@@ -694,6 +700,45 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
     } else {
         EXIT_FAIL_ON
     }
+}
+
+/// What makes `--node`/`--channel` a usage error once the inputs are read:
+/// a node over 127 where no input holds EtherCAT (only station addresses go
+/// that high, so it is a typo that would select nothing), or, under a
+/// `--fail-on` gate, filters that selected no node of any input. Such a run
+/// checked nothing, and a CI gate must not turn green on it.
+fn filter_problem(
+    nodes: &[NodeId],
+    channels: &[String],
+    gate: bool,
+    reports: &[InputReport],
+) -> Option<String> {
+    let ethercat = reports.iter().any(|r| r.counts.ethercat_frames > 0);
+    if let Some(n) = nodes.iter().find(|&&n| n > 127)
+        && !ethercat
+    {
+        return Some(format!(
+            "--node {n} is no CANopen node id (1-127) and no input holds EtherCAT, whose \
+             station addresses go higher"
+        ));
+    }
+    let filtered = !nodes.is_empty() || !channels.is_empty();
+    if gate && filtered && reports.iter().all(|r| r.nodes.is_empty()) {
+        let mut given = Vec::new();
+        if !nodes.is_empty() {
+            let list: Vec<String> = nodes.iter().map(ToString::to_string).collect();
+            given.push(format!("--node {}", list.join(",")));
+        }
+        if !channels.is_empty() {
+            given.push(format!("--channel {}", channels.join(",")));
+        }
+        return Some(format!(
+            "{} matches no node in the input{}, so --fail-on checked nothing",
+            given.join(" "),
+            if reports.len() == 1 { "" } else { "s" }
+        ));
+    }
+    None
 }
 
 /// The width to fit the table to: `--width` (0: none), else at a terminal
@@ -732,6 +777,43 @@ fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi:
 mod tests {
     use super::*;
     use std::ffi::OsStr;
+
+    /// A read input without nodes; `ethercat` frames in it or not.
+    fn read_input(ethercat: u64) -> InputReport {
+        let mut report = Analysis::unopened("t.log".into(), String::new()).report;
+        report.error = None;
+        report.counts.ethercat_frames = ethercat;
+        report
+    }
+
+    #[test]
+    fn a_node_over_127_needs_ethercat_in_the_input() {
+        let can = [read_input(0)];
+        let problem = filter_problem(&[5, 200], &[], false, &can).expect("200 on CAN");
+        assert!(
+            problem.starts_with("--node 200 is no CANopen node id"),
+            "{problem}"
+        );
+        assert_eq!(filter_problem(&[127], &[], false, &can), None);
+        let mixed = [read_input(0), read_input(3)];
+        assert_eq!(filter_problem(&[200], &[], false, &mixed), None);
+    }
+
+    #[test]
+    fn filters_that_select_nothing_fail_only_a_gate() {
+        let one = [read_input(0)];
+        assert_eq!(filter_problem(&[5], &[], false, &one), None, "no --fail-on");
+        assert_eq!(filter_problem(&[], &[], true, &one), None, "no filter");
+        assert_eq!(
+            filter_problem(&[5, 6], &["can1".into()], true, &one).as_deref(),
+            Some(
+                "--node 5,6 --channel can1 matches no node in the input, so --fail-on checked nothing"
+            )
+        );
+        let two = [read_input(0), read_input(0)];
+        let problem = filter_problem(&[], &["can9".into()], true, &two).expect("no channel");
+        assert!(problem.contains("in the inputs,"), "{problem}");
+    }
 
     fn names(n: usize) -> Vec<String> {
         (1..=n).map(|i| format!("d/{i}.log")).collect()
