@@ -1365,3 +1365,39 @@ fn a_filter_that_selects_nothing_fails_a_fail_on_gate_even_with_quiet() {
     assert_eq!(code, Some(2));
     assert!(stderr.starts_with("error: "), "{stderr}");
 }
+
+#[test]
+fn an_input_that_cannot_be_read_prints_only_its_error_line_in_table_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let binary = dir.path().join("firmware.bin");
+    std::fs::write(
+        &binary,
+        [0u8, 159, 146, 150, 255, 10, 1, 2, 3, 10].repeat(50),
+    )
+    .unwrap();
+    for file in [dir.path().join("nosuch.log"), binary] {
+        let out = emcy_decode().arg(&file).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{file:?}");
+        assert_eq!(String::from_utf8_lossy(&out.stdout), "", "{file:?}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(stderr.starts_with("error: "), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    // Beside a trace that was read, the Inputs table still names it.
+    let out = emcy_decode()
+        .arg(dir.path().join("nosuch.log"))
+        .arg("fixtures/s300.log")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(stdout.contains("nosuch.log "), "{stdout}");
+    // The JSON contract keeps its document with the input's error.
+    let out = emcy_decode()
+        .args(["-f", "json"])
+        .arg(dir.path().join("nosuch.log"))
+        .output()
+        .unwrap();
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(doc["inputs"][0]["error"].is_string(), "{doc}");
+}
