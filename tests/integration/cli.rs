@@ -1331,14 +1331,27 @@ fn a_filter_that_selects_nothing_fails_a_fail_on_gate_even_with_quiet() {
         args.extend(filter);
         let (code, stderr) = run(&args);
         assert_eq!(code, Some(2), "{args:?}");
-        assert_eq!(
-            stderr,
-            format!(
-                "error: {} {} matches no node in the input, so --fail-on checked nothing\n",
+        assert!(
+            stderr.starts_with(&format!(
+                "error: fixtures/acme-servo.log: {} {} matches no ",
                 filter[0], filter[1]
-            )
+            )),
+            "{stderr}"
         );
+        assert!(
+            stderr.ends_with("; --fail-on checked nothing\n"),
+            "{stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
+    // Without -q the same one line: the input's note is in it.
+    let (code, stderr) = run(&["--node", "9", "--fail-on", "any", "fixtures/acme-servo.log"]);
+    assert_eq!(code, Some(2));
+    assert_eq!(
+        stderr,
+        "error: fixtures/acme-servo.log: --node 9 matches no node; the nodes that sent EMCY \
+         or boot-up frames: 7; --fail-on checked nothing\n"
+    );
     // Node 7 is there: the gate decides as before (its errors fail it).
     let (code, stderr) = run(&[
         "-q",

@@ -40,7 +40,10 @@ fn stdin_prompt(no_files: bool, stdin_is_terminal: bool, quiet: bool) -> Option<
 }
 
 pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
-    let opts = args.options()?;
+    let mut opts = args.options()?;
+    // A gate with a filter that selects nothing fails with one error line
+    // that says what the input has, instead of a note beside it.
+    opts.unmatched_filter_fails = FailOn::combine(&args.fail_on) != FailOn::default();
     // Before any input is read: an unknown --tz is a usage error.
     let time_style = args.time_style()?;
     let walk = Walk::new(args.recursive, args.follow_links, &args.glob)?;
@@ -814,6 +817,11 @@ fn filter_problem(
     }
     let filtered = !nodes.is_empty() || !channels.is_empty();
     if gate && filtered && reports.iter().all(|r| r.nodes.is_empty()) {
+        if let [only] = reports
+            && let Some(note) = &only.unmatched
+        {
+            return Some(format!("{}: {note}; --fail-on checked nothing", only.file));
+        }
         let mut given = Vec::new();
         if !nodes.is_empty() {
             let list: Vec<String> = nodes.iter().map(ToString::to_string).collect();
@@ -822,8 +830,13 @@ fn filter_problem(
         if !channels.is_empty() {
             given.push(format!("--channel {}", channels.join(",")));
         }
+        // Of several inputs the first that names what it has instead.
+        let example = reports
+            .iter()
+            .find_map(|r| Some(format!(" (first: {}: {})", r.file, r.unmatched.as_ref()?)))
+            .unwrap_or_default();
         return Some(format!(
-            "{} matches no node in the input{}, so --fail-on checked nothing",
+            "{} matches no node in the input{}, so --fail-on checked nothing{example}",
             given.join(" "),
             if reports.len() == 1 { "" } else { "s" }
         ));
@@ -966,6 +979,18 @@ mod tests {
             Some(
                 "--node 5,6 --channel can1 matches no node in the input, so --fail-on checked nothing"
             )
+        );
+        // The input's note on what it has goes into the one line.
+        let mut noted = read_input(0);
+        noted.unmatched = Some("--node 5 matches no node; the nodes ...: 7".into());
+        assert_eq!(
+            filter_problem(&[5], &[], true, std::slice::from_ref(&noted)).as_deref(),
+            Some("t.log: --node 5 matches no node; the nodes ...: 7; --fail-on checked nothing")
+        );
+        let problem = filter_problem(&[5], &[], true, &[read_input(0), noted]).unwrap();
+        assert!(
+            problem.ends_with("nothing (first: t.log: --node 5 matches no node; the nodes ...: 7)"),
+            "{problem}"
         );
         let two = [read_input(0), read_input(0)];
         let problem = filter_problem(&[], &["can9".into()], true, &two).expect("no channel");
