@@ -23,6 +23,7 @@ impl Analysis {
                 timestamps: None,
                 error: Some(error),
                 nmt_unanswered: Vec::new(),
+                unmatched: None,
             },
             errors_raised: 0,
             frames_with_warnings: 0,

@@ -160,7 +160,9 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             nodes_taken.into_reports(self.opts, |report, health| {
                 monitors.report(report, health);
             });
-        if let Some(note) = unmatched {
+        if let Some(note) = &unmatched
+            && !self.opts.unmatched_filter_fails
+        {
             self.log.note(&format!("{file}: {note}"));
         }
         // Nodes that raised the same codes under the same profile share
@@ -219,6 +221,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             history,
             error,
             nmt_unanswered,
+            unmatched,
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;

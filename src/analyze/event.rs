@@ -438,6 +438,9 @@ pub struct InputReport {
     /// one entry per command (in the order of their bytes), guard requests
     /// last; empty when every id addressed spoke.
     pub nmt_unanswered: Vec<Unanswered>,
+    /// `--node`/`--channel` selected no node of this input: what it has
+    /// instead (`--node 9 matches no node; the nodes that sent ...: 7`).
+    pub unmatched: Option<String>,
 }
 
 impl InputReport {

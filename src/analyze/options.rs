@@ -64,6 +64,12 @@ pub struct Options {
     /// `--assume-cia402-pdo`: the predefined CiA 402 mapping for PDOs no
     /// other source maps (source `assumed`).
     pub assume_cia402_pdo: bool,
+    /// A `--node`/`--channel` that selects nothing fails the run (a
+    /// `--fail-on` gate): the input's note on it is kept in its report
+    /// ([`InputReport::unmatched`]) for the run's error line, not printed.
+    ///
+    /// [`InputReport::unmatched`]: super::InputReport::unmatched
+    pub unmatched_filter_fails: bool,
 }
 
 /// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
@@ -95,6 +101,7 @@ impl Default for Options {
             pdo: Vec::new(),
             dcf: Vec::new(),
             assume_cia402_pdo: false,
+            unmatched_filter_fails: false,
         }
     }
 }

@@ -19,6 +19,92 @@ fn plural(n: u64, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
+/// One trace in a JUnit report of traces that were not all read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JunitCase {
+    pub trace: String,
+    /// Seconds spent reading it.
+    pub seconds: f64,
+    /// Why it could not be read; `None` for a trace that was read.
+    pub error: Option<String>,
+}
+
+impl JunitCase {
+    pub fn unread(trace: String, error: String, seconds: f64) -> JunitCase {
+        JunitCase {
+            trace,
+            seconds,
+            error: Some(error),
+        }
+    }
+}
+
+/// A JUnit report for a check that compared nothing because a trace could
+/// not be read: that trace is a case with an `<error>`, the traces read are
+/// skipped cases (nothing was compared), so the CI report still parses and
+/// says what went wrong.
+pub fn junit_unread(traces: &[JunitCase]) -> String {
+    let mut cases = String::new();
+    let mut errors = 0;
+    for case in traces {
+        cases.push_str(&format!(
+            "    <testcase classname=\"emcy-decode.check\" name=\"{}\" time=\"{:.3}\">\n",
+            xml(&printable(&case.trace)),
+            case.seconds
+        ));
+        match &case.error {
+            Some(why) => {
+                errors += 1;
+                let line = format!("{}: {}", printable(&case.trace), why);
+                cases.push_str(&format!(
+                    "      <error message=\"{}\" type=\"unreadable\">{}</error>\n",
+                    xml(&line),
+                    xml(&line)
+                ));
+            }
+            None => cases.push_str(
+                "      <skipped message=\"nothing compared: another trace could not be read\"/>\n",
+            ),
+        }
+        cases.push_str("    </testcase>\n");
+    }
+    let total = traces.iter().map(|c| c.seconds).sum();
+    let skipped = traces.len() as u64 - errors;
+    let counts = Counts {
+        tests: traces.len() as u64,
+        failures: 0,
+        errors,
+        skipped,
+    };
+    junit_document(counts, total, &cases)
+}
+
+/// A JUnit suite's counts of cases.
+struct Counts {
+    tests: u64,
+    failures: u64,
+    errors: u64,
+    skipped: u64,
+}
+
+/// The JUnit envelope around `cases`: one suite, its counts and seconds.
+fn junit_document(counts: Counts, seconds: f64, cases: &str) -> String {
+    let Counts {
+        tests,
+        failures,
+        errors,
+        skipped,
+    } = counts;
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
+         <testsuites name=\"emcy-decode check\" tests=\"{tests}\" failures=\"{failures}\" \
+         errors=\"{errors}\" time=\"{seconds:.3}\">\n  \
+         <testsuite name=\"emcy-decode check\" tests=\"{tests}\" failures=\"{failures}\" \
+         errors=\"{errors}\" skipped=\"{skipped}\" time=\"{seconds:.3}\">\n{cases}  </testsuite>\n\
+         </testsuites>\n"
+    )
+}
+
 impl Diff {
     /// One line per finding, `SEVERITY: FILE[ CHANNEL node N]: MESSAGE`,
     /// sorted by file, channel, node and code; then the summary line.
@@ -110,11 +196,19 @@ impl Diff {
     /// trace given or in the baseline), a `<failure>` per regression with
     /// its line of text; a trace whose regressions were all allowed passes,
     /// its allowed regressions, improvements and changes in `<system-out>`.
-    pub fn junit<'t>(&self, traces: impl IntoIterator<Item = &'t str>) -> String {
+    pub fn junit<'t>(
+        &self,
+        traces: impl IntoIterator<Item = &'t str>,
+        seconds: impl Fn(&str) -> Option<f64>,
+    ) -> String {
         let mut cases = String::new();
         let (mut tests, mut failures) = (0u64, 0u64);
+        let mut total = 0.0;
         for trace in traces {
             tests += 1;
+            // A trace only the baseline names was not read: no time spent.
+            let time = seconds(trace).unwrap_or(0.0);
+            total += time;
             let mine: Vec<_> = self.findings.iter().filter(|f| f.file == trace).collect();
             let failed: Vec<_> = mine
                 .iter()
@@ -124,7 +218,7 @@ impl Diff {
                 failures += 1;
             }
             cases.push_str(&format!(
-                "    <testcase classname=\"emcy-decode.check\" name=\"{}\">\n",
+                "    <testcase classname=\"emcy-decode.check\" name=\"{}\" time=\"{time:.3}\">\n",
                 xml(&printable(trace))
             ));
             for f in &failed {
@@ -152,12 +246,13 @@ impl Diff {
             }
             cases.push_str("    </testcase>\n");
         }
-        format!(
-            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
-             <testsuites name=\"emcy-decode check\" tests=\"{tests}\" failures=\"{failures}\">\n  \
-             <testsuite name=\"emcy-decode check\" tests=\"{tests}\" failures=\"{failures}\" \
-             errors=\"0\" skipped=\"0\">\n{cases}  </testsuite>\n</testsuites>\n"
-        )
+        let counts = Counts {
+            tests,
+            failures,
+            errors: 0,
+            skipped: 0,
+        };
+        junit_document(counts, total, &cases)
     }
 
     /// GitHub Actions workflow commands: `::error` per regression (on its
@@ -201,6 +296,30 @@ mod tests {
         assert_eq!(xml("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
         assert_eq!(xml("tab\tline\nbell\u{7}"), "tab\tline\nbell\u{FFFD}");
         assert!(roxmltree::Document::parse(&format!("<a>{}</a>", xml("\u{0}\u{1B}x"))).is_ok());
+    }
+
+    #[test]
+    fn an_unread_check_is_a_suite_of_errors_and_skipped_cases() {
+        let cases = [
+            JunitCase::unread("a<1>.log".into(), "No such file".into(), 0.25),
+            JunitCase {
+                trace: "b.log".into(),
+                seconds: 1.5,
+                error: None,
+            },
+        ];
+        let text = junit_unread(&cases);
+        let doc = roxmltree::Document::parse(&text).expect("well-formed");
+        let suite = doc
+            .descendants()
+            .find(|n| n.has_tag_name("testsuite"))
+            .unwrap();
+        let counts =
+            ["tests", "failures", "errors", "skipped", "time"].map(|a| suite.attribute(a).unwrap());
+        assert_eq!(counts, ["2", "0", "1", "1", "1.750"]);
+        let error = doc.descendants().find(|n| n.has_tag_name("error")).unwrap();
+        assert_eq!(error.attribute("message"), Some("a<1>.log: No such file"));
+        assert_eq!(error.parent().unwrap().attribute("time"), Some("0.250"));
     }
 
     #[test]

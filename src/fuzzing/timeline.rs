@@ -308,6 +308,7 @@ pub fn decode_timeline(data: &[u8]) {
         timestamps: None,
         error: None,
         nmt_unanswered: Vec::new(),
+        unmatched: None,
     };
     let inputs = std::slice::from_ref(&report);
     ndjson.end_input(&report).expect("Vec");

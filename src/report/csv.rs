@@ -4,18 +4,22 @@
 //! the `csv` crate quotes (RFC 4180: a field with a comma, a quote or a
 //! line break is quoted; the tests read every output back with the crate).
 //! A cell with several values separates them with
-//! spaces (`0x4310 0x3120`, `0x4310:2 0x3120:1` for counts); the profile's
+//! spaces (`4310h 3120h`, `4310h:2 3120h:1` for counts); the profile's
 //! fields are the JSON object the JSON formats give them (their texts can
 //! hold any separator).
 //!
 //! Text from outside (file and channel names, a user profile's texts) is
 //! made harmless as in every other output: control characters escaped,
 //! and a text a spreadsheet would run as a formula neutralised as OWASP's
-//! CSV injection advice says ([`text`]). Numbers are written as numbers.
+//! CSV injection advice says ([`text`]). Numbers are written as numbers;
+//! codes, device types and bytes are written so that DuckDB and pandas
+//! guess them as text without options: codes in CiA 301's `4310h`
+//! notation (both read `0x4310` or `0100` as a number), bytes as hex pairs
+//! with spaces between (`10 43 08 01`).
 
 use std::io::{self, Write};
 
-use super::format::{self, CSV_LIST, push_code, push_code_counts, push_codes, push_hex};
+use super::format::{CSV_LIST, cia_code, push_code_counts, push_codes, push_hex_spaced};
 use super::jsonw::{JsonWriter, push_decoded};
 use super::table::health_description;
 use super::timefmt::{TimeFormat, TimeStyle};
@@ -234,8 +238,7 @@ impl<W: Write> Csv<W> {
         };
         let (longest_code, longest) = match n.stats.longest {
             Some((code, d)) => {
-                let mut c = Vec::new();
-                push_code(&mut c, code);
+                let c = cia_code(code).to_vec();
                 (c, span(Some(d)))
             }
             None => (Vec::new(), Vec::new()),
@@ -252,7 +255,11 @@ impl<W: Write> Csv<W> {
         let (last, last_text) = time(n.stats.last_emcy.and_then(|a| a.time));
         let node = itoa::Buffer::new().format(n.node).to_string();
         let count = itoa::Buffer::new().format(n.emcy_count).to_string();
-        let device_type = n.device_type.map(format::device_type).unwrap_or_default();
+        // CiA 301's `h` notation, as the codes: `0x00020192` would be a number.
+        let device_type = n
+            .device_type
+            .map(|v| format!("{v:08X}h"))
+            .unwrap_or_default();
         let device_profile = n
             .device_type
             .map(device_profile::describe)
@@ -415,7 +422,7 @@ where
 /// The payload columns of an EMCY, encoded (see [`Csv::payload`]).
 fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
     let mut row = Vec::with_capacity(256);
-    push_code(&mut row, ev.emcy.code);
+    row.extend_from_slice(&cia_code(ev.emcy.code));
     row.push(b',');
     row.extend_from_slice(ev.info.class.slug().as_bytes());
     row.push(b',');
@@ -430,9 +437,9 @@ fn payload_fragment(ev: &EmcyEvent<'_>, json: &mut Vec<u8>) -> Vec<u8> {
         row.extend_from_slice(name.as_bytes());
     }
     row.push(b',');
-    push_hex(&mut row, ev.data);
+    push_hex_spaced(&mut row, ev.data);
     row.push(b',');
-    push_hex(&mut row, ev.emcy.manufacturer());
+    push_hex_spaced(&mut row, ev.emcy.manufacturer());
     row.push(b',');
     push_text(&mut row, ev.profile.profile.name());
     row.push(b',');

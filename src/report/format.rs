@@ -37,6 +37,27 @@ pub(crate) fn code(code: u16) -> [u8; 6] {
     text
 }
 
+/// `4310h`: a code as CiA 301 itself writes hex, for the CSV. DuckDB reads
+/// `0x4310` as the number 17168 (quoted or not) and pandas reads digit
+/// strings as numbers; a trailing `h` keeps the cell text in both without
+/// options, where a code must stay (it is looked up, never added).
+pub(crate) fn cia_code(code: u16) -> [u8; 5] {
+    let mut text = *b"0000h";
+    for (d, shift) in text[..4].iter_mut().zip([12, 8, 4, 0]) {
+        *d = HEX[usize::from((code >> shift) & 0xF)];
+    }
+    text
+}
+
+/// How a list writes each code.
+#[derive(Clone, Copy)]
+pub(crate) enum Notation {
+    /// `0x4310`.
+    Prefixed,
+    /// `4310h` ([`cia_code`]).
+    Cia,
+}
+
 /// Appends `0x4310`.
 pub(crate) fn push_code(out: &mut impl Ascii, c: u16) {
     out.push_ascii(&code(c));
@@ -67,6 +88,18 @@ pub(crate) fn push_hex(out: &mut impl Ascii, bytes: &[u8]) {
         word[..chunk.len()].copy_from_slice(chunk);
         let text = hex16(u64::from_be_bytes(word));
         out.push_ascii(text.get(..2 * chunk.len()).unwrap_or_default());
+    }
+}
+
+/// Appends `bytes` as upper-case hex pairs with a space between
+/// (`10 43 08 01`): the CSV's bytes, which two or more pairs keep text in
+/// DuckDB and pandas (`1043080100000000` is a number to pandas).
+pub(crate) fn push_hex_spaced(out: &mut impl Ascii, bytes: &[u8]) {
+    for (i, &b) in bytes.iter().enumerate() {
+        if i > 0 {
+            out.push_ascii(b" ");
+        }
+        push_hex_byte(out, b);
     }
 }
 
@@ -107,6 +140,7 @@ pub(crate) struct ListStyle {
     pub count: &'static str,
     /// After the last item.
     pub close: &'static str,
+    pub notation: Notation,
 }
 
 /// The table's lists: `0x4310, 0x2310` and `0x3120 x1, 0x4210 x2`.
@@ -116,9 +150,10 @@ pub(crate) const TABLE_LIST: ListStyle = ListStyle {
     separator: ", ",
     count: " x",
     close: "",
+    notation: Notation::Prefixed,
 };
 
-/// A CSV cell's lists: `0x4310 0x2310` and `0x3120:1 0x4210:2` (no commas,
+/// A CSV cell's lists: `4310h 2310h` and `3120h:1 4210h:2` (no commas,
 /// so a cell needs no quoting).
 pub(crate) const CSV_LIST: ListStyle = ListStyle {
     open: "",
@@ -126,6 +161,7 @@ pub(crate) const CSV_LIST: ListStyle = ListStyle {
     separator: " ",
     count: ":",
     close: "",
+    notation: Notation::Cia,
 };
 
 /// A JSON array of codes: `["0x4310","0x2310"]`.
@@ -135,6 +171,7 @@ pub(crate) const JSON_ARRAY: ListStyle = ListStyle {
     separator: ",",
     count: "",
     close: "]",
+    notation: Notation::Prefixed,
 };
 
 /// A JSON object from codes to counts: `{"0x3120":1,"0x4210":2}`.
@@ -144,6 +181,7 @@ pub(crate) const JSON_COUNTS: ListStyle = ListStyle {
     separator: ",",
     count: ":",
     close: "}",
+    notation: Notation::Prefixed,
 };
 
 /// Appends `codes` as a list in `style`.
@@ -182,7 +220,10 @@ pub(crate) fn push_code_counts(
 
 fn push_quoted_code(out: &mut impl Ascii, c: u16, style: &ListStyle) {
     out.push_ascii(style.quote.as_bytes());
-    push_code(out, c);
+    match style.notation {
+        Notation::Prefixed => push_code(out, c),
+        Notation::Cia => out.push_ascii(&cia_code(c)),
+    }
     out.push_ascii(style.quote.as_bytes());
 }
 
@@ -247,11 +288,23 @@ mod tests {
         };
         assert_eq!(list(&TABLE_LIST), "0x3120, 0x4210");
         assert_eq!(with_counts(&TABLE_LIST), "0x3120 x1, 0x4210 x12");
-        assert_eq!(list(&CSV_LIST), "0x3120 0x4210");
-        assert_eq!(with_counts(&CSV_LIST), "0x3120:1 0x4210:12");
+        assert_eq!(list(&CSV_LIST), "3120h 4210h");
+        assert_eq!(with_counts(&CSV_LIST), "3120h:1 4210h:12");
         assert_eq!(list(&JSON_ARRAY), r#"["0x3120","0x4210"]"#);
         assert_eq!(with_counts(&JSON_COUNTS), r#"{"0x3120":1,"0x4210":12}"#);
         assert_eq!(codes_list(&[]), "");
+    }
+
+    #[test]
+    fn the_csv_writes_codes_as_cia_and_bytes_spaced() {
+        assert_eq!(&cia_code(0x4310), b"4310h");
+        assert_eq!(&cia_code(0x00AF), b"00AFh");
+        let mut out = String::new();
+        push_hex_spaced(&mut out, &[0x10, 0x43, 0x0C, 0x01]);
+        assert_eq!(out, "10 43 0C 01");
+        out.clear();
+        push_hex_spaced(&mut out, &[]);
+        assert_eq!(out, "");
     }
 
     proptest::proptest! {

@@ -1168,6 +1168,78 @@ fn junit_has_a_test_case_per_trace_and_a_failure_per_regression() {
 }
 
 #[test]
+fn junit_cases_and_suites_say_how_long_they_took() {
+    let (_, xml) = two_traces_checked("junit", &[]);
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    for tag in ["testsuites", "testsuite", "testcase"] {
+        for node in doc.descendants().filter(|n| n.has_tag_name(tag)) {
+            let time = node
+                .attribute("time")
+                .unwrap_or_else(|| panic!("{tag}: {xml}"));
+            let seconds: f64 = time.parse().expect("seconds");
+            assert!((0.0..60.0).contains(&seconds), "{tag} time {time}");
+        }
+    }
+}
+
+#[test]
+fn junit_with_an_unreadable_trace_is_valid_xml_with_an_error_case() {
+    let dir = workspace("rig.log");
+    make_baseline(&dir);
+    let out = cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "-f", "junit"])
+        .args(["traces/rig.log", "traces/gone.log"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let xml = String::from_utf8(out.stdout).unwrap();
+    let doc = roxmltree::Document::parse(&xml).expect("well-formed XML");
+    let suite = doc
+        .descendants()
+        .find(|n| n.has_tag_name("testsuite"))
+        .unwrap();
+    assert_eq!(suite.attribute("tests"), Some("2"));
+    assert_eq!(suite.attribute("errors"), Some("1"));
+    assert_eq!(suite.attribute("skipped"), Some("1"));
+    let case = |name: &str| {
+        doc.descendants()
+            .find(|n| n.has_tag_name("testcase") && n.attribute("name") == Some(name))
+            .unwrap_or_else(|| panic!("{name}: {xml}"))
+    };
+    let error = case("traces/gone.log")
+        .children()
+        .find(|n| n.has_tag_name("error"))
+        .expect("an error element");
+    assert!(
+        error
+            .attribute("message")
+            .unwrap()
+            .starts_with("traces/gone.log: "),
+        "{xml}"
+    );
+    assert!(
+        case("traces/rig.log")
+            .children()
+            .any(|n| n.has_tag_name("skipped"))
+    );
+    // A directory with no trace under it is an unreadable case too.
+    let out = cmd_in(&dir)
+        .args(["check", "--baseline", "baseline.json", "-f", "junit", "-r"])
+        .args(["--glob", "*.nope", "traces"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let xml = String::from_utf8(out.stdout).unwrap();
+    let doc = roxmltree::Document::parse(&xml).expect("well-formed XML");
+    assert_eq!(
+        doc.descendants()
+            .filter(|n| n.has_tag_name("error"))
+            .count(),
+        1
+    );
+}
+
+#[test]
 fn junit_shows_an_allowed_regression_as_a_passed_case_with_a_note() {
     let (code, xml) = two_traces_checked("junit", &["--allow", "0x2310"]);
     assert_eq!(code, Some(0));

@@ -64,11 +64,15 @@ fn fail_on_active_exits_1_only_when_an_error_is_still_active() {
 
 #[test]
 fn fail_on_respects_the_node_filter() {
-    // In s300 only node 1 has errors.
+    // In edge.log node 3 ends without an active error, node 4 with three.
     emcy_decode()
-        .args(["--fail-on", "active", "--node", "2", "fixtures/s300.log"])
+        .args(["--fail-on", "active", "--node", "3", "fixtures/edge.log"])
         .assert()
         .code(0);
+    emcy_decode()
+        .args(["--fail-on", "active", "--node", "4", "fixtures/edge.log"])
+        .assert()
+        .code(1);
 }
 
 #[test]
@@ -1457,4 +1461,121 @@ fn verbose_says_how_each_input_was_read() {
         .args(["-v", "-q", "fixtures/acme-servo.log"])
         .assert()
         .code(2);
+}
+
+#[test]
+fn a_node_over_127_on_a_trace_without_ethercat_is_a_usage_error() {
+    let out = emcy_decode()
+        .args([
+            "-q",
+            "--node",
+            "200",
+            "--fail-on",
+            "any",
+            "fixtures/acme-servo.log",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("error: --node 200 is no CANopen node id (1-127)"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+}
+
+#[test]
+fn a_filter_that_selects_nothing_fails_a_fail_on_gate_even_with_quiet() {
+    let run = |args: &[&str]| {
+        let out = emcy_decode().args(args).output().unwrap();
+        (out.status.code(), String::from_utf8(out.stderr).unwrap())
+    };
+    for filter in [["--node", "9"], ["--channel", "can7"]] {
+        let mut args = vec!["-q", "--fail-on", "any", "fixtures/acme-servo.log"];
+        args.extend(filter);
+        let (code, stderr) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}");
+        assert!(
+            stderr.starts_with(&format!(
+                "error: fixtures/acme-servo.log: {} {} matches no ",
+                filter[0], filter[1]
+            )),
+            "{stderr}"
+        );
+        assert!(
+            stderr.ends_with("; --fail-on checked nothing\n"),
+            "{stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    // Without -q the same one line: the input's note is in it.
+    let (code, stderr) = run(&["--node", "9", "--fail-on", "any", "fixtures/acme-servo.log"]);
+    assert_eq!(code, Some(2));
+    assert_eq!(
+        stderr,
+        "error: fixtures/acme-servo.log: --node 9 matches no node; the nodes that sent EMCY \
+         or boot-up frames: 7; --fail-on checked nothing\n"
+    );
+    // Node 7 is there: the gate decides as before (its errors fail it).
+    let (code, stderr) = run(&[
+        "-q",
+        "--node",
+        "7",
+        "--fail-on",
+        "any",
+        "fixtures/acme-servo.log",
+    ]);
+    assert_eq!((code, stderr.as_str()), (Some(1), ""));
+    // Without a gate a filter that matches nothing stays a note.
+    let (code, _) = run(&["-q", "--node", "9", "fixtures/acme-servo.log"]);
+    assert_eq!(code, Some(0));
+    // A --glob that selects nothing under a directory was already an error.
+    let (code, stderr) = run(&[
+        "-q",
+        "-r",
+        "--glob",
+        "*.nope",
+        "--fail-on",
+        "any",
+        "fixtures/profiles",
+    ]);
+    assert_eq!(code, Some(2));
+    assert!(stderr.starts_with("error: "), "{stderr}");
+}
+
+#[test]
+fn an_input_that_cannot_be_read_prints_only_its_error_line_in_table_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let binary = dir.path().join("firmware.bin");
+    std::fs::write(
+        &binary,
+        [0u8, 159, 146, 150, 255, 10, 1, 2, 3, 10].repeat(50),
+    )
+    .unwrap();
+    for file in [dir.path().join("nosuch.log"), binary] {
+        let out = emcy_decode().arg(&file).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{file:?}");
+        assert_eq!(String::from_utf8_lossy(&out.stdout), "", "{file:?}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(stderr.starts_with("error: "), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    // Beside a trace that was read, the Inputs table still names it.
+    let out = emcy_decode()
+        .arg(dir.path().join("nosuch.log"))
+        .arg("fixtures/s300.log")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(stdout.contains("nosuch.log "), "{stdout}");
+    // The JSON contract keeps its document with the input's error.
+    let out = emcy_decode()
+        .args(["-f", "json"])
+        .arg(dir.path().join("nosuch.log"))
+        .output()
+        .unwrap();
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(doc["inputs"][0]["error"].is_string(), "{doc}");
 }

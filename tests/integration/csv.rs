@@ -31,9 +31,20 @@ fn codes(v: &Value) -> String {
     v.as_array()
         .unwrap()
         .iter()
-        .map(|c| c.as_str().unwrap().to_string())
+        .map(|c| cia(c.as_str().unwrap()))
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// The JSON's `0x4310` as the CSV writes it, `4310h`.
+fn cia(hex: &str) -> String {
+    format!("{}h", hex.strip_prefix("0x").expect("0x hex"))
+}
+
+/// The JSON's `10430801` as the CSV writes it, `10 43 08 01`.
+fn spaced(hex: &str) -> String {
+    let pairs: Vec<&str> = (0..hex.len()).step_by(2).map(|i| &hex[i..i + 2]).collect();
+    pairs.join(" ")
 }
 
 /// A JSON number's text as the binary wrote it (`serde_json` keeps it with
@@ -81,8 +92,12 @@ fn every_fixtures_event_rows_say_what_its_ndjson_says() {
             }
             assert_eq!(cell("cleared"), codes(&ev["cleared"]));
             if ev["type"] == "emcy" {
-                assert_eq!(cell("code"), ev["code"].as_str().unwrap());
-                assert_eq!(cell("data"), ev["data"].as_str().unwrap());
+                assert_eq!(cell("code"), cia(ev["code"].as_str().unwrap()));
+                assert_eq!(cell("data"), spaced(ev["data"].as_str().unwrap()));
+                assert_eq!(
+                    cell("manufacturer"),
+                    spaced(ev["manufacturer"].as_str().unwrap())
+                );
                 assert_eq!(cell("description"), ev["description"].as_str().unwrap());
                 assert_eq!(cell("state"), ev["state"].as_str().unwrap());
                 let decoded = cell("profile_fields");
@@ -142,16 +157,19 @@ fn summary_is_one_row_per_node_object() {
             .as_object()
             .unwrap()
             .iter()
-            .map(|(c, k)| format!("{c}:{k}"))
+            .map(|(c, k)| format!("{}:{k}", cia(c)))
             .collect();
         assert_eq!(&row[6], seen.join(" "));
         assert_eq!(&row[14], n["profile"].as_str().unwrap());
-        assert_eq!(&row[16], n["device_type"].as_str().unwrap_or_default());
+        assert_eq!(
+            row[16],
+            n["device_type"].as_str().map(cia).unwrap_or_default()
+        );
         assert_eq!(&row[17], n["device_profile"].as_str().unwrap_or_default());
     }
     assert!(
         rows.iter()
-            .any(|r| &r[16] == "0x00020192" && &r[17] == "CiA 402 drive")
+            .any(|r| &r[16] == "00020192h" && &r[17] == "CiA 402 drive")
     );
 }
 
@@ -235,4 +253,66 @@ fn names_can_neither_run_formulas_nor_reach_the_terminal() {
             assert_eq!(&can0[9], "-1.600000", "longest_error_duration");
         }
     }
+}
+
+/// Reads the CSV files given with DuckDB and pandas, no options, and prints
+/// each code, id and byte column that either guessed as anything but text.
+const GUESS_TYPES: &str = r#"
+import sys
+import duckdb
+import pandas as pd
+
+TEXT = ["code", "data", "manufacturer", "cleared", "active", "errors_seen",
+        "longest_error_code", "device_type"]
+for path in sys.argv[1:]:
+    duck = {r[0]: r[1] for r in duckdb.sql(f"DESCRIBE SELECT * FROM read_csv('{path}')").fetchall()}
+    frame = pd.read_csv(path)
+    for col in TEXT:
+        if col not in duck:
+            continue
+        values = frame[col].dropna()
+        if duck[col] != "VARCHAR" and not (duck[col] == "NULL" or values.empty):
+            print(f"duckdb {path} {col} {duck[col]}")
+        if not values.empty and not all(isinstance(v, str) for v in values):
+            print(f"pandas {path} {col} {frame[col].dtype}")
+"#;
+
+#[test]
+fn duckdb_and_pandas_read_codes_ids_and_bytes_as_text_without_options() {
+    let ready = std::process::Command::new("python3")
+        .args(["-c", "import duckdb, pandas"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ready {
+        eprintln!("skipped: python3 with duckdb and pandas not found (.ci/run installs them)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for (name, view) in [("events.csv", "full"), ("nodes.csv", "summary")] {
+        let out = emcy_decode()
+            .args(["--format", "csv", "--view", view])
+            .args([
+                "fixtures/edge.log",
+                "fixtures/s300.log",
+                "fixtures/cia402-commissioning.log",
+                "fixtures/stoeber-ecat.pcapng",
+            ])
+            .output()
+            .unwrap();
+        let path = dir.path().join(name);
+        std::fs::write(&path, out.stdout).unwrap();
+        files.push(path);
+    }
+    let out = std::process::Command::new("python3")
+        .args(["-c", GUESS_TYPES])
+        .args(&files)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "");
 }

@@ -23,19 +23,31 @@ use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use emcy_decode::analyze::{self, DiagnosticLog, Discard, InputReport, OutputError, describe_io};
 use emcy_decode::baseline::compare::{Allow, compare};
 use emcy_decode::baseline::key::trace_key_under;
+use emcy_decode::baseline::text::{JunitCase, junit_unread};
 use emcy_decode::baseline::{self, Baseline};
 use emcy_decode::small_file;
 use emcy_decode::trace::input::{self, ReadMode, Source};
 
-/// Reads every trace through the decode pipeline. `Ok(Err(status))` when a
+/// The traces as read: each one's key and report, and the seconds reading
+/// it took (for JUnit's `time`).
+struct Traces {
+    reports: Vec<(String, InputReport)>,
+    seconds: BTreeMap<String, f64>,
+}
+
+/// Reading stopped: the status to exit with, and every trace given as a
+/// case for a JUnit report, with why it could not be read.
+struct Unread {
+    status: ExitCode,
+    cases: Vec<JunitCase>,
+}
+
+/// Reads every trace through the decode pipeline. `Ok(Err(unread))` when a
 /// trace could not be read (2) or a signal stopped reading (its status):
 /// each has had its `error:` line (naming `unwritten`, what is then not
 /// done) and the caller exits with that status without writing or
 /// comparing anything.
-fn read_traces(
-    args: &TraceArgs,
-    unwritten: &str,
-) -> Result<Result<Vec<(String, InputReport)>, ExitCode>> {
+fn read_traces(args: &TraceArgs, unwritten: &str) -> Result<Result<Traces, Unread>> {
     let cwd = std::env::current_dir().ok();
     let root = args.root.as_deref();
     let opts = args.options()?;
@@ -44,19 +56,22 @@ fn read_traces(
     // cannot be listed is an unreadable trace.
     let mut traces: Vec<PathBuf> = Vec::new();
     let walk = Walk::new(args.recursive, args.follow_links, &args.glob)?;
-    let mut unlisted = false;
+    let mut unlisted = Vec::new();
     for input in walk.expand(&args.traces, &opts.cancel, &mut log) {
         match input {
             Input::Source(Source::Path(p)) => traces.push(p),
             Input::Source(Source::Stdin) => traces.push(PathBuf::from("-")),
             Input::Unlisted { name, error } => {
                 log.error(&format!("{name}: {error}; {unwritten}"));
-                unlisted = true;
+                unlisted.push(JunitCase::unread(name, error, 0.0));
             }
         }
     }
-    if unlisted {
-        return Ok(Err(ExitCode::from(EXIT_ERROR)));
+    if !unlisted.is_empty() {
+        return Ok(Err(Unread {
+            status: ExitCode::from(EXIT_ERROR),
+            cases: unlisted,
+        }));
     }
     let mut keys: BTreeMap<String, &Path> = BTreeMap::new();
     for arg in &traces {
@@ -71,8 +86,12 @@ fn read_traces(
     }
     let caught = signals::catch(&opts.cancel);
     let mut reports = Vec::new();
+    let mut seconds = BTreeMap::new();
+    let mut cases = Vec::new();
     let mut failed = false;
     for arg in &traces {
+        let started = std::time::Instant::now();
+        let key = trace_key_under(arg, cwd.as_deref(), root);
         let source = Source::from_arg(arg);
         // A pipe may be quiet for long: read so that a signal ends the wait.
         let mode = if matches!(source, Source::Stdin) && input::stdin_is_stream() {
@@ -90,21 +109,36 @@ fn read_traces(
             &mut log,
         )
         .map_err(|OutputError(e)| anyhow::Error::from(e))?;
+        let took = started.elapsed().as_secs_f64();
         if let Some(stop) = caught.stopped() {
             log.error(&format!(
                 "stopped by {} while reading {}; {unwritten}",
                 stop.name,
                 source.display_name()
             ));
-            return Ok(Err(ExitCode::from(stop.status)));
+            let why = format!("stopped by {}", stop.name);
+            cases.push(JunitCase::unread(key, why, took));
+            return Ok(Err(Unread {
+                status: ExitCode::from(stop.status),
+                cases,
+            }));
         }
         failed |= analysis.report.error.is_some();
-        reports.push((trace_key_under(arg, cwd.as_deref(), root), analysis.report));
+        cases.push(JunitCase {
+            trace: key.clone(),
+            seconds: took,
+            error: analysis.report.error.clone(),
+        });
+        seconds.insert(key.clone(), took);
+        reports.push((key, analysis.report));
     }
     Ok(if failed {
-        Err(ExitCode::from(EXIT_ERROR))
+        Err(Unread {
+            status: ExitCode::from(EXIT_ERROR),
+            cases,
+        })
     } else {
-        Ok(reports)
+        Ok(Traces { reports, seconds })
     })
 }
 
@@ -399,8 +433,8 @@ pub(super) fn baseline(args: &BaselineArgs) -> Result<ExitCode> {
     destination(out)?;
     refuse_overwriting_inputs(out, &args.read)?;
     let reports = match read_traces(&args.read, "no baseline written")? {
-        Ok(reports) => reports,
-        Err(status) => return Ok(status),
+        Ok(traces) => traces.reports,
+        Err(unread) => return Ok(unread.status),
     };
     let mut record = Baseline::from_reports(&reports);
     record.options = args.read.recorded()?;
@@ -445,9 +479,16 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
             options
         );
     }
-    let reports = match read_traces(&args.read, unwritten)? {
-        Ok(reports) => reports,
-        Err(status) => return Ok(status),
+    let Traces { reports, seconds } = match read_traces(&args.read, unwritten)? {
+        Ok(traces) => traces,
+        Err(unread) => {
+            // The CI job's test report must still parse and name the
+            // trace that could not be read, not vanish with the run.
+            if args.format == CheckFormat::Junit {
+                write_stdout(&junit_unread(&unread.cases))?;
+            }
+            return Ok(unread.status);
+        }
     };
     let mut new = Baseline::from_reports(&reports);
     new.options = options;
@@ -477,7 +518,7 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
                 .chain(new.traces.keys())
                 .map(String::as_str)
                 .collect();
-            diff.junit(traces)
+            diff.junit(traces, |trace| seconds.get(trace).copied())
         }
         CheckFormat::Github => diff.github(),
     };

@@ -17,6 +17,7 @@ use emcy_decode::analyze::{
     self, Analysis, DiagnosticLog, InputReport, Options, OutputError, Reading, Sink, WithoutEvents,
     batch,
 };
+use emcy_decode::canopen::NodeId;
 use emcy_decode::report::csv::Csv;
 use emcy_decode::report::html::HtmlReport;
 use emcy_decode::report::json::JsonDocument;
@@ -29,14 +30,30 @@ use emcy_decode::trace::input::{self, ReadMode, Source};
 
 /// Reads every input into the chosen renderer; the exit code is the worst
 /// of all inputs.
+/// What to say on stderr when there is no FILE and stdin is a terminal: the
+/// run waits for typed or pasted lines, which looks like a hang to someone
+/// who forgot the file.
+fn stdin_prompt(no_files: bool, stdin_is_terminal: bool, quiet: bool) -> Option<&'static str> {
+    (no_files && stdin_is_terminal && !quiet).then_some(
+        "reading a trace from stdin (no FILE given); end it with Ctrl-D, or stop with Ctrl-C",
+    )
+}
+
 pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
-    let opts = args.options()?;
+    let mut opts = args.options()?;
+    // A gate with a filter that selects nothing fails with one error line
+    // that says what the input has, instead of a note beside it.
+    opts.unmatched_filter_fails = FailOn::combine(&args.fail_on) != FailOn::default();
     // Before any input is read: an unknown --tz is a usage error.
     let time_style = args.time_style()?;
     let walk = Walk::new(args.recursive, args.follow_links, &args.glob)?;
     let mut log = DiagnosticLog::new(io::stderr());
     log.quiet = args.quiet;
     let inputs = walk.expand(&args.files, &opts.cancel, &mut log);
+    if let Some(prompt) = stdin_prompt(args.files.is_empty(), io::stdin().is_terminal(), args.quiet)
+    {
+        log.note(prompt);
+    }
     if args.follow && !matches!(inputs.as_slice(), [Input::Source(Source::Path(_))]) {
         anyhow::bail!("--follow takes exactly one FILE (not stdin, not a directory)");
     }
@@ -84,7 +101,13 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
             let table = TableReport::new(out, color, live)
                 .time_style(time_style)
                 .fit_width(width);
-            Box::new(if summary { table.summary_only() } else { table })
+            let table = if summary { table.summary_only() } else { table };
+            // A live table shows each input's header as it starts.
+            if live {
+                Box::new(table)
+            } else {
+                Box::new(OnlyWhatWasRead::new(table))
+            }
         }
         OutputFormat::Json if summary => Box::new(WithoutEvents(JsonDocument::new(out))),
         OutputFormat::Json => Box::new(JsonDocument::new(out)),
@@ -126,6 +149,77 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
         return Ok(ExitCode::from(stop.status));
     }
     Ok(ExitCode::from(code))
+}
+
+/// The table of inputs that could not be read: nothing. An input that
+/// could not be opened, or in which no frame was found (a binary file, a
+/// wrong format), gets its `error:` line on stderr and no header or table of
+/// zeros on stdout; when no input was read the Inputs table goes too, so the
+/// error is all there is to read.
+struct OnlyWhatWasRead<R> {
+    inner: R,
+    /// The input begun but not passed on until it shows it has something.
+    pending: Option<String>,
+}
+
+impl<R: Sink> OnlyWhatWasRead<R> {
+    fn new(inner: R) -> Self {
+        OnlyWhatWasRead {
+            inner,
+            pending: None,
+        }
+    }
+
+    fn begin_pending(&mut self) -> io::Result<()> {
+        match self.pending.take() {
+            Some(file) => self.inner.begin_input(&file),
+            None => Ok(()),
+        }
+    }
+}
+
+/// An input with an error and no frame read: nothing to show but the error.
+fn unread(input: &InputReport) -> bool {
+    input.error.is_some() && input.counts.frames == 0
+}
+
+impl<R: Sink> Sink for OnlyWhatWasRead<R> {
+    fn begin_input(&mut self, file: &str) -> io::Result<()> {
+        self.begin_pending()?;
+        self.pending = Some(file.to_string());
+        Ok(())
+    }
+    fn emcy(&mut self, event: &analyze::EmcyEvent<'_>) -> io::Result<()> {
+        self.begin_pending()?;
+        self.inner.emcy(event)
+    }
+    fn boot(&mut self, event: &analyze::BootEvent<'_>) -> io::Result<()> {
+        self.begin_pending()?;
+        self.inner.boot(event)
+    }
+    fn health(&mut self, event: &analyze::HealthEvent<'_>) -> io::Result<()> {
+        self.begin_pending()?;
+        self.inner.health(event)
+    }
+    fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
+        if unread(input) {
+            self.pending = None;
+            return Ok(());
+        }
+        self.begin_pending()?;
+        self.inner.end_input(input)
+    }
+    fn finish(
+        &mut self,
+        inputs: &[InputReport],
+        diagnostics: &[analyze::Diagnostic],
+    ) -> io::Result<()> {
+        self.begin_pending()?;
+        if inputs.iter().all(unread) {
+            return Ok(());
+        }
+        self.inner.finish(inputs, diagnostics)
+    }
 }
 
 /// Standard output for a report, written in 64 KiB chunks by the caller's
@@ -689,6 +783,11 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
         return EXIT_ERROR;
     }
     let fail_on = FailOn::combine(&args.fail_on);
+    let gate = fail_on != FailOn::default();
+    if let Some(problem) = filter_problem(&args.node, &args.channel, gate, &outcome.reports) {
+        log.error(&problem);
+        return EXIT_ERROR;
+    }
     if let Some(bound) = fail_on.category_at_most {
         let nodes = || outcome.reports.iter().flat_map(|r| &r.nodes);
         if !nodes().any(|n| n.profile.has_categories()) {
@@ -715,6 +814,55 @@ fn exit_code(args: &DecodeArgs, outcome: &Outcome, log: &mut DiagnosticLog<io::S
     } else {
         EXIT_FAIL_ON
     }
+}
+
+/// What makes `--node`/`--channel` a usage error once the inputs are read:
+/// a node over 127 where no input holds EtherCAT (only station addresses go
+/// that high, so it is a typo that would select nothing), or, under a
+/// `--fail-on` gate, filters that selected no node of any input. Such a run
+/// checked nothing, and a CI gate must not turn green on it.
+fn filter_problem(
+    nodes: &[NodeId],
+    channels: &[String],
+    gate: bool,
+    reports: &[InputReport],
+) -> Option<String> {
+    let ethercat = reports.iter().any(|r| r.counts.ethercat_frames > 0);
+    if let Some(n) = nodes.iter().find(|&&n| n > 127)
+        && !ethercat
+    {
+        return Some(format!(
+            "--node {n} is no CANopen node id (1-127) and no input holds EtherCAT, whose \
+             station addresses go higher"
+        ));
+    }
+    let filtered = !nodes.is_empty() || !channels.is_empty();
+    if gate && filtered && reports.iter().all(|r| r.nodes.is_empty()) {
+        if let [only] = reports
+            && let Some(note) = &only.unmatched
+        {
+            return Some(format!("{}: {note}; --fail-on checked nothing", only.file));
+        }
+        let mut given = Vec::new();
+        if !nodes.is_empty() {
+            let list: Vec<String> = nodes.iter().map(ToString::to_string).collect();
+            given.push(format!("--node {}", list.join(",")));
+        }
+        if !channels.is_empty() {
+            given.push(format!("--channel {}", channels.join(",")));
+        }
+        // Of several inputs the first that names what it has instead.
+        let example = reports
+            .iter()
+            .find_map(|r| Some(format!(" (first: {}: {})", r.file, r.unmatched.as_ref()?)))
+            .unwrap_or_default();
+        return Some(format!(
+            "{} matches no node in the input{}, so --fail-on checked nothing{example}",
+            given.join(" "),
+            if reports.len() == 1 { "" } else { "s" }
+        ));
+    }
+    None
 }
 
 /// The width to fit the table to: `--width` (0: none), else at a terminal
@@ -762,6 +910,122 @@ fn use_color(
 mod tests {
     use super::*;
     use std::ffi::OsStr;
+
+    #[test]
+    fn the_stdin_prompt_only_at_a_terminal_without_files_and_quiet() {
+        assert!(stdin_prompt(true, true, false).is_some_and(|p| p.contains("Ctrl-D")));
+        assert_eq!(stdin_prompt(false, true, false), None, "a FILE given");
+        assert_eq!(stdin_prompt(true, false, false), None, "a pipe");
+        assert_eq!(stdin_prompt(true, true, true), None, "--quiet");
+    }
+
+    /// Records what reaches the table.
+    #[derive(Default)]
+    struct Seen(Vec<String>);
+
+    impl Sink for Seen {
+        fn begin_input(&mut self, file: &str) -> io::Result<()> {
+            self.0.push(format!("begin {file}"));
+            Ok(())
+        }
+        fn emcy(&mut self, _: &analyze::EmcyEvent<'_>) -> io::Result<()> {
+            self.0.push("emcy".into());
+            Ok(())
+        }
+        fn boot(&mut self, _: &analyze::BootEvent<'_>) -> io::Result<()> {
+            self.0.push("boot".into());
+            Ok(())
+        }
+        fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
+            self.0.push(format!("end {}", input.file));
+            Ok(())
+        }
+        fn finish(&mut self, inputs: &[InputReport], _: &[analyze::Diagnostic]) -> io::Result<()> {
+            self.0.push(format!("finish {}", inputs.len()));
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn inputs_that_could_not_be_read_leave_the_table_empty() {
+        let report = |file: &str, error: Option<&str>, frames: u64| {
+            let mut r = read_input(0);
+            r.file = file.into();
+            r.error = error.map(str::to_string);
+            r.counts.frames = frames;
+            r
+        };
+        let unreadable = report("bin", Some("cannot detect the trace format"), 0);
+        let mut only = OnlyWhatWasRead::new(Seen::default());
+        only.begin_input("bin").unwrap();
+        only.end_input(&unreadable).unwrap();
+        only.finish(std::slice::from_ref(&unreadable), &[]).unwrap();
+        assert!(only.inner.0.is_empty(), "{:?}", only.inner.0);
+
+        // Beside a trace that was read, the unread input is in the Inputs
+        // table only; a trace that broke off part way keeps its header.
+        let good = report("good", None, 4);
+        let cut = report("cut", Some("gzip stream corrupt"), 2);
+        let mut only = OnlyWhatWasRead::new(Seen::default());
+        for r in [&unreadable, &good, &cut] {
+            only.begin_input(&r.file).unwrap();
+            only.end_input(r).unwrap();
+        }
+        only.finish(&[unreadable, good, cut], &[]).unwrap();
+        assert_eq!(
+            only.inner.0,
+            ["begin good", "end good", "begin cut", "end cut", "finish 3"]
+        );
+    }
+
+    /// A read input without nodes; `ethercat` frames in it or not.
+    fn read_input(ethercat: u64) -> InputReport {
+        let mut report = Analysis::unopened("t.log".into(), String::new()).report;
+        report.error = None;
+        report.counts.ethercat_frames = ethercat;
+        report
+    }
+
+    #[test]
+    fn a_node_over_127_needs_ethercat_in_the_input() {
+        let can = [read_input(0)];
+        let problem = filter_problem(&[5, 200], &[], false, &can).expect("200 on CAN");
+        assert!(
+            problem.starts_with("--node 200 is no CANopen node id"),
+            "{problem}"
+        );
+        assert_eq!(filter_problem(&[127], &[], false, &can), None);
+        let mixed = [read_input(0), read_input(3)];
+        assert_eq!(filter_problem(&[200], &[], false, &mixed), None);
+    }
+
+    #[test]
+    fn filters_that_select_nothing_fail_only_a_gate() {
+        let one = [read_input(0)];
+        assert_eq!(filter_problem(&[5], &[], false, &one), None, "no --fail-on");
+        assert_eq!(filter_problem(&[], &[], true, &one), None, "no filter");
+        assert_eq!(
+            filter_problem(&[5, 6], &["can1".into()], true, &one).as_deref(),
+            Some(
+                "--node 5,6 --channel can1 matches no node in the input, so --fail-on checked nothing"
+            )
+        );
+        // The input's note on what it has goes into the one line.
+        let mut noted = read_input(0);
+        noted.unmatched = Some("--node 5 matches no node; the nodes ...: 7".into());
+        assert_eq!(
+            filter_problem(&[5], &[], true, std::slice::from_ref(&noted)).as_deref(),
+            Some("t.log: --node 5 matches no node; the nodes ...: 7; --fail-on checked nothing")
+        );
+        let problem = filter_problem(&[5], &[], true, &[read_input(0), noted]).unwrap();
+        assert!(
+            problem.ends_with("nothing (first: t.log: --node 5 matches no node; the nodes ...: 7)"),
+            "{problem}"
+        );
+        let two = [read_input(0), read_input(0)];
+        let problem = filter_problem(&[], &["can9".into()], true, &two).expect("no channel");
+        assert!(problem.contains("in the inputs,"), "{problem}");
+    }
 
     fn names(n: usize) -> Vec<String> {
         (1..=n).map(|i| format!("d/{i}.log")).collect()
