@@ -406,9 +406,9 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.add_tally(r.tally);
         self.frame_times(r.frame_times.0, r.frame_times.1);
         let mut cuts = std::mem::take(&mut r.cuts);
-        let mut next_cut = cuts.iter().map(|c| c.record).next();
+        // The next cut to reach, and whether the interest widened at it.
         let mut cut_at = 0usize;
-        let mut widened_at = None;
+        let mut widened = false;
         for (n, record) in r.records.drain(..).enumerate() {
             match record {
                 BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
@@ -465,18 +465,17 @@ impl<E: Write> Consumer<'_, '_, E> {
                         data,
                     };
                     self.frame(idx, &frame, foreign)?;
-                    if next_cut == Some(n) {
+                    if cuts.get(cut_at).is_some_and(|c| c.record == n) {
                         if self.wanted.widened > r.interest_gen {
-                            widened_at = Some(cut_at);
+                            widened = true;
                             break;
                         }
                         cut_at += 1;
-                        next_cut = cuts.get(cut_at).map(|c| c.record);
                     }
                 }
             }
         }
-        let Some(cut) = widened_at.and_then(|i| cuts.get_mut(i)) else {
+        let Some(cut) = cuts.get_mut(cut_at).filter(|_| widened) else {
             self.lines(r.lines);
             r.cuts = cuts;
             return Ok((r.into_spare(), None));
