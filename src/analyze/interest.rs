@@ -110,15 +110,6 @@ fn carries_index(id: u32, cs: u8) -> bool {
     }
 }
 
-/// Whether command byte `cmd` on SDO id `id` begins a segmented transfer:
-/// the client's download initiate or the server's upload initiate
-/// response with e = 0 (the segments follow).
-#[inline]
-fn begins_segments(id: u32, cmd: u8) -> bool {
-    let cs = if id >= sdo::REQUEST_BASE { 1 } else { 2 };
-    cmd >> 5 == cs && cmd & 0b10 == 0
-}
-
 fn index_of(lo: u8, hi: u8) -> u16 {
     u16::from_le_bytes([lo, hi])
 }
@@ -154,7 +145,8 @@ pub(super) fn may_widen(frame: &Frame<'_>, interest: &Interest) -> bool {
             index == sdo::COB_ID_EMCY
                 || index == sdo::DEVICE_TYPE
                 || pdo::PdoId::is_pdo_parameter(index)
-                || begins_segments(frame.id, cmd) && learns_from(index)
+                || sdo::begins_segmented_transfer(frame.id, frame.data.as_slice())
+                    && learns_from(index)
         }
         _ => true,
     }

@@ -33,13 +33,20 @@ pub fn names_followed_object(id: u32, data: &[u8]) -> bool {
     is_sdo_id(id) && named_index(data).is_some_and(is_followed)
 }
 
-/// Whether an SDO frame is a node's answer that begins a segmented upload
-/// (scs 2 with e = 0): its segments follow, naming no object.
-pub fn begins_segmented_upload(id: u32, data: &[u8]) -> bool {
-    matches!(
-        (sender(id), data.first()),
-        (Some((false, _)), Some(&cmd)) if cmd >> 5 == SCS_UPLOAD_INITIATE && cmd & 0b10 == 0
-    )
+/// Whether an SDO frame begins a segmented transfer: the client's download
+/// initiate or the node's answer to an upload initiate with e = 0 (ccs 1,
+/// scs 2): its segments follow, naming no object. (The client's upload
+/// request cannot say; the node's answer does.)
+pub fn begins_segmented_transfer(id: u32, data: &[u8]) -> bool {
+    let (Some((request, _)), Some(&cmd)) = (sender(id), data.first()) else {
+        return false;
+    };
+    let cs = if request {
+        CCS_DOWNLOAD_INITIATE
+    } else {
+        SCS_UPLOAD_INITIATE
+    };
+    cmd >> 5 == cs && cmd & 0b10 == 0
 }
 
 /// Whether an SDO frame's command byte says abort (any object).
@@ -168,18 +175,27 @@ mod tests {
     }
 
     #[test]
-    fn segmented_upload_answers() {
-        assert!(begins_segmented_upload(0x581, &[0x41, 0x08, 0x10, 0]));
-        assert!(begins_segmented_upload(0x581, &[0x40, 0x08, 0x10, 0]));
+    fn segmented_transfers_begin() {
+        assert!(begins_segmented_transfer(0x581, &[0x41, 0x08, 0x10, 0]));
+        assert!(begins_segmented_transfer(0x581, &[0x40, 0x08, 0x10, 0]));
         assert!(
-            !begins_segmented_upload(0x581, &[0x43, 0x08, 0x10, 0]),
+            !begins_segmented_transfer(0x581, &[0x43, 0x08, 0x10, 0]),
             "expedited"
         );
         assert!(
-            !begins_segmented_upload(0x601, &[0x41, 0x08, 0x10, 0]),
-            "a request"
+            !begins_segmented_transfer(0x601, &[0x41, 0x08, 0x10, 0]),
+            "an upload request: the answer says"
         );
-        assert!(!begins_segmented_upload(0x581, &[]));
+        assert!(begins_segmented_transfer(0x601, &[0x21, 0x00, 0x1A, 1]));
+        assert!(
+            !begins_segmented_transfer(0x601, &[0x23, 0x00, 0x1A, 1]),
+            "an expedited download"
+        );
+        assert!(
+            !begins_segmented_transfer(0x581, &[0x21, 0x00, 0x1A, 1]),
+            "a download segment's answer"
+        );
+        assert!(!begins_segmented_transfer(0x581, &[]));
     }
 
     #[test]

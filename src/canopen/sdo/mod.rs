@@ -26,6 +26,6 @@ pub use access::{
 pub use block::{BlockStep, Blocks};
 #[cfg(test)]
 pub use frame::names_followed_object;
-pub use frame::{begins_segmented_upload, is_abort, names_object, parse, parse_payload};
+pub use frame::{begins_segmented_transfer, is_abort, names_object, parse, parse_payload};
 pub use segmented::{Confirmed, Downloads, Uploads};
 pub use tracker::Tracker;
