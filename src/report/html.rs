@@ -3,9 +3,11 @@
 //! input and its events table below, filterable by node and sortable by
 //! column. The chart is the SVG of [`super::chart`], inlined.
 //!
-//! The table is bounded: the first [`TABLE_ROWS`] events of each input are
-//! listed and a note says how many more were left out (the chart still
-//! draws all of them; `--format table` or `ndjson` list every event).
+//! The table is bounded: a page carries at most [`PAGE_ROWS`] events of
+//! each input. Past that it carries every 2nd, then every 4th event (and so
+//! on), so that its rows still cover the whole trace and the table follows
+//! a zoom anywhere in it; a note says so (the chart still draws every
+//! event; `--format table` or `ndjson` list every event).
 
 use super::format::codes_list;
 use std::fmt::Write as _;
@@ -21,8 +23,10 @@ use crate::canopen::profile::{Decoded, FieldValue};
 use crate::timeline::At;
 use crate::trace::Timestamp;
 
-/// Events listed per input.
-pub const TABLE_ROWS: usize = 1000;
+/// Events a page carries per input. A row is some 400 bytes of HTML, so a
+/// page stays below about 4 MB an input however long the trace: the size
+/// a browser opens and filters without a pause.
+pub const PAGE_ROWS: usize = 10_000;
 
 /// What a row of the events table is.
 enum Kind {
@@ -110,13 +114,17 @@ struct Section {
     panel: Panel,
     rows: Vec<Row>,
     events: u64,
+    /// The page carries every `stride`-th event (1: all of them).
+    stride: u64,
 }
 
 pub struct HtmlReport<W: Write> {
     out: W,
     collector: Collector,
+    /// Events `0, stride, 2 * stride, ...` of the input so far.
     rows: Vec<Row>,
     events: u64,
+    stride: u64,
     sections: Vec<Section>,
 }
 
@@ -127,15 +135,33 @@ impl<W: Write> HtmlReport<W> {
             collector: Collector::default(),
             rows: Vec::new(),
             events: 0,
+            stride: 1,
             sections: Vec::new(),
         }
     }
 
+    /// Keeps every `stride`-th event. When [`PAGE_ROWS`] are kept, every
+    /// other one is dropped and the stride doubles: the rows stay evenly
+    /// spread over the input's events, in bounded memory, without knowing
+    /// in advance how many will come.
     fn keep(&mut self, row: impl FnOnce() -> Row) {
+        let index = self.events;
         self.events += 1;
-        if self.rows.len() < TABLE_ROWS {
-            self.rows.push(row());
+        if !index.is_multiple_of(self.stride) {
+            return;
         }
+        if self.rows.len() >= PAGE_ROWS {
+            let mut i = 0usize;
+            self.rows.retain(|_| {
+                i += 1;
+                i % 2 == 1
+            });
+            self.stride *= 2;
+            if !index.is_multiple_of(self.stride) {
+                return;
+            }
+        }
+        self.rows.push(row());
     }
 }
 
@@ -270,9 +296,8 @@ function apply(){if(!tb)return;var n=0,z=view&&(view[0]>all[0]||view[1]<all[1]);
 [].forEach.call(tb.rows,function(r){var v=r.getAttribute('data-v'),out=z&&v!==null&&(+v<view[0]||+v>view[1]);
 r.hidden=out||(sel.value!==''&&r.getAttribute('data-lane')!==sel.value);if(!r.hidden)n++;});
 sec.querySelectorAll('g.lane').forEach(function(g){g.style.opacity=sel.value===''||g.getAttribute('data-lane')===sel.value?'':'0.3';});
-var past=z&&tb.parentNode.hasAttribute('data-cut')&&view[1]>lastV;
-shown.textContent=n+' row'+(n===1?'':'s')+' shown'+(z?' (in the visible time range'+(past?'; events after the last row listed are not in this table':'')+')':'');}
-var lastV=-Infinity;if(tb)[].forEach.call(tb.rows,function(r){var v=r.getAttribute('data-v');if(v!==null&&+v>lastV)lastV=+v;});
+var k=tb.parentNode.getAttribute('data-every');
+shown.textContent=n+' row'+(n===1?'':'s')+' shown'+(z?' (in the visible time range)':'')+(k?'; the page carries every '+k+' event':'');}
 if(sel&&tb){sel.addEventListener('change',apply);
 sec.querySelectorAll('g.lane').forEach(function(g){g.addEventListener('click',function(){if(moved){moved=false;return;}var v=g.getAttribute('data-lane');sel.value=sel.value===v?'':v;apply();});});
 var heads=sec.querySelectorAll('th');
@@ -299,16 +324,16 @@ fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
         write!(s, "<option value=\"{}\">{}</option>", esc(key), esc(label))?;
     }
     s.push_str("</select></label> <span class=\"shown note\"></span></p>\n");
-    // `data-cut`: the table stops before the input's last event, so the
-    // script can say why a range past it lists nothing.
-    let cut = if sec.events > sec.rows.len() as u64 {
-        " data-cut"
+    // `data-every`: the page carries every n-th event only (`2nd`), so the
+    // script says so beside the rows a zoom shows.
+    let thinned = if sec.stride > 1 {
+        format!(" data-every=\"{}\"", ordinal(sec.stride))
     } else {
-        ""
+        String::new()
     };
     write!(
         s,
-        "<table class=\"ev\"{cut}><thead><tr><th>{}</th><th>line</th><th>channel</th><th>node</th>\
+        "<table class=\"ev\"{thinned}><thead><tr><th>{}</th><th>line</th><th>channel</th><th>node</th>\
          <th>event</th><th title=\"transition: 1 first error, 2 one error reset, 3 further error, 4 all reset\">TR</th>\
          <th>register</th><th>description</th><th>manufacturer</th><th>warnings</th><th>cleared</th><th>state after</th></tr></thead>\n<tbody>\n",
         sec.panel.clock.heading()
@@ -317,18 +342,31 @@ fn write_section(s: &mut String, sec: &Section) -> std::fmt::Result {
         write_row(s, &sec.panel.clock, r)?;
     }
     s.push_str("</tbody></table>\n");
-    let shown = sec.rows.len() as u64;
-    if sec.events > shown {
+    if sec.stride > 1 {
         writeln!(
             s,
-            "<p class=\"note\">The first {shown} of {} events are listed; {} more not shown. \
-             The chart draws all of them; <code>--format table</code> or <code>--format ndjson</code> lists every event.</p>",
-            sec.events,
-            sec.events - shown
+            "<p class=\"note\">This page lists every {} event of this input ({} of {}), spread \
+             over the whole trace so that the list follows a zoom. The chart draws all of them; \
+             <code>--format table</code> or <code>--format ndjson</code> lists every event.</p>",
+            ordinal(sec.stride),
+            sec.rows.len(),
+            sec.events
         )?;
     }
     s.push_str("</section>\n");
     Ok(())
+}
+
+/// `2nd`, `4th`, `32nd`: the English ordinal of `n`.
+fn ordinal(n: u64) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
 }
 
 fn write_row(s: &mut String, clock: &Clock, r: &Row) -> std::fmt::Result {
@@ -388,6 +426,7 @@ impl<W: Write> Sink for HtmlReport<W> {
         self.collector.begin_input();
         self.rows.clear();
         self.events = 0;
+        self.stride = 1;
         Ok(())
     }
 
@@ -460,6 +499,7 @@ impl<W: Write> Sink for HtmlReport<W> {
             panel,
             rows: std::mem::take(&mut self.rows),
             events: self.events,
+            stride: self.stride,
         });
         Ok(())
     }
@@ -494,6 +534,60 @@ mod tests {
     use super::*;
     use crate::analyze::HistoryReport;
     use crate::analyze::event::HistoryItem;
+
+    fn row_at(line: u64) -> Row {
+        Row {
+            time: None,
+            line,
+            channel: String::new(),
+            node: 5,
+            kind: Kind::Boot,
+            register: 0,
+            transition: None,
+            description: String::new(),
+            manufacturer: String::new(),
+            warnings: Vec::new(),
+            cleared: Vec::new(),
+            state: "",
+        }
+    }
+
+    #[test]
+    fn a_long_input_keeps_every_nth_event_evenly_in_bounded_rows() {
+        let mut page = HtmlReport::new(Vec::new());
+        let events = PAGE_ROWS as u64 * 4 + 3;
+        for line in 0..events {
+            page.keep(|| row_at(line));
+            assert!(page.rows.len() <= PAGE_ROWS, "at {line}");
+        }
+        // Thinned at 10 000, 20 000 and 40 000 events.
+        assert_eq!(page.stride, 8);
+        assert_eq!(page.rows.len(), PAGE_ROWS / 2 + 1);
+        for (i, row) in page.rows.iter().enumerate() {
+            assert_eq!(row.line, i as u64 * 8);
+        }
+        // Up to the bound, every event.
+        let mut short = HtmlReport::new(Vec::new());
+        for line in 0..PAGE_ROWS as u64 {
+            short.keep(|| row_at(line));
+        }
+        assert_eq!((short.stride, short.rows.len()), (1, PAGE_ROWS));
+    }
+
+    #[test]
+    fn ordinals_read_as_english() {
+        let said: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 32, 64, 101, 112, 1024]
+            .into_iter()
+            .map(ordinal)
+            .collect();
+        assert_eq!(
+            said,
+            [
+                "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "32nd", "64th",
+                "101st", "112th", "1024th"
+            ]
+        );
+    }
 
     #[test]
     fn manufacturer_cell_joins_a_text_to_its_number_else_shows_the_bytes() {

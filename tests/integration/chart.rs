@@ -361,19 +361,28 @@ fn ten_thousand_errors_stay_small_and_merged_bars_say_so() {
     assert!(resets < 1_000, "{resets} reset markers");
 
     let html = render("html", &[&trace]);
-    assert!(html.len() < 600_000, "{} bytes of HTML", html.len());
-    assert_eq!(
-        html.matches("<tr data-lane=").count() + html.matches("<tr class=").count(),
-        1_000
-    );
+    // 20 005 events: past 10 000 the page carries every 2nd, past 20 000
+    // every 4th, so 5 002 rows spread over the whole trace.
+    assert!(html.len() < 3_000_000, "{} bytes of HTML", html.len());
+    let rows = table_rows(&html);
+    assert_eq!(rows.len(), 5_002);
     assert!(
-        html.contains("The first 1000 of 20005 events are listed; 19005 more not shown."),
-        "the table says it is cut"
+        html.contains("lists every 4th event of this input (5002 of 20005)"),
+        "the page says it is thinned"
     );
-    // And tells the page's script, which says so when zoomed past its end.
-    assert!(html.contains("<table class=\"ev\" data-cut>"));
+    assert!(html.contains("<table class=\"ev\" data-every=\"4th\">"));
+    // The rows run from the first event to the last few: the list follows
+    // a zoom anywhere in the trace.
+    let lines: Vec<u64> = rows
+        .iter()
+        .map(|(_, cells)| cells[1].parse().expect("a line number"))
+        .collect();
+    assert_eq!(lines[0], 1);
+    assert!(*lines.last().unwrap() > 19_990, "{:?}", lines.last());
+    assert!(lines.windows(2).all(|w| w[0] < w[1]), "in order");
     let whole = render("html", &[Path::new("fixtures/s300.log")]);
     assert!(whole.contains("<table class=\"ev\">"));
+    assert!(!whole.contains("lists every"));
 }
 
 #[test]
@@ -933,6 +942,39 @@ fn chromium_fits_narrow_windows_without_a_horizontal_scroll() {
     }
 }
 
+/// The time range a laid-out page shows (its section's `data-view`).
+fn view_of(dom: &str) -> (f64, f64) {
+    let at = dom.find("data-view=\"").expect("the page says its range") + 11;
+    let text = &dom[at..at + dom[at..].find('"').unwrap()];
+    let (a, b) = text.split_once(' ').expect("two values");
+    (a.parse().unwrap(), b.parse().unwrap())
+}
+
+/// How many rows of a laid-out page's events table are inside and outside
+/// the range `a..=b`; fails unless exactly those inside are shown.
+fn rows_in_view(dom: &str, a: f64, b: f64) -> (usize, usize) {
+    let body_at = dom.find("<tbody>").expect("a table");
+    let body_end = dom.find("</tbody>").expect("table ends") + "</tbody>".len();
+    let body = roxmltree::Document::parse(&dom[body_at..body_end]).expect("rows");
+    let (mut inside, mut outside) = (0, 0);
+    for tr in body
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("tr"))
+    {
+        let v = num(&tr, "data-v");
+        let hidden = tr.attribute("hidden").is_some();
+        if v >= a && v <= b {
+            assert!(!hidden, "row at {v} in {a}-{b} hidden");
+            inside += 1;
+        } else {
+            assert!(hidden, "row at {v} outside {a}-{b} shown");
+            outside += 1;
+        }
+    }
+    (inside, outside)
+}
+
 /// Wheel events over the plot (as a user's wheel sends them) narrow the
 /// visible range around the pointer: ticks get finer, the events table
 /// hides rows outside the range and keeps those inside; a double-click
@@ -951,14 +993,8 @@ fn chromium_zooms_the_time_axis_and_the_table_follows() {
         {deltaY:-240,clientX:x,clientY:r.top+80,bubbles:true,cancelable:true}));";
     let before = browser_dom(browser, &html, "", 1200, 700);
     let after = browser_dom(browser, &html, wheel, 1200, 700);
-    let range = |dom: &str| -> (f64, f64) {
-        let at = dom.find("data-view=\"").expect("the page says its range") + 11;
-        let text = &dom[at..at + dom[at..].find('"').unwrap()];
-        let (a, b) = text.split_once(' ').expect("two values");
-        (a.parse().unwrap(), b.parse().unwrap())
-    };
-    let (a0, b0) = range(&before);
-    let (a1, b1) = range(&after);
+    let (a0, b0) = view_of(&before);
+    let (a1, b1) = view_of(&after);
     assert_eq!(a0, 0.0);
     assert!(b0 > 60.0, "the whole minute and the room after it: {b0}");
     assert!(
@@ -999,26 +1035,7 @@ fn chromium_zooms_the_time_axis_and_the_table_follows() {
         }
     }
     assert!(full > 0, "no bar in view is wide");
-    // The table: rows inside the range shown, rows outside hidden.
-    let body_at = after.find("<tbody>").expect("a table");
-    let body_end = after.find("</tbody>").expect("table ends") + "</tbody>".len();
-    let body = roxmltree::Document::parse(&after[body_at..body_end]).expect("rows");
-    let (mut inside, mut outside) = (0, 0);
-    for tr in body
-        .root_element()
-        .children()
-        .filter(|n| n.has_tag_name("tr"))
-    {
-        let v = num(&tr, "data-v");
-        let hidden = tr.attribute("hidden").is_some();
-        if v >= a1 && v <= b1 {
-            assert!(!hidden, "row at {v} in {a1}-{b1} hidden");
-            inside += 1;
-        } else {
-            assert!(hidden, "row at {v} outside {a1}-{b1} shown");
-            outside += 1;
-        }
-    }
+    let (inside, outside) = rows_in_view(&after, a1, b1);
     assert!(
         inside > 0 && outside > 0,
         "{inside} inside, {outside} outside"
@@ -1032,6 +1049,35 @@ fn chromium_zooms_the_time_axis_and_the_table_follows() {
         "{wheel}document.querySelector('section.input svg').dispatchEvent(new MouseEvent('dblclick',{{bubbles:true}}));"
     );
     let back = browser_dom(browser, &html, &reset, 1200, 700);
-    assert_eq!(range(&back), (a0, b0));
+    assert_eq!(view_of(&back), (a0, b0));
     assert!(!back.contains("<tr hidden") && !back.contains("hidden=\"\""));
+}
+
+/// Zoomed into the last seconds of a trace with more events than a page
+/// carries in full, the events list still shows the events there (the page
+/// carries every 4th event over the whole trace, and says so).
+#[test]
+fn chromium_lists_events_anywhere_a_long_trace_is_zoomed() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("many.log");
+    fs::write(&trace, many_errors_trace(10_000)).expect("write trace");
+    let html = render("html", &[&trace]);
+    // Ten notches of the wheel near the plot's right end.
+    let wheel = "var s=document.querySelector('section.input svg'),r=s.getBoundingClientRect(),\
+        x=r.left+170+(r.width-198)*0.95;\
+        for(var i=0;i<10;i++)s.dispatchEvent(new WheelEvent('wheel',\
+        {deltaY:-240,clientX:x,clientY:r.top+80,bubbles:true,cancelable:true}));";
+    let dom = browser_dom(browser, &html, wheel, 1200, 700);
+    let (a, b) = view_of(&dom);
+    assert!(a > 80.0 && b - a < 5.0, "zoomed into {a}-{b}");
+    let (inside, outside) = rows_in_view(&dom, a, b);
+    assert!(inside > 10, "{inside} rows in {a}-{b}");
+    assert!(outside > 4_000, "{outside} rows outside");
+    assert!(
+        dom.contains(&format!(
+            "{inside} rows shown (in the visible time range); the page carries every 4th event"
+        )),
+        "the count says the page is thinned"
+    );
 }
