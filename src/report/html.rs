@@ -191,6 +191,7 @@ table.ev td.w{color:#a6611a}
 .note{color:#555}
 p.zoom{margin:0 0 6px}
 p.zoom button{margin-right:4px;min-width:2em}
+button.prev,button.next{margin-left:6px}
 ";
 
 /// The page's behaviour, plain DOM and no library (the page works without
@@ -202,7 +203,9 @@ p.zoom button{margin-right:4px;min-width:2em}
 /// - wheel zooms around the pointer, drag pans, double-click or the
 ///   buttons go back; the events table then lists the rows in the visible
 ///   range only (`data-v`: each row's value on the time scale);
-/// - filter by node (select, or a click on a lane) and sort by a column.
+/// - filter by node (select, or a click on a lane) and sort by a column;
+/// - more than 1,000 rows are shown a page of 1,000 at a time, with buttons
+///   to turn the pages.
 ///
 /// The script's comments are part of every page and of the golden files:
 /// its `axis.rs, tick_label` names what is now `chart/time_scale.rs`.
@@ -291,13 +294,19 @@ var range=document.createElement('span');range.className='note';bar.appendChild(
 var hint=document.createElement('span');hint.className='note';hint.textContent=' · wheel: zoom, drag: pan, double-click: whole trace';bar.appendChild(hint);
 box.parentNode.insertBefore(bar,box);
 fit=layout;window.addEventListener('resize',redraw);}
-// Rows: the node chosen (or all) within the visible time range.
-function apply(){if(!tb)return;var n=0,z=view&&(view[0]>all[0]||view[1]<all[1]);
+// Rows: the node chosen (or all) within the visible time range, PAGE at a
+// time; a new choice or range starts at the first page, the pager turns.
+var PAGE=1000,page=0,prev=null,next=null;
+function apply(turn){if(!tb)return;if(turn!==true)page=0;var m=0,from=page*PAGE,z=view&&(view[0]>all[0]||view[1]<all[1]);
 [].forEach.call(tb.rows,function(r){var v=r.getAttribute('data-v'),out=z&&v!==null&&(+v<view[0]||+v>view[1]);
-r.hidden=out||(sel.value!==''&&r.getAttribute('data-lane')!==sel.value);if(!r.hidden)n++;});
+var match=!out&&(sel.value===''||r.getAttribute('data-lane')===sel.value);r.hidden=!(match&&m>=from&&m<from+PAGE);if(match)m++;});
 sec.querySelectorAll('g.lane').forEach(function(g){g.style.opacity=sel.value===''||g.getAttribute('data-lane')===sel.value?'':'0.3';});
 var k=tb.parentNode.getAttribute('data-every');
-shown.textContent=n+' row'+(n===1?'':'s')+' shown'+(z?' (in the visible time range)':'')+(k?'; the page carries every '+k+' event':'');}
+shown.textContent=(m>PAGE?'rows '+(from+1)+'–'+Math.min(from+PAGE,m)+' of '+m:m+' row'+(m===1?'':'s'))+' shown'+(z?' (in the visible time range)':'')+(k?'; the page carries every '+k+' event':'');
+if(prev){prev.hidden=page===0;next.hidden=from+PAGE>=m;}}
+if(tb&&tb.rows.length>PAGE){[['‹ previous '+PAGE,-1],['next '+PAGE+' ›',1]].forEach(function(b){
+var e=document.createElement('button');e.textContent=b[0];e.className=b[1]<0?'prev':'next';e.addEventListener('click',function(){page+=b[1];apply(true);});
+shown.parentNode.appendChild(e);if(b[1]<0)prev=e;else next=e;});}
 if(sel&&tb){sel.addEventListener('change',apply);
 sec.querySelectorAll('g.lane').forEach(function(g){g.addEventListener('click',function(){if(moved){moved=false;return;}var v=g.getAttribute('data-lane');sel.value=sel.value===v?'':v;apply();});});
 var heads=sec.querySelectorAll('th');
@@ -307,7 +316,7 @@ function key(r){var c=r.cells[i];return c.hasAttribute('data-k')?c.getAttribute(
 var rows=[].slice.call(tb.rows);
 rows.sort(function(a,b){var x=key(a),y=key(b),nx=parseFloat(x),ny=parseFloat(y),d;
 d=(!isNaN(nx)&&!isNaN(ny)&&String(nx)===x&&String(ny)===y)?nx-ny:x.localeCompare(y);return up?d:-d;});
-rows.forEach(function(r){tb.appendChild(r);});});});}
+rows.forEach(function(r){tb.appendChild(r);});apply();});});}
 if(fit)fit();else apply();});
 "#;
 

@@ -901,7 +901,7 @@ fn chromium_fits_narrow_windows_without_a_horizontal_scroll() {
     // A phone's width, given to the chart's box as a narrower window would.
     let phone = "document.querySelectorAll('.chart').forEach(function(b){b.style.width='320px';});\
                  window.dispatchEvent(new Event('resize'));";
-    for (window, chart) in [(600u32, None), (500, Some(320.0))] {
+    for (window, chart) in [(1280u32, None), (600, None), (500, Some(320.0))] {
         let extra = match chart {
             Some(_) => format!("{phone}{measure}"),
             None => measure.to_string(),
@@ -1080,4 +1080,42 @@ fn chromium_lists_events_anywhere_a_long_trace_is_zoomed() {
         )),
         "the count says the page is thinned"
     );
+}
+
+/// More than 1,000 rows in view are shown a page of 1,000 at a time: the
+/// first page at first, the second after a click on "next".
+#[test]
+fn chromium_pages_the_events_list_past_a_thousand_rows() {
+    let Some(browser) = chromium() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let trace = dir.path().join("many.log");
+    fs::write(&trace, many_errors_trace(10_000)).expect("write trace");
+    let html = render("html", &[&trace]);
+    let shown_rows = |dom: &str| -> Vec<usize> {
+        let at = dom.find("<tbody>").expect("a table");
+        let end = dom.find("</tbody>").expect("table ends") + "</tbody>".len();
+        let body = roxmltree::Document::parse(&dom[at..end]).expect("rows");
+        body.root_element()
+            .children()
+            .filter(|n| n.has_tag_name("tr"))
+            .enumerate()
+            .filter(|(_, tr)| tr.attribute("hidden").is_none())
+            .map(|(i, _)| i)
+            .collect()
+    };
+    let first = browser_dom(browser, &html, "", 1280, 700);
+    assert_eq!(shown_rows(&first), (0..1000).collect::<Vec<_>>());
+    assert!(
+        first.contains("rows 1\u{2013}1000 of 5002 shown; the page carries every 4th event"),
+        "the count names the page"
+    );
+    let turned = browser_dom(
+        browser,
+        &html,
+        "document.querySelector('button.next').click();",
+        1280,
+        700,
+    );
+    assert_eq!(shown_rows(&turned), (1000..2000).collect::<Vec<_>>());
+    assert!(turned.contains("rows 1001\u{2013}2000 of 5002 shown"));
 }
