@@ -38,6 +38,7 @@ pub mod any;
 pub mod cancel;
 pub mod deltas;
 pub mod detect;
+pub mod error_frame;
 pub mod ethercat;
 pub mod fold;
 pub mod follow;
@@ -55,6 +56,7 @@ pub mod token;
 pub mod traits;
 
 pub use any::{AnyParser, AnyReader};
+pub use error_frame::ErrorFrame;
 pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
 pub use format::Format;
 pub use frame::NumberedChannel;
