@@ -190,6 +190,15 @@ impl<'a> TraceReader<'a> {
         }
     }
 
+    /// The bit rate the input records in a header (IXXAT's `Baudrate:`),
+    /// in bit/s, once the header was read.
+    pub fn bit_rate(&self) -> Option<u32> {
+        match &self.source {
+            Source::Reading(reader) => reader.bit_rate(),
+            Source::Failed(_) | Source::Done(_) => None,
+        }
+    }
+
     /// Fills the queue from the next item of the source; `Err` ends the
     /// input, `Ok(false)` at its end. Every format goes through this one
     /// loop: a record is one line, a note is no line.

@@ -35,6 +35,7 @@
 #![warn(missing_docs)]
 
 pub mod any;
+pub mod bit_rate;
 pub mod cancel;
 pub mod deltas;
 pub mod detect;
@@ -56,6 +57,7 @@ pub mod token;
 pub mod traits;
 
 pub use any::{AnyParser, AnyReader};
+pub use bit_rate::parse_bit_rate;
 pub use error_frame::ErrorFrame;
 pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
 pub use format::Format;
