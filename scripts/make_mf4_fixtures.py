@@ -42,6 +42,10 @@ frames of our own:
                    record split across the two; the second data group
                    (CAN_RemoteFrame) after the data; uint64 nanosecond
                    master. S300 on channel 3.
+- bus-errors.mf4   by hand, the CANedge layout of canedge.mf4: the frames
+                   of fixtures/bus-errors.log on channel 1, each error frame
+                   with the ErrorType that says its class (python-can reads
+                   error frames without their type: it checks their times).
 - damaged.mf4      by hand, what a reader must survive: non-zero bytes
                    between blocks, a record id no group declares in the
                    first DT block of a DL (the rest of that block is lost),
@@ -74,6 +78,33 @@ def s300_frames():
             if m:
                 us = (int(m.group(1)) - START) * 1_000_000 + int(m.group(2))
                 frames.append((us, int(m.group(3), 16), bytes.fromhex(m.group(4))))
+    return frames
+
+
+def bus_error_frames():
+    """fixtures/bus-errors.log on channel 1: its data frames, and its error
+    frames with the ErrorType that says their SocketCAN class (1 bit,
+    2 form, 3 stuff, 4 CRC, 5 ACK; 0 for what ErrorType cannot say)."""
+    frames = []
+    pattern = re.compile(r"\((\d+)\.(\d{6})\) can0 ([0-9A-F]{3}|[0-9A-F]{8})#([0-9A-F]*)")
+    with open(os.path.join(FIXTURES, "bus-errors.log")) as f:
+        for line in f:
+            m = pattern.match(line)
+            if not m:
+                continue
+            us = (int(m.group(1)) - START) * 1_000_000 + int(m.group(2))
+            word, data = int(m.group(3), 16), bytes.fromhex(m.group(4))
+            if word & 0x20000000:
+                kind = 0
+                if word & 0x20:
+                    kind = 5
+                elif word & 0x08:
+                    kind = {0x01: 1, 0x02: 2, 0x04: 3}.get(data[2] & 0x7F, 4 if data[3] == 0x08 else 0)
+                f_ = frame(us, 1, 0, kind="error")
+                f_["error_type"] = kind
+                frames.append(f_)
+            else:
+                frames.append(frame(us, 1, word, data))
     return frames
 
 
@@ -235,7 +266,8 @@ def write_canedge(frames, lin):
         if what == "lin":
             records += bytes([5]) + struct.pack("<dBB8s", f["us"] * 1000.0, f["id"], len(f["data"]), f["data"])
         elif f["kind"] == "error":
-            records += bytes([3]) + struct.pack("<dB", f["us"] * 1000.0, f["channel"] | (1 << 2))
+            kind = f.get("error_type", 1)
+            records += bytes([3]) + struct.pack("<dB", f["us"] * 1000.0, f["channel"] | (kind << 2))
         elif f["kind"] == "remote":
             word = (f["id"] << 3) | int(f["ext"])
             records += bytes([4]) + struct.pack("<dIB", f["us"] * 1000.0, word, (0 << 4) | f["channel"])
@@ -454,6 +486,10 @@ def main():
     canedge = sorted(s300 + extra, key=lambda f: f["us"])
     write_canedge(canedge, lin).save("canedge.mf4")
     check("canedge.mf4", canedge)
+
+    bus = bus_error_frames()
+    write_canedge(bus, []).save("bus-errors.mf4")
+    check("bus-errors.mf4", [{k: v for k, v in f.items() if k != "error_type"} for f in bus])
 
     ide = [frame(2_750_000, 1, 0x1000085, b"\x00\x50\x01\x00\x00\x00\x00\x00", ext=True)]
     fd = [frame(2_800_000, 2, 0x085, bytes(range(12)), kind="fd"),

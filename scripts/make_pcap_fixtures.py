@@ -23,6 +23,9 @@ fixtures/s300.log (the S300 sequence: boot-up, SDO identity reads, EMCYs
                       1700000000 s, an ARP packet (another protocol:
                       skipped) and node 6's EMCYs; a name resolution and an
                       interface statistics block (not lines).
+- bus-errors.pcap     pcap, link type 227: fixtures/bus-errors.log with
+                      its error frames (written by fixtures/make_fixtures.py,
+                      run that first).
 - mixed.pcapng        pcapng, big-endian section: link type 227 (id word
                       big-endian) and LINUX_SLL with CAN FD (a 72-byte
                       canfd_frame, FD by length, and protocol 0x000D), a
@@ -55,6 +58,21 @@ def s300_frames():
     frames = []
     pattern = re.compile(r"\((\d+)\.(\d{6})\) can0 ([0-9A-F]{3})#([0-9A-F]*)")
     with open(os.path.join(FIXTURES, "s300.log")) as f:
+        for line in f:
+            m = pattern.match(line)
+            if m:
+                frames.append(
+                    (int(m[1]), int(m[2]), int(m[3], 16), bytes.fromhex(m[4]))
+                )
+    return frames
+
+
+def log_frames(name):
+    """(seconds, microseconds, id word, data) of a candump log fixture,
+    error frames (id with the error flag) included."""
+    frames = []
+    pattern = re.compile(r"\((\d+)\.(\d{6})\) can0 ([0-9A-F]{3}|[0-9A-F]{8})#([0-9A-F]*)")
+    with open(os.path.join(FIXTURES, name)) as f:
         for line in f:
             m = pattern.match(line)
             if m:
@@ -233,6 +251,19 @@ def main():
     out += epb(o, 1, t + 1_200_000, sll(0x000C, can_frame(o, 0x81, nine)))  # 9 bytes
     out += epb(o, 0, t + 1_300_000, can_frame(">", 0x81, reset))  # the reset, read
     write("mixed.pcapng", out)
+
+    # bus-errors.pcap: fixtures/bus-errors.log (SYNC with a gap, a burst of
+    # error frames of every class the kernel sends, counters rising to bus
+    # off), link type 227, id word big-endian, as candump would capture it.
+    write(
+        "bus-errors.pcap",
+        pcap(
+            "<",
+            False,
+            227,
+            [(s, us, can_frame(">", word, data)) for s, us, word, data in log_frames("bus-errors.log")],
+        ),
+    )
 
 
 if __name__ == "__main__":

@@ -27,13 +27,15 @@ pub struct CanFrame {
     /// Interface (candump), channel number (ASC, TRC, BLF) as written;
     /// bytes that are not UTF-8 become U+FFFD.
     pub channel: String,
-    /// 11- or 29-bit identifier (for error frames, the error class bits).
+    /// 11- or 29-bit identifier (for error frames, the error class bits
+    /// of linux/can/error.h, without the error flag).
     pub id: u32,
     /// A 29-bit identifier.
     pub extended: bool,
     /// Data, remote, error or CAN FD.
     pub kind: FrameKind,
-    /// The data bytes (none for remote and error frames).
+    /// The data bytes (none for remote frames; an error frame's are
+    /// error.h's 8, or none when the trace does not say its class).
     pub data: Vec<u8>,
 }
 
@@ -185,6 +187,15 @@ impl<'a> TraceReader<'a> {
             Source::Reading(reader) => reader.format(),
             Source::Failed(_) => None,
             Source::Done(format) => *format,
+        }
+    }
+
+    /// The bit rate the input records in a header (IXXAT's `Baudrate:`),
+    /// in bit/s, once the header was read.
+    pub fn bit_rate(&self) -> Option<u32> {
+        match &self.source {
+            Source::Reading(reader) => reader.bit_rate(),
+            Source::Failed(_) | Source::Done(_) => None,
         }
     }
 

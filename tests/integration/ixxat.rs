@@ -97,3 +97,15 @@ fn detected_from_its_rows_without_the_header_and_damaged_rows_say_where() {
         "{stderr}"
     );
 }
+
+#[test]
+fn the_header_bit_rate_is_read() {
+    let file = std::fs::File::open("fixtures/s300.ixxat.trc").expect("fixture");
+    let mut reader = emcy_decode::TraceReader::new(std::io::BufReader::new(file));
+    assert_eq!(reader.bit_rate(), None);
+    let first_frame = reader
+        .by_ref()
+        .find(|r| matches!(r, Ok(emcy_decode::Record::Frame(_))));
+    assert!(first_frame.is_some());
+    assert_eq!(reader.bit_rate(), Some(250_000));
+}

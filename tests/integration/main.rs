@@ -22,6 +22,7 @@ mod cia402;
 mod cli;
 mod csv;
 mod differential;
+mod error_frames;
 mod ethercat;
 mod follow;
 mod fuzz_corpus;

@@ -97,6 +97,18 @@ impl LineParser for AnyParser {
         }
     }
 
+    fn bit_rate(&self) -> Option<u32> {
+        match self {
+            AnyParser::CandumpLog(p) => p.bit_rate(),
+            AnyParser::CandumpScreen(p) => p.bit_rate(),
+            AnyParser::Asc(p) => p.bit_rate(),
+            AnyParser::Trc(p) => p.bit_rate(),
+            AnyParser::Busmaster(p) => p.bit_rate(),
+            AnyParser::Ixxat(p) => p.bit_rate(),
+            AnyParser::Binary(p) => p.bit_rate(),
+        }
+    }
+
     fn clock(&self) -> Option<Timestamp> {
         match self {
             AnyParser::CandumpLog(p) => p.clock(),
@@ -265,5 +277,9 @@ impl<R: Read> FrameSource for AnyReader<R> {
 
     fn ethercat_counts(&self) -> Option<EthercatCounts> {
         each_reader!(self, r => FrameSource::ethercat_counts(&**r))
+    }
+
+    fn bit_rate(&self) -> Option<u32> {
+        each_reader!(self, r => FrameSource::bit_rate(&**r))
     }
 }

@@ -182,6 +182,13 @@ impl Detector {
         Some(ctx)
     }
 
+    /// The bit rate the detected format's header recorded, once read.
+    pub fn bit_rate(&self) -> Option<u32> {
+        self.primary
+            .and_then(|i| self.parsers.get(i))
+            .and_then(|p| p.bit_rate())
+    }
+
     /// The format, once known.
     pub fn format(&self) -> Option<Format> {
         self.primary

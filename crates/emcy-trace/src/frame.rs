@@ -12,7 +12,8 @@ pub enum FrameKind {
     Data,
     /// Remote transmission request; carries no data.
     Remote,
-    /// Error frame; `id` holds the error class bits as the trace wrote them.
+    /// Error frame; `id` holds the error class bits and `data` the bytes of
+    /// linux/can/error.h, whatever the format ([`crate::error_frame`]).
     Error,
     /// CAN FD frame, 0..=64 bytes.
     Fd,
@@ -151,6 +152,7 @@ pub struct Frame<'a> {
     /// Interface (candump) or channel number (ASC) exactly as written.
     pub channel: &'a [u8],
     /// 11- or 29-bit identifier (for error frames, the error class bits).
+    /// An error frame's data is always filled, whatever the interest.
     pub id: u32,
     /// 29-bit identifier. For candump this follows the digit count, not the value.
     pub extended: bool,

@@ -35,9 +35,11 @@
 #![warn(missing_docs)]
 
 pub mod any;
+pub mod bit_rate;
 pub mod cancel;
 pub mod deltas;
 pub mod detect;
+pub mod error_frame;
 pub mod ethercat;
 pub mod fold;
 pub mod follow;
@@ -55,6 +57,8 @@ pub mod token;
 pub mod traits;
 
 pub use any::{AnyParser, AnyReader};
+pub use bit_rate::parse_bit_rate;
+pub use error_frame::ErrorFrame;
 pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
 pub use format::Format;
 pub use frame::NumberedChannel;

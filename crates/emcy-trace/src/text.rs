@@ -74,6 +74,10 @@ impl<R: Read> FrameSource for TextReader<R> {
         self.detector.format()
     }
 
+    fn bit_rate(&self) -> Option<u32> {
+        self.detector.bit_rate()
+    }
+
     fn next_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Next<'_>>> {
         if !self.fill()? {
             return Ok(None);

@@ -164,6 +164,12 @@ pub trait LineParser: Send {
         None
     }
 
+    /// The bit rate the trace's header records (IXXAT's `Baudrate:`), in
+    /// bit/s, once a header line said it.
+    fn bit_rate(&self) -> Option<u32> {
+        None
+    }
+
     /// The state later lines depend on, as a small exact value (below 256):
     /// a block parsed from a fork is valid only if the state it started from
     /// equals the state the previous block ended in. `None` when every line
@@ -239,6 +245,12 @@ pub trait FrameSource {
     /// After a skipped or malformed record that was an EtherCAT frame: its
     /// CoE messages, and the channel they came on.
     fn take_ethercat(&mut self) -> Option<(Box<EthercatPacket>, &[u8])> {
+        None
+    }
+
+    /// The bit rate the input records, in bit/s, once read (see
+    /// [`LineParser::bit_rate`]).
+    fn bit_rate(&self) -> Option<u32> {
         None
     }
 

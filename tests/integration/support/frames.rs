@@ -57,7 +57,8 @@ pub fn frame() -> impl Strategy<Value = TestFrame> {
             |(kind, ext, sid, eid, mut data, secs, digits, frac, channel)| {
                 let frac = frac % 10u64.pow(u32::from(digits));
                 let (id, extended) = match kind {
-                    FrameKind::Error => (0x2000_0000 | (eid & 0x1FF), true),
+                    // The class bits, as every reader gives them.
+                    FrameKind::Error => (eid & 0x1FF, false),
                     FrameKind::Fd => (if ext { eid } else { sid }, ext),
                     _ => (if ext { eid } else { sid }, ext),
                 };
@@ -119,7 +120,10 @@ pub fn hex(data: &[u8], sep: &str, lower: bool) -> String {
 }
 
 pub fn render_log(f: &TestFrame, s: &LogStyle) -> String {
-    let id = if f.extended {
+    let id = if f.kind == FrameKind::Error {
+        // candump writes an error frame's class bits with the error flag.
+        format!("{:08X}", 0x2000_0000 | f.id)
+    } else if f.extended {
         format!("{:08X}", f.id)
     } else {
         format!("{:03X}", f.id)
@@ -166,7 +170,10 @@ pub fn render_screen(f: &TestFrame, s: &ScreenStyle) -> String {
         " ".to_string()
     };
     let extra = if s.extra { "  RX - -" } else { "" };
-    let id = if f.extended {
+    let id = if f.kind == FrameKind::Error {
+        // candump writes an error frame's class bits with the error flag.
+        format!("{:08X}", 0x2000_0000 | f.id)
+    } else if f.extended {
         format!("{:08X}", f.id)
     } else {
         format!("{:03X}", f.id)

@@ -15,6 +15,7 @@ pub mod ixxat;
 pub mod mf4;
 pub mod pcap;
 pub mod trc;
+pub mod vector;
 
 use std::fmt;
 

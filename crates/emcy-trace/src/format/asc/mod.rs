@@ -18,6 +18,7 @@
 //! that does not parse is malformed with a reason.
 
 mod body;
+mod error;
 mod shape;
 mod syntax;
 
@@ -474,7 +475,7 @@ impl AscParser {
             return Err("line ends after the channel number".into());
         };
         if is(what, b"ErrorFrame") {
-            return Ok(Some(Frame::error(Some(time), channel)));
+            return Ok(Some(error::classic(toks).frame(Some(time), channel)));
         }
         let known = is(what, b"Statistic:")
             || is(what, b"OverloadFrame")
@@ -569,7 +570,8 @@ impl AscParser {
         let tx_request = is_tx_request(dir)?;
         let what = toks.next().ok_or("CANFD line ends after the direction")?;
         if is(what, b"ErrorFrame") {
-            return Ok(Some(Frame::error(Some(time), channel)));
+            let e = error::fd(is(dir, b"Tx"), toks.rest());
+            return Ok(Some(e.frame(Some(time), channel)));
         }
         let (id, extended) = parse_id(what, self.base)?;
         if tx_request {
@@ -863,17 +865,25 @@ mod tests {
         assert_eq!(f.channel, b"2");
         assert_eq!(
             (f.id, f.extended, f.kind, f.len),
-            (0, false, FrameKind::Error, 0)
+            (0x88, false, FrameKind::Error, 8)
         );
-        assert_eq!(frame("   0.5 1  ErrorFrame").kind, FrameKind::Error);
+        assert_eq!(f.data.as_slice(), [0, 0, 0x04, 0, 0, 0, 0, 0]);
+        let unknown = frame("   0.5 1  ErrorFrame");
         assert_eq!(
-            frame("3.501000 1 ErrorFrame ECC: 10100010").kind,
-            FrameKind::Error
+            (unknown.kind, unknown.id, unknown.len),
+            (FrameKind::Error, 0, 0)
         );
+        let ecc = frame("3.501000 1 ErrorFrame ECC: 10100010");
+        assert_eq!((ecc.kind, ecc.id), (FrameKind::Error, 0x88));
+        assert_eq!(ecc.data.as_slice(), [0, 0, 0x04, 0x02, 0, 0, 0, 0]);
         let f = frame(
             "  30.806898 CANFD   5 Tx ErrorFrame Not Acknowledge error, dominant error flag fffe c7 31ca Arb. 556 44 0 0 f 64 00 00",
         );
-        assert_eq!((f.kind, f.channel, f.id), (FrameKind::Error, &b"5"[..], 0));
+        assert_eq!(
+            (f.kind, f.channel, f.id),
+            (FrameKind::Error, &b"5"[..], 0xA8)
+        );
+        assert_eq!(f.data.as_slice(), [0, 0, 0x80, 0x19, 0, 0, 0, 0]);
     }
 
     #[test]

@@ -30,6 +30,8 @@
 
 use std::io::{self, Read};
 
+use crate::error_frame::ErrorFrame;
+use crate::format::vector;
 use crate::read::{read_full, read_until_stopped};
 use crate::time::{SECS_PER_DAY, days_from_civil};
 use crate::{
@@ -549,6 +551,19 @@ impl<R: Read> FrameSource for BlfReader<R> {
     }
 }
 
+/// A `CAN_ERROR_EXT` object's content in the SocketCAN representation:
+/// channel (0), length (2), flags (4), ECC (8), position (9), DLC (10),
+/// frame length in ns (12), id (16), extended flags (20), read as Vector
+/// defines them ([`vector::error_frame`]). A `CAN_ERROR` object has only
+/// the channel and length: an error frame of unknown class.
+fn error_ext(d: &[u8]) -> ErrorFrame {
+    vector::error_frame(
+        u32_at(d, 4).unwrap_or(0),
+        d.get(8).copied().unwrap_or(0),
+        u16_at(d, 20),
+    )
+}
+
 /// Decodes one object that is not a log container.
 fn decode(base: Base, body: &[u8], start: (u128, u8)) -> Object {
     let name = match base.kind {
@@ -609,20 +624,26 @@ fn decode_can(base: Base, body: &[u8], start: (u128, u8)) -> Result<Option<Decod
             Ok(())
         }
     };
-    let error = |channel: u16| Decoded {
-        time,
-        channel,
-        id: 0,
-        extended: false,
-        kind: FrameKind::Error,
-        len: 0,
-        data: Payload::new(),
-        warning: None,
-    };
     let frame = match base.kind {
         CAN_ERROR | CAN_ERROR_EXT => {
             short(4)?;
-            error(u16_at(d, 0).unwrap_or(0))
+            // A field the object is too short to hold reads as not valid.
+            let e = if base.kind == CAN_ERROR_EXT {
+                error_ext(d)
+            } else {
+                ErrorFrame::default()
+            };
+            let f = e.frame(None, &[]);
+            Decoded {
+                time,
+                channel: u16_at(d, 0).unwrap_or(0),
+                id: f.id,
+                extended: false,
+                kind: FrameKind::Error,
+                len: f.len,
+                data: f.data,
+                warning: None,
+            }
         }
         CAN_MESSAGE | CAN_MESSAGE2 => {
             short(16)?;
@@ -828,6 +849,28 @@ pub fn fuzz_blf(data: &[u8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn error_ext_fields() {
+        use crate::error_frame::{LOCATION_BYTE, PROTOCOL_BYTE};
+        let object = |flags: u32, ecc: u8, ext: u16| {
+            let mut d = vec![0u8; 32];
+            d[4..8].copy_from_slice(&flags.to_le_bytes());
+            d[8] = ecc;
+            d[20..22].copy_from_slice(&ext.to_le_bytes());
+            let e = error_ext(&d);
+            (e.class, e.data[PROTOCOL_BYTE], e.data[LOCATION_BYTE])
+        };
+        // SJA1000 ECC: bit error while transmitting, at the ACK slot.
+        assert_eq!(object(1, 0x19, 0), (0xA8, 0x81, 0x19));
+        // CAN-Core code: CRC error, receiving.
+        assert_eq!(object(0xE, 4 | (2 << 6), 0), (0x88, 0, 0x08));
+        // Only the extended flags: stuff error, transmitting.
+        assert_eq!(object(0, 0, (2 << 6) | (3 << 12)), (0x88, 0x84, 0));
+        // Nothing valid, or an object too short for the fields.
+        assert_eq!(object(0, 0x19, 0), (0, 0, 0));
+        assert_eq!(error_ext(&[1, 0, 0, 0]), ErrorFrame::default());
+    }
 
     /// An object with a version 1 header (1 ns ticks), padded as the rule
     /// says or, with `padded` false, not at all.

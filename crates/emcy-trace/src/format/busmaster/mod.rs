@@ -50,6 +50,7 @@
 //! `s-fd` and `x-fd` (CAN FD, the length a byte count), and `ERR...` (error
 //! frames). Rx and Tx are both frames; the channel is kept as written.
 
+use crate::error_frame::{ErrorFrame, class};
 use crate::time::{SECS_PER_DAY, unix_midnight};
 use crate::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
@@ -593,7 +594,7 @@ impl BusmasterParser {
         let channel = channel_of(channel).map_err(fail)?;
         if kind.starts_with(b"ERR") {
             return Ok(Line {
-                frame: Frame::error(None, channel),
+                frame: error_frame(rest).frame(None, channel),
                 time,
                 decided: None,
             });
@@ -928,6 +929,20 @@ pub fn fuzz_busmaster(data: &[u8]) {
     }
 }
 
+/// What BUSMASTER writes after `ERR`, in the SocketCAN representation:
+/// `Bus Off` is the class bus-off; any other text an error frame whose
+/// class is unknown.
+fn error_frame(words: &[&[u8]]) -> ErrorFrame {
+    let mut e = ErrorFrame::default();
+    if let [a, b, ..] = words
+        && a.eq_ignore_ascii_case(b"Bus")
+        && b.eq_ignore_ascii_case(b"Off")
+    {
+        e.class |= class::BUS_OFF;
+    }
+    e
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1114,6 +1129,14 @@ mod tests {
     }
 
     #[test]
+    fn error_texts() {
+        assert_eq!(error_frame(&[b"Bus", b"Off"]).class, class::BUS_OFF);
+        assert_eq!(error_frame(&[b"bus", b"off", b"x"]).class, class::BUS_OFF);
+        assert_eq!(error_frame(&[b"Bus"]), ErrorFrame::default());
+        assert_eq!(error_frame(&[]), ErrorFrame::default());
+    }
+
+    #[test]
     fn appended_sessions_switch_base_and_channels_stay_as_written() {
         let mut p = BusmasterParser::new();
         let parsed = read(
@@ -1142,7 +1165,10 @@ mod tests {
             ("0", FrameKind::Fd, 12)
         );
         assert_eq!(got[3].6, (0..12).collect::<Vec<u8>>());
-        assert_eq!(got[4].4, FrameKind::Error);
+        assert_eq!(
+            (got[4].2, got[4].4, got[4].6.clone()),
+            (0x40, FrameKind::Error, vec![0; 8])
+        );
         assert!(malformed(&parsed).is_empty());
     }
 

@@ -341,7 +341,7 @@ fn parse_line_full<'a>(
     let mut frame = parse_frame(frame_text, interest)?;
     // The timestamp is validated for every frame but only converted for wanted ones.
     let time = Timestamp::parse(time_text).map_err(Reason::from)?;
-    if interest.wants(frame.id, frame.extended) {
+    if frame.kind == FrameKind::Error || interest.wants(frame.id, frame.extended) {
         frame.time = Some(time);
     }
     frame.channel = channel;
@@ -661,7 +661,8 @@ fn shape(line: &[u8]) -> Option<Shape> {
     let (extended, kind) = match id_len {
         3 if id <= 0x7FF => (false, FrameKind::Data),
         8 if id & !(EFF_MASK | ERROR_FLAG) != 0 => return None,
-        8 if id & ERROR_FLAG != 0 => (true, FrameKind::Error),
+        // Error frames are rare and always decoded whole: the general path.
+        8 if id & ERROR_FLAG != 0 => return None,
         8 => (true, FrameKind::Data),
         _ => return None,
     };
@@ -698,7 +699,10 @@ pub fn parse_frame<'a>(token: &[u8], interest: &Interest) -> Result<Frame<'a>, R
         (8, Some(id)) if id & !(EFF_MASK | ERROR_FLAG) != 0 => {
             return Err(format!("extended id {id:08X} has bits above 29 set").into());
         }
-        (8, Some(id)) => (id, true, id & ERROR_FLAG != 0),
+        // An error frame's id is its class bits, without the flag (the
+        // representation every reader gives, `crate::error_frame`).
+        (8, Some(id)) if id & ERROR_FLAG != 0 => (id & EFF_MASK, false, true),
+        (8, Some(id)) => (id, true, false),
         (3 | 8, None) => return Err("id is not hexadecimal".into()),
         (n, _) => {
             return Err(
@@ -706,7 +710,8 @@ pub fn parse_frame<'a>(token: &[u8], interest: &Interest) -> Result<Frame<'a>, R
             );
         }
     };
-    let wanted = interest.wants(id, extended);
+    // Error frames are rare: their data is always read.
+    let wanted = is_error || interest.wants(id, extended);
     let mut data = Payload::new();
     let (kind, len) = if let Some(fd) = body.strip_prefix(b"#") {
         if is_error {
@@ -847,9 +852,16 @@ mod tests {
 
     #[test]
     fn error_frames() {
-        let f = frame("(1.000000) can0 20000004#0000000000000000");
-        assert_eq!(f.kind, FrameKind::Error);
-        assert_eq!(f.id, 0x2000_0004);
+        // Whatever the interest: error frames are always decoded whole.
+        let mut p = CandumpLogParser::new();
+        let line = b"(1.000000) can0 20000204#0004000000000A85";
+        let Parsed::Frame(f) = p.parse(line, &Interest::none()) else {
+            panic!("an error frame");
+        };
+        assert_eq!((f.kind, f.id, f.extended), (FrameKind::Error, 0x204, false));
+        assert_eq!(f.data.as_slice(), [0, 4, 0, 0, 0, 0, 0x0A, 0x85]);
+        assert_eq!(f.time.map(|t| t.to_string()).as_deref(), Some("1.000000"));
+        assert!(matches!(p.scan(line, &Interest::none()), Scan::Parse));
     }
 
     #[test]

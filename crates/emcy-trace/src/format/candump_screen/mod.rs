@@ -521,7 +521,8 @@ fn parse_line<'a, const LENIENT: bool>(
         return Err("error frame with a CAN FD length".into());
     }
 
-    let wanted = interest.wants(id, extended);
+    // Error frames are rare: always decoded whole, whatever the interest.
+    let wanted = is_error || interest.wants(id, extended);
     let mut data = Payload::new();
     let before_body = cur.pos;
     let mut annotated = false;
@@ -597,6 +598,12 @@ fn parse_line<'a, const LENIENT: bool>(
     let time = match time_text {
         Some(text) => Some(parse_time(text)?),
         None => None,
+    };
+    let (id, extended) = if is_error {
+        // The class bits, without the flag (`crate::error_frame`).
+        (id & !ERROR_FLAG, false)
+    } else {
+        (id, extended)
     };
     let frame = Frame {
         time: if wanted { time } else { None },
@@ -784,7 +791,7 @@ mod tests {
         let f = frame("  vcan0  20000004   [8]  00 00 00 00 00 00 00 00   ERRORFRAME");
         assert_eq!(
             (f.id, f.extended, f.kind, f.len),
-            (0x2000_0004, true, FrameKind::Error, 8)
+            (0x004, false, FrameKind::Error, 8)
         );
         assert_eq!(f.data.as_slice(), [0; 8]);
         let f = frame("  can0  20001111   [7]  C6 23 7B 32 69 98 3C      ERRORFRAME");

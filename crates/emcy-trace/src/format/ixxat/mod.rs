@@ -49,6 +49,8 @@ const CHANNEL: &[u8] = b"1";
 pub struct IxxatParser {
     /// The title line was read: header lines are known from now on.
     titled: bool,
+    /// The header's `Baudrate: 500 kbit/s`, in bit/s.
+    bit_rate: Option<u32>,
 }
 
 impl IxxatParser {
@@ -73,6 +75,10 @@ impl LineParser for IxxatParser {
         self.titled
     }
 
+    fn bit_rate(&self) -> Option<u32> {
+        self.bit_rate
+    }
+
     fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
         let t = trim_end(trim_start(line));
         if t.is_empty() || is_blank(t) {
@@ -86,6 +92,9 @@ impl LineParser for IxxatParser {
             // `Date: 28.01.2025`, `Overruns: 0`: header lines, once the
             // title said whose they are.
             return if self.titled && is_header(t) {
+                if let Some(rate) = t.strip_prefix(b"Baudrate:") {
+                    self.bit_rate = crate::parse_bit_rate(rate);
+                }
                 Parsed::Skipped
             } else {
                 Parsed::Malformed(

@@ -42,6 +42,7 @@ fn header_lines_are_skipped_and_the_title_identifies_the_format() {
         assert!(p.identified(), "{line}");
     }
     assert_eq!(p.context(), Some(1));
+    assert_eq!(p.bit_rate(), Some(250_000));
     // Before the title, a `Key: value` line is nobody's header.
     assert!(malformed("Date: 03.02.2026").contains("quoted fields"));
     assert_eq!(parse(""), Parsed::Skipped);

@@ -134,6 +134,10 @@ pub struct CanFields {
     pub data_length: Option<Channel>,
     pub data_bytes: Option<Channel>,
     pub edl: Option<Channel>,
+    /// An error frame's `ErrorType` ([`super::error_frame`]).
+    pub error_type: Option<Channel>,
+    /// `Dir`: 0 received, 1 transmitted.
+    pub dir: Option<Channel>,
 }
 
 /// A field read as it is stored: an unsigned little-endian integer, not
@@ -387,6 +391,8 @@ fn group<B: Blocks>(blocks: &B, offset: u64, cg: &Cg, cx: &mut Cx) -> Result<Gro
                     "DataLength" => &mut fields.data_length,
                     "DataBytes" => &mut fields.data_bytes,
                     "EDL" => &mut fields.edl,
+                    "ErrorType" => &mut fields.error_type,
+                    "Dir" => &mut fields.dir,
                     _ => continue,
                 };
                 if slot.is_none() {

@@ -69,6 +69,7 @@ use std::collections::{HashMap, VecDeque};
 use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
+use crate::error_frame::{ErrorFrame, class, location, protocol};
 use crate::read::{read_full, read_until_stopped};
 use crate::{
     Counted, Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed,
@@ -1502,7 +1503,18 @@ impl<R: Read> Mf4Reader<R> {
             len: 0,
             data: Payload::new(),
         };
-        if matches!(kind, FrameKind::Remote | FrameKind::Error) {
+        if kind == FrameKind::Error {
+            let e = error_frame(get(&f.error_type), get(&f.dir));
+            let frame = e.frame(None, &[]);
+            return Ok(Out::Frame(Decoded {
+                id: frame.id,
+                extended: false,
+                len: frame.len,
+                data: frame.data,
+                ..base
+            }));
+        }
+        if kind == FrameKind::Remote {
             // No data, as every reader here gives these frames.
             return Ok(Out::Frame(base));
         }
@@ -1925,4 +1937,29 @@ pub fn fuzz_mf4(data: &[u8]) {
         }
     }
     assert_eq!(with, without, "the interest changes what is read");
+}
+
+/// A `CAN_ErrorFrame` record in the SocketCAN representation: the one
+/// place that says what its members mean. `ErrorType` as ASAM's bus
+/// logging defines it: 1 bit, 2 form, 3 stuff, 4 CRC (error.h's CRC
+/// sequence location), 5 ACK (no ACK, at the ACK slot); 0 or none is an
+/// error frame of unknown class. `Dir` 1 (transmitted) marks the
+/// violation as the logger's own transmission.
+fn error_frame(error_type: Option<u64>, dir: Option<u64>) -> ErrorFrame {
+    let mut e = ErrorFrame::default();
+    match error_type {
+        Some(1) => e.violation(protocol::BIT),
+        Some(2) => e.violation(protocol::FORM),
+        Some(3) => e.violation(protocol::STUFF),
+        Some(4) => e.at(location::CRC_SEQUENCE),
+        Some(5) => {
+            e.class |= class::NO_ACK;
+            e.at(location::ACK_SLOT)
+        }
+        _ => return e,
+    };
+    if dir == Some(1) {
+        e.transmitting();
+    }
+    e
 }

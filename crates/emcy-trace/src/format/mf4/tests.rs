@@ -539,3 +539,26 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn every_error_type_and_direction() {
+    use crate::error_frame::{LOCATION_BYTE, PROTOCOL_BYTE};
+    let of = |t, d| {
+        let e = error_frame(t, d);
+        (e.class, e.data[PROTOCOL_BYTE], e.data[LOCATION_BYTE])
+    };
+    assert_eq!(of(Some(1), Some(0)), (0x88, protocol::BIT, 0));
+    assert_eq!(of(Some(2), None), (0x88, protocol::FORM, 0));
+    assert_eq!(
+        of(Some(3), Some(1)),
+        (0x88, protocol::STUFF | protocol::TX, 0)
+    );
+    assert_eq!(of(Some(4), None), (0x88, 0, location::CRC_SEQUENCE));
+    assert_eq!(
+        of(Some(5), Some(1)),
+        (0xA8, protocol::TX, location::ACK_SLOT)
+    );
+    assert_eq!(of(Some(0), Some(1)), (0, 0, 0));
+    assert_eq!(of(None, None), (0, 0, 0));
+    assert_eq!(of(Some(9), None), (0, 0, 0));
+}

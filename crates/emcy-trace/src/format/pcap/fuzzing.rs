@@ -65,7 +65,7 @@ pub fn fuzz_pcap(data: &[u8]) {
                 }
                 FrameKind::Fd => assert_eq!(f.data.len(), usize::from(f.len)),
                 FrameKind::Remote => assert!(f.data.is_empty()),
-                FrameKind::Error => assert!(f.extended && f.id & 0x2000_0000 != 0),
+                FrameKind::Error => assert!(!f.extended && f.id & 0x2000_0000 == 0),
             }
             if f.kind != FrameKind::Error {
                 assert!(f.id <= if f.extended { 0x1FFF_FFFF } else { 0x7FF });

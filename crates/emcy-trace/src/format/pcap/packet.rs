@@ -240,8 +240,8 @@ pub fn quick(
 }
 
 /// Decodes a SocketCAN `can_frame` / `canfd_frame` whose id word is in
-/// `order`. Error and remote frames are read as candump writes them: an
-/// error frame's id keeps the error flag and class bits.
+/// `order`. An error frame's id is its class bits without the error flag,
+/// as every reader gives it (`crate::error_frame`).
 pub fn frame<'p>(
     linktype: u16,
     d: &'p [u8],
@@ -306,7 +306,12 @@ impl Head {
     /// Only counted: not a data frame, or on an id `interest` does not want.
     #[inline]
     fn plain(self, interest: &Interest) -> bool {
-        self.kind != FrameKind::Data || !interest.wants(self.id, self.extended)
+        match self.kind {
+            // Rare, and always decoded whole, whatever the interest.
+            FrameKind::Error => false,
+            FrameKind::Data => !interest.wants(self.id, self.extended),
+            FrameKind::Remote | FrameKind::Fd => true,
+        }
     }
 }
 
@@ -339,8 +344,9 @@ fn head(d: &[u8], reported: u32, order: Order, shape: Shape) -> Result<Option<He
             return Err(format!("error frame with {len} data bytes (at most 8)"));
         }
         Head {
-            id: word & (EFF_MASK | ERR_FLAG),
-            extended: true,
+            // The class bits, without the flag (`crate::error_frame`).
+            id: word & EFF_MASK,
+            extended: false,
             kind: FrameKind::Error,
             len,
         }
@@ -482,10 +488,7 @@ mod tests {
 
         let err = can([0x20, 0, 0, 0x04], 8, 0, &[0, 4, 0, 0, 0, 0, 0, 0]);
         let c = decoded(decode(227, &err, 16, Order::Little, BE, None));
-        assert_eq!(
-            (c.id, c.extended, c.kind),
-            (0x2000_0004, true, FrameKind::Error)
-        );
+        assert_eq!((c.id, c.extended, c.kind), (0x004, false, FrameKind::Error));
     }
 
     #[test]

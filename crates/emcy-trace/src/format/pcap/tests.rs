@@ -436,7 +436,7 @@ fn can_fd_remote_error_and_extended_frames() {
         [
             (FrameKind::Fd, 0x81, false, 12),
             (FrameKind::Remote, 0x81, false, 0),
-            (FrameKind::Error, 0x2000_0004, true, 8),
+            (FrameKind::Error, 0x004, false, 8),
             (FrameKind::Data, 0x81, true, 8),
         ]
     );
@@ -575,7 +575,7 @@ fn big_endian_socketcan_ids_are_read_as_the_link_type_says() {
             other => panic!("{other:?}"),
         })
         .collect();
-    assert_eq!(ids, [0x81, 0x701, 0x0123_4567, 0x2000_0004, 0]);
+    assert_eq!(ids, [0x81, 0x701, 0x0123_4567, 0x004, 0]);
 }
 
 #[test]

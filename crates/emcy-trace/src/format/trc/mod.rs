@@ -27,11 +27,62 @@
 //! error frames; `RTR` rows and `RR` are remote frames; `FD`, `FB`, `FE`,
 //! `BI` are CAN FD frames (never an EMCY).
 
+use crate::error_frame::{ErrorFrame, protocol};
 use crate::{
     Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
     show_token as show,
 };
 use crate::{hex, is_blank, trim_start};
+
+/// A PEAK error frame (a TRC error row, as PCAN-Basic hands it over) in the
+/// SocketCAN representation: the one place that says what its fields mean.
+///
+/// | field | values | error.h |
+/// |---|---|---|
+/// | type | 1 bit, 2 form, 4 stuff, 8 other (bits) | the protocol type byte; other: unspecified |
+/// | direction | 0 transmitting, 1 receiving | `CAN_ERR_PROT_TX` |
+/// | position | the SJA1000 segment code | the location byte (its codes) |
+/// | RX, TX counters | 0-255 | data\[7\], data\[6\], `CAN_ERR_CNT` |
+fn peak_error(kind: u8, direction: u8, position: u8, counters: Option<(u8, u8)>) -> ErrorFrame {
+    let mut e = ErrorFrame::default();
+    for (bit, violation) in [
+        (1, protocol::BIT),
+        (2, protocol::FORM),
+        (4, protocol::STUFF),
+        (8, protocol::UNSPECIFIED),
+    ] {
+        if kind & bit != 0 {
+            e.violation(violation);
+        }
+    }
+    if e.class != 0 {
+        e.at(position & 0x1F);
+        if direction == 0 {
+            e.transmitting();
+        }
+        e.with_ack_inferred();
+    }
+    if let Some((rx, tx)) = counters {
+        e.counters(tx, rx);
+    }
+    e
+}
+
+/// The trailing run of two-digit hex tokens of an error row, at most 8.
+fn error_bytes(tokens: &[&[u8]]) -> Vec<u8> {
+    let run = tokens
+        .iter()
+        .rev()
+        .take_while(|t| t.len() == 2 && t.iter().all(u8::is_ascii_hexdigit))
+        .count()
+        .min(8);
+    tokens
+        .get(tokens.len() - run..)
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|t| hex::parse_u32(t).and_then(|v| u8::try_from(v).ok()))
+        .collect()
+}
 
 /// The TRC file versions (`;$FILEVERSION=`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -373,8 +424,17 @@ impl TrcParser {
         let len = dlc.min(8) as u8;
         let time = || self.time(offset);
         if error || data.first() == Some(&&b"ERROR"[..]) {
-            // The data of an error row is the error's description.
-            return Ok(Some(Frame::error(Some(time()?), channel)));
+            // Version 1 rows: the id is the error type, the data the
+            // direction, the position and the counters (after `ERROR` in 1.0).
+            let bytes = data.strip_prefix(&[&b"ERROR"[..]]).unwrap_or(data);
+            let fields = error_bytes(bytes);
+            let e = match (u8::try_from(id).ok(), fields.as_slice()) {
+                (Some(kind), [dir, position, rx, tx]) => {
+                    peak_error(kind, *dir, *position, Some((*rx, *tx)))
+                }
+                _ => ErrorFrame::default(),
+            };
+            return Ok(Some(e.frame(Some(time()?), channel)));
         }
         if data == [&b"RTR"[..]] {
             return Ok(Some(remote_frame(time()?, channel, id, extended, interest)));
@@ -405,7 +465,17 @@ impl TrcParser {
             b"ST" | b"EC" | b"EV" => return Ok(None),
             b"ER" => {
                 let channel = channel(c.bus.and_then(at))?;
-                return Ok(Some(Frame::error(Some(time()?), channel)));
+                // The error type, direction, position, RX and TX counters
+                // are the row's last five bytes (version 2.0 leaves the id
+                // column empty, so the columns do not place them).
+                let fields = error_bytes(f);
+                let e = match fields.as_slice() {
+                    [.., kind, dir, position, rx, tx] => {
+                        peak_error(*kind, *dir, *position, Some((*rx, *tx)))
+                    }
+                    _ => ErrorFrame::default(),
+                };
+                return Ok(Some(e.frame(Some(time()?), channel)));
             }
             other => return Err(format!("unknown message type '{}'", show(other)).into()),
         };
@@ -895,5 +965,77 @@ mod tests {
     fn fuzz_body_survives_odd_input() {
         fuzz_trc(b";$FILEVERSION=2.1\n;$COLUMNS=O,T,I,L,D\n1 DT 81 15 00\n\xff\x00)\n");
         fuzz_trc(b";$STARTTIME=999999999.999999999999999999\n1) 9999999999999999999.999999999999999 0081 0\n");
+    }
+
+    #[test]
+    fn every_peak_error_field() {
+        use crate::error_frame::{LOCATION_BYTE, PROTOCOL_BYTE, location};
+        let of = |e: ErrorFrame| {
+            (
+                e.class,
+                e.data[PROTOCOL_BYTE],
+                e.data[LOCATION_BYTE],
+                e.data[6],
+                e.data[7],
+            )
+        };
+        // (type, direction, position) -> (class, type byte, location)
+        let rows = [
+            (1, 1, 0x02, 0x288, protocol::BIT, location::ID28_21),
+            (2, 1, 0x1A, 0x288, protocol::FORM, location::EOF),
+            (
+                4,
+                0,
+                0x0A,
+                0x288,
+                protocol::STUFF | protocol::TX,
+                location::DATA,
+            ),
+            (
+                8,
+                1,
+                0x08,
+                0x288,
+                protocol::UNSPECIFIED,
+                location::CRC_SEQUENCE,
+            ),
+            (8, 0, 0x19, 0x2A8, protocol::TX, location::ACK_SLOT),
+            (0, 0, 0x19, 0x200, 0, 0),
+        ];
+        for (kind, dir, position, class, byte, at) in rows {
+            assert_eq!(
+                of(peak_error(kind, dir, position, Some((9, 130)))),
+                (class, byte, at, 130, 9),
+                "type {kind} direction {dir}"
+            );
+        }
+        assert_eq!(peak_error(0, 0, 0, None), ErrorFrame::default());
+    }
+
+    #[test]
+    fn error_rows_carry_their_fields() {
+        let mut p = TrcParser::new();
+        let got = parse_all(
+            &mut p,
+            &[
+                ";$FILEVERSION=1.1",
+                "     6)      1349.2  Error      0008  4  00 19 08 08 ",
+                ";$FILEVERSION=2.0",
+                ";$COLUMNS=N,O,T,I,d,l,D",
+                "      6      1334.522 ER          Rx    04 00 02 00 00 ",
+                ";$FILEVERSION=2.1",
+                ";$COLUMNS=N,O,T,B,I,d,R,L,D",
+                "     10      1334.268 ER 1         - Rx -  5    04 01 02 08 00 ",
+                "     11      1334.269 ER 1         - Rx -  2    04 01 ",
+            ],
+        );
+        let f = |i: usize| match &got[i] {
+            Parsed::Frame(f) => (f.id, f.data.as_slice().to_vec()),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(f(1), (0x2A8, vec![0, 0, 0x80, 0x19, 0, 0, 8, 8]));
+        assert_eq!(f(4), (0x288, vec![0, 0, 0x84, 0x02, 0, 0, 0, 0]));
+        assert_eq!(f(7), (0x288, vec![0, 0, 0x04, 0x02, 0, 0, 0, 8]));
+        assert_eq!(f(8), (0, vec![]));
     }
 }
