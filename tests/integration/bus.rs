@@ -171,3 +171,30 @@ fn csv_has_a_row_per_burst_and_bus_off() {
     let details: Value = serde_json::from_str(&burst[21]).expect("json details");
     assert_eq!(details["frames"], 13);
 }
+
+#[test]
+fn the_table_lists_bursts_and_bus_offs_and_ends_with_a_bus_errors_table() {
+    let out = emcy_decode().arg(TRACE).output().expect("runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("  errors  "), "{text}");
+    assert!(text.contains("node 5 bus-off for 2.5 s"), "{text}");
+    assert!(text.contains("EMCY 0x8140 at"), "{text}");
+    let table = text
+        .split("Bus errors\n")
+        .nth(1)
+        .expect("a Bus errors table");
+    let row = table.lines().nth(1).expect("a row");
+    assert!(row.starts_with("can0               20       3"), "{row}");
+    assert!(row.ends_with("node 5, controller, node 6"), "{row}");
+    assert!(
+        text.contains("20 error frames in 3 bursts, 3 bus-offs"),
+        "{text}"
+    );
+    // The summary view keeps the table and the line, not the events.
+    let out = emcy_decode()
+        .args(["--view", "summary", TRACE])
+        .output()
+        .expect("runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains("Bus errors\n") && !summary.contains("  errors  "));
+}
