@@ -24,6 +24,7 @@ impl Analysis {
                 error: Some(error),
                 nmt_unanswered: Vec::new(),
                 unmatched: None,
+                bus_errors: Vec::new(),
             },
             errors_raised: 0,
             frames_with_warnings: 0,

@@ -12,7 +12,9 @@ use std::sync::mpsc;
 
 use super::analysis::{Analysis, OutputError};
 use super::diagnostics::DiagnosticLog;
-use super::event::{BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport};
+use super::event::{
+    BootEvent, Bus, BusEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport,
+};
 use super::options::Options;
 use super::sink::Sink;
 use super::threads::spawn_scoped;
@@ -38,7 +40,16 @@ enum Recorded {
         cleared: Vec<u16>,
     },
     Health(Box<OwnedHealth>),
+    Bus(Box<OwnedBus>),
     End,
+}
+
+struct OwnedBus {
+    file: String,
+    line: u64,
+    time: Option<Timestamp>,
+    channel: String,
+    bus: Bus,
 }
 
 struct OwnedHealth {
@@ -69,6 +80,7 @@ struct OwnedEmcy {
     warnings: Vec<Warning>,
     profile: Chosen,
     decoded: Option<Decoded>,
+    bus_error: Option<Timestamp>,
 }
 
 /// A sink that keeps everything for a later replay.
@@ -103,6 +115,7 @@ impl Sink for Recorder {
             warnings: ev.warnings.to_vec(),
             profile: ev.profile,
             decoded: ev.decoded.cloned(),
+            bus_error: ev.bus_error,
         })));
         Ok(())
     }
@@ -127,6 +140,17 @@ impl Sink for Recorder {
             channel: ev.channel.to_string(),
             node: ev.node,
             health: ev.health.clone(),
+        })));
+        Ok(())
+    }
+
+    fn bus(&mut self, ev: &BusEvent<'_>) -> io::Result<()> {
+        self.events.push(Recorded::Bus(Box::new(OwnedBus {
+            file: ev.file.to_string(),
+            line: ev.line,
+            time: ev.time,
+            channel: ev.channel.to_string(),
+            bus: ev.bus.clone(),
         })));
         Ok(())
     }
@@ -181,6 +205,7 @@ impl FileResult {
                     warnings: &e.warnings,
                     profile: e.profile,
                     decoded: e.decoded.as_ref(),
+                    bus_error: e.bus_error,
                 }),
                 Recorded::Boot {
                     file,
@@ -204,6 +229,13 @@ impl FileResult {
                     channel: &h.channel,
                     node: h.node,
                     health: &h.health,
+                }),
+                Recorded::Bus(b) => sink.bus(&BusEvent {
+                    file: &b.file,
+                    line: b.line,
+                    time: b.time,
+                    channel: &b.channel,
+                    bus: &b.bus,
                 }),
                 Recorded::End => match &self.analysis {
                     Some(a) => sink.end_input(&a.report),

@@ -295,12 +295,17 @@ pub(super) fn deliver(
         let interest = sink.interest();
         // Remote requests on wanted ids go on too: on 0x700 + node they ask
         // for a node-guarding reply.
-        let kind_used = matches!(frame.kind, FrameKind::Data | FrameKind::Remote);
-        if !kind_used || !interest.wants(frame.id, frame.extended) {
+        let wanted = match frame.kind {
+            FrameKind::Data | FrameKind::Remote => interest.wants(frame.id, frame.extended),
+            FrameKind::Error => interest.wants_error_frames(),
+            FrameKind::Fd => false,
+        };
+        if !wanted {
             sink.plain_frames(1);
             return Ok(());
         }
-        if let Some(t) = frame.time
+        if frame.kind != FrameKind::Error
+            && let Some(t) = frame.time
             && interest.timed_only(frame.id, frame.extended, frame.data.as_slice())
         {
             sink.timed_frames(1, t, t);

@@ -9,9 +9,10 @@ use std::collections::HashMap;
 use std::io::Write;
 
 use super::analysis::{Analysis, OutputError, Reading};
+use super::bus::{MAX_CHANNELS, Told};
 use super::classify::{FoldedRun, Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
-use super::event::{CodeTexts, Counts, InputReport};
+use super::event::{CodeTexts, Counts, EvidenceKind, InputReport};
 use super::interest::{Wanted, interest};
 use super::monitor::context::{Emit, Fact, Facts, Learnt, Seen, Step};
 use super::monitor::{Carried, Monitors, TakenFold};
@@ -19,7 +20,9 @@ use super::nodes::Nodes;
 use super::options::Options;
 use super::sink::Sink;
 use crate::canopen::profile::Profile;
+use crate::canopen::{NodeId, emcy};
 use crate::timeline::At;
+use crate::trace::can_error::ErrorFrame;
 use crate::trace::deltas::TimeMode;
 use crate::trace::ethercat::CoeMessage;
 use crate::trace::{FoldBuffers, Format, Frame, FrameKind, Interest, Reason, Timestamp};
@@ -55,6 +58,8 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     spare_folds: FoldBuffers,
     /// How workers read the input, if they did.
     pub(super) reading: Reading,
+    /// Bus events to tell, reused.
+    told: Vec<Told>,
 }
 
 /// The monitors, the node table, the shared facts and an [`Emit`] over the
@@ -118,6 +123,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             rebounds: Vec::new(),
             spare_folds: FoldBuffers::default(),
             reading: Reading::default(),
+            told: Vec::new(),
         }
     }
 
@@ -136,6 +142,19 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         };
         let (monitors, nodes, facts, emit) = parts!(self);
         monitors.finish(end, nodes, facts, emit)?;
+        let mut told = std::mem::take(&mut self.told);
+        self.facts.bus.finish(&mut told);
+        let (_, _, _, emit) = parts!(self);
+        emit.bus(&mut told)?;
+        let bus = std::mem::take(&mut self.facts.bus);
+        if bus.ignored > 0 {
+            self.log.note(&format!(
+                "{file}: {} error frames on channels past the first {MAX_CHANNELS} with error \
+                 frames were only counted",
+                bus.ignored
+            ));
+        }
+        let bus_errors = bus.into_report();
         let nmt_unanswered = self.monitors.nmt.take_unanswered();
         if format.is_none() && self.counts.malformed > 0 && error.is_none() {
             error = Some(
@@ -222,6 +241,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             error,
             nmt_unanswered,
             unmatched,
+            bus_errors,
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;
@@ -347,6 +367,61 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         self.frame_times.1 = self.frame_times.1.max(Some(last));
     }
 
+    /// An error frame at `line`: into its channel's burst; what closed or
+    /// ended goes out.
+    fn error_frame(&mut self, line: u64, frame: &Frame<'_>) -> Result<(), OutputError> {
+        let decoded = ErrorFrame::decode(frame.id, frame.data.as_slice());
+        let at = At {
+            time: frame.time,
+            line,
+        };
+        let mut told = std::mem::take(&mut self.told);
+        self.facts
+            .bus
+            .error_frame(frame.channel, at, &decoded, &mut told);
+        let (_, _, _, emit) = parts!(self);
+        emit.bus(&mut told)?;
+        self.told = told;
+        Ok(())
+    }
+
+    /// A node's frame that shows it back on the bus (EMCY 0x8140, a
+    /// boot-up), once error frames were seen: a bus-off of the node if its
+    /// silence and a burst go together. Asked before the monitors see the
+    /// frame, while the node's last sign of life is the one before it.
+    fn node_back(&mut self, seen: &Seen<'_>) -> Result<(), OutputError> {
+        let back = match (self.facts.emcy_node(seen.id, false), seen.data) {
+            (Some(node), [lo, hi, ..])
+                if u16::from_le_bytes([*lo, *hi]) == RECOVERED_FROM_BUS_OFF =>
+            {
+                Some((node, EvidenceKind::Emcy(RECOVERED_FROM_BUS_OFF)))
+            }
+            (None, [0]) if emcy::is_nmt_error_control(seen.id) => Some((
+                (seen.id - emcy::NMT_ERROR_CONTROL_BASE) as NodeId,
+                EvidenceKind::BootUp,
+            )),
+            _ => None,
+        };
+        let Some((node, via)) = back else {
+            return Ok(());
+        };
+        let last_seen = self
+            .nodes
+            .known(seen.channel, node)
+            .and_then(|n| n.health())
+            .and_then(|h| h.heartbeat.last_seen());
+        if let Some(told) = self
+            .facts
+            .bus
+            .node_back(seen.channel, node, seen.at, via, last_seen)
+        {
+            let mut told = vec![told];
+            let (_, _, _, emit) = parts!(self);
+            emit.bus(&mut told)?;
+        }
+        Ok(())
+    }
+
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]
@@ -454,6 +529,12 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         }
         let interest = &self.wanted.interest;
         if frame.kind != FrameKind::Data {
+            if frame.kind == FrameKind::Error {
+                if interest.wants_error_frames() {
+                    self.error_frame(line_no, frame)?;
+                }
+                return Ok(());
+            }
             if frame.kind == FrameKind::Remote && !frame.extended && interest.wants(frame.id, false)
             {
                 // A guard request's time is checked against the deadlines,
@@ -491,6 +572,13 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 let (monitors, nodes, _, emit) = parts!(self);
                 monitors.nmt.deadlines_passed(t, line_no, nodes, emit)?;
             }
+            if self.facts.bus.passed(t) {
+                let mut told = std::mem::take(&mut self.told);
+                self.facts.bus.close_until(t, &mut told);
+                let (_, _, _, emit) = parts!(self);
+                emit.bus(&mut told)?;
+                self.told = told;
+            }
         }
         if self
             .wanted
@@ -509,6 +597,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             },
             data: frame.data.as_slice(),
         };
+        if self.facts.bus.any() && !seen.extended {
+            self.node_back(&seen)?;
+        }
         let (monitors, nodes, facts, emit) = parts!(self);
         if let Step::Learnt(learnt) = monitors.frame(&seen, nodes, facts, emit)? {
             self.learnt(seen.channel, seen.at, learnt)?;
@@ -516,6 +607,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         Ok(())
     }
 }
+
+/// EMCY 0x8140, "recovered from bus-off" (CiA 301).
+const RECOVERED_FROM_BUS_OFF: u16 = 0x8140;
 
 /// The earlier of two times, either of which may be unknown.
 fn earliest(a: Option<Timestamp>, b: Option<Timestamp>) -> Option<Timestamp> {

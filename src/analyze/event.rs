@@ -18,6 +18,7 @@ use crate::timeline::heartbeat::{Outage, Supervision, TimeoutSource};
 use crate::timeline::history::ErrorHistory;
 use crate::timeline::nmt::{GuardCounts, Via};
 use crate::timeline::{NodeStats, State};
+use crate::trace::can_error::ErrorKind;
 use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Span, Timestamp};
 
@@ -55,6 +56,9 @@ pub struct EmcyEvent<'a> {
     pub profile: Chosen,
     /// The manufacturer bytes as the profile reads them.
     pub decoded: Option<&'a Decoded>,
+    /// For a communication error (0x81xx), the start of the burst of
+    /// error frames on its channel it came in or right after.
+    pub bus_error: Option<Timestamp>,
 }
 
 /// An NMT boot-up: the node restarted, its errors are gone.
@@ -65,6 +69,165 @@ pub struct BootEvent<'a> {
     pub channel: &'a str,
     pub node: NodeId,
     pub cleared: &'a [u16],
+}
+
+/// An event of the bus rather than of one node's services: a burst of
+/// error frames, a bus-off, an LSS service. `time` and `line` are where it
+/// began (a burst is told when it closes, so after later events).
+pub struct BusEvent<'a> {
+    pub file: &'a str,
+    pub line: u64,
+    pub time: Option<Timestamp>,
+    pub channel: &'a str,
+    pub bus: &'a Bus,
+}
+
+/// What a [`BusEvent`] says; the JSON `type` is [`Bus::slug`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Bus {
+    /// Error frames with no more than [`BURST_GAP_MS`] between two.
+    Errors(ErrorBurst),
+    /// A controller (the logging one, or a node) left the bus.
+    BusOff(BusOff),
+}
+
+impl Bus {
+    /// The event's JSON `type` (docs/guide/output.md, the JSON contract).
+    pub fn slug(&self) -> &'static str {
+        match self {
+            Bus::Errors(_) => "bus_error",
+            Bus::BusOff(_) => "bus_off",
+        }
+    }
+}
+
+/// A burst of error frames ends after this long without one.
+pub const BURST_GAP_MS: u64 = 1000;
+
+/// A burst of error frames on one channel.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ErrorBurst {
+    pub start: Option<Timestamp>,
+    /// The last error frame's time.
+    pub end: Option<Timestamp>,
+    pub frames: u64,
+    /// Error frames by kind, indexed by [`ErrorKind::index`] (a frame may
+    /// count under several kinds).
+    pub kinds: [u64; ErrorKind::ALL.len()],
+    /// The highest error counters the frames reported; `None` when none
+    /// reported them.
+    pub tx_errors_max: Option<u8>,
+    pub rx_errors_max: Option<u8>,
+}
+
+impl ErrorBurst {
+    /// The kinds seen, with their counts, in [`ErrorKind::ALL`]'s order.
+    pub fn kinds(&self) -> impl Iterator<Item = (ErrorKind, u64)> + '_ {
+        kind_counts(&self.kinds)
+    }
+}
+
+/// The non-zero counts of `kinds`, with their kind.
+pub fn kind_counts(
+    kinds: &[u64; ErrorKind::ALL.len()],
+) -> impl Iterator<Item = (ErrorKind, u64)> + '_ {
+    ErrorKind::ALL
+        .into_iter()
+        .zip(kinds.iter().copied())
+        .filter(|(_, n)| *n > 0)
+}
+
+/// A controller off the bus: the logging controller's (its error frames
+/// say so) or a node's (inferred: it cannot say so while off).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BusOff {
+    /// `None`: the controller that logged the trace.
+    pub node: Option<NodeId>,
+    pub start: Option<Timestamp>,
+    /// `None`: still off at the end of the input.
+    pub end: Option<Timestamp>,
+    /// What showed it, in time order.
+    pub evidence: Vec<Evidence>,
+}
+
+/// One thing that showed a bus-off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Evidence {
+    pub kind: EvidenceKind,
+    pub time: Option<Timestamp>,
+    pub line: u64,
+}
+
+/// What a piece of [`Evidence`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EvidenceKind {
+    /// The burst of error frames (at its start).
+    BusError,
+    /// An error frame of class bus-off.
+    BusOffFrame,
+    /// An error frame saying the controller restarted or is error active
+    /// again.
+    RecoveryFrame,
+    /// The node's last sign of life before its silence.
+    LastSeen,
+    /// The node's EMCY with this code (0x8140: recovered from bus-off).
+    Emcy(u16),
+    /// The node's boot-up.
+    BootUp,
+}
+
+impl EvidenceKind {
+    /// The stable name in JSON.
+    pub fn slug(self) -> &'static str {
+        match self {
+            EvidenceKind::BusError => "bus_error",
+            EvidenceKind::BusOffFrame => "bus_off_frame",
+            EvidenceKind::RecoveryFrame => "recovery_frame",
+            EvidenceKind::LastSeen => "last_seen",
+            EvidenceKind::Emcy(_) => "emcy",
+            EvidenceKind::BootUp => "boot_up",
+        }
+    }
+
+    /// In words, for the table: "EMCY 0x8140", "boot-up".
+    pub fn words(self) -> String {
+        match self {
+            EvidenceKind::BusError => "error frames".to_string(),
+            EvidenceKind::BusOffFrame => "bus-off error frame".to_string(),
+            EvidenceKind::RecoveryFrame => "controller restarted".to_string(),
+            EvidenceKind::LastSeen => "last heard".to_string(),
+            EvidenceKind::Emcy(code) => format!("EMCY 0x{code:04X}"),
+            EvidenceKind::BootUp => "boot-up".to_string(),
+        }
+    }
+}
+
+/// The error frames of one channel over an input.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ChannelErrors {
+    pub channel: String,
+    pub frames: u64,
+    /// By kind, indexed by [`ErrorKind::index`].
+    pub kinds: [u64; ErrorKind::ALL.len()],
+    pub bursts: u64,
+    pub tx_errors_max: Option<u8>,
+    pub rx_errors_max: Option<u8>,
+    /// Bus-offs in all, the controller's and the nodes'.
+    pub bus_off_count: u64,
+    /// The first [`MAX_BUS_OFFS_KEPT`] bus-offs.
+    pub bus_offs: Vec<BusOffRecord>,
+}
+
+/// Bus-offs an input's report keeps per channel (the count goes on).
+pub const MAX_BUS_OFFS_KEPT: usize = 64;
+
+/// A bus-off as the input's report keeps it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BusOffRecord {
+    /// `None`: the logging controller.
+    pub node: Option<NodeId>,
+    pub start: Option<Timestamp>,
+    pub end: Option<Timestamp>,
 }
 
 /// A node's NMT, heartbeat, SDO abort or error history event (rare next to
@@ -441,6 +604,9 @@ pub struct InputReport {
     /// `--node`/`--channel` selected no node of this input: what it has
     /// instead (`--node 9 matches no node; the nodes that sent ...: 7`).
     pub unmatched: Option<String>,
+    /// Error frames and bus-offs per channel that had any, in the order
+    /// the channels first had one.
+    pub bus_errors: Vec<ChannelErrors>,
 }
 
 impl InputReport {

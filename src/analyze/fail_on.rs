@@ -21,6 +21,10 @@ pub struct FailOn {
     pub lost: bool,
     /// A node's CiA 402 drive entered fault.
     pub fault: bool,
+    /// A controller went bus-off (the logging one, or a node inferred).
+    pub bus_off: bool,
+    /// Any error frame on the bus.
+    pub bus_errors: bool,
 }
 
 impl FailOn {
@@ -33,6 +37,8 @@ impl FailOn {
             all.warning |= f.warning;
             all.lost |= f.lost;
             all.fault |= f.fault;
+            all.bus_off |= f.bus_off;
+            all.bus_errors |= f.bus_errors;
             all.codes.extend(&f.codes);
             all.category_at_most = match (all.category_at_most, f.category_at_most) {
                 (Some(a), Some(b)) => Some(a.max(b)),
@@ -123,6 +129,31 @@ pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<Stri
             ));
         }
     }
+    let channels = || reports.iter().flat_map(|r| &r.bus_errors);
+    if fail_on.bus_off {
+        let n: u64 = channels().map(|c| c.bus_off_count).sum();
+        if n > 0 {
+            let nodes = channels()
+                .flat_map(|c| &c.bus_offs)
+                .filter(|b| b.node.is_some())
+                .count();
+            met.push(format!(
+                "bus-off: {n} bus-off{} ({nodes} of a node, as far as kept)",
+                plural(n)
+            ));
+        }
+    }
+    if fail_on.bus_errors {
+        let frames: u64 = channels().map(|c| c.frames).sum();
+        let bursts: u64 = channels().map(|c| c.bursts).sum();
+        if frames > 0 {
+            met.push(format!(
+                "bus-errors: {frames} error frame{} in {bursts} burst{}",
+                plural(frames),
+                plural(bursts)
+            ));
+        }
+    }
     for &code in &fail_on.codes {
         let n: u64 = nodes().filter_map(|n| n.stats.raised.get(&code)).sum();
         if n > 0 {
@@ -139,4 +170,74 @@ pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<Stri
 
 fn plural(n: u64) -> &'static str {
     if n == 1 { "" } else { "s" }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analyze::event::{BusOffRecord, ChannelErrors};
+
+    fn with_bus(frames: u64, bus_offs: &[Option<u16>]) -> InputReport {
+        let mut report = Analysis::unopened("t.log".into(), String::new()).report;
+        report.bus_errors.push(ChannelErrors {
+            channel: "can0".into(),
+            frames,
+            bursts: u64::from(frames > 0),
+            bus_off_count: bus_offs.len() as u64,
+            bus_offs: bus_offs
+                .iter()
+                .map(|&node| BusOffRecord {
+                    node,
+                    start: None,
+                    end: None,
+                })
+                .collect(),
+            ..ChannelErrors::default()
+        });
+        report
+    }
+
+    #[test]
+    fn bus_off_is_met_by_any_bus_off() {
+        let f = FailOn {
+            bus_off: true,
+            ..FailOn::default()
+        };
+        let tally = Tally::default();
+        assert!(met(&f, &tally, &[with_bus(12, &[])]).is_empty());
+        assert_eq!(
+            met(&f, &tally, &[with_bus(12, &[Some(5), None])]),
+            ["bus-off: 2 bus-offs (1 of a node, as far as kept)"]
+        );
+    }
+
+    #[test]
+    fn bus_errors_is_met_by_any_error_frame() {
+        let f = FailOn {
+            bus_errors: true,
+            ..FailOn::default()
+        };
+        let tally = Tally::default();
+        assert!(met(&f, &tally, &[with_bus(0, &[])]).is_empty());
+        assert_eq!(
+            met(&f, &tally, &[with_bus(1, &[])]),
+            ["bus-errors: 1 error frame in 1 burst"]
+        );
+        // Not asked: not met.
+        assert!(met(&FailOn::default(), &tally, &[with_bus(9, &[None])]).is_empty());
+    }
+
+    #[test]
+    fn bus_conditions_combine() {
+        let a = FailOn {
+            bus_off: true,
+            ..FailOn::default()
+        };
+        let b = FailOn {
+            bus_errors: true,
+            ..FailOn::default()
+        };
+        let all = FailOn::combine(&[a, b]);
+        assert!(all.bus_off && all.bus_errors);
+    }
 }

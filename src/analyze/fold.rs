@@ -159,6 +159,11 @@ impl<E: Write> Consumer<'_, '_, E> {
         taken_as: &mut Vec<TakenFold>,
         rebounds: &mut Vec<(u32, Option<Timestamp>)>,
     ) -> bool {
+        // A burst of error frames closes within the run: frame by frame,
+        // so it closes where the frame path closes it.
+        if self.facts.bus.passed(run.latest) {
+            return false;
+        }
         // Index + 1 into the folds by node (0: not folded).
         let mut folded = [0u8; 128];
         for (i, f) in run.folds.iter().enumerate() {

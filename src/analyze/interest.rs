@@ -40,6 +40,9 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     for e in &opts.emcy_ids {
         add_emcy_id(&mut i, e.id, e.extended);
     }
+    // Error frames are rare on a sound bus, and on a faulty one they are
+    // the story.
+    i.add_error_frames();
     i
 }
 

@@ -15,6 +15,7 @@
 
 mod analysis;
 pub mod batch;
+mod bus;
 mod classify;
 mod consumer;
 pub mod diagnostics;
@@ -47,8 +48,9 @@ use classify::{LineSink, classify_block, deliver};
 use consumer::Consumer;
 pub use diagnostics::DiagnosticLog;
 pub use event::{
-    BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, GuardingReport, Health, HealthEvent,
-    HeartbeatReport, HistoryReport, InputReport, NodeReport, Unanswered,
+    BURST_GAP_MS, BootEvent, Bus, BusEvent, BusOff, BusOffRecord, ChannelErrors, Counts,
+    Diagnostic, DriveReport, EmcyEvent, ErrorBurst, Evidence, EvidenceKind, GuardingReport, Health,
+    HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeReport, Unanswered, kind_counts,
 };
 use nodes::Capped;
 pub use options::{EmcyId, MAX_NODES, Options};

@@ -4,7 +4,7 @@
 
 use std::io;
 
-use super::event::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport};
+use super::event::{BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport};
 
 /// Receives events as they are decoded, then the per-input and final
 /// summaries. Output errors (a closed pipe) stop the run.
@@ -17,6 +17,11 @@ pub trait Sink {
     /// NMT, heartbeat, SDO abort and error history events; sinks that show
     /// only EMCYs leave them out.
     fn health(&mut self, _event: &HealthEvent<'_>) -> io::Result<()> {
+        Ok(())
+    }
+    /// Error bursts, bus-offs and LSS services; sinks that show only
+    /// nodes leave them out.
+    fn bus(&mut self, _event: &BusEvent<'_>) -> io::Result<()> {
         Ok(())
     }
     fn end_input(&mut self, _input: &InputReport) -> io::Result<()> {

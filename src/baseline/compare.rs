@@ -55,6 +55,11 @@ pub enum Kind {
     /// The baseline's drive faulted; now it does not.
     #[serde(rename = "axis_fault_gone")]
     DriveFaultGone,
+    /// A controller went bus-off (a node's, or the one that logged the
+    /// trace); in the baseline it did not.
+    BusOffNew,
+    /// In the baseline it went bus-off; now it does not.
+    BusOffGone,
 }
 
 impl Kind {
@@ -68,13 +73,15 @@ impl Kind {
             | Kind::NewError
             | Kind::NowActive
             | Kind::HeartbeatLostNew
-            | Kind::DriveFaultNew => Severity::Regression,
+            | Kind::DriveFaultNew
+            | Kind::BusOffNew => Severity::Regression,
             Kind::MalformedFell
             | Kind::EmcyInvalidFell
             | Kind::ErrorGone
             | Kind::NowCleared
             | Kind::HeartbeatLostGone
-            | Kind::DriveFaultGone => Severity::Improvement,
+            | Kind::DriveFaultGone
+            | Kind::BusOffGone => Severity::Improvement,
             Kind::FormatChanged
             | Kind::NewNodeWithoutErrors
             | Kind::NodeGone
@@ -283,6 +290,20 @@ fn compare_trace(c: &mut Collector<'_>, file: &str, old: &TraceEntry, new: &Trac
         c.add(at, kind, None, (Some(now), Some(was)), false, msg);
     }
 
+    let controllers: BTreeSet<&String> = old.bus_off.keys().chain(new.bus_off.keys()).collect();
+    for channel in controllers {
+        let was = old.bus_off.get(channel).copied().unwrap_or(0);
+        let now = new.bus_off.get(channel).copied().unwrap_or(0);
+        let counts = (Some(now), Some(was));
+        if now > 0 && was == 0 {
+            let msg = format!("{channel}: the controller went bus-off {now}x, baseline never");
+            c.add(at, Kind::BusOffNew, None, counts, false, msg);
+        } else if now == 0 && was > 0 {
+            let msg = format!("{channel}: the controller no longer goes bus-off (baseline {was}x)");
+            c.add(at, Kind::BusOffGone, None, counts, false, msg);
+        }
+    }
+
     let empty = BTreeMap::new();
     let channels: BTreeSet<&String> = old.nodes.keys().chain(new.nodes.keys()).collect();
     for channel in channels {
@@ -327,6 +348,16 @@ fn compare_node(
             false,
             msg,
         );
+    }
+    let bus_offs = |e: Option<&NodeEntry>| e.map_or(0, |e| e.bus_off);
+    let (was, now) = (bus_offs(old), bus_offs(new));
+    let counts = (Some(now), Some(was));
+    if now > 0 && was == 0 {
+        let msg = format!("went bus-off {now}x, baseline never");
+        c.add(at, Kind::BusOffNew, None, counts, false, msg);
+    } else if now == 0 && was > 0 && new.is_some() {
+        let msg = format!("no longer goes bus-off (baseline {was}x)");
+        c.add(at, Kind::BusOffGone, None, counts, false, msg);
     }
     let faults = |e: Option<&NodeEntry>| e.map_or(0, |e| e.drive_faults);
     let (was, now) = (faults(old), faults(new));
@@ -455,6 +486,7 @@ mod tests {
                 .collect(),
             heartbeat_lost: 0,
             drive_faults: 0,
+            bus_off: 0,
         }
     }
 
@@ -551,6 +583,52 @@ mod tests {
         let text = b.to_json().unwrap_or_default();
         assert!(text.contains("\"heartbeat_lost\": 3"), "{text}");
         assert_eq!(Baseline::from_json(&text).ok(), Some(b));
+    }
+
+    fn off(n: u64) -> NodeEntry {
+        NodeEntry {
+            bus_off: n,
+            ..node(&[])
+        }
+    }
+
+    #[test]
+    fn bus_offs_where_the_baseline_had_none_regress() {
+        let mut old = one(&[(1, node(&[])), (2, off(1)), (3, off(1))]);
+        let mut new = one(&[(1, off(2)), (2, node(&[])), (3, off(4))]);
+        if let Some(t) = new.traces.get_mut("t.log") {
+            t.bus_off.insert("can0".to_string(), 1);
+        }
+        if let Some(t) = old.traces.get_mut("t.log") {
+            t.bus_off.insert("can1".to_string(), 2);
+        }
+        let diff = compare(&old, &new, &Allow::default());
+        let found: Vec<(Option<NodeId>, Kind, Severity)> = diff
+            .findings
+            .iter()
+            .filter(|f| matches!(f.kind, Kind::BusOffNew | Kind::BusOffGone))
+            .map(|f| (f.node, f.kind, f.severity))
+            .collect();
+        use Kind::*;
+        use Severity::*;
+        assert_eq!(
+            found,
+            [
+                (None, BusOffNew, Regression),
+                (None, BusOffGone, Improvement),
+                (Some(1), BusOffNew, Regression),
+                (Some(2), BusOffGone, Improvement),
+            ]
+        );
+        assert_eq!(
+            serde_json::to_value(BusOffNew).ok(),
+            Some(serde_json::json!("bus_off_new"))
+        );
+        // Baselines without bus-offs keep their bytes; with them they read back.
+        let plain = one(&[(1, node(&[]))]).to_json().unwrap_or_default();
+        assert!(!plain.contains("bus_off"), "{plain}");
+        let text = new.to_json().unwrap_or_default();
+        assert_eq!(Baseline::from_json(&text).ok(), Some(new));
     }
 
     fn one(nodes: &[(NodeId, NodeEntry)]) -> Baseline {

@@ -122,6 +122,11 @@ pub struct TraceEntry {
     pub format: Option<String>,
     /// Channel -> node -> what the node did.
     pub nodes: BTreeMap<String, BTreeMap<NodeId, NodeEntry>>,
+    /// Channel -> bus-offs of the controller that logged the trace; left
+    /// out when none, so baselines of traces without them read and write
+    /// as before.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub bus_off: BTreeMap<String, u64>,
 }
 
 /// The input counts of the JSON contract, in alphabetical order.
@@ -151,6 +156,10 @@ pub struct NodeEntry {
     /// the name baselines were written with.
     #[serde(default, skip_serializing_if = "is_zero", rename = "axis_faults")]
     pub drive_faults: u64,
+    /// Bus-offs of the node (inferred from its silence across error
+    /// frames); left out when none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub bus_off: u64,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -270,11 +279,24 @@ impl TraceEntry {
                 errors,
                 heartbeat_lost: n.heartbeat.as_ref().map_or(0, |h| h.lost),
                 drive_faults: n.drive.as_ref().map_or(0, |a| a.fault_count),
+                bus_off: 0,
             };
             nodes
                 .entry(n.channel.clone())
                 .or_default()
                 .insert(n.node, entry);
+        }
+        let mut bus_off: BTreeMap<String, u64> = BTreeMap::new();
+        for c in &report.bus_errors {
+            for b in &c.bus_offs {
+                match b.node {
+                    Some(node) => {
+                        let entry = nodes.entry(c.channel.clone()).or_default();
+                        entry.entry(node).or_default().bus_off += 1;
+                    }
+                    None => *bus_off.entry(c.channel.clone()).or_default() += 1,
+                }
+            }
         }
         TraceEntry {
             counts: CountsEntry {
@@ -289,6 +311,7 @@ impl TraceEntry {
             },
             format: report.format.map(|f| f.name().to_string()),
             nodes,
+            bus_off,
         }
     }
 }

@@ -176,6 +176,7 @@ pub fn decode_timeline(data: &[u8]) {
                         source: ProfileSource::Flag,
                     },
                     decoded: decoded.as_ref(),
+                    bus_error: None,
                 };
                 ndjson.emcy(&event).expect("Vec");
                 table.emcy(&event).expect("Vec");
@@ -309,6 +310,7 @@ pub fn decode_timeline(data: &[u8]) {
         error: None,
         nmt_unanswered: Vec::new(),
         unmatched: None,
+        bus_errors: Vec::new(),
     };
     let inputs = std::slice::from_ref(&report);
     ndjson.end_input(&report).expect("Vec");

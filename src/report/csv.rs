@@ -21,10 +21,10 @@ use std::io::{self, Write};
 
 use super::format::{CSV_LIST, cia_code, push_code_counts, push_codes, push_hex_spaced};
 use super::jsonw::{JsonWriter, push_decoded};
-use super::table::health_description;
+use super::table::{bus_description, health_description};
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
-    BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, NodeReport, Sink,
+    BootEvent, Bus, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, NodeReport, Sink,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
@@ -159,7 +159,7 @@ impl<W: Write> Csv<W> {
         line: u64,
         time: Option<Timestamp>,
         channel: &str,
-        node: u16,
+        node: Option<u16>,
     ) {
         let file = cached_cell(&mut self.file, file);
         let channel = cached_cell(&mut self.channel, channel);
@@ -184,7 +184,10 @@ impl<W: Write> Csv<W> {
         row.push(b',');
         row.extend_from_slice(channel);
         row.push(b',');
-        push_u64(row, u64::from(node));
+        // Empty for a bus event of no node.
+        if let Some(node) = node {
+            push_u64(row, u64::from(node));
+        }
         row.push(b',');
     }
 
@@ -457,7 +460,7 @@ impl<W: Write> Sink for Csv<W> {
             return Ok(());
         }
         self.header()?;
-        self.head("emcy", ev.file, ev.line, ev.time, ev.channel, ev.node);
+        self.head("emcy", ev.file, ev.line, ev.time, ev.channel, Some(ev.node));
         if let Some(id) = ev.cob_id {
             push_u64(&mut self.row, u64::from(id));
         }
@@ -488,7 +491,7 @@ impl<W: Write> Sink for Csv<W> {
             return Ok(());
         }
         self.header()?;
-        self.head("boot", ev.file, ev.line, ev.time, ev.channel, ev.node);
+        self.head("boot", ev.file, ev.line, ev.time, ev.channel, Some(ev.node));
         // cob_id .. state: nothing for a boot-up.
         self.row.extend_from_slice(&[b','; 12]);
         push_codes(&mut self.row, ev.cleared.iter().copied(), &CSV_LIST);
@@ -511,11 +514,34 @@ impl<W: Write> Sink for Csv<W> {
             ev.line,
             ev.time,
             ev.channel,
-            ev.node,
+            Some(ev.node),
         );
         let description = health_description(ev.health, &self.times);
         self.json.clear();
         self.jsonw.health(&mut self.json, ev);
+        // cob_id .. class empty, description, register .. warnings empty.
+        self.row.extend_from_slice(b",,,");
+        push_text(&mut self.row, &description);
+        self.row.extend_from_slice(&[b','; 11]);
+        push_json(&mut self.row, &self.json);
+        self.end_row()
+    }
+
+    /// Error bursts and bus-offs: `description` as the table says it,
+    /// `details` the event's JSON object (`kinds`, `evidence`, ...).
+    fn bus(&mut self, ev: &BusEvent<'_>) -> io::Result<()> {
+        if self.summary {
+            return Ok(());
+        }
+        self.header()?;
+        let node = match ev.bus {
+            Bus::BusOff(off) => off.node,
+            Bus::Errors(_) => None,
+        };
+        self.head(ev.bus.slug(), ev.file, ev.line, ev.time, ev.channel, node);
+        let description = bus_description(ev.bus, &self.times);
+        self.json.clear();
+        self.jsonw.bus(&mut self.json, ev);
         // cob_id .. class empty, description, register .. warnings empty.
         self.row.extend_from_slice(b",,,");
         push_text(&mut self.row, &description);

@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 
 use super::jsonw::{JsonWriter, Pretty, pretty};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 
 /// `{"events":[...],"nodes":[...],"inputs":[...],"diagnostics":[...]}`,
 /// pretty-printed, events streamed as they come.
@@ -76,6 +76,11 @@ impl<W: Write> Sink for JsonDocument<W> {
 
     fn health(&mut self, event: &HealthEvent<'_>) -> io::Result<()> {
         self.json.health(&mut self.compact, event);
+        self.event()
+    }
+
+    fn bus(&mut self, event: &BusEvent<'_>) -> io::Result<()> {
+        self.json.bus(&mut self.compact, event);
         self.event()
     }
 

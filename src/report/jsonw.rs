@@ -14,8 +14,9 @@ use std::sync::Arc;
 use super::format;
 use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::{
-    BootEvent, Counts, Diagnostic, DriveReport, EmcyEvent, Health, HealthEvent, HeartbeatReport,
-    HistoryReport, InputReport, NodeReport,
+    BootEvent, Bus, BusEvent, ChannelErrors, Counts, Diagnostic, DriveReport, EmcyEvent,
+    EvidenceKind, Health, HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeReport,
+    kind_counts,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
@@ -25,6 +26,7 @@ use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
 use crate::timeline::Interval;
 use crate::timeline::drive::Via as DriveVia;
+use crate::trace::can_error::ErrorKind;
 use crate::trace::time::SecondsText;
 use crate::trace::{Format, Span, Timestamp};
 
@@ -106,6 +108,22 @@ pub(crate) fn push_decoded(out: &mut Vec<u8>, decoded: Option<&Decoded>) {
         }
     }
     o.end();
+}
+
+/// `{"protocol_violation":3,"no_ack":1}`: the kinds seen, with counts.
+fn kinds_object(out: &mut Vec<u8>, kinds: &[u64; ErrorKind::ALL.len()]) {
+    let mut o = Obj::new(out);
+    for (kind, n) in kind_counts(kinds) {
+        o.u64(kind.slug(), n);
+    }
+    o.end();
+}
+
+fn optional_u8(out: &mut Vec<u8>, v: Option<u8>) {
+    match v {
+        Some(v) => push_u64(out, u64::from(v)),
+        None => out.extend_from_slice(b"null"),
+    }
 }
 
 fn push_span(out: &mut Vec<u8>, s: Option<Span>) {
@@ -469,6 +487,15 @@ impl JsonWriter {
         self.array(out, ev.cleared, |_, out, c| push_code(out, c));
         key!(self, out, "warnings");
         self.array(out, ev.warnings, |w, out, warning| w.warning(out, warning));
+        // Only for a communication error that came with error frames.
+        if let Some(start) = ev.bus_error {
+            key!(self, out, "bus_error");
+            let at = out.len();
+            self.time(out, Some(start));
+            let number = at..out.len();
+            key!(self, out, "bus_error_text");
+            self.time_text(out, number, Some(start));
+        }
         if let Some(level) = self.level {
             newline(out, level);
         }
@@ -559,6 +586,52 @@ impl JsonWriter {
             }
             Health::FaultReset { controlword } => {
                 o.str("controlword", &format!("0x{controlword:04X}"));
+            }
+        }
+        o.end();
+    }
+
+    /// An error burst or a bus-off (docs/guide/output.md, JSON contract).
+    pub fn bus(&mut self, out: &mut Vec<u8>, ev: &BusEvent<'_>) {
+        let mut o = Obj::new(out);
+        o.str("type", ev.bus.slug());
+        o.str("file", ev.file);
+        o.u64("line", ev.line);
+        self.time_pair(&mut o, ["time", "time_text"], ev.time);
+        o.str("channel", ev.channel);
+        match ev.bus {
+            Bus::Errors(b) => {
+                o.null("node");
+                self.time_pair(&mut o, ["start", "start_text"], b.start);
+                self.time_pair(&mut o, ["end", "end_text"], b.end);
+                o.u64("frames", b.frames);
+                kinds_object(o.key("kinds"), &b.kinds);
+                optional_u8(o.key("tx_errors_max"), b.tx_errors_max);
+                optional_u8(o.key("rx_errors_max"), b.rx_errors_max);
+            }
+            Bus::BusOff(off) => {
+                match off.node {
+                    Some(n) => o.u64("node", u64::from(n)),
+                    None => o.null("node"),
+                }
+                self.time_pair(&mut o, ["start", "start_text"], off.start);
+                self.time_pair(&mut o, ["end", "end_text"], off.end);
+                let buf = o.key("evidence");
+                buf.push(b'[');
+                for (i, e) in off.evidence.iter().enumerate() {
+                    if i > 0 {
+                        buf.push(b',');
+                    }
+                    let mut item = Obj::new(buf);
+                    item.str("kind", e.kind.slug());
+                    if let EvidenceKind::Emcy(code) = e.kind {
+                        push_code(item.key("code"), code);
+                    }
+                    self.time_pair(&mut item, ["time", "time_text"], e.time);
+                    item.u64("line", e.line);
+                    item.end();
+                }
+                buf.push(b']');
             }
         }
         o.end();
@@ -948,6 +1021,47 @@ impl JsonWriter {
             }
             list.push(b']');
         }
+        // Only for inputs with error frames, likewise.
+        if !input.bus_errors.is_empty() {
+            let list = o.key("bus_errors");
+            list.push(b'[');
+            for (i, c) in input.bus_errors.iter().enumerate() {
+                if i > 0 {
+                    list.push(b',');
+                }
+                self.channel_errors(list, c);
+            }
+            list.push(b']');
+        }
+        o.end();
+    }
+
+    /// One channel's error frames and bus-offs over an input.
+    fn channel_errors(&mut self, out: &mut Vec<u8>, c: &ChannelErrors) {
+        let mut o = Obj::new(out);
+        o.str("channel", &c.channel);
+        o.u64("error_frames", c.frames);
+        kinds_object(o.key("kinds"), &c.kinds);
+        o.u64("bursts", c.bursts);
+        optional_u8(o.key("tx_errors_max"), c.tx_errors_max);
+        optional_u8(o.key("rx_errors_max"), c.rx_errors_max);
+        o.u64("bus_off_count", c.bus_off_count);
+        let list = o.key("bus_offs");
+        list.push(b'[');
+        for (i, b) in c.bus_offs.iter().enumerate() {
+            if i > 0 {
+                list.push(b',');
+            }
+            let mut bo = Obj::new(list);
+            match b.node {
+                Some(n) => bo.u64("node", u64::from(n)),
+                None => bo.null("node"),
+            }
+            self.time_pair(&mut bo, ["start", "start_text"], b.start);
+            self.time_pair(&mut bo, ["end", "end_text"], b.end);
+            bo.end();
+        }
+        list.push(b']');
         o.end();
     }
 

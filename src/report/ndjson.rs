@@ -5,7 +5,7 @@ use std::io::{self, Write};
 
 use super::jsonw::{JsonTexts, JsonWriter, NODE_END};
 use super::ordered::Ordered;
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 use crate::timeline::Interval;
 
 pub struct Ndjson<W: Write> {
@@ -165,6 +165,11 @@ impl<W: Write> Sink for Ndjson<W> {
 
     fn health(&mut self, event: &HealthEvent<'_>) -> io::Result<()> {
         self.json.health(&mut self.buf, event);
+        self.line()
+    }
+
+    fn bus(&mut self, event: &BusEvent<'_>) -> io::Result<()> {
+        self.json.bus(&mut self.buf, event);
         self.line()
     }
 

@@ -462,6 +462,11 @@ impl HeartbeatMonitor {
         self.lost_count
     }
 
+    /// The last sign of life with a time.
+    pub fn last_seen(&self) -> Option<At> {
+        self.last
+    }
+
     /// Silent past its deadline now.
     pub fn is_lost(&self) -> bool {
         self.lost.is_some()

@@ -7,4 +7,5 @@
 
 pub use emcy_trace::*;
 
+pub mod can_error;
 pub mod reader;

@@ -16,6 +16,7 @@ mod support;
 mod api;
 mod baseline;
 mod blf;
+mod bus;
 mod busmaster;
 mod chart;
 mod cia402;

@@ -33,7 +33,14 @@ pub struct Interest {
     /// Standard ids whose frames need not end a run of folds
     /// ([`Interest::keep_inside`]).
     inside: [u64; 32],
+    /// Error frames are wanted (time and data decoded), whatever their
+    /// class bits: candump writes those bits as an extended id with its
+    /// error flag, which no list of ids could cover.
+    errors: bool,
 }
+
+/// candump's flag for an error frame in an extended id.
+const ERROR_FLAG: u32 = 0x2000_0000;
 
 /// Whether a frame's data matters (see [`Interest`]), from its head.
 #[derive(Clone, Copy)]
@@ -128,6 +135,7 @@ impl Interest {
             fold_masks: Vec::new(),
             untimed: [0; 32],
             inside: [0; 32],
+            errors: true,
         }
     }
 
@@ -143,6 +151,7 @@ impl Interest {
             fold_masks: Vec::new(),
             untimed: [0; 32],
             inside: [0; 32],
+            errors: false,
         }
     }
 
@@ -280,6 +289,17 @@ impl Interest {
         bit(&self.filtered, id)
     }
 
+    /// Wants every error frame decoded.
+    pub fn add_error_frames(&mut self) {
+        self.errors = true;
+    }
+
+    /// Whether error frames are wanted.
+    #[inline]
+    pub fn wants_error_frames(&self) -> bool {
+        self.errors
+    }
+
     /// Wants the extended id `id`.
     pub fn add_extended(&mut self, id: u32) {
         if let Err(i) = self.extended.binary_search(&id) {
@@ -315,7 +335,9 @@ impl Interest {
     #[inline]
     pub fn wants(&self, id: u32, extended: bool) -> bool {
         if extended {
-            return self.all_extended || self.extended.binary_search(&id).is_ok();
+            return self.all_extended
+                || (self.errors && id & ERROR_FLAG != 0)
+                || self.extended.binary_search(&id).is_ok();
         }
         match self.standard.get((id >> 6) as usize) {
             Some(word) => word & (1 << (id & 63)) != 0,
@@ -344,6 +366,20 @@ mod tests {
         assert!(i.wants(0x1234_5678, true));
         assert!(!i.wants(0x1234_5679, true));
         assert!(!i.wants(0x78, false));
+    }
+
+    #[test]
+    fn error_frames_are_wanted_whatever_their_class_bits() {
+        let mut i = Interest::none();
+        assert!(!i.wants_error_frames());
+        assert!(!i.wants(0x2000_0004, true));
+        i.add_error_frames();
+        assert!(i.wants_error_frames());
+        assert!(i.wants(0x2000_0004, true));
+        assert!(i.wants(0x2000_0340, true));
+        // Only ids with candump's error flag: other extended ids are not.
+        assert!(!i.wants(0x0000_0004, true));
+        assert!(!i.wants(0x1234_5678, true));
     }
 
     #[test]

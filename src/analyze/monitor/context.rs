@@ -9,8 +9,11 @@ use std::collections::HashMap;
 use std::io::Write;
 
 use crate::analyze::analysis::OutputError;
+use crate::analyze::bus::{BusErrors, Told};
 use crate::analyze::diagnostics::{DiagnosticLog, InputDiagnostics};
-use crate::analyze::event::{BootEvent, Counts, EmcyEvent, Health, HealthEvent, NodeReport};
+use crate::analyze::event::{
+    BootEvent, Bus, BusEvent, Counts, EmcyEvent, Health, HealthEvent, NodeReport,
+};
 use crate::analyze::interest::Wanted;
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
@@ -144,6 +147,8 @@ pub(in crate::analyze) struct Facts<'r> {
     pub(in crate::analyze) profiles: NodeProfiles<'r>,
     /// EMCY ids other than 0x80 + node, to their node.
     emcy_ids: HashMap<(u32, bool), NodeId>,
+    /// The error frames so far: bursts, bus-offs.
+    pub(in crate::analyze) bus: BusErrors,
 }
 
 impl<'r> Facts<'r> {
@@ -175,6 +180,7 @@ impl<'r> Facts<'r> {
                 .iter()
                 .map(|e| ((e.id, e.extended), e.node))
                 .collect(),
+            bus: BusErrors::default(),
         }
     }
 
@@ -268,6 +274,33 @@ impl<E: Write> Emit<'_, E> {
 
     pub(in crate::analyze) fn boot(&mut self, event: &BootEvent<'_>) -> Result<(), OutputError> {
         self.sink.boot(event).map_err(OutputError)
+    }
+
+    /// Bus events (emptied) to the sink, those of a node only if the
+    /// options select it, those of a channel if they select the channel.
+    pub(in crate::analyze) fn bus(&mut self, told: &mut Vec<Told>) -> Result<(), OutputError> {
+        for t in told.drain(..) {
+            let node = match &t.bus {
+                Bus::BusOff(off) => off.node,
+                Bus::Errors(_) => None,
+            };
+            let selected = match node {
+                Some(node) => self.opts.selects(&t.channel, node),
+                None => self.opts.channels.is_empty() || self.opts.channels.contains(&t.channel),
+            };
+            if selected {
+                self.sink
+                    .bus(&BusEvent {
+                        file: self.file,
+                        line: t.at.line,
+                        time: t.at.time,
+                        channel: &t.channel,
+                        bus: &t.bus,
+                    })
+                    .map_err(OutputError)?;
+            }
+        }
+        Ok(())
     }
 
     /// A diagnostic at `line` of the input.

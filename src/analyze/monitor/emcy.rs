@@ -102,6 +102,17 @@ impl Monitor for EmcyMonitor {
     }
 }
 
+/// For a communication error (0x81xx: overrun, error passive, recovered
+/// from bus-off, ...), the start of the burst of error frames it came in
+/// or right after on its channel: drives report the wire late and
+/// indirectly, and the burst is what they report.
+fn bus_error_of(emcy: &Emcy, channel: &[u8], at: At, facts: &Facts<'_>) -> Option<Timestamp> {
+    if emcy.code & 0xFF00 != 0x8100 || !facts.bus.any() {
+        return None;
+    }
+    facts.bus.burst_of(channel, at.time?)
+}
+
 impl EmcyMonitor {
     /// An EMCY of `node` (on CAN id `cob_id`; `None` for a CoE emergency):
     /// its timeline step, counts and event.
@@ -205,6 +216,7 @@ impl EmcyMonitor {
             warnings: &self.warnings,
             profile: chosen,
             decoded: decoded.as_ref(),
+            bus_error: bus_error_of(&emcy, channel_bytes, at, facts),
         };
         emit.emcy(&event)?;
         self.step_buffers = step;

@@ -406,6 +406,7 @@ impl NmtMonitor {
         };
         if !decided
             || self.passed(time)
+            || facts.bus.passed(time)
             || !interest.wants(frame.id, false)
             || facts.moved_emcy(frame.id)
         {

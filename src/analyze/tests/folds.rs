@@ -166,6 +166,15 @@ fn assert_fold_independent(name: &str, t: &[u8], opts: &Options) -> (u64, u64) {
     tally
 }
 
+/// A burst of error frames closes where the frame path closes it, folding
+/// or not: a run of steady heartbeats past the burst's end is refused.
+#[test]
+fn error_bursts_close_on_the_same_frame_with_folds() {
+    let t = include_bytes!("../../../fixtures/bus-off.log");
+    let (taken, refused) = assert_fold_independent("bus-off", t, &base_options());
+    assert!(taken > 0 && refused > 0, "{taken} taken, {refused} refused");
+}
+
 #[test]
 fn steady_heartbeats_are_folded_and_give_what_they_give_one_by_one() {
     let t = trace(1, 32, 40, Twists::default());

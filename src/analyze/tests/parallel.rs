@@ -381,6 +381,17 @@ fn nmt_heartbeats_and_error_history_across_blocks() {
     assert!(err.contains("toggle bit error"), "{err}");
 }
 
+/// Error frames, split anywhere and on any thread count: bursts close on
+/// the same frame, and a node's bus-off is found from the same silence.
+#[test]
+fn error_bursts_and_bus_offs_across_blocks() {
+    let trace = include_bytes!("../../../fixtures/bus-off.log");
+    assert_split_independent("bus-off", trace);
+    let (out, _) = run(trace, 2, 64);
+    assert_eq!(out.matches("\"type\":\"bus_error\"").count(), 3, "{out}");
+    assert_eq!(out.matches("\"type\":\"bus_off\"").count(), 3, "{out}");
+}
+
 /// The network fixtures (a reset scan of absent ids, node guarding, the
 /// command grace), split anywhere: what the master sent to ids that had
 /// not spoken yet, a guard request waiting and a command waiting carry

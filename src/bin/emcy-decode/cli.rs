@@ -170,12 +170,13 @@ pub struct DecodeArgs {
     #[arg(long, short = 'f', value_enum, default_value_t = OutputFormat::Table, help_heading = OUTPUT)]
     pub format: OutputFormat,
 
-    /// Exit 1 when a condition is met: any, active, warning, lost, fault, code=..., category<=N, never
+    /// Exit 1 when a condition is met: any, active, warning, lost, fault, bus-off, bus-errors, code=..., category<=N, never
     ///
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
     /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), a node
-    /// `lost` its heartbeat, a CiA 402 drive entered `fault`, `never`
+    /// `lost` its heartbeat, a CiA 402 drive entered `fault`, a controller went
+    /// `bus-off`, any error frame (`bus-errors`), `never`
     #[arg(long, value_parser = parse_fail_on, value_name = "WHEN", help_heading = CI)]
     pub fail_on: Vec<FailOn>,
 
@@ -862,6 +863,8 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             "warning" | "warnings" => f.warning = true,
             "lost" => f.lost = true,
             "fault" | "faults" => f.fault = true,
+            "bus-off" | "bus_off" => f.bus_off = true,
+            "bus-errors" | "bus_errors" => f.bus_errors = true,
             _ if in_codes => {
                 f.codes.push(fail_on_code(item)?);
                 continue;
@@ -869,7 +872,7 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             _ => {
                 return Err(format!(
                     "'{item}' is not a condition: never, any, active, warning, lost, fault, \
-                     code=CODE[,CODE...], category<=N"
+                     bus-off, bus-errors, code=CODE[,CODE...], category<=N"
                 ));
             }
         }
@@ -1116,6 +1119,14 @@ mod tests {
         assert!(f("code=").is_err());
         assert!(f("category<=x").is_err());
         assert!(f("sometimes").is_err());
+        assert_eq!(
+            f("bus-off,bus-errors"),
+            Ok(FailOn {
+                bus_off: true,
+                bus_errors: true,
+                ..FailOn::default()
+            })
+        );
     }
 
     #[test]

@@ -201,6 +201,10 @@ impl<R: Sink> Sink for OnlyWhatWasRead<R> {
         self.begin_pending()?;
         self.inner.health(event)
     }
+    fn bus(&mut self, event: &analyze::BusEvent<'_>) -> io::Result<()> {
+        self.begin_pending()?;
+        self.inner.bus(event)
+    }
     fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
         if unread(input) {
             self.pending = None;

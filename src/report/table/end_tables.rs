@@ -10,7 +10,7 @@ use comfy_table::{CellAlignment, Table, presets};
 use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut, push_row, write_row};
 use super::page::{BOLD, Page};
 use super::timeline::{NodeTexts, write_timeline};
-use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport};
+use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport, kind_counts};
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
 use crate::report::timefmt::{SameDay, TimeFormat, human_span};
 use crate::text::printable;
@@ -23,6 +23,10 @@ pub(super) fn write_end_of_input<W: Write>(
     input: &InputReport,
 ) -> io::Result<()> {
     if input.nodes.is_empty() {
+        write_bus_errors(page, input)?;
+        if !input.bus_errors.is_empty() {
+            writeln!(page.out)?;
+        }
         write_bus_line(page, input)?;
         return writeln!(page.out);
     }
@@ -30,6 +34,7 @@ pub(super) fn write_end_of_input<W: Write>(
     write_nodes(page, input)?;
     write_health(page, input)?;
     write_drives(page, input)?;
+    write_bus_errors(page, input)?;
 
     write_timeline(page, input)?;
     writeln!(page.out)?;
@@ -45,6 +50,10 @@ pub(super) fn write_summary<W: Write>(page: &mut Page<W>, input: &InputReport) -
         write_codes(page, input)?;
         write_health(page, input)?;
         write_drives(page, input)?;
+    }
+    write_bus_errors(page, input)?;
+    if !input.bus_errors.is_empty() {
+        writeln!(page.out)?;
     }
     write_bus_line(page, input)?;
     writeln!(page.out)
@@ -301,6 +310,79 @@ fn write_drives<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result
     )
 }
 
+/// The error frames per channel (none: no section): how many, in how many
+/// bursts, by kind, the highest counters, and the bus-offs with who went
+/// off. Channels are few: one comfy table.
+fn write_bus_errors<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
+    if input.bus_errors.is_empty() {
+        return Ok(());
+    }
+    let rows: Vec<[String; 6]> = input
+        .bus_errors
+        .iter()
+        .map(|c| {
+            let kinds: Vec<String> = kind_counts(&c.kinds)
+                .map(|(k, n)| format!("{} {n}", k.words()))
+                .collect();
+            let counters = match (c.tx_errors_max, c.rx_errors_max) {
+                (None, None) => "-".to_string(),
+                (tx, rx) => format!(
+                    "{}/{}",
+                    tx.map_or("-".to_string(), |v| v.to_string()),
+                    rx.map_or("-".to_string(), |v| v.to_string())
+                ),
+            };
+            let mut offs: Vec<String> = c
+                .bus_offs
+                .iter()
+                .map(|b| match b.node {
+                    Some(n) => format!("node {n}"),
+                    None => "controller".to_string(),
+                })
+                .collect();
+            if c.bus_off_count > c.bus_offs.len() as u64 {
+                offs.push(format!(
+                    "{} more",
+                    c.bus_off_count - c.bus_offs.len() as u64
+                ));
+            }
+            [
+                printable(&c.channel).into_owned(),
+                c.frames.to_string(),
+                c.bursts.to_string(),
+                kinds.join(", "),
+                counters,
+                if offs.is_empty() {
+                    "-".to_string()
+                } else {
+                    offs.join(", ")
+                },
+            ]
+        })
+        .collect();
+    let mut widths = BUS_ERRORS_HEADER.map(str::len);
+    let mut said = [false; 6];
+    for row in &rows {
+        for (w, c) in widths.iter_mut().zip(row) {
+            *w = (*w).max(display_width(c));
+        }
+        for (s, c) in said.iter_mut().zip(row) {
+            *s |= c != "-";
+        }
+    }
+    let shown = page.fit_shown(&mut widths, &BUS_ERRORS_HEADER, &BUS_ERRORS_FIT, said);
+    writeln!(page.out)?;
+    writeln!(page.out, "{}", page.paint(BOLD, "Bus errors"))?;
+    write_comfy_table(
+        &mut page.out,
+        &BUS_ERRORS_HEADER,
+        &rows,
+        &widths,
+        &shown,
+        &BUS_ERRORS_RIGHT,
+    )
+}
+
 /// The bus-level line: frames, EMCY rate, nodes with errors.
 fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
     let c = &input.counts;
@@ -347,6 +429,29 @@ fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Resu
     let frames = match c.annotated {
         0 => frames,
         n => format!("{frames} ({n} annotated)"),
+    };
+    // Said only when error frames came: other traces read as before.
+    let errors: u64 = input.bus_errors.iter().map(|b| b.frames).sum();
+    let bursts: u64 = input.bus_errors.iter().map(|b| b.bursts).sum();
+    let offs: u64 = input.bus_errors.iter().map(|b| b.bus_off_count).sum();
+    let plural = |n: u64, one: &str, many: &str| {
+        if n == 1 {
+            format!("1 {one}")
+        } else {
+            format!("{n} {many}")
+        }
+    };
+    let frames = match (errors, offs) {
+        (0, _) => frames,
+        (e, o) => format!(
+            "{frames}, {} in {}{}",
+            plural(e, "error frame", "error frames"),
+            plural(bursts, "burst", "bursts"),
+            match o {
+                0 => String::new(),
+                o => format!(", {}", plural(o, "bus-off", "bus-offs")),
+            }
+        ),
     };
     let dropped = match c.dropped {
         0 => String::new(),
@@ -655,6 +760,23 @@ const DRIVES_RIGHT: [bool; 7] = [false, true, false, true, true, false, false];
 const DRIVES_FIT: Fit = Fit {
     drop: &[5, 4, 3],
     flex: &[(6, 60, 20), (0, CHANNEL_MAX, 7)],
+};
+
+const BUS_ERRORS_HEADER: [&str; 6] = [
+    "CHANNEL",
+    "ERROR FRAMES",
+    "BURSTS",
+    "KINDS",
+    "TX/RX MAX",
+    "BUS-OFF",
+];
+
+const BUS_ERRORS_RIGHT: [bool; 6] = [false, true, true, false, true, false];
+
+/// The kinds go first when narrow: the count and the bus-offs say most.
+const BUS_ERRORS_FIT: Fit = Fit {
+    drop: &[4, 2, 3],
+    flex: &[(3, 60, 20), (0, CHANNEL_MAX, 7)],
 };
 
 const INPUTS_HEADER: [&str; 9] = [

@@ -14,7 +14,7 @@ use super::fit::{
     CHANNEL_MAX, Fit, blanks, display_width, pad_to, push_cut, push_padded, write_row,
 };
 use super::page::{BOLD, GREEN, Page, RED, YELLOW};
-use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, HistoryReport};
+use crate::analyze::{BootEvent, Bus, BusEvent, EmcyEvent, Health, HealthEvent, HistoryReport};
 use crate::canopen::NodeId;
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
@@ -130,7 +130,7 @@ impl EventLines {
         // output, and traces with many EMCY print a line per frame.
         let mut line = std::mem::take(&mut self.line);
         line.clear();
-        self.push_prefix(page, &mut line, l, ev.time, ev.channel, ev.node);
+        self.push_prefix(page, &mut line, l, ev.time, ev.channel, Some(ev.node));
         if page.color {
             line.push_str(&page.paint(style, &code_text(ev.emcy.code)));
         } else {
@@ -234,7 +234,7 @@ impl EventLines {
             l,
             ev.time,
             ev.channel,
-            ev.node,
+            Some(ev.node),
             "boot",
             Some(GREEN),
             &what,
@@ -266,7 +266,7 @@ impl EventLines {
             l,
             ev.time,
             ev.channel,
-            ev.node,
+            Some(ev.node),
             tag,
             style,
             &printable(&what),
@@ -284,6 +284,45 @@ impl EventLines {
                     } else {
                         ""
                     }
+                );
+                write_detail(page, indent, &text, None)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A bus event's row: an error burst, a bus-off (with its evidence
+    /// under it).
+    pub(super) fn write_bus_event<W: Write>(
+        &mut self,
+        page: &mut Page<W>,
+        ev: &BusEvent<'_>,
+    ) -> io::Result<()> {
+        page.times.set_origin(ev.time);
+        let l = self.layout_for(page, ev.time, ev.channel)?;
+        let what = bus_description(ev.bus, &page.times);
+        let (tag, node) = match ev.bus {
+            Bus::Errors(_) => ("errors", None),
+            Bus::BusOff(off) => ("busoff", off.node),
+        };
+        self.write_tagged(
+            page,
+            l,
+            ev.time,
+            ev.channel,
+            node,
+            tag,
+            Some(RED),
+            &printable(&what),
+        )?;
+        if let Bus::BusOff(off) = ev.bus {
+            let indent = l.description_indent() + 2;
+            for e in &off.evidence {
+                let text = format!(
+                    "{} at {} (line {})",
+                    e.kind.words(),
+                    page.times.show_opt(e.time),
+                    e.line
                 );
                 write_detail(page, indent, &text, None)?;
             }
@@ -367,7 +406,7 @@ impl EventLines {
         l: Layout,
         time: Option<Timestamp>,
         channel: &str,
-        node: NodeId,
+        node: Option<NodeId>,
     ) {
         let start = line.len();
         let mut row_start = start;
@@ -406,7 +445,9 @@ impl EventLines {
         }
         line.push_str("  ");
         let mut digits = itoa::Buffer::new();
-        let node = digits.format(node);
+        // A bus event of no node (an error burst, the logging
+        // controller's bus-off) shows a dash.
+        let node = node.map_or("-", |n| digits.format(n));
         for _ in node.len()..4 {
             line.push(' ');
         }
@@ -423,7 +464,7 @@ impl EventLines {
         l: Layout,
         time: Option<Timestamp>,
         channel: &str,
-        node: NodeId,
+        node: Option<NodeId>,
         tag: &str,
         style: Option<Style>,
         what: &str,
@@ -638,6 +679,55 @@ fn history_head(h: &HistoryReport) -> String {
 
 /// A health event's text, as the table's description column and the CSV
 /// `description` column give it.
+/// A bus event in words: "12 error frames over 0.8 s: protocol_violation
+/// 10, no_ack 2 (TX errors up to 128)", "node 5 bus-off until 3.2 s".
+pub(crate) fn bus_description(bus: &Bus, times: &TimeFormat) -> String {
+    match bus {
+        Bus::Errors(b) => {
+            let over = match (b.start, b.end) {
+                (Some(s), Some(e)) if b.frames > 1 => format!(" over {}", human_span(e.since(s))),
+                _ => String::new(),
+            };
+            let kinds: Vec<String> = b
+                .kinds()
+                .map(|(k, n)| format!("{} {n}", k.slug()))
+                .collect();
+            let mut text = format!(
+                "{} error frame{}{over}: {}",
+                b.frames,
+                if b.frames == 1 { "" } else { "s" },
+                kinds.join(", ")
+            );
+            let counters: Vec<String> = [("TX", b.tx_errors_max), ("RX", b.rx_errors_max)]
+                .iter()
+                .filter_map(|(name, max)| max.map(|m| format!("{name} errors up to {m}")))
+                .collect();
+            if !counters.is_empty() {
+                text.push_str(&format!(" ({})", counters.join(", ")));
+            }
+            text
+        }
+        Bus::BusOff(off) => {
+            let who = match off.node {
+                Some(n) => format!("node {n}"),
+                None => "controller".to_string(),
+            };
+            let until = match off.end {
+                Some(end) => match off.start {
+                    Some(start) => format!(
+                        " for {}, back at {}",
+                        human_span(end.since(start)),
+                        times.show(end)
+                    ),
+                    None => format!(", back at {}", times.show(end)),
+                },
+                None => ", still off at the end".to_string(),
+            };
+            format!("{who} bus-off{until}")
+        }
+    }
+}
+
 pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String {
     match health {
         Health::Nmt { state, via } => format!("NMT {} (via {})", state.slug(), via.slug()),

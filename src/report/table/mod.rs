@@ -13,7 +13,7 @@
 use std::io::{self, Write};
 
 use super::timefmt::{TimeFormat, TimeStyle};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 use crate::text::printable;
 
 mod end_tables;
@@ -23,7 +23,7 @@ mod page;
 mod timeline;
 
 use events::EventLines;
-pub(crate) use events::health_description;
+pub(crate) use events::{bus_description, health_description};
 use fit::{MIN_WIDTH, push_cut};
 use page::{BOLD, Page};
 
@@ -113,6 +113,14 @@ impl<W: Write> Sink for TableReport<W> {
             return Ok(());
         }
         self.events.write_health_event(&mut self.page, ev)?;
+        self.end_event()
+    }
+
+    fn bus(&mut self, ev: &BusEvent<'_>) -> io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
+        self.events.write_bus_event(&mut self.page, ev)?;
         self.end_event()
     }
 
