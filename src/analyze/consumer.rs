@@ -405,11 +405,16 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         let Some((node, via)) = back else {
             return Ok(());
         };
-        let last_seen = self
-            .nodes
-            .known(seen.channel, node)
-            .and_then(|n| n.health())
-            .and_then(|h| h.heartbeat.last_seen());
+        // Heard last: by its heartbeat or by an EMCY, whichever came later
+        // (a node that sends EMCYs is on the bus, whatever its heartbeat).
+        let last_seen = self.nodes.known(seen.channel, node).and_then(|n| {
+            let heartbeat = n.health().and_then(|h| h.heartbeat.last_seen());
+            let emcy = n.last_emcy().filter(|a| a.time.is_some());
+            heartbeat
+                .into_iter()
+                .chain(emcy)
+                .max_by_key(|a| (a.time, a.line))
+        });
         if let Some(told) = self
             .facts
             .bus

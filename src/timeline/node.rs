@@ -166,6 +166,11 @@ impl NodeTimeline {
         self.stats.as_deref().unwrap_or(&NONE_YET)
     }
 
+    /// The last EMCY frame the node sent (a sign of life, as a heartbeat is).
+    pub fn last_emcy(&self) -> Option<At> {
+        self.stats.as_ref().and_then(|s| s.last_emcy)
+    }
+
     fn stats_mut(&mut self) -> &mut NodeStats {
         self.stats.get_or_insert_with(Box::default)
     }
