@@ -280,9 +280,11 @@ impl<E: Write> Emit<'_, E> {
     /// options select it, those of a channel if they select the channel.
     pub(in crate::analyze) fn bus(&mut self, told: &mut Vec<Told>) -> Result<(), OutputError> {
         for t in told.drain(..) {
+            // An LSS frame's node-id is the one it configures: the node
+            // has not spoken by it yet, so only the channel selects.
             let node = match &t.bus {
                 Bus::BusOff(off) => off.node,
-                Bus::Errors(_) => None,
+                Bus::Errors(_) | Bus::Lss(_) => None,
             };
             let selected = match node {
                 Some(node) => self.opts.selects(&t.channel, node),
