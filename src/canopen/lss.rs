@@ -414,6 +414,27 @@ mod tests {
         assert_eq!(slave(&[]), Lss::Unknown { cs: 0 });
     }
 
+    proptest::proptest! {
+        /// Any frame either way decodes (short ones too), to a service
+        /// that is unknown exactly when CiA 305 defines no such specifier
+        /// in that direction.
+        #[test]
+        fn every_frame_decodes_and_unknown_is_what_cia_305_leaves_out(
+            from_master in proptest::prelude::any::<bool>(),
+            data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..9),
+        ) {
+            let lss = Lss::decode(from_master, &data);
+            let cs = data.first().copied().unwrap_or(0);
+            let defined = if from_master {
+                matches!(cs, 0x04 | 0x11 | 0x13 | 0x15 | 0x17 | 0x40..=0x43 | 0x46..=0x4C | 0x51 | 0x5A..=0x5E)
+            } else {
+                matches!(cs, 0x11 | 0x13 | 0x17 | 0x44 | 0x4F | 0x50 | 0x5A..=0x5E)
+            };
+            proptest::prop_assert_eq!(lss == Lss::Unknown { cs }, !defined);
+            proptest::prop_assert!(!lss.words().is_empty());
+        }
+    }
+
     #[test]
     fn answers_and_bit_rates_in_words() {
         let r = |s, e, x| result_words(s, e, x);
