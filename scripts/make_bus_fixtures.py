@@ -15,6 +15,15 @@ linux/can/error.h, and the 8 bytes that header defines.
   0x8110 (CAN overrun) in that burst names it. At 22.0 s a lone no-ACK
   error frame without counters, and at 24.0 s node 6 boots up after
   being silent across it: a bus-off of node 6 inferred from the boot-up.
+- fixtures/lss-time.log: an LSS session. The master sends every node to
+  waiting, asks for non-configured nodes (one answers), selects one by its
+  identity (vendor 0xA5, product 0x1234, revision 0x00010002, serial
+  0xBEEF), gives it node-id 5, bit timing 500 kbit/s (table 0 index 2) and
+  has it store them; then a second node (serial 0xBEF0) is refused
+  node-id 200 (out of range) and given 6; an inquiry reads node-id 6
+  back; the new bit rate is activated; nodes 5 and 6 boot up. A TIME
+  producer sends a stamp every second, its clock 1.5 s ahead of the
+  trace's and gaining 2 ms a stamp.
 
 Run from the repository root:  python3 scripts/make_bus_fixtures.py
 then refresh the goldens:
@@ -90,5 +99,51 @@ def bus_off():
     tr.write("bus-off.log")
 
 
+def pad(data):
+    return bytes(data) + bytes(8 - len(data))
+
+
+def lss_time():
+    tr = Trace()
+    master = lambda t, data: tr.data(t, 0x7E5, pad(data))
+    node = lambda t, data: tr.data(t, 0x7E4, pad(data))
+
+    def select(t, serial):
+        for i, value in enumerate([0xA5, 0x1234, 0x00010002, serial]):
+            master(round(t + 0.01 * i, 3), [0x40 + i] + list(value.to_bytes(4, "little")))
+        node(round(t + 0.045, 3), [0x44])
+
+    master(0.5, [0x04, 0])
+    master(0.6, [0x4C])
+    node(0.61, [0x50])
+    select(1.0, 0xBEEF)
+    master(1.1, [0x11, 5])
+    node(1.11, [0x11, 0])
+    master(1.2, [0x13, 0, 2])
+    node(1.21, [0x13, 0])
+    master(1.3, [0x17])
+    node(1.31, [0x17, 0])
+    master(1.4, [0x04, 0])
+    select(2.0, 0xBEF0)
+    master(2.1, [0x11, 200])
+    node(2.11, [0x11, 1])
+    master(2.2, [0x11, 6])
+    node(2.21, [0x11, 0])
+    master(3.0, [0x5E])
+    node(3.01, [0x5E, 6])
+    master(3.1, [0x04, 0])
+    master(3.5, [0x15, 0xE8, 0x03])
+    tr.data(4.6, 0x705, bytes([0]))
+    tr.data(4.61, 0x706, bytes([0]))
+    # TIME: the producer's clock 1.5 s ahead, gaining 2 ms a stamp.
+    for i in range(6):
+        ms = (BASE + i) * 1000 + 1500 + 2 * i
+        days, in_day = divmod(ms, 86_400_000)
+        data = (in_day).to_bytes(4, "little") + (days - 5113).to_bytes(2, "little")
+        tr.data(float(i), 0x100, data)
+    tr.write("lss-time.log")
+
+
 if __name__ == "__main__":
     bus_off()
+    lss_time()

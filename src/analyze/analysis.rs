@@ -25,6 +25,7 @@ impl Analysis {
                 nmt_unanswered: Vec::new(),
                 unmatched: None,
                 bus_errors: Vec::new(),
+                time_producer: None,
             },
             errors_raised: 0,
             frames_with_warnings: 0,

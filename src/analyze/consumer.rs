@@ -242,6 +242,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             nmt_unanswered,
             unmatched,
             bus_errors,
+            time_producer: self.monitors.lss.time_producer(),
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use crate::canopen::NodeId;
 use crate::canopen::codes::CodeInfo;
 use crate::canopen::emcy::{Emcy, Warning};
+use crate::canopen::lss::Lss;
 use crate::canopen::nmt::{Command, NmtState};
 use crate::canopen::pdo::Mapping;
 use crate::canopen::profile::{Decoded, Profile};
@@ -89,6 +90,8 @@ pub enum Bus {
     Errors(ErrorBurst),
     /// A controller (the logging one, or a node) left the bus.
     BusOff(BusOff),
+    /// A layer setting service (CiA 305).
+    Lss(LssReport),
 }
 
 impl Bus {
@@ -97,8 +100,47 @@ impl Bus {
         match self {
             Bus::Errors(_) => "bus_error",
             Bus::BusOff(_) => "bus_off",
+            Bus::Lss(_) => "lss",
         }
     }
+}
+
+/// An LSS frame, with what the frames before it said: the node-id a
+/// configure node-id answer confirms, and the identity of the node the
+/// master had selected.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LssReport {
+    pub lss: Lss,
+    /// Sent by the master (0x7E5), else by a node (0x7E4).
+    pub from_master: bool,
+    /// The node-id configured (a configure node-id request, and its
+    /// answer) or inquired.
+    pub node: Option<NodeId>,
+    /// The identity of the node in configuration, as far as the master
+    /// selected or inquired it.
+    pub identity: Option<LssIdentity>,
+}
+
+/// A node's identity (object 0x1018) as LSS frames showed it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LssIdentity {
+    pub vendor_id: Option<u32>,
+    pub product_code: Option<u32>,
+    pub revision: Option<u32>,
+    pub serial: Option<u32>,
+}
+
+/// The bus's TIME producer over an input: how many stamps, the first, and
+/// how far its clock was from the trace's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TimeProducer {
+    pub frames: u64,
+    /// The first stamp, as the producer's clock read (Unix time).
+    pub first: Timestamp,
+    /// The producer's clock minus the trace's at the first and the last
+    /// stamp; `None` when the trace has no times.
+    pub first_offset: Option<Span>,
+    pub last_offset: Option<Span>,
 }
 
 /// A burst of error frames ends after this long without one.
@@ -607,6 +649,8 @@ pub struct InputReport {
     /// Error frames and bus-offs per channel that had any, in the order
     /// the channels first had one.
     pub bus_errors: Vec<ChannelErrors>,
+    /// The TIME producer, if the input has TIME frames.
+    pub time_producer: Option<TimeProducer>,
 }
 
 impl InputReport {

@@ -6,12 +6,14 @@ pub mod codes;
 pub mod dcf;
 pub mod device_profile;
 pub mod emcy;
+pub mod lss;
 pub mod nmt;
 pub mod pdo;
 pub mod profile;
 pub mod profile_choice;
 pub mod register;
 pub mod sdo;
+pub mod time;
 
 /// A node: a CANopen node id (1 to 127, from the COB-ID), or an EtherCAT
 /// slave's station address for CANopen over EtherCAT (e.g. 1001), which

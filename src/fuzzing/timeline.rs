@@ -311,6 +311,7 @@ pub fn decode_timeline(data: &[u8]) {
         nmt_unanswered: Vec::new(),
         unmatched: None,
         bus_errors: Vec::new(),
+        time_producer: None,
     };
     let inputs = std::slice::from_ref(&report);
     ndjson.end_input(&report).expect("Vec");

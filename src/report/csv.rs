@@ -536,6 +536,7 @@ impl<W: Write> Sink for Csv<W> {
         self.header()?;
         let node = match ev.bus {
             Bus::BusOff(off) => off.node,
+            Bus::Lss(l) => l.node,
             Bus::Errors(_) => None,
         };
         self.head(ev.bus.slug(), ev.file, ev.line, ev.time, ev.channel, node);

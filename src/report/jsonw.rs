@@ -21,6 +21,7 @@ use crate::analyze::{
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
 use crate::canopen::emcy::Warning;
+use crate::canopen::lss::{self, Lss};
 use crate::canopen::pdo::{Direction, Mapped};
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
@@ -633,6 +634,41 @@ impl JsonWriter {
                 }
                 buf.push(b']');
             }
+            Bus::Lss(l) => {
+                match l.node {
+                    Some(n) => o.u64("node", u64::from(n)),
+                    None => o.null("node"),
+                }
+                o.str("service", l.lss.slug());
+                o.str("from", if l.from_master { "master" } else { "node" });
+                o.str("text", &l.lss.words());
+                match l.lss {
+                    Lss::Answer {
+                        service,
+                        error,
+                        specific,
+                    } => o.str("result", &lss::result_words(service, error, specific)),
+                    _ => o.null("result"),
+                }
+                match l.identity {
+                    Some(id) => {
+                        let mut io = Obj::new(o.key("identity"));
+                        for (key, v) in [
+                            ("vendor_id", id.vendor_id),
+                            ("product_code", id.product_code),
+                            ("revision", id.revision),
+                            ("serial", id.serial),
+                        ] {
+                            match v {
+                                Some(v) => io.u64(key, u64::from(v)),
+                                None => io.null(key),
+                            }
+                        }
+                        io.end();
+                    }
+                    None => o.null("identity"),
+                }
+            }
         }
         o.end();
     }
@@ -1020,6 +1056,15 @@ impl JsonWriter {
                 uo.end();
             }
             list.push(b']');
+        }
+        // Only for inputs with TIME frames, likewise.
+        if let Some(t) = &input.time_producer {
+            let mut to = Obj::new(o.key("time_producer"));
+            to.u64("frames", t.frames);
+            self.time_pair(&mut to, ["first", "first_text"], Some(t.first));
+            push_span(to.key("first_offset"), t.first_offset);
+            push_span(to.key("last_offset"), t.last_offset);
+            to.end();
         }
         // Only for inputs with error frames, likewise.
         if !input.bus_errors.is_empty() {

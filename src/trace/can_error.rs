@@ -438,6 +438,24 @@ mod tests {
         assert!(!ErrorFrame::decode(class::BUS_ERROR, &[]).recovered());
     }
 
+    proptest::proptest! {
+        /// Any class bits and data, short or long: a frame of at least one
+        /// kind, with a detail exactly when its class says it has one.
+        #[test]
+        fn every_error_frame_decodes_to_a_kind(
+            id in proptest::prelude::any::<u32>(),
+            data in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..9),
+        ) {
+            let f = ErrorFrame::decode(id, &data);
+            proptest::prop_assert!(f.kinds.iter().next().is_some());
+            proptest::prop_assert_eq!(f.classes, id & 0x3FF);
+            proptest::prop_assert_eq!(f.protocol.is_some(), id & class::PROTOCOL != 0);
+            proptest::prop_assert_eq!(f.transceiver.is_some(), id & class::TRANSCEIVER != 0);
+            proptest::prop_assert_eq!(f.counters.is_some(), id & class::COUNTERS != 0);
+            proptest::prop_assert_eq!(f.bus_off(), id & class::BUS_OFF != 0);
+        }
+    }
+
     #[test]
     fn kinds_list_in_one_order() {
         for (i, k) in ErrorKind::ALL.iter().enumerate() {

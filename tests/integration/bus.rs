@@ -198,3 +198,50 @@ fn the_table_lists_bursts_and_bus_offs_and_ends_with_a_bus_errors_table() {
     let summary = String::from_utf8_lossy(&out.stdout);
     assert!(summary.contains("Bus errors\n") && !summary.contains("  errors  "));
 }
+
+#[test]
+fn lss_says_who_became_node_5_and_when() {
+    let objects = ndjson(["fixtures/lss-time.log"]);
+    let lss = of_type(&objects, "lss");
+    assert_eq!(lss.len(), 28);
+    let configured: Vec<&&Value> = lss
+        .iter()
+        .filter(|o| o["service"] == "configure_node_id" && o["from"] == "node")
+        .collect();
+    assert_eq!(configured.len(), 3);
+    let five = configured[0];
+    assert_eq!(five["node"], 5);
+    assert_eq!(five["result"], "ok");
+    assert_eq!(five["time_text"], "2023-11-14T22:13:21.110000Z");
+    assert_eq!(five["identity"]["serial"], 0xBEEF);
+    assert_eq!(five["identity"]["vendor_id"], 0xA5);
+    assert_eq!(configured[1]["node"], 200);
+    assert_eq!(configured[1]["result"], "failed: node-id out of range");
+    assert_eq!(configured[2]["identity"]["serial"], 0xBEF0);
+    let services: std::collections::BTreeSet<&str> =
+        lss.iter().filter_map(|o| o["service"].as_str()).collect();
+    for s in [
+        "switch_state_global",
+        "switch_state_selective",
+        "configure_bit_timing",
+        "store_configuration",
+        "activate_bit_timing",
+        "inquire",
+        "identify_non_configured_slave",
+    ] {
+        assert!(services.contains(s), "{s}: {services:?}");
+    }
+}
+
+#[test]
+fn time_stamps_give_the_producer_clock_against_the_trace() {
+    let objects = ndjson(["fixtures/lss-time.log"]);
+    let input = of_type(&objects, "input")[0];
+    let t = &input["time_producer"];
+    assert_eq!(t["frames"], 6);
+    assert_eq!(t["first_text"], "2023-11-14T22:13:21.500Z");
+    assert_eq!(t["first_offset"].as_f64(), Some(1.5));
+    assert_eq!(t["last_offset"].as_f64(), Some(1.51));
+    // No event per stamp.
+    assert!(objects.iter().all(|o| o["type"] != "time"));
+}

@@ -82,7 +82,7 @@ fn every_fixtures_event_rows_say_what_its_ndjson_says() {
             assert_eq!(cell("line"), ev["line"].to_string());
             let time = raw_time(line);
             assert_eq!(cell("time"), if time == "null" { "" } else { &time });
-            // A bus event of no node has an empty cell.
+            // An event of no node (a burst of error frames) has an empty cell.
             let node = match &ev["node"] {
                 Value::Null => String::new(),
                 n => n.to_string(),

@@ -45,8 +45,11 @@ fn every_s300_mf4_decodes_like_the_candump_log() {
         ("fixtures/sorted-sd.mf4", "3"),
     ] {
         let v = ndjson(&["--channel", channel, file]);
+        // The CANedge recordings log an error frame the candump scenario
+        // has not: the EMCYs, nodes and boot-ups are compared.
         let strip = |v: Vec<Value>| -> Vec<Value> {
             v.iter()
+                .filter(|o| o["type"] != "bus_error" && o["type"] != "bus_off")
                 .map(|o| support::without(o, &["time_in_error"]))
                 .collect()
         };

@@ -280,13 +280,21 @@ impl<E: Write> Emit<'_, E> {
     /// options select it, those of a channel if they select the channel.
     pub(in crate::analyze) fn bus(&mut self, told: &mut Vec<Told>) -> Result<(), OutputError> {
         for t in told.drain(..) {
+            // An LSS frame's node-id is the one it configures or inquires.
             let node = match &t.bus {
                 Bus::BusOff(off) => off.node,
+                Bus::Lss(l) => l.node,
                 Bus::Errors(_) => None,
             };
+            // An event of no node (a burst, the logging controller's
+            // bus-off) is no node's: `--node` leaves it out.
             let selected = match node {
                 Some(node) => self.opts.selects(&t.channel, node),
-                None => self.opts.channels.is_empty() || self.opts.channels.contains(&t.channel),
+                None => {
+                    self.opts.nodes.is_empty()
+                        && (self.opts.channels.is_empty()
+                            || self.opts.channels.contains(&t.channel))
+                }
             };
             if selected {
                 self.sink

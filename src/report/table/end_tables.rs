@@ -453,6 +453,19 @@ fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Resu
             }
         ),
     };
+    // The TIME producer's clock against the trace's, when it sent any.
+    let frames = match &input.time_producer {
+        Some(t) => match t.last_offset {
+            Some(offset) => format!(
+                "{frames}, {} TIME stamps (producer clock {}{} from the trace's)",
+                t.frames,
+                if offset.is_negative() { "" } else { "+" },
+                human_span(offset)
+            ),
+            None => format!("{frames}, {} TIME stamps", t.frames),
+        },
+        None => frames,
+    };
     let dropped = match c.dropped {
         0 => String::new(),
         1 => ", 1 frame dropped (DROPCOUNT): EMCYs may be missing".to_string(),

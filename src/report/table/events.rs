@@ -301,9 +301,10 @@ impl EventLines {
         page.times.set_origin(ev.time);
         let l = self.layout_for(page, ev.time, ev.channel)?;
         let what = bus_description(ev.bus, &page.times);
-        let (tag, node) = match ev.bus {
-            Bus::Errors(_) => ("errors", None),
-            Bus::BusOff(off) => ("busoff", off.node),
+        let (tag, node, style) = match ev.bus {
+            Bus::Errors(_) => ("errors", None, Some(RED)),
+            Bus::BusOff(off) => ("busoff", off.node, Some(RED)),
+            Bus::Lss(l) => ("lss", l.node, None),
         };
         self.write_tagged(
             page,
@@ -312,7 +313,7 @@ impl EventLines {
             ev.channel,
             node,
             tag,
-            Some(RED),
+            style,
             &printable(&what),
         )?;
         if let Bus::BusOff(off) = ev.bus {
@@ -724,6 +725,26 @@ pub(crate) fn bus_description(bus: &Bus, times: &TimeFormat) -> String {
                 None => ", still off at the end".to_string(),
             };
             format!("{who} bus-off{until}")
+        }
+        Bus::Lss(l) => {
+            let mut text = format!(
+                "LSS {}: {}",
+                if l.from_master { "master" } else { "node" },
+                l.lss.words()
+            );
+            if let Some(id) = l.identity {
+                let parts: Vec<String> = [
+                    ("vendor", id.vendor_id),
+                    ("product", id.product_code),
+                    ("revision", id.revision),
+                    ("serial", id.serial),
+                ]
+                .iter()
+                .filter_map(|(name, v)| v.map(|v| format!("{name} 0x{v:08X}")))
+                .collect();
+                text.push_str(&format!(" ({})", parts.join(", ")));
+            }
+            text
         }
     }
 }

@@ -79,12 +79,18 @@ pub fn semantic(objects: &[Value], keys: &[&str]) -> Vec<Value> {
         .filter(|o| o["type"] != "input")
         .filter(|o| o["type"] != "bus_error" && !(o["type"] == "bus_off" && o["node"].is_null()))
         .map(|o| {
-            let mut v = without(o, keys);
+            // What a format records of an error frame beyond its being
+            // one differs (candump logs its class bits and counters, ASC
+            // only that it came), and an EMCY's burst is a time.
+            let mut v = without(&without(o, keys), &ERROR_FRAME_DETAIL);
             without_time_texts(&mut v);
             v
         })
         .collect()
 }
+
+/// Keys whose values depend on how much a format records of error frames.
+pub const ERROR_FRAME_DETAIL: [&str; 4] = ["kinds", "tx_errors_max", "rx_errors_max", "bus_error"];
 
 /// What depends on where a trace is and how its lines are laid out.
 pub const PLACE: [&str; 5] = ["file", "line", "channel", "start_line", "end_line"];
