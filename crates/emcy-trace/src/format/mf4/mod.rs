@@ -1886,7 +1886,14 @@ pub fn fuzz_mf4(data: &[u8]) {
                     assert_eq!(f.data.as_slice().len(), usize::from(f.len));
                 }
                 FrameKind::Fd => assert_eq!(f.data.as_slice().len(), usize::from(f.len)),
-                FrameKind::Remote | FrameKind::Error => assert!(f.data.as_slice().is_empty()),
+                FrameKind::Remote => assert!(f.data.as_slice().is_empty()),
+                // An error frame carries the SocketCAN error class in its id and
+                // error.h's eight data bytes (or none when the record says no
+                // more than that it is one).
+                FrameKind::Error => {
+                    assert!(!f.extended && f.id < 0x2000_0000);
+                    assert!(matches!(f.data.as_slice().len(), 0 | 8));
+                }
             }
             assert!(f.id <= if f.extended { 0x1FFF_FFFF } else { 0x7FF });
             assert!(!f.channel.is_empty());
