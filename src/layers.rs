@@ -1,6 +1,7 @@
 //! The rule the folders show, checked: every import points down.
 //!
 //! ```text
+//! diff       two traces' CANopen stories and their comparison
 //! baseline   CI baseline model and comparison
 //! report     renderers (implement analyze's Sink)
 //! analyze    the pipeline: events, reports, the Sink trait
@@ -33,8 +34,8 @@
 use std::path::{Path, PathBuf};
 
 /// Bottom first.
-const LAYERS: [&str; 6] = [
-    "trace", "canopen", "timeline", "analyze", "report", "baseline",
+const LAYERS: [&str; 7] = [
+    "trace", "canopen", "timeline", "analyze", "report", "baseline", "diff",
 ];
 
 /// The rank of a top-level module; `None` for ones outside the stack.

@@ -62,6 +62,8 @@ pub mod baseline;
 pub(crate) mod cache;
 #[doc(hidden)]
 pub mod canopen;
+#[doc(hidden)]
+pub mod diff;
 #[cfg(feature = "fuzzing")]
 #[doc(hidden)]
 pub mod fuzzing;

@@ -22,6 +22,7 @@ mod chart;
 mod cia402;
 mod cli;
 mod csv;
+mod diff;
 mod differential;
 mod error_frames;
 mod ethercat;

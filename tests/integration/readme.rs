@@ -77,6 +77,7 @@ fn every_option_of_every_command_is_in_the_readme_option_tables() {
         Some("profiles"),
         Some("baseline"),
         Some("check"),
+        Some("diff"),
         Some("man"),
     ] {
         let opts = options(sub);

@@ -50,7 +50,7 @@ struct Unread {
 fn read_traces(args: &TraceArgs, unwritten: &str) -> Result<Result<Traces, Unread>> {
     let cwd = std::env::current_dir().ok();
     let root = args.root.as_deref();
-    let opts = args.options()?;
+    let opts = args.reading.options()?;
     let mut log = DiagnosticLog::new(io::stderr());
     // Directories (-r) become their traces, in name order; a part that
     // cannot be listed is an unreadable trace.
@@ -387,7 +387,11 @@ fn refuse_overwriting_inputs(out: &Path, read: &TraceArgs) -> Result<()> {
         return Ok(());
     }
     let traces = read.traces.iter().map(|p| (p, "a trace"));
-    let profiles = read.profile_file.iter().map(|p| (p, "a profile file"));
+    let profiles = read
+        .reading
+        .profile_file
+        .iter()
+        .map(|p| (p, "a profile file"));
     for (input, what) in traces.chain(profiles) {
         if input.as_os_str() != "-" && same_file(out, input) {
             let alias = if input == out {
@@ -437,7 +441,7 @@ pub(super) fn baseline(args: &BaselineArgs) -> Result<ExitCode> {
         Err(unread) => return Ok(unread.status),
     };
     let mut record = Baseline::from_reports(&reports);
-    record.options = args.read.recorded()?;
+    record.options = args.read.reading.recorded()?;
     write_file(out, &record.to_json()?)?;
     Ok(ExitCode::from(EXIT_OK))
 }
@@ -468,7 +472,7 @@ pub(super) fn check(args: &CheckArgs) -> Result<ExitCode> {
     } else {
         "nothing compared"
     };
-    let options = args.read.recorded()?;
+    let options = args.read.reading.recorded()?;
     // Traces decoded with other options decode to other things: comparing
     // them would report the options as regressions.
     if options != old.options && !args.update {

@@ -30,6 +30,7 @@ Examples:
   emcy-decode --fail-on active traces/*.log     fail a CI job when a node ends in error
   emcy-decode explain 4310                      what does code 0x4310 mean?
   emcy-decode check --baseline baseline.json traces/*.log   fail CI on a new error
+  emcy-decode diff good.log bad.log             where two runs part at the CANopen level
   emcy-decode explain --data \"10 43 09 01 00 00 00 00\"
 
 Formats read (detected from content, .gz decompressed): candump log (-l/-L),
@@ -93,6 +94,9 @@ pub enum Command {
     Baseline(BaselineArgs),
     /// Compare traces with a baseline: exit 1 on a regression
     Check(CheckArgs),
+    /// Compare two traces by CANopen meaning: exit 0 same, 1 different, 2 trouble
+    #[command(after_help = DIFF_HELP)]
+    Diff(DiffArgs),
 }
 
 /// Headings of `--help`, grouped as ripgrep groups its options.
@@ -585,15 +589,41 @@ impl DriveArgs {
     }
 }
 
-/// Traces and how to read them; the same for `baseline` and `check`, so a
+const DIFF_HELP: &str = "\
+Each trace is told as its nodes' stories: boot-ups, NMT states (said by the
+node, or commanded), EMCY codes, CiA 402 drive states, fault resets, SDO
+aborts, heartbeat losses, bus-offs and LSS services, in order, without their
+times and without process data. The stories are aligned node by node; the
+output names where the traces part first, then every difference per node,
+then what differs in how each node ended (NMT state, active errors, PDO
+mappings). Traces that differ only in timing or process data are the same.
+
+Exit status: 0 the same, 1 different, 2 trouble (an input that cannot be
+read), as diff(1).";
+
+/// `diff GOOD BAD`.
+#[derive(Args, Debug)]
+pub struct DiffArgs {
+    /// The trace that shows the machine working (`-` reads stdin)
+    #[arg(value_name = "GOOD")]
+    pub good: PathBuf,
+
+    /// The trace to compare with it (`-` reads stdin)
+    #[arg(value_name = "BAD")]
+    pub bad: PathBuf,
+
+    #[command(flatten)]
+    pub reading: ReadArgs,
+
+    /// Output format of the differences
+    #[arg(long, short = 'f', value_enum, default_value_t = ExplainFormat::Text, help_heading = OUTPUT)]
+    pub format: ExplainFormat,
+}
+
+/// How to read a trace: the same for `baseline`, `check` and `diff`, so a
 /// check reads its traces exactly as the baseline did.
 #[derive(Args, Debug)]
-pub struct TraceArgs {
-    /// Trace files (`-` reads stdin); each is recorded under the path as given,
-    /// normalized and relative
-    #[arg(value_name = "TRACE", required = true)]
-    pub traces: Vec<PathBuf>,
-
+pub struct ReadArgs {
     /// Read traces as this format instead of detecting it
     #[arg(long, value_enum, value_name = "FORMAT", help_heading = INPUT)]
     pub input_format: Option<InputFormat>,
@@ -624,6 +654,19 @@ pub struct TraceArgs {
 
     #[command(flatten)]
     pub drive: DriveArgs,
+}
+
+/// Traces and how to read them; the same for `baseline` and `check`, so a
+/// check reads its traces exactly as the baseline did.
+#[derive(Args, Debug)]
+pub struct TraceArgs {
+    /// Trace files (`-` reads stdin); each is recorded under the path as given,
+    /// normalized and relative
+    #[arg(value_name = "TRACE", required = true)]
+    pub traces: Vec<PathBuf>,
+
+    #[command(flatten)]
+    pub reading: ReadArgs,
 
     /// Record and look up traces by their path relative to DIR, not to the current directory
     /// (the same keys wherever baseline and check run)
@@ -775,7 +818,7 @@ impl DecodeArgs {
     }
 }
 
-impl TraceArgs {
+impl ReadArgs {
     /// The decoding options as a baseline records them, normalized (the
     /// `--profile-file` profiles by name: paths differ between machines).
     pub(super) fn recorded(&self) -> Result<ReadOptions> {

@@ -9,6 +9,7 @@
 mod baseline;
 mod cli;
 mod decode;
+mod diff;
 mod explain;
 mod man;
 mod profiles;
@@ -52,6 +53,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Profiles(args)) => profiles::run(&args),
         Some(Command::Baseline(args)) => baseline::baseline(&args),
         Some(Command::Check(args)) => baseline::check(&args),
+        Some(Command::Diff(args)) => diff::run(&args),
         None => decode::run(&cli.decode),
     }
 }

@@ -159,6 +159,8 @@ const EXAMPLES: &str = "  emcy-decode trace.log
   emcy-decode baseline traces/*.log -o baseline.json
   emcy-decode check --baseline baseline.json traces/*.log
       record what traces contain, then fail CI on a new error
+  emcy-decode diff good.log bad.log
+      where a good and a bad run part at the CANopen level
   emcy-decode explain 4310
   emcy-decode explain --data \"10 43 09 01 00 00 00 00\"
       what a code, or one raw EMCY payload, means";
@@ -217,7 +219,8 @@ with a one-line error.";
 
 // No `\` after the quote: it would eat the first line's indent.
 const EXIT_STATUS: &str = "  0    success, also when the reader of stdout goes away (| head -1)
-  1    the --fail-on condition was met; check found a regression
+  1    the --fail-on condition was met; check found a regression; diff
+       found a difference
   2    usage error, unreadable or missing input (also a part of a -r
        directory that cannot be listed), a directory without -r, unknown
        format, corrupt gzip, malformed lines with --strict, output that
