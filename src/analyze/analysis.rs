@@ -30,6 +30,7 @@ impl Analysis {
             errors_raised: 0,
             frames_with_warnings: 0,
             worst_category: None,
+            incidents: 0,
             reading: Reading::default(),
         }
     }
@@ -49,6 +50,8 @@ pub struct Analysis {
     pub frames_with_warnings: u64,
     /// The lowest (most severe) profile category of a selected error EMCY.
     pub worst_category: Option<u8>,
+    /// Incidents of the selected nodes and channels told.
+    pub incidents: u64,
     /// How the input was read (for `--verbose`).
     pub reading: Reading,
 }

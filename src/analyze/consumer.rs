@@ -13,6 +13,7 @@ use super::bus::{MAX_CHANNELS, Told};
 use super::classify::{FoldedRun, Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
 use super::event::{CodeTexts, Counts, EvidenceKind, InputReport};
+use super::incident::Builder;
 use super::interest::{Wanted, interest};
 use super::monitor::context::{Emit, Fact, Facts, Learnt, Seen, Step};
 use super::monitor::{Carried, Monitors, TakenFold};
@@ -60,6 +61,7 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     pub(super) reading: Reading,
     /// Bus events to tell, reused.
     told: Vec<Told>,
+    pub(super) incidents: Builder,
 }
 
 /// The monitors, the node table, the shared facts and an [`Emit`] over the
@@ -80,6 +82,7 @@ macro_rules! parts {
                 summed_deltas: $c.timestamps.is_some(),
                 counts: &mut $c.counts,
                 wanted: &mut $c.wanted,
+                incidents: &mut $c.incidents,
             },
         )
     };
@@ -124,6 +127,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             spare_folds: FoldBuffers::default(),
             reading: Reading::default(),
             told: Vec::new(),
+            incidents: Builder::new(opts.incident_gap),
         }
     }
 
@@ -146,6 +150,15 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         self.facts.bus.finish(&mut told);
         let (_, _, _, emit) = parts!(self);
         emit.bus(&mut told)?;
+        emit.incidents.finish();
+        emit.tell_incidents()?;
+        if self.incidents.ignored > 0 {
+            self.log.note(&format!(
+                "{file}: {} fault-like events on channels past the first {} with an open                  incident were not grouped into incidents",
+                self.incidents.ignored,
+                super::incident::MAX_OPEN
+            ));
+        }
         let bus = std::mem::take(&mut self.facts.bus);
         if bus.ignored > 0 {
             self.log.note(&format!(
@@ -251,6 +264,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             errors_raised: emcy.errors_raised,
             frames_with_warnings: emcy.frames_with_warnings,
             worst_category: emcy.worst_category,
+            incidents: self.incidents.told,
             reading: self.reading,
         })
     }

@@ -92,6 +92,9 @@ pub enum Bus {
     BusOff(BusOff),
     /// A layer setting service (CiA 305).
     Lss(LssReport),
+    /// Fault-like events of several nodes and the bus told as one story
+    /// (see [`super::incident`]).
+    Incident(Box<super::incident::Incident>),
 }
 
 impl Bus {
@@ -101,6 +104,7 @@ impl Bus {
             Bus::Errors(_) => "bus_error",
             Bus::BusOff(_) => "bus_off",
             Bus::Lss(_) => "lss",
+            Bus::Incident(_) => "incident",
         }
     }
 }

@@ -25,6 +25,7 @@ pub struct FailOn {
     pub bus_off: bool,
     /// Any error frame on the bus.
     pub bus_errors: bool,
+    pub incident: bool,
 }
 
 impl FailOn {
@@ -39,6 +40,7 @@ impl FailOn {
             all.fault |= f.fault;
             all.bus_off |= f.bus_off;
             all.bus_errors |= f.bus_errors;
+            all.incident |= f.incident;
             all.codes.extend(&f.codes);
             all.category_at_most = match (all.category_at_most, f.category_at_most) {
                 (Some(a), Some(b)) => Some(a.max(b)),
@@ -58,6 +60,7 @@ pub struct Tally {
     errors_raised: u64,
     frames_with_warnings: u64,
     worst_category: Option<u8>,
+    incidents: u64,
 }
 
 impl Tally {
@@ -65,6 +68,7 @@ impl Tally {
     pub fn add(&mut self, a: &Analysis) {
         self.errors_raised += a.errors_raised;
         self.frames_with_warnings += a.frames_with_warnings;
+        self.incidents += a.incidents;
         self.worst_category = match (self.worst_category, a.worst_category) {
             (Some(w), Some(c)) => Some(w.min(c)),
             (w, c) => w.or(c),
@@ -153,6 +157,10 @@ pub fn met(fail_on: &FailOn, tally: &Tally, reports: &[InputReport]) -> Vec<Stri
                 plural(bursts)
             ));
         }
+    }
+    if fail_on.incident && tally.incidents > 0 {
+        let n = tally.incidents;
+        met.push(format!("incident: {n} incident{}", plural(n)));
     }
     for &code in &fail_on.codes {
         let n: u64 = nodes().filter_map(|n| n.stats.raised.get(&code)).sum();

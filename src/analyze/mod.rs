@@ -22,6 +22,7 @@ pub mod diagnostics;
 pub mod event;
 pub mod fail_on;
 mod fold;
+pub mod incident;
 pub mod interest;
 mod monitor;
 mod nodes;

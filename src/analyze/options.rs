@@ -70,6 +70,9 @@ pub struct Options {
     ///
     /// [`InputReport::unmatched`]: super::InputReport::unmatched
     pub unmatched_filter_fails: bool,
+    /// `--incident-gap`: fault-like events further apart on a channel
+    /// belong to different incidents.
+    pub incident_gap: Span,
 }
 
 /// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
@@ -102,6 +105,7 @@ impl Default for Options {
             dcf: Vec::new(),
             assume_cia402_pdo: false,
             unmatched_filter_fails: false,
+            incident_gap: Span::from_millis(super::incident::DEFAULT_GAP_MS),
         }
     }
 }

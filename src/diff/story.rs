@@ -258,6 +258,8 @@ impl Sink for Recorder {
             // Error frames come and go with the wiring and the noise of
             // the day: a difference of timing, not of meaning.
             Bus::Errors(_) => return Ok(()),
+            // An incident retells the steps above.
+            Bus::Incident(_) => return Ok(()),
         };
         self.push(e.channel, node, e.line, step);
         Ok(())

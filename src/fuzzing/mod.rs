@@ -560,7 +560,7 @@ fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
                     assert!(v.get(key).is_some(), "{key} in {v}");
                 }
             }
-            Some("bus_error" | "bus_off" | "lss") => {
+            Some("bus_error" | "bus_off" | "lss" | "incident") => {
                 // Told where they began, which a burst closed later (or a
                 // node's silence before its bus-off) puts before events
                 // already written: only within the input.

@@ -13,6 +13,7 @@ use std::sync::Arc;
 
 use super::format;
 use super::timefmt::{UNIX_FROM, calendar_second};
+use crate::analyze::incident::{Incident, Occurrence};
 use crate::analyze::{
     BootEvent, Bus, BusEvent, ChannelErrors, Counts, Diagnostic, DriveReport, EmcyEvent,
     EvidenceKind, Health, HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeReport,
@@ -592,6 +593,99 @@ impl JsonWriter {
         o.end();
     }
 
+    /// An incident's keys after the common ones (docs/guide/incidents.md).
+    fn incident(&mut self, o: &mut Obj<'_>, i: &Incident) {
+        o.null("node");
+        self.time_pair(o, ["start", "start_text"], Some(i.start));
+        self.time_pair(o, ["end", "end_text"], Some(i.end));
+        let buf = o.key("nodes");
+        buf.push(b'[');
+        for (k, n) in i.nodes.iter().enumerate() {
+            if k > 0 {
+                buf.push(b',');
+            }
+            buf.extend_from_slice(n.to_string().as_bytes());
+        }
+        buf.push(b']');
+        let root = &i.events[i.root.event];
+        {
+            let mut r = Obj::new(o.key("root"));
+            self.occurrence(&mut r, root);
+            r.str("reason", &i.root.reason);
+            r.bool("decided", i.root.decided());
+            let buf = r.key("candidates");
+            buf.push(b'[');
+            if !i.root.decided() {
+                for (k, &c) in i.root.candidates.iter().enumerate() {
+                    if k > 0 {
+                        buf.push(b',');
+                    }
+                    let mut item = Obj::new(buf);
+                    self.occurrence(&mut item, &i.events[c]);
+                    item.end();
+                }
+            }
+            buf.push(b']');
+            r.end();
+        }
+        {
+            let mut f = Obj::new(o.key("first"));
+            self.occurrence(&mut f, &i.events[i.first]);
+            f.end();
+        }
+        let buf = o.key("events");
+        buf.push(b'[');
+        for (k, e) in i.events.iter().enumerate() {
+            if k > 0 {
+                buf.push(b',');
+            }
+            let mut item = Obj::new(buf);
+            self.occurrence(&mut item, e);
+            item.bool("context", e.context);
+            item.end();
+        }
+        buf.push(b']');
+        o.u64("events_total", i.events_total);
+        let buf = o.key("links");
+        buf.push(b'[');
+        for (k, l) in i.links.iter().enumerate() {
+            if k > 0 {
+                buf.push(b',');
+            }
+            let mut item = Obj::new(buf);
+            for (key, at) in [("from", l.from), ("to", l.to)] {
+                let e = &i.events[at];
+                let mut side = Obj::new(item.key(key));
+                match e.node {
+                    Some(n) => side.u64("node", u64::from(n)),
+                    None => side.null("node"),
+                }
+                side.str("kind", e.kind.slug());
+                side.u64("line", e.line);
+                side.end();
+            }
+            item.str("reason", &l.reason);
+            item.end();
+        }
+        buf.push(b']');
+        o.str("summary", &i.summary);
+    }
+
+    /// `node`, `kind`, `code`, `time`, `time_text`, `line` of an incident's event.
+    fn occurrence(&mut self, o: &mut Obj<'_>, e: &Occurrence) {
+        match e.node {
+            Some(n) => o.u64("node", u64::from(n)),
+            None => o.null("node"),
+        }
+        o.str("kind", e.kind.slug());
+        match e.code {
+            Some(c) => push_code(o.key("code"), c),
+            None => o.null("code"),
+        }
+        self.time_pair(o, ["time", "time_text"], Some(e.time));
+        o.u64("line", e.line);
+    }
+
     /// An error burst or a bus-off (docs/guide/output.md, JSON contract).
     pub fn bus(&mut self, out: &mut Vec<u8>, ev: &BusEvent<'_>) {
         let mut o = Obj::new(out);
@@ -601,6 +695,7 @@ impl JsonWriter {
         self.time_pair(&mut o, ["time", "time_text"], ev.time);
         o.str("channel", ev.channel);
         match ev.bus {
+            Bus::Incident(i) => self.incident(&mut o, i),
             Bus::Errors(b) => {
                 o.null("node");
                 self.time_pair(&mut o, ["start", "start_text"], b.start);

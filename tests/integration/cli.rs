@@ -787,6 +787,17 @@ fn node_filter_accepts_lists_and_repeats() {
             if o["node"].is_null() && o["type"] == "bus_error" {
                 continue;
             }
+            // An incident is shown whole when one of its nodes is selected.
+            if o["type"] == "incident" {
+                let nodes: Vec<u64> = o["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|n| n.as_u64().unwrap())
+                    .collect();
+                assert!(nodes.contains(&1) || nodes.contains(&3), "{o}");
+                continue;
+            }
             let node = o["node"].as_u64().unwrap();
             assert!(node == 1 || node == 3, "{o}");
         }
@@ -824,11 +835,12 @@ fn json_is_one_document_with_the_four_arrays() {
     for key in ["inputs", "events", "nodes", "diagnostics"] {
         assert!(doc[key].is_array(), "{key}");
     }
-    // 7 EMCY and 2 boot-ups, and the NMT state changes the heartbeats show.
+    // 7 EMCY and 2 boot-ups, the NMT state changes the heartbeats show,
+    // and the two incidents the errors make (node 1's, 4 s apart).
     let events = doc["events"].as_array().unwrap();
     let of = |t: &str| events.iter().filter(|e| e["type"] == t).count();
-    assert_eq!((of("emcy"), of("boot")), (7, 2));
-    assert_eq!(of("nmt") + 9, events.len());
+    assert_eq!((of("emcy"), of("boot"), of("incident")), (7, 2, 2));
+    assert_eq!(of("nmt") + 11, events.len());
 }
 
 #[test]
@@ -906,7 +918,8 @@ fn ndjson_order_is_events_then_nodes_then_inputs() {
         | "heartbeat_back"
         | "sdo_abort"
         | "error_history"
-        | "error_history_cleared" => 0,
+        | "error_history_cleared"
+        | "incident" => 0,
         "node" => 1,
         "input" => 2,
         other => panic!("unknown type {other}"),

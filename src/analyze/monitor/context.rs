@@ -14,6 +14,7 @@ use crate::analyze::diagnostics::{DiagnosticLog, InputDiagnostics};
 use crate::analyze::event::{
     BootEvent, Bus, BusEvent, Counts, EmcyEvent, Health, HealthEvent, NodeReport,
 };
+use crate::analyze::incident;
 use crate::analyze::interest::Wanted;
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
@@ -239,6 +240,8 @@ pub(in crate::analyze) struct Emit<'a, E: Write> {
     pub(in crate::analyze) summed_deltas: bool,
     pub(in crate::analyze) counts: &'a mut Counts,
     pub(in crate::analyze) wanted: &'a mut Wanted,
+    /// Every event goes here too, before the filters.
+    pub(in crate::analyze) incidents: &'a mut incident::Builder,
 }
 
 impl<E: Write> Emit<'_, E> {
@@ -251,6 +254,9 @@ impl<E: Write> Emit<'_, E> {
         events: &mut Vec<(At, Health)>,
     ) -> Result<(), OutputError> {
         let selected = events.is_empty() || self.opts.selects(channel, node);
+        for (at, health) in events.iter() {
+            self.hear(channel, node, *at, health);
+        }
         for (at, health) in events.drain(..) {
             if selected {
                 self.sink
@@ -264,6 +270,73 @@ impl<E: Write> Emit<'_, E> {
                     })
                     .map_err(OutputError)?;
             }
+        }
+        self.tell_incidents()
+    }
+
+    /// A node's health event, for the incidents.
+    fn hear(&mut self, channel: &str, node: NodeId, at: At, health: &Health) {
+        use crate::canopen::nmt::NmtState;
+        use crate::timeline::nmt::Via;
+        let b = &mut *self.incidents;
+        b.tick(at.time);
+        match health {
+            // The boot-up is told as a boot.
+            Health::Nmt {
+                via: Via::BootUp, ..
+            } => {}
+            &Health::Nmt { state, via } => {
+                let commanded = via == Via::Command;
+                let reset = commanded && state == NmtState::Initialising;
+                b.nmt(
+                    channel,
+                    node,
+                    state == NmtState::Operational,
+                    commanded,
+                    reset,
+                    at,
+                );
+            }
+            Health::HeartbeatLost { .. } => b.heartbeat_lost(channel, node, at),
+            &Health::DriveState { state, from, .. }
+                if state.is_fault() && !from.is_some_and(|f| f.is_fault()) =>
+            {
+                b.axis_fault(channel, node, at)
+            }
+            Health::FaultReset { .. } => b.fault_reset(channel, node, at),
+            _ => {}
+        }
+    }
+
+    /// Incidents that closed, to the sink: those with a node the options
+    /// select, or of a channel they select when they name no node.
+    pub(in crate::analyze) fn tell_incidents(&mut self) -> Result<(), OutputError> {
+        if self.incidents.closed.is_empty() {
+            return Ok(());
+        }
+        let closed = std::mem::take(&mut self.incidents.closed);
+        for incident in closed {
+            let channel_selected =
+                self.opts.channels.is_empty() || self.opts.channels.contains(&incident.channel);
+            let node_selected = self.opts.nodes.is_empty()
+                || incident.nodes.iter().any(|n| self.opts.nodes.contains(n));
+            if !(channel_selected && node_selected) {
+                continue;
+            }
+            self.incidents.told += 1;
+            let line = incident.events[incident.first].line;
+            let time = Some(incident.start);
+            let channel = incident.channel.clone();
+            let bus = Bus::Incident(Box::new(incident));
+            self.sink
+                .bus(&BusEvent {
+                    file: self.file,
+                    line,
+                    time,
+                    channel: &channel,
+                    bus: &bus,
+                })
+                .map_err(OutputError)?;
         }
         Ok(())
     }
@@ -279,12 +352,19 @@ impl<E: Write> Emit<'_, E> {
     /// Bus events (emptied) to the sink, those of a node only if the
     /// options select it, those of a channel if they select the channel.
     pub(in crate::analyze) fn bus(&mut self, told: &mut Vec<Told>) -> Result<(), OutputError> {
+        for t in told.iter() {
+            match &t.bus {
+                Bus::Errors(_) => self.incidents.bus_error(&t.channel, t.at),
+                Bus::BusOff(off) => self.incidents.bus_off(&t.channel, off.node, t.at),
+                _ => {}
+            }
+        }
         for t in told.drain(..) {
             // An LSS frame's node-id is the one it configures or inquires.
             let node = match &t.bus {
                 Bus::BusOff(off) => off.node,
                 Bus::Lss(l) => l.node,
-                Bus::Errors(_) => None,
+                Bus::Errors(_) | Bus::Incident(_) => None,
             };
             // An event of no node (a burst, the logging controller's
             // bus-off) is no node's: `--node` leaves it out.
@@ -308,7 +388,7 @@ impl<E: Write> Emit<'_, E> {
                     .map_err(OutputError)?;
             }
         }
-        Ok(())
+        self.tell_incidents()
     }
 
     /// A diagnostic at `line` of the input.

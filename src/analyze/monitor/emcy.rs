@@ -178,6 +178,10 @@ impl EmcyMonitor {
         {
             rec.emcy(at, emcy.code);
         }
+        // Incidents hear every node, shown or not.
+        let burst = bus_error_of(&emcy, channel_bytes, at, facts);
+        emit.incidents.emcy(channel, node, emcy.code, at, burst);
+        emit.tell_incidents()?;
         if !emit.opts.selects(channel, node) {
             self.step_buffers = step;
             return Ok(());
@@ -234,6 +238,7 @@ impl EmcyMonitor {
     ) -> Result<(), OutputError> {
         emit.counts.boot += 1;
         self.check_clock(at, emit);
+        let heard = nodes.known(channel_bytes, node).is_some();
         let NodeSlot {
             channel,
             channel_id,
@@ -245,6 +250,8 @@ impl EmcyMonitor {
         for iv in closed {
             history.push(channel_id, node, iv);
         }
+        emit.incidents.boot(channel, node, heard, at);
+        emit.tell_incidents()?;
         if emit.opts.selects(channel, node) {
             let event = BootEvent {
                 file: emit.file,

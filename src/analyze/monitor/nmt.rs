@@ -154,6 +154,8 @@ impl Monitor for NmtMonitor {
                 if !(1..=127).contains(&producer) {
                     return Ok(());
                 }
+                let name = nodes.get(channel, node).channel;
+                emit.incidents.consumes_heartbeat(name, node, producer);
                 if nodes.known(channel, producer).is_some() {
                     self.set_timeout(channel, producer, nodes, timeout, |h| {
                         h.heartbeat.set_consumer_ms(ms)
@@ -178,6 +180,11 @@ impl Monitor for NmtMonitor {
                 self.set_timeout(channel, node, nodes, timeout, |h| {
                     h.heartbeat.set_producer_ms((value & 0xFFFF) as u16)
                 });
+            }
+            // An RPDO's COB-ID: whose PDOs the node waits for (0x8250).
+            0x1400..=0x15FF if object.sub == 1 && value & 0x8000_0000 == 0 => {
+                let name = nodes.get(channel, node).channel;
+                emit.incidents.consumes_pdo(name, node, value & 0x7FF);
             }
             _ => {}
         }

@@ -152,6 +152,15 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub heartbeat_timeout: Option<Span>,
 
+    /// Fault-like events further apart than this (seconds) start a new incident [default: 2]
+    ///
+    /// Fault-like events of any node or the bus (an error EMCY, a heartbeat loss, a reboot
+    /// nobody commanded, a node leaving operational on its own, a drive fault, error
+    /// frames, a bus-off) that follow each other within this many seconds on a channel are
+    /// one incident, told with its root cause when its gap has passed (default 2)
+    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
+    pub incident_gap: Option<Span>,
+
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable
     ///
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable, a node's
@@ -174,13 +183,13 @@ pub struct DecodeArgs {
     #[arg(long, short = 'f', value_enum, default_value_t = OutputFormat::Table, help_heading = OUTPUT)]
     pub format: OutputFormat,
 
-    /// Exit 1 when a condition is met: any, active, warning, lost, fault, bus-off, bus-errors, code=..., category<=N, never
+    /// Exit 1 when a condition is met: any, active, warning, lost, fault, bus-off, bus-errors, incident, code=..., category<=N, never
     ///
     /// Exit 1 when a condition is met (repeatable or comma-separated; any met fails):
     /// `any` error EMCY, a node ends with an `active` error, any protocol `warning`,
     /// `code=0x4310,0x8611` raised, `category<=N` (profiles with categories), a node
     /// `lost` its heartbeat, a CiA 402 drive entered `fault`, a controller went
-    /// `bus-off`, any error frame (`bus-errors`), `never`
+    /// `bus-off`, any error frame (`bus-errors`), an `incident`, `never`
     #[arg(long, value_parser = parse_fail_on, value_name = "WHEN", help_heading = CI)]
     pub fail_on: Vec<FailOn>,
 
@@ -809,6 +818,7 @@ impl DecodeArgs {
             emcy_ids: self.emcy_id.clone(),
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
             heartbeat_timeout: self.heartbeat_timeout,
+            incident_gap: self.incident_gap.unwrap_or(Options::default().incident_gap),
             ..Options::default()
         })
         .and_then(|mut o| {
@@ -908,6 +918,7 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             "fault" | "faults" => f.fault = true,
             "bus-off" | "bus_off" => f.bus_off = true,
             "bus-errors" | "bus_errors" => f.bus_errors = true,
+            "incident" | "incidents" => f.incident = true,
             _ if in_codes => {
                 f.codes.push(fail_on_code(item)?);
                 continue;
@@ -915,7 +926,7 @@ fn parse_fail_on(s: &str) -> Result<FailOn, String> {
             _ => {
                 return Err(format!(
                     "'{item}' is not a condition: never, any, active, warning, lost, fault, \
-                     bus-off, bus-errors, code=CODE[,CODE...], category<=N"
+                     bus-off, bus-errors, incident, code=CODE[,CODE...], category<=N"
                 ));
             }
         }

@@ -305,6 +305,7 @@ impl EventLines {
             Bus::Errors(_) => ("errors", None, Some(RED)),
             Bus::BusOff(off) => ("busoff", off.node, Some(RED)),
             Bus::Lss(l) => ("lss", l.node, None),
+            Bus::Incident(_) => ("incident", None, Some(RED)),
         };
         self.write_tagged(
             page,
@@ -684,6 +685,7 @@ fn history_head(h: &HistoryReport) -> String {
 /// 10, no_ack 2 (TX errors up to 128)", "node 5 bus-off until 3.2 s".
 pub(crate) fn bus_description(bus: &Bus, times: &TimeFormat) -> String {
     match bus {
+        Bus::Incident(i) => format!("incident: {}", i.summary),
         Bus::Errors(b) => {
             let over = match (b.start, b.end) {
                 (Some(s), Some(e)) if b.frames > 1 => format!(" over {}", human_span(e.since(s))),

@@ -72,12 +72,14 @@ pub fn without(object: &Value, keys: &[&str]) -> Value {
 /// counters, a bus-off, only that there was one) or not at all, and the
 /// fixtures of one scenario in several formats hold what each format can:
 /// the bus's own events (`bus_error`, a controller's `bus_off`) are left out
-/// here. `error_frames.rs` compares them on fixtures that record them alike.
+/// here, and so are incidents, which are made of them and name lines.
+/// `error_frames.rs` compares them on fixtures that record them alike.
 pub fn semantic(objects: &[Value], keys: &[&str]) -> Vec<Value> {
     objects
         .iter()
         .filter(|o| o["type"] != "input")
         .filter(|o| o["type"] != "bus_error" && !(o["type"] == "bus_off" && o["node"].is_null()))
+        .filter(|o| o["type"] != "incident")
         .map(|o| {
             // What a format records of an error frame beyond its being
             // one differs (candump logs its class bits and counters, ASC
