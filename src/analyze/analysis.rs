@@ -26,6 +26,7 @@ impl Analysis {
                 unmatched: None,
                 bus_errors: Vec::new(),
                 time_producer: None,
+                incident_roots: Vec::new(),
             },
             errors_raised: 0,
             frames_with_warnings: 0,

@@ -256,6 +256,9 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             unmatched,
             bus_errors,
             time_producer: self.monitors.lss.time_producer(),
+            incident_roots: std::mem::take(&mut self.incidents.roots)
+                .into_iter()
+                .collect(),
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;

@@ -655,6 +655,10 @@ pub struct InputReport {
     pub bus_errors: Vec<ChannelErrors>,
     /// The TIME producer, if the input has TIME frames.
     pub time_producer: Option<TimeProducer>,
+    /// The roots of the incidents told, each (channel, node, kind, code)
+    /// once with how many incidents it started, in that order; at most
+    /// [`super::incident::MAX_ROOTS`] of them.
+    pub incident_roots: Vec<(super::incident::RootKey, u64)>,
 }
 
 impl InputReport {

@@ -30,6 +30,34 @@ pub const LATE_MS: u64 = 1_500;
 /// Events an incident keeps (and the rules look at); the rest are counted.
 pub const MAX_EVENTS: usize = 100;
 
+/// Distinct incident roots an input report keeps (for `check`); the
+/// incidents past them are told but not recorded.
+pub const MAX_ROOTS: usize = 1024;
+
+/// What started an incident, as a baseline records it: the same root in
+/// two runs is the same trouble.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct RootKey {
+    pub channel: String,
+    pub node: Option<NodeId>,
+    pub kind: &'static str,
+    pub code: Option<u16>,
+}
+
+impl RootKey {
+    /// `node 3 heartbeat_lost`, `node 5 emcy 0x8130`, `bus bus_error`.
+    pub fn words(&self) -> String {
+        let mut s = match self.node {
+            Some(n) => format!("node {n} {}", self.kind),
+            None => format!("bus {}", self.kind),
+        };
+        if let Some(c) = self.code {
+            let _ = write!(s, " 0x{c:04X}");
+        }
+        s
+    }
+}
+
 /// Channels with an open incident at once; an event of a channel past them
 /// is counted in [`Builder::ignored`], not grouped.
 pub const MAX_OPEN: usize = 256;
@@ -213,6 +241,8 @@ pub struct Builder {
     pub count: u64,
     /// Incidents told (their nodes and channel selected).
     pub told: u64,
+    /// The roots of the incidents told, with how many each started.
+    pub roots: std::collections::BTreeMap<RootKey, u64>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -233,6 +263,7 @@ impl Builder {
             ignored: 0,
             count: 0,
             told: 0,
+            roots: std::collections::BTreeMap::new(),
         }
     }
 

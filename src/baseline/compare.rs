@@ -60,6 +60,11 @@ pub enum Kind {
     BusOffNew,
     /// In the baseline it went bus-off; now it does not.
     BusOffGone,
+    /// An incident whose root (node, kind and code) the baseline has not
+    /// seen on that channel.
+    IncidentNew,
+    /// The baseline had incidents of this root; now there are none.
+    IncidentGone,
 }
 
 impl Kind {
@@ -74,14 +79,16 @@ impl Kind {
             | Kind::NowActive
             | Kind::HeartbeatLostNew
             | Kind::DriveFaultNew
-            | Kind::BusOffNew => Severity::Regression,
+            | Kind::BusOffNew
+            | Kind::IncidentNew => Severity::Regression,
             Kind::MalformedFell
             | Kind::EmcyInvalidFell
             | Kind::ErrorGone
             | Kind::NowCleared
             | Kind::HeartbeatLostGone
             | Kind::DriveFaultGone
-            | Kind::BusOffGone => Severity::Improvement,
+            | Kind::BusOffGone
+            | Kind::IncidentGone => Severity::Improvement,
             Kind::FormatChanged
             | Kind::NewNodeWithoutErrors
             | Kind::NodeGone
@@ -253,6 +260,31 @@ pub fn compare(old: &Baseline, new: &Baseline, allow: &Allow) -> Diff {
     Diff { findings, summary }
 }
 
+/// Whether the trace shows what an incident root (`node 5 emcy 0x8130`,
+/// `node 3 heartbeat_lost`, `bus bus_error`) names, outside incidents: the
+/// node raised the code, lost its heartbeat, faulted, went bus-off. Roots
+/// of other kinds (a reboot, an NMT change, error frames) have no finding
+/// of their own: never "seen".
+fn root_seen(root: &str, channel: &str, trace: &TraceEntry) -> bool {
+    let words: Vec<&str> = root.split_whitespace().collect();
+    let (node, kind, code) = match words.as_slice() {
+        ["node", n, kind, rest @ ..] => (n.parse::<NodeId>().ok(), *kind, rest.first()),
+        _ => return false,
+    };
+    let Some(entry) = node.and_then(|n| trace.nodes.get(channel)?.get(&n)) else {
+        return false;
+    };
+    match kind {
+        "emcy" => code
+            .and_then(|c| u16::from_str_radix(c.trim_start_matches("0x"), 16).ok())
+            .is_some_and(|c| entry.errors.contains_key(&Code(c))),
+        "heartbeat_lost" => entry.heartbeat_lost > 0,
+        "axis_fault" => entry.drive_faults > 0,
+        "bus_off" => entry.bus_off > 0,
+        _ => false,
+    }
+}
+
 fn compare_trace(c: &mut Collector<'_>, file: &str, old: &TraceEntry, new: &TraceEntry) {
     let at = Place { file, node: None };
     if old.format != new.format {
@@ -288,6 +320,36 @@ fn compare_trace(c: &mut Collector<'_>, file: &str, old: &TraceEntry, new: &Trac
         };
         let msg = format!("{what} {now}, baseline {was}");
         c.add(at, kind, None, (Some(now), Some(was)), false, msg);
+    }
+
+    let none = BTreeMap::new();
+    let channels: BTreeSet<&String> = old.incidents.keys().chain(new.incidents.keys()).collect();
+    for channel in channels {
+        let was = old.incidents.get(channel).unwrap_or(&none);
+        let now = new.incidents.get(channel).unwrap_or(&none);
+        // A root that is itself new or gone (a new error code, a first
+        // heartbeat loss, drive fault or bus-off of the node) has its own
+        // finding: the incident would say it twice.
+        let said = |root: &str, from: &TraceEntry, to: &TraceEntry| {
+            !root_seen(root, channel, from) && root_seen(root, channel, to)
+        };
+        for (root, &n) in now
+            .iter()
+            .filter(|(r, _)| !was.contains_key(*r) && !said(r, old, new))
+        {
+            let msg = format!(
+                "{channel}: {n} incident{} rooted in {root}, baseline none",
+                if n == 1 { "" } else { "s" }
+            );
+            c.add(at, Kind::IncidentNew, None, (Some(n), Some(0)), false, msg);
+        }
+        for (root, &n) in was
+            .iter()
+            .filter(|(r, _)| !now.contains_key(*r) && !said(r, new, old))
+        {
+            let msg = format!("{channel}: no incident rooted in {root} now (baseline {n})");
+            c.add(at, Kind::IncidentGone, None, (Some(0), Some(n)), false, msg);
+        }
     }
 
     let controllers: BTreeSet<&String> = old.bus_off.keys().chain(new.bus_off.keys()).collect();

@@ -127,6 +127,11 @@ pub struct TraceEntry {
     /// as before.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub bus_off: BTreeMap<String, u64>,
+    /// Channel -> the roots of its incidents (`node 3 heartbeat_lost`,
+    /// `node 5 emcy 0x8130`, `bus bus_error`) -> how many incidents each
+    /// started; left out when none.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub incidents: BTreeMap<String, BTreeMap<String, u64>>,
 }
 
 /// The input counts of the JSON contract, in alphabetical order.
@@ -298,6 +303,14 @@ impl TraceEntry {
                 }
             }
         }
+        let mut incidents: BTreeMap<String, BTreeMap<String, u64>> = BTreeMap::new();
+        for (root, n) in &report.incident_roots {
+            *incidents
+                .entry(root.channel.clone())
+                .or_default()
+                .entry(root.words())
+                .or_default() += n;
+        }
         TraceEntry {
             counts: CountsEntry {
                 boot: c.boot,
@@ -312,6 +325,7 @@ impl TraceEntry {
             format: report.format.map(|f| f.name().to_string()),
             nodes,
             bus_off,
+            incidents,
         }
     }
 }

@@ -17,7 +17,9 @@ use super::chart::{self, Clock, Collector, Panel, esc};
 use super::svg::{doc_title, document, style_sheet};
 use super::table::health_description;
 use super::timefmt::TimeFormat;
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport, Sink};
+use crate::analyze::{
+    BootEvent, BusEvent, Diagnostic, EmcyEvent, Health, HealthEvent, InputReport, Sink,
+};
 use crate::canopen::NodeId;
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::timeline::At;
@@ -499,6 +501,12 @@ impl<W: Write> Sink for HtmlReport<W> {
             cleared: ev.cleared.to_vec(),
             state: "error_free",
         });
+        Ok(())
+    }
+
+    /// Incidents become numbered bands on the chart.
+    fn bus(&mut self, ev: &BusEvent<'_>) -> io::Result<()> {
+        self.collector.bus(ev);
         Ok(())
     }
 

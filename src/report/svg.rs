@@ -7,7 +7,7 @@
 use std::io::{self, Write};
 
 use super::chart::{self, Collector, N, Panel};
-use crate::analyze::{BootEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
+use crate::analyze::{BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
 
 /// Space between the panels of several inputs.
 pub(crate) const PANEL_GAP: f64 = 24.0;
@@ -113,6 +113,11 @@ impl<W: Write> Sink for SvgReport<W> {
 
     fn boot(&mut self, event: &BootEvent<'_>) -> io::Result<()> {
         self.collector.boot(event);
+        Ok(())
+    }
+
+    fn bus(&mut self, event: &BusEvent<'_>) -> io::Result<()> {
+        self.collector.bus(event);
         Ok(())
     }
 

@@ -189,3 +189,78 @@ fn the_table_tells_the_incident_in_one_row() {
         .unwrap_or_else(|| panic!("{out}"));
     assert!(row.contains("root: node 3 fell silent"), "{row}");
 }
+
+#[test]
+fn check_reports_an_incident_whose_root_the_baseline_has_not_seen() {
+    use crate::support::Rig;
+    let rig = Rig::new("");
+    rig.trace_from("fixtures/incident-reset-all.log");
+    let base = rig.baseline(&[]);
+    assert!(!base.contains("\"incidents\""), "{base}");
+    // Error frames start two incidents: a root no other finding names.
+    rig.trace_from("fixtures/bus-off.log");
+    let (code, found) = rig.check("incident_new");
+    assert_eq!(code, Some(1), "{found:?}");
+    let messages: Vec<&str> = found
+        .iter()
+        .map(|f| f["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        messages,
+        ["can0: 2 incidents rooted in bus bus_error, baseline none"],
+        "{found:#?}"
+    );
+    assert_eq!(found[0]["severity"], "regression");
+    // A root that has its own finding (node 6's first bus-off and heartbeat
+    // loss) is not said twice.
+    let (_, offs) = rig.check("bus_off_new");
+    assert!(!offs.is_empty());
+    // Recorded, the same roots are no longer new; gone, an improvement.
+    let base = rig.baseline(&[]);
+    assert!(base.contains("\"bus bus_error\": 2"), "{base}");
+    assert_eq!(rig.check("incident_new"), (Some(0), vec![]));
+    rig.trace_from("fixtures/incident-reset-all.log");
+    let (_, gone) = rig.check("incident_gone");
+    let messages: Vec<&str> = gone
+        .iter()
+        .map(|f| f["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        messages,
+        ["can0: no incident rooted in bus bus_error now (baseline 2)"]
+    );
+}
+
+#[test]
+fn the_chart_marks_each_incident_as_a_numbered_band() {
+    let told = incidents(&["fixtures/bus-off.log"]);
+    let (svg, _, code) = run(&["--format", "svg", "fixtures/bus-off.log"], b"");
+    assert_eq!(code, 0);
+    let doc = roxmltree::Document::parse(&svg).expect("well-formed SVG");
+    let bands: Vec<roxmltree::Node<'_, '_>> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("inc"))
+        .collect();
+    assert_eq!(bands.len(), told.len());
+    for (k, (band, incident)) in bands.iter().zip(&told).enumerate() {
+        let title = band
+            .descendants()
+            .find(|n| n.has_tag_name("title"))
+            .and_then(|t| t.text())
+            .unwrap();
+        assert_eq!(
+            title,
+            format!(
+                "incident {}: {}",
+                k + 1,
+                incident["summary"].as_str().unwrap()
+            )
+        );
+        let number = band
+            .descendants()
+            .find(|n| n.has_tag_name("text"))
+            .and_then(|t| t.text())
+            .unwrap();
+        assert_eq!(number, (k + 1).to_string());
+    }
+}

@@ -324,6 +324,19 @@ impl<E: Write> Emit<'_, E> {
                 continue;
             }
             self.incidents.told += 1;
+            let r = &incident.events[incident.root.event];
+            let key = incident::RootKey {
+                channel: incident.channel.clone(),
+                node: r.node,
+                kind: r.kind.slug(),
+                code: r.code,
+            };
+            let roots = &mut self.incidents.roots;
+            if let Some(n) = roots.get_mut(&key) {
+                *n += 1;
+            } else if roots.len() < incident::MAX_ROOTS {
+                roots.insert(key, 1);
+            }
             let line = incident.events[incident.first].line;
             let time = Some(incident.start);
             let channel = incident.channel.clone();

@@ -150,8 +150,43 @@ pub(super) fn write_panel(
         write_lane(out, clock, scale, lane, keys, y)?;
         y += lane.height;
     }
+    write_incident_bands(out, clock, scale, streamed, time_scale_y)?;
     let legend_h = write_legend(out, lanes, keys, time_scale_y + 44.0)?;
     Ok(time_scale_y + 44.0 + legend_h)
+}
+
+/// Incidents as numbered bands over every lane, from the first event to
+/// the last (at least 2 px), the number above the lanes and the summary in
+/// the tooltip; the table and the JSON number them alike.
+fn write_incident_bands(
+    out: &mut String,
+    clock: &Clock,
+    scale: Scale,
+    streamed: &Streamed,
+    bottom: f64,
+) -> fmt::Result {
+    for (k, (start, end, summary)) in streamed.incidents.iter().enumerate() {
+        let (Some(a), Some(b)) = (clock.value(start), clock.value(end)) else {
+            continue;
+        };
+        let x0 = scale.x(a);
+        let x1 = scale.x(b).max(x0 + 2.0);
+        writeln!(
+            out,
+            "<g class=\"inc\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"><title>incident {}: {}</title></rect>\
+             <text x=\"{}\" y=\"{}\">{}</text></g>",
+            N(x0),
+            N(LANES_TOP),
+            N(x1 - x0),
+            N(bottom - LANES_TOP),
+            k + 1,
+            esc(summary),
+            N(x0 + 1.0),
+            N(LANES_TOP - 3.0),
+            k + 1
+        )?;
+    }
+    Ok(())
 }
 
 fn write_lane(

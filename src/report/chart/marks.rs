@@ -127,7 +127,13 @@ pub(super) struct Streamed {
     /// Events that could not be placed (no time in a timed trace).
     pub(super) unplaced: u64,
     pub(super) counts: [u64; 3],
+    /// Incidents as numbered bands over every lane: start, end and
+    /// summary, the first [`MAX_INCIDENT_BANDS`].
+    pub(super) incidents: Vec<(At, At, String)>,
 }
+
+/// Incidents a panel draws at most (one band each).
+pub(super) const MAX_INCIDENT_BANDS: usize = 100;
 
 impl Streamed {
     pub(super) fn mark(

@@ -43,7 +43,7 @@ mod time_scale;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io;
 
-use crate::analyze::{BootEvent, EmcyEvent, Health, HealthEvent, InputReport};
+use crate::analyze::{BootEvent, Bus, BusEvent, EmcyEvent, Health, HealthEvent, InputReport};
 use crate::canopen::NodeId;
 use crate::canopen::nmt::NmtState;
 use crate::timeline::At;
@@ -125,6 +125,27 @@ impl Collector {
         };
         self.current
             .mark(ev.channel, ev.node, ev.time, ev.line, mark);
+    }
+
+    /// An incident becomes a numbered band over the lanes.
+    pub(super) fn bus(&mut self, ev: &BusEvent<'_>) {
+        let Bus::Incident(i) = ev.bus else { return };
+        let incidents = &mut self.current.incidents;
+        if incidents.len() >= marks::MAX_INCIDENT_BANDS {
+            return;
+        }
+        let last = i.events.iter().map(|e| e.line).max().unwrap_or(ev.line);
+        incidents.push((
+            At {
+                time: Some(i.start),
+                line: ev.line,
+            },
+            At {
+                time: Some(i.end),
+                line: last,
+            },
+            i.summary.clone(),
+        ));
     }
 
     pub(super) fn boot(&mut self, ev: &BootEvent<'_>) {

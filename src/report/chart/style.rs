@@ -57,6 +57,8 @@ pub(in crate::report) const STYLE: &str = "\
 .ec .n-operational{fill:#1b7837;fill-opacity:.08}
 .ec .n-stopped{fill:#555;fill-opacity:.18}
 .ec .out{fill:#d62728;fill-opacity:.28}
+.ec .inc rect{fill:#d62728;fill-opacity:.10;stroke:#d62728;stroke-opacity:.6;stroke-width:1}
+.ec .inc text{font-size:10px;font-weight:600;fill:#b2182b}
 ";
 
 /// The drive state strips' fills, only in documents that have a CiA 402

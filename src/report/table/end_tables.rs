@@ -10,19 +10,26 @@ use comfy_table::{CellAlignment, Table, presets};
 use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut, push_row, write_row};
 use super::page::{BOLD, Page};
 use super::timeline::{NodeTexts, write_timeline};
+use crate::analyze::incident::Incident;
 use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport, kind_counts};
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
 use crate::report::timefmt::{SameDay, TimeFormat, human_span};
 use crate::text::printable;
 use crate::timeline::heartbeat::Supervision;
+use crate::trace::Timestamp;
 
 /// The end of an input, under its events' legend: the nodes, their
 /// health and drives, the error timeline and the bus line.
 pub(super) fn write_end_of_input<W: Write>(
     page: &mut Page<W>,
     input: &InputReport,
+    incidents: &Incidents,
 ) -> io::Result<()> {
     if input.nodes.is_empty() {
+        if !incidents.lines.is_empty() {
+            writeln!(page.out)?;
+            write_incidents(page, incidents)?;
+        }
         write_bus_errors(page, input)?;
         if !input.bus_errors.is_empty() {
             writeln!(page.out)?;
@@ -31,6 +38,7 @@ pub(super) fn write_end_of_input<W: Write>(
         return writeln!(page.out);
     }
     writeln!(page.out)?;
+    write_incidents(page, incidents)?;
     write_nodes(page, input)?;
     write_health(page, input)?;
     write_drives(page, input)?;
@@ -39,6 +47,59 @@ pub(super) fn write_end_of_input<W: Write>(
     write_timeline(page, input)?;
     writeln!(page.out)?;
     write_bus_line(page, input)?;
+    writeln!(page.out)
+}
+
+/// Incidents the section lists at most; the rest are counted.
+const INCIDENTS_SHOWN: usize = 100;
+
+/// An input's incidents as the section shows them: start, channel, summary.
+#[derive(Debug, Default)]
+pub(super) struct Incidents {
+    lines: Vec<(Timestamp, String, String)>,
+    more: u64,
+}
+
+impl Incidents {
+    pub(super) fn push(&mut self, channel: &str, i: &Incident) {
+        if self.lines.len() < INCIDENTS_SHOWN {
+            self.lines.push((
+                i.start,
+                printable(channel).into_owned(),
+                printable(&i.summary).into_owned(),
+            ));
+        } else {
+            self.more += 1;
+        }
+    }
+}
+
+/// "Incidents": one line each, when, where, the root and what followed;
+/// it opens the end of an input, the story before the tables.
+pub(super) fn write_incidents<W: Write>(
+    page: &mut Page<W>,
+    incidents: &Incidents,
+) -> io::Result<()> {
+    if incidents.lines.is_empty() {
+        return Ok(());
+    }
+    writeln!(page.out, "{}", page.paint(BOLD, "Incidents"))?;
+    for (n, (start, channel, summary)) in incidents.lines.iter().enumerate() {
+        let mut line = format!(
+            "{:>3}. {}  {channel}  {summary}",
+            n + 1,
+            page.times.show(*start)
+        );
+        if let Some(width) = page.width {
+            let mut cut = String::new();
+            push_cut(&mut cut, &line, width);
+            line = cut;
+        }
+        writeln!(page.out, "{line}")?;
+    }
+    if incidents.more > 0 {
+        writeln!(page.out, "     ... and {} more", incidents.more)?;
+    }
     writeln!(page.out)
 }
 

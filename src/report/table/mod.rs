@@ -13,7 +13,9 @@
 use std::io::{self, Write};
 
 use super::timefmt::{TimeFormat, TimeStyle};
-use crate::analyze::{BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink};
+use crate::analyze::{
+    BootEvent, Bus, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink,
+};
 use crate::text::printable;
 
 mod end_tables;
@@ -34,6 +36,8 @@ pub struct TableReport<W: Write> {
     flush_each: bool,
     /// `--view summary`: no events, no timeline; one line per node and bus.
     summary_only: bool,
+    /// The input's incidents so far, for the section that opens its end.
+    incidents: end_tables::Incidents,
 }
 
 impl<W: Write> TableReport<W> {
@@ -48,6 +52,7 @@ impl<W: Write> TableReport<W> {
             events: EventLines::new(),
             flush_each,
             summary_only: false,
+            incidents: end_tables::Incidents::default(),
         }
     }
 
@@ -81,6 +86,7 @@ impl<W: Write> TableReport<W> {
 impl<W: Write> Sink for TableReport<W> {
     fn begin_input(&mut self, file: &str) -> io::Result<()> {
         self.events.begin_input();
+        self.incidents = end_tables::Incidents::default();
         self.page.times.origin = None;
         let mut head = String::from("== ");
         match self.page.width {
@@ -117,6 +123,9 @@ impl<W: Write> Sink for TableReport<W> {
     }
 
     fn bus(&mut self, ev: &BusEvent<'_>) -> io::Result<()> {
+        if let Bus::Incident(i) = ev.bus {
+            self.incidents.push(ev.channel, i);
+        }
         if self.summary_only {
             return Ok(());
         }
@@ -126,10 +135,11 @@ impl<W: Write> Sink for TableReport<W> {
 
     fn end_input(&mut self, input: &InputReport) -> io::Result<()> {
         if self.summary_only {
+            end_tables::write_incidents(&mut self.page, &self.incidents)?;
             return end_tables::write_summary(&mut self.page, input);
         }
         self.events.write_end(&mut self.page)?;
-        end_tables::write_end_of_input(&mut self.page, input)
+        end_tables::write_end_of_input(&mut self.page, input, &self.incidents)
     }
 
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
