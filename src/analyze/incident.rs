@@ -593,6 +593,25 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                 reason,
             })
         };
+        // The node's own events of `kind` at or before this one (within
+        // `ms` of it when given): the first of them, or the last.
+        let own = |kind: Kind, ms: Option<u64>, last: bool| {
+            let mut found = events
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| {
+                    o.kind == kind
+                        && o.node == e.node
+                        && o.time <= e.time
+                        && ms.is_none_or(|ms| within(o, e, Span::from_millis(ms)))
+                })
+                .map(|(j, _)| j);
+            if last {
+                found.next_back()
+            } else {
+                found.next()
+            }
+        };
         match (e.kind, e.code) {
             // A consumer's heartbeat error, RPDO timeout or SYNC error: the
             // producer it consumes fell silent (or restarted).
@@ -659,9 +678,7 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                 let burst = events.iter().position(|o| {
                     o.kind == Kind::BusError && e.burst.is_some() && o.burst == e.burst
                 });
-                let off = events
-                    .iter()
-                    .position(|o| o.kind == Kind::BusOff && o.node == e.node && o.time <= e.time);
+                let off = own(Kind::BusOff, None, false);
                 if let Some(j) = off.filter(|_| code == 0x8140) {
                     add(
                         j,
@@ -699,12 +716,7 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                     continue;
                 }
                 // An EMCY sent with a drive's fault just before it.
-                if let Some(j) = events.iter().position(|o| {
-                    o.kind == Kind::AxisFault
-                        && o.node == e.node
-                        && o.time <= e.time
-                        && within(o, e, Span::from_millis(SAME_FAULT_MS))
-                }) {
+                if let Some(j) = own(Kind::AxisFault, Some(SAME_FAULT_MS), false) {
                     add(
                         j,
                         format!("{} came with the drive's fault: one fault", e.words()),
@@ -712,12 +724,7 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                 }
             }
             (Kind::AxisFault, _) => {
-                if let Some(j) = events.iter().position(|o| {
-                    o.kind == Kind::Emcy
-                        && o.node == e.node
-                        && o.time <= e.time
-                        && within(o, e, Span::from_millis(SAME_FAULT_MS))
-                }) {
+                if let Some(j) = own(Kind::Emcy, Some(SAME_FAULT_MS), false) {
                     add(
                         j,
                         format!(
@@ -731,10 +738,7 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
             (Kind::Nmt, _) => {
                 // Out of operational after its own error: its error
                 // behaviour (0x1029).
-                if let Some(j) = events
-                    .iter()
-                    .rposition(|o| o.kind == Kind::Emcy && o.node == e.node && o.time <= e.time)
-                {
+                if let Some(j) = own(Kind::Emcy, None, true) {
                     add(
                         j,
                         format!(
@@ -746,10 +750,7 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                 }
             }
             (Kind::HeartbeatLost, _) => {
-                if let Some(j) = events
-                    .iter()
-                    .position(|o| o.kind == Kind::BusOff && o.node == e.node && o.time <= e.time)
-                {
+                if let Some(j) = own(Kind::BusOff, None, false) {
                     add(j, format!("{}: it was bus-off", e.words()));
                     continue;
                 }
@@ -772,9 +773,7 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                 }
             }
             (Kind::Boot, _) => {
-                if let Some(j) = events.iter().rposition(|o| {
-                    o.kind == Kind::HeartbeatLost && o.node == e.node && o.time <= e.time
-                }) {
+                if let Some(j) = own(Kind::HeartbeatLost, None, true) {
                     add(
                         j,
                         format!("{} after falling silent: it restarted", e.words()),

@@ -419,3 +419,23 @@ fn an_io_module_among_drives_does_not_refuse_their_folds() {
     let (taken, refused) = assert_fold_independent("drives and an I/O module", &t, &opts);
     assert!(taken > 5 * refused, "{taken} taken, {refused} refused");
 }
+
+/// Incidents close where the frame path closes them, folding or not: the
+/// steady heartbeats of the incident fixtures fold into runs, and the
+/// incidents come out the same and in the same place.
+#[test]
+fn incidents_are_the_same_with_folds() {
+    for (name, t) in [
+        (
+            "silent producer",
+            &include_bytes!("../../../fixtures/incident-silent-producer.log")[..],
+        ),
+        (
+            "repeated",
+            &include_bytes!("../../../fixtures/incident-repeated.log")[..],
+        ),
+    ] {
+        let (taken, _) = assert_fold_independent(name, t, &base_options());
+        assert!(taken > 0, "{name}: no run was folded");
+    }
+}

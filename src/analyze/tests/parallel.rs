@@ -584,3 +584,42 @@ fn blocks_read_twice_too_often_fall_back_to_one_thread() {
     assert!(!reading.fell_back && reading.workers == 2, "{reading:?}");
     assert_eq!(reading.blocks_read_again + reading.rests_read_again, 0);
 }
+
+/// Incidents, split anywhere and read on several threads: the same
+/// incidents with the same roots, told at the same place in the output
+/// (an incident closes on events, which come in one order however the
+/// input is split).
+#[test]
+fn incidents_across_blocks() {
+    let traces: [(&str, &[u8], usize); 4] = [
+        (
+            "silent producer",
+            include_bytes!("../../../fixtures/incident-silent-producer.log"),
+            1,
+        ),
+        (
+            "repeated",
+            include_bytes!("../../../fixtures/incident-repeated.log"),
+            2,
+        ),
+        (
+            "rpdo timeout",
+            include_bytes!("../../../fixtures/incident-rpdo-timeout.log"),
+            1,
+        ),
+        (
+            "under-voltage",
+            include_bytes!("../../../fixtures/incident-undervoltage.log"),
+            1,
+        ),
+    ];
+    for (name, trace, incidents) in traces {
+        assert_split_independent(name, trace);
+        let (out, _) = run(trace, 3, 300);
+        assert_eq!(
+            out.matches("\"type\":\"incident\"").count(),
+            incidents,
+            "{name}: {out}"
+        );
+    }
+}
