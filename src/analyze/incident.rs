@@ -550,7 +550,13 @@ impl Builder {
         nodes.sort_unstable();
         nodes.dedup();
         let start = open.events[first].time;
-        let summary = summary(&open.events, &root, open.total, open.end.since(start));
+        let summary = summary(
+            &open.events,
+            &root,
+            open.faults,
+            open.total - open.faults,
+            open.end.since(start),
+        );
         self.count += 1;
         self.closed.push(Incident {
             channel: channel.to_string(),
@@ -894,7 +900,9 @@ fn root(events: &[Occurrence], links: &[Link]) -> Root {
 
 /// "node 3 fell silent started it; then node 5 EMCY 0x8130 (+0.200 s),
 /// ...; 4 events on 3 nodes over 0.800 s".
-fn summary(events: &[Occurrence], root: &Root, total: u64, span: Span) -> String {
+/// `faults` and `actions` count every event, kept or not: the faults,
+/// and the master's actions among them.
+fn summary(events: &[Occurrence], root: &Root, faults: u64, actions: u64, span: Span) -> String {
     let r = &events[root.event];
     let mut s = if root.decided() {
         format!("root: {}", r.words())
@@ -915,17 +923,28 @@ fn summary(events: &[Occurrence], root: &Root, total: u64, span: Span) -> String
     if !then.is_empty() {
         let _ = write!(s, "; then {}", then.join(", "));
     }
-    let mut nodes: Vec<NodeId> = events.iter().filter_map(|o| o.node).collect();
+    let mut nodes: Vec<NodeId> = events
+        .iter()
+        .filter(|o| !o.context)
+        .filter_map(|o| o.node)
+        .collect();
     nodes.sort_unstable();
     nodes.dedup();
     let _ = write!(
         s,
-        "; {total} event{} on {} node{} over {:.3} s",
-        if total == 1 { "" } else { "s" },
+        "; {faults} event{} on {} node{} over {:.3} s",
+        if faults == 1 { "" } else { "s" },
         nodes.len(),
         if nodes.len() == 1 { "" } else { "s" },
         span.as_f64()
     );
+    if actions > 0 {
+        let _ = write!(
+            s,
+            ", amid {actions} master action{} (NMT commands, the boot-ups they caused, fault resets)",
+            if actions == 1 { "" } else { "s" }
+        );
+    }
     s
 }
 
