@@ -242,6 +242,13 @@ fn the_chart_marks_each_incident_as_a_numbered_band() {
         .filter(|n| n.attribute("class") == Some("inc"))
         .collect();
     assert_eq!(bands.len(), told.len());
+    // The legend says what the bands are, where there are any.
+    assert!(
+        svg.contains(">incident (numbered as in the table)<"),
+        "{svg}"
+    );
+    let (quiet, _, _) = run(&["--format", "svg", "fixtures/incident-reset-all.log"], b"");
+    assert!(!quiet.contains("incident (numbered"), "{quiet}");
     for (k, (band, incident)) in bands.iter().zip(&told).enumerate() {
         let title = band
             .descendants()

@@ -151,7 +151,8 @@ pub(super) fn write_panel(
         y += lane.height;
     }
     write_incident_bands(out, clock, scale, streamed, time_scale_y)?;
-    let legend_h = write_legend(out, lanes, keys, time_scale_y + 44.0)?;
+    let incidents = !streamed.incidents.is_empty();
+    let legend_h = write_legend(out, lanes, keys, incidents, time_scale_y + 44.0)?;
     Ok(time_scale_y + 44.0 + legend_h)
 }
 
@@ -483,6 +484,7 @@ fn write_legend(
     out: &mut String,
     lanes: &[Lane<'_>],
     keys: &CodeKeys,
+    incidents: bool,
     y: f64,
 ) -> Result<f64, fmt::Error> {
     let (mut merged, mut open) = (false, false);
@@ -623,6 +625,20 @@ fn write_legend(
         };
         let glyph = format!("<g class=\"mk {}\">{glyph}</g>", mark.css());
         entry(out, std::mem::take(&mut row), &glyph, text, "", None)?;
+    }
+    if incidents {
+        let glyph = format!(
+            "<g class=\"inc key\"><rect width=\"11\" height=\"{}\"/></g>",
+            N(BAR_H)
+        );
+        entry(
+            out,
+            std::mem::take(&mut row),
+            &glyph,
+            "incident (numbered as in the table)",
+            "",
+            None,
+        )?;
     }
     out.push_str("</g>\n");
     Ok(y - y0 + 18.0)
