@@ -449,6 +449,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]
     fn steady_heartbeat(&mut self, idx: u64, frame: &Frame<'_>) -> bool {
+        // An incident due to close closes on the frame path, as it would
+        // frame by frame.
+        if frame.time.is_some_and(|t| self.incidents.passed(t)) {
+            return false;
+        }
         let line_base = self.line_base;
         let Some(time) = self.monitors.nmt.steady_heartbeat(
             frame,
@@ -601,6 +606,14 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 let (_, _, _, emit) = parts!(self);
                 emit.bus(&mut told)?;
                 self.told = told;
+            }
+            // An incident whose gap has passed is told now, on a quiet bus
+            // too (live input, --follow); the fold paths leave such a frame
+            // to this path, so where it is told does not depend on the split.
+            if self.incidents.passed(t) {
+                let (_, _, _, emit) = parts!(self);
+                emit.incidents.tick(Some(t));
+                emit.tell_incidents()?;
             }
         }
         if self

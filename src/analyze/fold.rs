@@ -161,7 +161,7 @@ impl<E: Write> Consumer<'_, '_, E> {
     ) -> bool {
         // A burst of error frames closes within the run: frame by frame,
         // so it closes where the frame path closes it.
-        if self.facts.bus.passed(run.latest) {
+        if self.facts.bus.passed(run.latest) || self.incidents.passed(run.latest) {
             return false;
         }
         // Index + 1 into the folds by node (0: not folded).

@@ -4,12 +4,12 @@
 //! their causes, and a sentence. The builder hears every event before the
 //! `--node`/`--channel` filters (an incident does not change with which
 //! nodes are shown) and hands an incident on when it closes: at the first
-//! event told after the trace's clock has passed its last event by the gap
-//! (and by [`LATE_MS`], for events told after later lines), or at the end
-//! of the input. Events, not frames, move its clock: frames reach the
-//! consumer one by one or folded into runs depending on how the input was
-//! split, events always in the same order, so the output does not depend
-//! on the split. The rules and their reasons are in docs/guide/incidents.md.
+//! followed frame or event after the trace's clock has passed its last
+//! event by the gap (and by [`LATE_MS`], for events told after later
+//! lines), or at the end of the input. The consumer asks [`Builder::passed`]
+//! for every timed frame, and its fast paths (folded runs, steady
+//! heartbeats) leave a frame past that time to the frame path, so the
+//! output does not depend on how the input was split. The rules and their reasons are in docs/guide/incidents.md.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -408,7 +408,9 @@ impl Builder {
         }
     }
 
-    /// Whether an incident is due to close at `now`.
+    /// Whether an incident is due to close at `now`: one comparison, the
+    /// cost every timed frame pays.
+    #[inline]
     pub fn passed(&self, now: Timestamp) -> bool {
         self.due.is_some_and(|d| now > d)
     }

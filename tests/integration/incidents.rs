@@ -271,3 +271,40 @@ fn the_chart_marks_each_incident_as_a_numbered_band() {
         assert_eq!(number, (k + 1).to_string());
     }
 }
+
+/// Live input: an incident is told once the trace's clock has passed its
+/// gap, while the input is still open, not only at its end.
+#[test]
+fn a_live_incident_is_told_while_the_input_stays_open() {
+    use std::io::Write;
+    let mut child = crate::live::spawn(&["--format", "ndjson", "--incident-gap", "0.5", "-"]);
+    let mut stdin = child.stdin.take().unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        use std::io::BufRead;
+        for line in std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+        {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let trace = std::fs::read("fixtures/incident-silent-producer.log").unwrap();
+    stdin.write_all(&trace).unwrap();
+    stdin.flush().unwrap();
+    // stdin stays open: the incident must come out on the clock alone.
+    let incident = loop {
+        let line = rx
+            .recv_timeout(crate::live::WAIT)
+            .expect("the incident is told while the input is open");
+        if line.starts_with(r#"{"type":"incident""#) {
+            break line;
+        }
+    };
+    assert!(incident.contains("root: node 3 fell silent"), "{incident}");
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+}
