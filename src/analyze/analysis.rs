@@ -27,6 +27,7 @@ impl Analysis {
                 bus_errors: Vec::new(),
                 time_producer: None,
                 incident_roots: Vec::new(),
+                channels: Vec::new(),
             },
             errors_raised: 0,
             frames_with_warnings: 0,

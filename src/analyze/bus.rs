@@ -407,7 +407,7 @@ mod tests {
         out.iter()
             .filter_map(|t| match &t.bus {
                 Bus::Errors(b) => Some(b),
-                Bus::BusOff(_) | Bus::Lss(_) | Bus::Incident(_) => None,
+                Bus::BusOff(_) | Bus::Lss(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
             })
             .collect()
     }
@@ -553,7 +553,7 @@ mod tests {
             .iter()
             .filter_map(|t| match &t.bus {
                 Bus::BusOff(o) => Some(o),
-                Bus::Errors(_) | Bus::Lss(_) | Bus::Incident(_) => None,
+                Bus::Errors(_) | Bus::Lss(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
             })
             .collect();
         assert_eq!(offs.len(), 1);

@@ -12,7 +12,7 @@ use super::analysis::{Analysis, OutputError, Reading};
 use super::bus::{MAX_CHANNELS, Told};
 use super::classify::{FoldedRun, Foreign, LineSink};
 use super::diagnostics::{DiagnosticLog, InputDiagnostics};
-use super::event::{CodeTexts, Counts, EvidenceKind, InputReport};
+use super::event::{Bus, CodeTexts, Counts, EvidenceKind, InputReport};
 use super::incident::Builder;
 use super::interest::{Wanted, interest};
 use super::monitor::context::{Emit, Fact, Facts, Learnt, Seen, Step};
@@ -20,6 +20,8 @@ use super::monitor::{Carried, Monitors, TakenFold};
 use super::nodes::Nodes;
 use super::options::Options;
 use super::sink::Sink;
+use super::traffic::Traffic;
+use crate::canopen::cob_id::SYNC_ID;
 use crate::canopen::profile::Profile;
 use crate::canopen::{NodeId, emcy};
 use crate::timeline::At;
@@ -62,6 +64,9 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// Bus events to tell, reused.
     told: Vec<Told>,
     pub(super) incidents: Builder,
+    pub(super) traffic: Traffic,
+    /// The bit rate the input records (a trace header), known at its end.
+    pub(super) recorded_bit_rate: Option<u32>,
 }
 
 /// The monitors, the node table, the shared facts and an [`Emit`] over the
@@ -118,7 +123,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             first_time: None,
             last_time: None,
             frame_times: (None, None),
-            wanted: Wanted::new(ids),
+            wanted: Wanted::new(ids, opts.timing),
             nodes: Nodes::new(opts.spill_at, opts.max_nodes),
             facts: Facts::new(opts),
             monitors,
@@ -128,6 +133,8 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             reading: Reading::default(),
             told: Vec::new(),
             incidents: Builder::new(opts.incident_gap),
+            traffic: Traffic::new(opts.timing),
+            recorded_bit_rate: None,
         }
     }
 
@@ -148,6 +155,14 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         monitors.finish(end, nodes, facts, emit)?;
         let mut told = std::mem::take(&mut self.told);
         self.facts.bus.finish(&mut told);
+        let input_end = self.last_time.max(self.frame_times.1);
+        for (channel, gap) in self.traffic.finish(input_end) {
+            told.push(Told {
+                channel,
+                at: gap.start,
+                bus: Bus::SyncMissed(gap),
+            });
+        }
         let (_, _, _, emit) = parts!(self);
         emit.bus(&mut told)?;
         emit.incidents.finish();
@@ -160,6 +175,13 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             ));
         }
         let bus = std::mem::take(&mut self.facts.bus);
+        if self.traffic.ignored > 0 {
+            self.log.note(&format!(
+                "{file}: {} frames on channels past the first {} were not counted per channel",
+                self.traffic.ignored,
+                super::traffic::MAX_CHANNELS
+            ));
+        }
         if bus.ignored > 0 {
             self.log.note(&format!(
                 "{file}: {} error frames on channels past the first {MAX_CHANNELS} with error \
@@ -259,6 +281,8 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             incident_roots: std::mem::take(&mut self.incidents.roots)
                 .into_iter()
                 .collect(),
+            channels: std::mem::replace(&mut self.traffic, Traffic::new(false))
+                .into_report(self.opts.bit_rate.or(self.recorded_bit_rate)),
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;
@@ -388,6 +412,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// An error frame at `line`: into its channel's burst; what closed or
     /// ended goes out.
     fn error_frame(&mut self, line: u64, frame: &Frame<'_>) -> Result<(), OutputError> {
+        self.traffic.error_frame(frame.channel, frame.time);
         let decoded = ErrorFrame::decode(frame.id, frame.data.as_slice());
         let at = At {
             time: frame.time,
@@ -445,6 +470,40 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         Ok(())
     }
 
+    /// A frame for the channel's traffic ([`Traffic::wants`]): counted and
+    /// timed there, a gap in SYNC told. `true` when that is all the frame
+    /// is for (SYNC, and with `--timing` any frame the analysis does not
+    /// decode): it is then counted as a frame, and nothing else happens.
+    fn traffic(&mut self, idx: u64, frame: &Frame<'_>) -> Result<bool, OutputError> {
+        let line = self.line_no(idx);
+        let at = At {
+            time: frame.time,
+            line,
+        };
+        let gap = self.traffic.frame(
+            frame.channel,
+            frame.id,
+            frame.extended,
+            frame.kind,
+            frame.len,
+            at,
+        );
+        if let Some(gap) = gap {
+            let mut told = std::mem::take(&mut self.told);
+            told.push(Told {
+                channel: String::from_utf8_lossy(frame.channel).into_owned(),
+                at,
+                bus: Bus::SyncMissed(gap),
+            });
+            let (_, _, _, emit) = parts!(self);
+            emit.bus(&mut told)?;
+            self.told = told;
+        }
+        let analysed = (frame.id != SYNC_ID || frame.extended)
+            && self.wanted.interest.wants(frame.id, frame.extended);
+        Ok(!analysed)
+    }
+
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]
@@ -473,7 +532,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
 
 impl<E: Write> LineSink for Consumer<'_, '_, E> {
     fn interest(&self) -> &Interest {
-        &self.wanted.interest
+        self.wanted.reading()
     }
 
     fn plain_frames(&mut self, n: u64) {
@@ -539,8 +598,11 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
     }
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
+        let only_traffic = frame.kind != FrameKind::Error
+            && self.traffic.wants(frame.id, frame.extended)
+            && self.traffic(idx, frame)?;
         // Heartbeats are the most frequent frames decoded.
-        if foreign.is_none() && self.steady_heartbeat(idx, frame) {
+        if !only_traffic && foreign.is_none() && self.steady_heartbeat(idx, frame) {
             return Ok(());
         }
         self.counts.frames += 1;
@@ -554,6 +616,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
                 primary.name()
             );
             self.diags.report(self.log, true, line_no, msg);
+        }
+        if only_traffic {
+            return Ok(());
         }
         let interest = &self.wanted.interest;
         if frame.kind != FrameKind::Data {

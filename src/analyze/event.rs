@@ -95,6 +95,8 @@ pub enum Bus {
     /// Fault-like events of several nodes and the bus told as one story
     /// (see [`super::incident`]).
     Incident(Box<super::incident::Incident>),
+    /// SYNC skipped cycles (one event per gap).
+    SyncMissed(super::traffic::SyncMissed),
 }
 
 impl Bus {
@@ -105,6 +107,7 @@ impl Bus {
             Bus::BusOff(_) => "bus_off",
             Bus::Lss(_) => "lss",
             Bus::Incident(_) => "incident",
+            Bus::SyncMissed(_) => "sync_missed",
         }
     }
 }
@@ -659,6 +662,9 @@ pub struct InputReport {
     /// once with how many incidents it started, in that order; at most
     /// [`super::incident::MAX_ROOTS`] of them.
     pub incident_roots: Vec<(super::incident::RootKey, u64)>,
+    /// Each channel's traffic, in the order the channels first had a frame
+    /// that came to it (SYNC; every frame with `--timing`).
+    pub channels: Vec<super::traffic::ChannelReport>,
 }
 
 impl InputReport {

@@ -93,6 +93,8 @@ pub enum Kind {
     BusOff,
     /// Context only: the master reset a drive's fault.
     FaultReset,
+    /// The SYNC producer skipped cycles.
+    SyncMissed,
 }
 
 impl Kind {
@@ -106,6 +108,7 @@ impl Kind {
             Kind::BusError => "bus_error",
             Kind::BusOff => "bus_off",
             Kind::FaultReset => "fault_reset",
+            Kind::SyncMissed => "sync_missed",
         }
     }
 }
@@ -148,6 +151,7 @@ impl Occurrence {
             }
             (Kind::BusOff, _) => format!("{who} went bus-off"),
             (Kind::FaultReset, _) => format!("fault reset of {who}"),
+            (Kind::SyncMissed, _) => "SYNC skipped cycles".to_string(),
             (Kind::Emcy, None) => format!("{who} EMCY"),
         }
     }
@@ -375,6 +379,11 @@ impl Builder {
 
     pub fn bus_error(&mut self, channel: &str, at: At) {
         self.occur(channel, None, Kind::BusError, None, at, false, at.time);
+    }
+
+    /// A gap in SYNC: `at` is the SYNC that ended it.
+    pub fn sync_missed(&mut self, channel: &str, at: At) {
+        self.occur(channel, None, Kind::SyncMissed, None, at, false, None);
     }
 
     pub fn bus_off(&mut self, channel: &str, node: Option<NodeId>, at: At) {
@@ -623,6 +632,25 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
         match (e.kind, e.code) {
             // A consumer's heartbeat error, RPDO timeout or SYNC error: the
             // producer it consumes fell silent (or restarted).
+            // A SYNC error after SYNC skipped cycles: the gap.
+            (Kind::Emcy, Some(0x8240))
+                if events
+                    .iter()
+                    .any(|o| o.kind == Kind::SyncMissed && o.time <= e.time) =>
+            {
+                let gap = events
+                    .iter()
+                    .rposition(|o| o.kind == Kind::SyncMissed && o.time <= e.time);
+                if let Some(j) = gap {
+                    add(
+                        j,
+                        format!(
+                            "{} reports a SYNC error (0x8240) after SYNC skipped cycles",
+                            e.words()
+                        ),
+                    );
+                }
+            }
             (Kind::Emcy, Some(code @ (0x8130 | 0x8250 | 0x8240))) => {
                 let Some(me) = e.node else { continue };
                 let configured: Vec<NodeId> = consumes(me)
@@ -676,6 +704,23 @@ fn link<'c>(events: &[Occurrence], consumes: impl Fn(NodeId) -> Option<&'c Consu
                                 .words()
                                 .replace(" fell silent", "")
                                 .replace(" rebooted on its own", "")
+                        ),
+                    );
+                }
+            }
+            // SYNC skipped cycles while error frames were on the bus: the
+            // producer could not send, or its frames were destroyed.
+            (Kind::SyncMissed, _) => {
+                let burst = events.iter().rposition(|o| {
+                    matches!(o.kind, Kind::BusError | Kind::BusOff) && o.time <= e.time
+                });
+                if let Some(j) = burst {
+                    add(
+                        j,
+                        format!(
+                            "SYNC skipped cycles after {} at line {}",
+                            events[j].words(),
+                            events[j].line
                         ),
                     );
                 }
@@ -975,6 +1020,30 @@ mod tests {
         assert_eq!(b.closed.len(), 2);
         assert_eq!(b.closed[0].nodes, [1, 2]);
         assert_eq!(b.closed[1].events_total, 1);
+    }
+
+    #[test]
+    fn a_sync_error_follows_from_the_gap_and_the_gap_from_the_errors() {
+        let mut b = builder();
+        b.bus_error("can0", at(0, 1));
+        b.sync_missed("can0", at(300, 5));
+        b.emcy("can0", 4, 0x8240, at(320, 6), None);
+        b.finish();
+        let i = &b.closed[0];
+        let kinds: Vec<Kind> = i.events.iter().map(|o| o.kind).collect();
+        assert_eq!(kinds, [Kind::BusError, Kind::SyncMissed, Kind::Emcy]);
+        let links: Vec<(usize, usize)> = i.links.iter().map(|l| (l.from, l.to)).collect();
+        assert_eq!(links, [(1, 0), (2, 1)], "{:?}", i.links);
+        assert_eq!(i.root.event, 0);
+        assert!(i.root.decided());
+        assert!(i.links[1].reason.contains("after SYNC skipped cycles"));
+        // Without error frames, the gap is the root.
+        let mut b = builder();
+        b.sync_missed("can0", at(300, 5));
+        b.emcy("can0", 4, 0x8240, at(320, 6), None);
+        b.finish();
+        assert_eq!(b.closed[0].root.event, 0);
+        assert_eq!(b.closed[0].events[0].kind.slug(), "sync_missed");
     }
 
     #[test]

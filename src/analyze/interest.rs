@@ -6,6 +6,7 @@ use std::sync::{Arc, RwLock};
 
 use super::options::Options;
 use crate::canopen::cia402;
+use crate::canopen::cob_id;
 use crate::canopen::emcy;
 use crate::canopen::nmt;
 use crate::canopen::pdo;
@@ -25,6 +26,8 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     let requests = sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127;
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard(nmt::COMMAND_ID);
+    // SYNC: timed per frame, for its period and the cycles it skips.
+    i.add_standard(cob_id::SYNC_ID);
     for ids in [nmt.clone(), responses, requests] {
         i.add_standard_range(ids.clone());
         i.filter_content(ids, filter);
@@ -36,6 +39,7 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     if folding() {
         i.fold(nmt);
         i.keep_inside(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
+        i.keep_inside(cob_id::SYNC_ID..=cob_id::SYNC_ID);
     }
     for e in &opts.emcy_ids {
         add_emcy_id(&mut i, e.id, e.extended);
@@ -173,16 +177,27 @@ pub(super) struct Wanted {
     pub(super) widened: u64,
     /// Set while workers run: where they read the interest from.
     pub(super) shared: Option<SharedInterest>,
+    /// `--timing`: what the readers decode (every frame), wider than what
+    /// the analysis wants; it never changes, so no block read with it
+    /// lacks a frame the analysis comes to want.
+    pub(super) reading: Option<Interest>,
 }
 
 impl Wanted {
-    pub(super) fn new(interest: Interest) -> Self {
+    pub(super) fn new(interest: Interest, every_frame: bool) -> Self {
         Wanted {
             interest,
             generation: 0,
             widened: 0,
             shared: None,
+            reading: every_frame.then(Interest::all),
         }
+    }
+
+    /// What the readers decode: the analysis's interest, or every frame.
+    #[inline]
+    pub(super) fn reading(&self) -> &Interest {
+        self.reading.as_ref().unwrap_or(&self.interest)
     }
 
     /// `add` may add ids: if it did, workers parse with the new interest
@@ -192,7 +207,7 @@ impl Wanted {
         add(&mut self.interest);
         if self.interest != before {
             self.publish();
-            self.widened = self.generation;
+            self.widened_now();
         }
     }
 
@@ -211,7 +226,15 @@ impl Wanted {
     pub(super) fn add_emcy_id(&mut self, id: u32, extended: bool) {
         add_emcy_id(&mut self.interest, id, extended);
         self.publish();
-        self.widened = self.generation;
+        self.widened_now();
+    }
+
+    /// The interest grew: blocks read before may lack frames it wants, so
+    /// they are read again, unless the readers decode every frame.
+    fn widened_now(&mut self) {
+        if self.reading.is_none() {
+            self.widened = self.generation;
+        }
     }
 
     fn publish(&mut self) {
@@ -219,7 +242,7 @@ impl Wanted {
         if let Some(shared) = &self.shared
             && let Ok(mut w) = shared.write()
         {
-            *w = (self.generation, self.interest.clone());
+            *w = (self.generation, self.reading().clone());
         }
     }
 }

@@ -32,6 +32,7 @@ pub mod sink;
 #[cfg(test)]
 mod tests;
 pub(crate) mod threads;
+pub mod traffic;
 
 use std::io::{self, Read, Write};
 
@@ -185,6 +186,7 @@ pub fn analyze<R: Read + Send, E: Write>(
         if opts.threads > 1 && detector.format().is_some() && detector.context().is_some() {
             let (read_error, detector) = parallel::run(blocks, detector, &mut consumer)?;
             error = read_error;
+            consumer.recorded_bit_rate = detector.bit_rate();
             break detector.format();
         }
         match blocks.next_block(buf) {
@@ -192,9 +194,13 @@ pub fn analyze<R: Read + Send, E: Write>(
                 classify_block(&block, opts.max_line, &mut detector, &mut consumer)?;
                 buf = block.bytes;
             }
-            Ok(None) => break detector.format(),
+            Ok(None) => {
+                consumer.recorded_bit_rate = detector.bit_rate();
+                break detector.format();
+            }
             Err(e) => {
                 error = Some(e.to_string());
+                consumer.recorded_bit_rate = detector.bit_rate();
                 break detector.format();
             }
         }
@@ -213,6 +219,7 @@ impl<E: Write> Visit for ReadRecords<'_, '_, '_, E> {
         if let Some((first, last)) = source.plain_span() {
             self.0.plain_span(first, last);
         }
+        self.0.recorded_bit_rate = source.bit_rate();
         if let Some(e) = source.ethercat_counts() {
             self.0.ethercat(e.frames, e.mailbox_messages, e.empty_polls);
         }

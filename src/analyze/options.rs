@@ -73,6 +73,11 @@ pub struct Options {
     /// `--incident-gap`: fault-like events further apart on a channel
     /// belong to different incidents.
     pub incident_gap: Span,
+    /// `--timing`: every frame is counted and timed per channel and id.
+    pub timing: bool,
+    /// `--bitrate`: the bus's bit rate in bit/s, for the load (else the
+    /// one the trace records, if any).
+    pub bit_rate: Option<u32>,
 }
 
 /// A node's EMCY COB-ID other than 0x80 + node (object 0x1014).
@@ -106,6 +111,8 @@ impl Default for Options {
             assume_cia402_pdo: false,
             unmatched_filter_fails: false,
             incident_gap: Span::from_millis(super::incident::DEFAULT_GAP_MS),
+            timing: false,
+            bit_rate: None,
         }
     }
 }

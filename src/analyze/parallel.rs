@@ -517,7 +517,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
     let mut current = detector;
     let shared: SharedInterest = Arc::new(RwLock::new((
         consumer.wanted.generation,
-        consumer.wanted.interest.clone(),
+        consumer.wanted.reading().clone(),
     )));
     consumer.wanted.shared = Some(Arc::clone(&shared));
     let feed_lock = Mutex::new(Feed {

@@ -2,6 +2,7 @@
 //! profiles and which profile decodes which node. Uses trace types at most.
 
 pub mod cia402;
+pub mod cob_id;
 pub mod codes;
 pub mod dcf;
 pub mod device_profile;

@@ -260,6 +260,8 @@ impl Sink for Recorder {
             Bus::Errors(_) => return Ok(()),
             // An incident retells the steps above.
             Bus::Incident(_) => return Ok(()),
+            // A late SYNC is timing.
+            Bus::SyncMissed(_) => return Ok(()),
         };
         self.push(e.channel, node, e.line, step);
         Ok(())

@@ -303,7 +303,7 @@ pub fn detect(data: &[u8]) {
     };
     let events: Vec<Value> = lines
         .iter()
-        .filter(|v| v["type"] != "node" && v["type"] != "input")
+        .filter(|v| !matches!(v["type"].as_str(), Some("node" | "input" | "channel")))
         .cloned()
         .collect();
     assert_eq!(
@@ -313,6 +313,11 @@ pub fn detect(data: &[u8]) {
     );
     assert_eq!(doc["nodes"], Value::Array(of_type("node")), "json nodes");
     assert_eq!(doc["inputs"], Value::Array(of_type("input")), "json inputs");
+    assert_eq!(
+        doc["channels"],
+        Value::Array(of_type("channel")),
+        "json channels"
+    );
     let diags = doc["diagnostics"].as_array().expect("diagnostics array");
     assert_eq!(diags.len(), reference.diagnostics.len());
 
@@ -560,7 +565,21 @@ fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
                     assert!(v.get(key).is_some(), "{key} in {v}");
                 }
             }
-            Some("bus_error" | "bus_off" | "lss" | "incident") => {
+            Some("channel") => {
+                // A channel's counts are a share of the input's frames.
+                let error_frames = v["error_frames"].as_u64().expect("error_frames");
+                let timed: u64 = v["ids"]
+                    .as_array()
+                    .expect("ids")
+                    .iter()
+                    .map(|id| id["count"].as_u64().expect("count"))
+                    .sum();
+                assert!(error_frames + timed <= c.frames, "channel counts: {v}");
+                if let Some(frames) = v["frames"].as_u64() {
+                    assert!(error_frames + timed <= frames && frames <= c.frames, "{v}");
+                }
+            }
+            Some("bus_error" | "bus_off" | "lss" | "incident" | "sync_missed") => {
                 // Told where they began, which a burst closed later (or a
                 // node's silence before its bus-off) puts before events
                 // already written: only within the input.

@@ -313,6 +313,7 @@ pub fn decode_timeline(data: &[u8]) {
         bus_errors: Vec::new(),
         time_producer: None,
         incident_roots: Vec::new(),
+        channels: Vec::new(),
     };
     let inputs = std::slice::from_ref(&report);
     ndjson.end_input(&report).expect("Vec");

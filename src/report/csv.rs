@@ -537,7 +537,7 @@ impl<W: Write> Sink for Csv<W> {
         let node = match ev.bus {
             Bus::BusOff(off) => off.node,
             Bus::Lss(l) => l.node,
-            Bus::Errors(_) | Bus::Incident(_) => None,
+            Bus::Errors(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
         };
         self.head(ev.bus.slug(), ev.file, ev.line, ev.time, ev.channel, node);
         let description = bus_description(ev.bus, &self.times);

@@ -127,6 +127,17 @@ impl<W: Write> Sink for JsonDocument<W> {
         }
         self.close_array(inputs.len())?;
 
+        self.out.write_all(b",\n  \"channels\": [")?;
+        let mut n = 0;
+        for input in inputs {
+            for c in &input.channels {
+                self.json.channel_traffic(&mut self.compact, input, c);
+                self.element(n == 0)?;
+                n += 1;
+            }
+        }
+        self.close_array(n)?;
+
         self.out.write_all(b",\n  \"diagnostics\": [")?;
         for (i, d) in diagnostics.iter().enumerate() {
             self.json.diagnostic(&mut self.compact, d);

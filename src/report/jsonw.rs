@@ -14,6 +14,7 @@ use std::sync::Arc;
 use super::format;
 use super::timefmt::{UNIX_FROM, calendar_second};
 use crate::analyze::incident::{Incident, Occurrence};
+use crate::analyze::traffic::ChannelReport;
 use crate::analyze::{
     BootEvent, Bus, BusEvent, ChannelErrors, Counts, Diagnostic, DriveReport, EmcyEvent,
     EvidenceKind, Health, HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeReport,
@@ -126,6 +127,11 @@ fn optional_u8(out: &mut Vec<u8>, v: Option<u8>) {
         Some(v) => push_u64(out, u64::from(v)),
         None => out.extend_from_slice(b"null"),
     }
+}
+
+/// A number already formatted as JSON writes it.
+fn push_str_raw(out: &mut Vec<u8>, number: &str) {
+    out.extend_from_slice(number.as_bytes());
 }
 
 fn push_span(out: &mut Vec<u8>, s: Option<Span>) {
@@ -696,6 +702,14 @@ impl JsonWriter {
         o.str("channel", ev.channel);
         match ev.bus {
             Bus::Incident(i) => self.incident(&mut o, i),
+            Bus::SyncMissed(gap) => {
+                o.null("node");
+                self.time_pair(&mut o, ["start", "start_text"], gap.start.time);
+                o.u64("start_line", gap.start.line);
+                self.time_pair(&mut o, ["end", "end_text"], gap.end.and_then(|e| e.time));
+                push_span(o.key("period"), Some(gap.period));
+                o.u64("missed", gap.missed);
+            }
             Bus::Errors(b) => {
                 o.null("node");
                 self.time_pair(&mut o, ["start", "start_text"], b.start);
@@ -1172,6 +1186,56 @@ impl JsonWriter {
                 self.channel_errors(list, c);
             }
             list.push(b']');
+        }
+        o.end();
+    }
+
+    /// A channel's traffic over an input: the `channel` object.
+    pub fn channel_traffic(&mut self, out: &mut Vec<u8>, input: &InputReport, c: &ChannelReport) {
+        let mut o = Obj::new(out);
+        o.str("type", "channel");
+        o.str("file", &input.file);
+        o.str("channel", &c.channel);
+        match c.frames {
+            Some(n) => o.u64("frames", n),
+            None => o.null("frames"),
+        }
+        o.u64("error_frames", c.error_frames);
+        match &c.load {
+            Some(l) => {
+                let mut lo = Obj::new(o.key("load"));
+                lo.u64("bit_rate", u64::from(l.bit_rate));
+                lo.u64("bits", l.bits);
+                push_str_raw(lo.key("mean_percent"), &format!("{:.2}", l.mean_percent));
+                push_str_raw(lo.key("peak_percent"), &format!("{:.2}", l.peak_percent));
+                lo.end();
+            }
+            None => o.null("load"),
+        }
+        let list = o.key("ids");
+        list.push(b'[');
+        for (i, id) in c.ids.iter().enumerate() {
+            if i > 0 {
+                list.push(b',');
+            }
+            let mut io = Obj::new(list);
+            io.u64("cob_id", u64::from(id.cob_id));
+            io.bool("extended", id.extended);
+            io.str("service", id.service);
+            match id.node {
+                Some(n) => io.u64("node", u64::from(n)),
+                None => io.null("node"),
+            }
+            io.u64("count", id.count);
+            push_span(io.key("period"), id.period);
+            push_span(io.key("jitter"), id.jitter);
+            push_span(io.key("max_gap"), id.max_gap);
+            io.u64("missed", id.missed);
+            io.end();
+        }
+        list.push(b']');
+        if c.other_ids > 0 {
+            o.u64("other_ids", c.other_ids);
         }
         o.end();
     }

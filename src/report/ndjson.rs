@@ -1,5 +1,5 @@
 //! `--format ndjson`: one object per line, events in trace order, then node
-//! objects, then input objects. The stable machine format; streamable.
+//! objects, then per input its channel objects and its input object. The stable machine format; streamable.
 
 use std::io::{self, Write};
 
@@ -176,7 +176,12 @@ impl<W: Write> Sink for Ndjson<W> {
     fn finish(&mut self, inputs: &[InputReport], _diagnostics: &[Diagnostic]) -> io::Result<()> {
         self.drain()?;
         self.nodes(inputs)?;
+        // An input's channels before it: its object stays the last line.
         for input in inputs {
+            for c in &input.channels {
+                self.json.channel_traffic(&mut self.buf, input, c);
+                self.line()?;
+            }
             self.json.input(&mut self.buf, input);
             self.line()?;
         }

@@ -69,7 +69,7 @@ fn every_fixtures_event_rows_say_what_its_ndjson_says() {
         let events: Vec<(&str, Value)> = text
             .lines()
             .map(|l| (l, serde_json::from_str::<Value>(l).unwrap()))
-            .filter(|(_, v)| v["type"] != "node" && v["type"] != "input")
+            .filter(|(_, v)| !matches!(v["type"].as_str(), Some("node" | "input" | "channel")))
             .collect();
         assert_eq!(rows.len() - 1, events.len(), "{fixture:?}");
         for (row, (line, ev)) in rows[1..].iter().zip(&events) {

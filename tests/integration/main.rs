@@ -46,4 +46,5 @@ mod roundtrip;
 mod sdo;
 mod table;
 mod timestamps;
+mod traffic;
 mod trc;

@@ -37,6 +37,9 @@ pub struct Interest {
     /// class bits: candump writes those bits as an extended id with its
     /// error flag, which no list of ids could cover.
     errors: bool,
+    /// CAN FD frames on wanted ids are wanted too (the analysis decodes no
+    /// FD frame; counting every frame per id and timing it needs them).
+    fd: bool,
 }
 
 /// candump's flag for an error frame in an extended id.
@@ -136,6 +139,7 @@ impl Interest {
             untimed: [0; 32],
             inside: [0; 32],
             errors: true,
+            fd: true,
         }
     }
 
@@ -152,6 +156,7 @@ impl Interest {
             untimed: [0; 32],
             inside: [0; 32],
             errors: false,
+            fd: false,
         }
     }
 
@@ -298,6 +303,12 @@ impl Interest {
     #[inline]
     pub fn wants_error_frames(&self) -> bool {
         self.errors
+    }
+
+    /// Whether CAN FD frames on wanted ids are wanted.
+    #[inline]
+    pub fn wants_fd(&self) -> bool {
+        self.fd
     }
 
     /// Wants the extended id `id`.

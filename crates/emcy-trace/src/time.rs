@@ -362,6 +362,15 @@ impl Span {
         }
     }
 
+    /// `us` microseconds (a measured period), written with six fraction
+    /// digits; negative for a negative count.
+    pub fn from_micros(us: i64) -> Span {
+        Span {
+            atto: i128::from(us) * (ATTO_PER_SEC / 1_000_000) as i128,
+            digits: 6,
+        }
+    }
+
     /// `self * num / den` (a margin on a timeout, a multiple of a period),
     /// same precision; `None` for `den == 0` or on overflow.
     pub fn scaled(self, num: i128, den: i128) -> Option<Span> {

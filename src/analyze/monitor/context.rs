@@ -369,6 +369,7 @@ impl<E: Write> Emit<'_, E> {
             match &t.bus {
                 Bus::Errors(_) => self.incidents.bus_error(&t.channel, t.at),
                 Bus::BusOff(off) => self.incidents.bus_off(&t.channel, off.node, t.at),
+                Bus::SyncMissed(_) => self.incidents.sync_missed(&t.channel, t.at),
                 _ => {}
             }
         }
@@ -377,7 +378,7 @@ impl<E: Write> Emit<'_, E> {
             let node = match &t.bus {
                 Bus::BusOff(off) => off.node,
                 Bus::Lss(l) => l.node,
-                Bus::Errors(_) | Bus::Incident(_) => None,
+                Bus::Errors(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
             };
             // An event of no node (a burst, the logging controller's
             // bus-off) is no node's: `--node` leaves it out.

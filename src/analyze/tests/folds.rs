@@ -434,6 +434,11 @@ fn incidents_are_the_same_with_folds() {
             "repeated",
             &include_bytes!("../../../fixtures/incident-repeated.log")[..],
         ),
+        // SYNC frames stay inside runs of folded heartbeats.
+        (
+            "sync gaps",
+            &include_bytes!("../../../fixtures/sync-gaps.log")[..],
+        ),
     ] {
         let (taken, _) = assert_fold_independent(name, t, &base_options());
         assert!(taken > 0, "{name}: no run was folded");

@@ -591,7 +591,7 @@ fn blocks_read_twice_too_often_fall_back_to_one_thread() {
 /// input is split).
 #[test]
 fn incidents_across_blocks() {
-    let traces: [(&str, &[u8], usize); 4] = [
+    let traces: [(&str, &[u8], usize); 5] = [
         (
             "silent producer",
             include_bytes!("../../../fixtures/incident-silent-producer.log"),
@@ -612,6 +612,12 @@ fn incidents_across_blocks() {
             include_bytes!("../../../fixtures/incident-undervoltage.log"),
             1,
         ),
+        // SYNC gaps, told at the SYNC that ends them, are incidents too.
+        (
+            "sync gaps",
+            include_bytes!("../../../fixtures/sync-gaps.log"),
+            1,
+        ),
     ];
     for (name, trace, incidents) in traces {
         assert_split_independent(name, trace);
@@ -622,4 +628,47 @@ fn incidents_across_blocks() {
             "{name}: {out}"
         );
     }
+}
+
+/// `--timing` and a bit rate, split anywhere and read on several threads:
+/// every frame counted and timed once, the same channel objects and the
+/// same events as without the flag.
+#[test]
+fn timing_across_blocks() {
+    let trace = include_bytes!("../../../fixtures/sync-gaps.log");
+    let timed = |threads, block_size| {
+        run_with(
+            trace,
+            Options {
+                threads,
+                block_size,
+                timing: true,
+                bit_rate: Some(500_000),
+                ..base_options()
+            },
+        )
+    };
+    let reference = timed(1, 1 << 20);
+    assert!(reference.0.contains("\"frames\":932"), "{}", reference.0);
+    for threads in [1, 2, 3] {
+        for block in [1, 64, 300, 4096] {
+            assert_eq!(
+                timed(threads, block),
+                reference,
+                "{threads} threads, {block}-byte blocks"
+            );
+        }
+    }
+    let without = run(trace, 1, 1 << 20).0;
+    let events = |out: &str| -> Vec<String> {
+        out.lines()
+            .filter(|l| !l.starts_with("{\"type\":\"channel\""))
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(
+        events(&reference.0),
+        events(&without),
+        "the analysis is the same"
+    );
 }

@@ -161,6 +161,24 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub incident_gap: Option<Span>,
 
+    /// Count and time every frame per channel and id: period, jitter, gaps, missed cycles
+    ///
+    /// Count and time every frame per channel and identifier: each id's period (median
+    /// interval), jitter, largest gap and missed cycles, in the `channel` objects and the
+    /// Bus table. The readers then decode every line's time, which the default path
+    /// spares (see the manual for the cost). SYNC is timed always
+    #[arg(long, help_heading = DECODING)]
+    pub timing: bool,
+
+    /// The bus's bit rate (500k, 1M, 250000): the load in percent; implies --timing
+    ///
+    /// The bus's bit rate (500k, 1M, 250000, "250 kbit/s"): the load in percent, mean and
+    /// busiest second, from each frame's bits and a worst-case stuffing estimate. Implies
+    /// --timing. Without it, a trace that records its bit rate (IXXAT) gives the load
+    /// with --timing
+    #[arg(long, value_parser = parse_bitrate, value_name = "RATE", help_heading = DECODING)]
+    pub bitrate: Option<u32>,
+
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable
     ///
     /// Vendor profile for every node (NAME) or one node (NODE=NAME); repeatable, a node's
@@ -819,6 +837,8 @@ impl DecodeArgs {
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
             heartbeat_timeout: self.heartbeat_timeout,
             incident_gap: self.incident_gap.unwrap_or(Options::default().incident_gap),
+            timing: self.timing || self.bitrate.is_some(),
+            bit_rate: self.bitrate,
             ..Options::default()
         })
         .and_then(|mut o| {
@@ -946,6 +966,12 @@ fn parse_seconds(s: &str) -> Result<Span, String> {
         ));
     }
     Ok(span)
+}
+
+/// A bit rate as people write one (`500k`, `1M`, `125000`).
+fn parse_bitrate(s: &str) -> Result<u32, String> {
+    emcy_decode::trace::parse_bit_rate(s.as_bytes())
+        .ok_or_else(|| format!("`{s}` is not a bit rate (e.g. 500k, 1M, 250000)"))
 }
 
 /// An error code in hex, with or without 0x.

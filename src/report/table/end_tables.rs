@@ -7,9 +7,10 @@ use std::io::{self, Write};
 
 use comfy_table::{CellAlignment, Table, presets};
 
-use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut, push_row, write_row};
-use super::page::{BOLD, Page};
+use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut};
+use super::page::{BOLD, Page, write_in_two_passes};
 use super::timeline::{NodeTexts, write_timeline};
+use super::traffic::{period_text, write_bus, write_timing};
 use crate::analyze::incident::Incident;
 use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport, kind_counts};
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
@@ -31,7 +32,9 @@ pub(super) fn write_end_of_input<W: Write>(
             write_incidents(page, incidents)?;
         }
         write_bus_errors(page, input)?;
-        if !input.bus_errors.is_empty() {
+        write_bus(page, input)?;
+        write_timing(page, input)?;
+        if !input.bus_errors.is_empty() || input.channels.iter().any(|c| c.frames.is_some()) {
             writeln!(page.out)?;
         }
         write_bus_line(page, input)?;
@@ -43,6 +46,8 @@ pub(super) fn write_end_of_input<W: Write>(
     write_health(page, input)?;
     write_drives(page, input)?;
     write_bus_errors(page, input)?;
+    write_bus(page, input)?;
+    write_timing(page, input)?;
 
     write_timeline(page, input)?;
     writeln!(page.out)?;
@@ -160,53 +165,6 @@ pub(super) fn write_inputs<W: Write>(page: &mut Page<W>, inputs: &[InputReport])
         &INPUTS_RIGHT,
     )?;
     page.out.flush()
-}
-
-/// An end table in two passes, widths then rows, so no table of a
-/// million rows is held: `rows` gives the rows again for each pass and
-/// `fill` puts a row's cells in `cells`, returning their display widths.
-/// `title` is written first (after a blank line with `blank`); no rows:
-/// nothing is written. A column that is `-` in every row says nothing and
-/// is left out: a terminal's width goes to the columns that say something.
-fn write_in_two_passes<W: Write, T, I, const N: usize>(
-    page: &mut Page<W>,
-    (title, blank): (&str, bool),
-    (header, right, fit): (&[&str; N], &[bool; N], &Fit),
-    rows: impl Fn() -> I,
-    mut fill: impl FnMut(&mut [String; N], T) -> [usize; N],
-) -> io::Result<()>
-where
-    I: Iterator<Item = T>,
-{
-    let mut cells: [String; N] = std::array::from_fn(|_| String::new());
-    let mut widths = header.map(str::len);
-    let mut any = false;
-    let mut said = [false; N];
-    for row in rows() {
-        any = true;
-        for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
-            *w = (*w).max(c);
-        }
-        for (s, c) in said.iter_mut().zip(&cells) {
-            *s |= c != "-";
-        }
-    }
-    if !any {
-        return Ok(());
-    }
-    let shown = page.fit_shown(&mut widths, header, fit, said);
-    if blank {
-        writeln!(page.out)?;
-    }
-    writeln!(page.out, "{}", page.paint(BOLD, title))?;
-    write_row(&mut page.out, header, &widths, &shown, right)?;
-    let mut line = String::new();
-    for row in rows() {
-        let cell_widths = fill(&mut cells, row);
-        push_row(&mut line, &cells, &cell_widths, &widths, &shown, right);
-        page.out.write_all(line.as_bytes())?;
-    }
-    Ok(())
 }
 
 /// One line per node: state, errors seen with counts, time in error,
@@ -526,6 +484,31 @@ fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Resu
             None => format!("{frames}, {} TIME stamps", t.frames),
         },
         None => frames,
+    };
+    // SYNC and the load, when one channel has them (the Bus table says
+    // each channel's).
+    let frames = match input.channels.as_slice() {
+        [one] => {
+            let mut frames = frames;
+            if let Some(sync) = one
+                .ids
+                .iter()
+                .find(|i| i.service == "sync" && i.period.is_some())
+            {
+                frames.push_str(&format!(", SYNC every {}", period_text(sync)));
+                if sync.missed > 0 {
+                    frames.push_str(&format!(" ({})", plural(sync.missed, "gap", "gaps")));
+                }
+            }
+            if let Some(l) = &one.load {
+                frames.push_str(&format!(
+                    ", load {:.1}% (peak {:.1}%)",
+                    l.mean_percent, l.peak_percent
+                ));
+            }
+            frames
+        }
+        _ => frames,
     };
     let dropped = match c.dropped {
         0 => String::new(),

@@ -306,6 +306,7 @@ impl EventLines {
             Bus::BusOff(off) => ("busoff", off.node, Some(RED)),
             Bus::Lss(l) => ("lss", l.node, None),
             Bus::Incident(_) => ("incident", None, Some(RED)),
+            Bus::SyncMissed(_) => ("sync", None, Some(YELLOW)),
         };
         self.write_tagged(
             page,
@@ -686,6 +687,24 @@ fn history_head(h: &HistoryReport) -> String {
 pub(crate) fn bus_description(bus: &Bus, times: &TimeFormat) -> String {
     match bus {
         Bus::Incident(i) => format!("incident: {}", i.summary),
+        Bus::SyncMissed(gap) => {
+            let cycles = if gap.missed == 1 { "cycle" } else { "cycles" };
+            match gap.end {
+                Some(end) => format!(
+                    "SYNC missed {} {cycles} (period {}): none from {} to {}",
+                    gap.missed,
+                    human_span(gap.period),
+                    times.show_opt(gap.start.time),
+                    times.show_opt(end.time)
+                ),
+                None => format!(
+                    "SYNC stopped: none after {} (period {}), {} {cycles} to the end",
+                    times.show_opt(gap.start.time),
+                    human_span(gap.period),
+                    gap.missed
+                ),
+            }
+        }
         Bus::Errors(b) => {
             let over = match (b.start, b.end) {
                 (Some(s), Some(e)) if b.frames > 1 => format!(" over {}", human_span(e.since(s))),

@@ -8,7 +8,7 @@
 //!
 //! Each file imports only the ones below it in this list: `mod.rs` (the
 //! [`TableReport`], whose [`Sink`] methods only dispatch), `end_tables`,
-//! `timeline`, `events`, `page`, `fit`.
+//! `traffic`, `timeline`, `events`, `page`, `fit`.
 
 use std::io::{self, Write};
 
@@ -23,6 +23,7 @@ mod events;
 mod fit;
 mod page;
 mod timeline;
+mod traffic;
 
 use events::EventLines;
 pub(crate) use events::{bus_description, health_description};

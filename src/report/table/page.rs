@@ -6,7 +6,7 @@ use std::io::{self, Write};
 
 use anstyle::{AnsiColor, Style};
 
-use super::fit::{Fit, blanks, fit_columns};
+use super::fit::{Fit, blanks, fit_columns, push_row, write_row};
 use crate::report::timefmt::TimeFormat;
 
 pub(super) const RED: Style = AnsiColor::Red.on_default().bold();
@@ -74,4 +74,51 @@ impl<W: Write> Page<W> {
         }
         shown
     }
+}
+
+/// An end table in two passes, widths then rows, so no table of a
+/// million rows is held: `rows` gives the rows again for each pass and
+/// `fill` puts a row's cells in `cells`, returning their display widths.
+/// `title` is written first (after a blank line with `blank`); no rows:
+/// nothing is written. A column that is `-` in every row says nothing and
+/// is left out: a terminal's width goes to the columns that say something.
+pub(super) fn write_in_two_passes<W: Write, T, I, const N: usize>(
+    page: &mut Page<W>,
+    (title, blank): (&str, bool),
+    (header, right, fit): (&[&str; N], &[bool; N], &Fit),
+    rows: impl Fn() -> I,
+    mut fill: impl FnMut(&mut [String; N], T) -> [usize; N],
+) -> io::Result<()>
+where
+    I: Iterator<Item = T>,
+{
+    let mut cells: [String; N] = std::array::from_fn(|_| String::new());
+    let mut widths = header.map(str::len);
+    let mut any = false;
+    let mut said = [false; N];
+    for row in rows() {
+        any = true;
+        for (w, c) in widths.iter_mut().zip(fill(&mut cells, row)) {
+            *w = (*w).max(c);
+        }
+        for (s, c) in said.iter_mut().zip(&cells) {
+            *s |= c != "-";
+        }
+    }
+    if !any {
+        return Ok(());
+    }
+    let shown = page.fit_shown(&mut widths, header, fit, said);
+    if blank {
+        writeln!(page.out)?;
+    }
+    writeln!(page.out, "{}", page.paint(BOLD, title))?;
+    write_row(&mut page.out, header, &widths, &shown, right)?;
+    let mut line = String::new();
+    for row in rows() {
+        let cell_widths = fill(&mut cells, row);
+        push_row(&mut line, &cells, &cell_widths, &widths, &shown, right);
+        page.out.write_all(line.as_bytes())?;
+    }
+    Ok(())
 }

@@ -1,0 +1,768 @@
+//! The traffic of each channel: frames and error frames, and per
+//! identifier how many frames, how regularly they came (period, jitter,
+//! largest gap, missed cycles) and, with a bit rate, the load they put on
+//! the wire.
+//!
+//! Two ways in. SYNC frames always come here: the tool follows SYNC, and a
+//! producer that skips cycles is a `sync_missed` event ([`Traffic::frame`]
+//! says when). With `--timing` every frame of the input does (the readers
+//! then decode every line's time, which the default path spares), and the
+//! channel report holds every identifier.
+//!
+//! Memory is bounded per identifier: counts, running sums and a thinned
+//! sample of at most 256 intervals for the median, nothing per frame.
+
+use crate::canopen::NodeId;
+use crate::canopen::cob_id::{self, SYNC_ID};
+use crate::timeline::At;
+use crate::trace::{FrameKind, Span, Timestamp};
+
+/// Channels followed; frames on more are counted in [`Traffic::ignored`],
+/// so a hostile input cannot grow the state without bound.
+pub(crate) const MAX_CHANNELS: usize = 256;
+
+/// Extended identifiers followed per channel, and identifiers followed
+/// over all channels; frames on more are counted in the channel's
+/// `other_ids`. An identifier holds at most about 2 KiB (its sample of
+/// intervals), so the traffic of an input stays under 40 MiB.
+pub(crate) const MAX_EXTENDED: usize = 4096;
+pub(crate) const MAX_IDS: usize = 16_384;
+
+/// A gap this many periods long (x 3/2) skipped at least one cycle.
+const MISSED_FACTOR: f64 = 1.5;
+
+/// Intervals seen before the period is trusted to call a gap a miss: the
+/// median of fewer is one odd interval away from wrong.
+const LEARN_FROM: u64 = 8;
+
+/// Load is measured over windows of this many seconds.
+const WINDOW_SECS: u64 = 1;
+
+/// The traffic of one input.
+pub(crate) struct Traffic {
+    /// `--timing`: every frame comes here, every identifier is reported.
+    every_frame: bool,
+    channels: Vec<ChannelTraffic>,
+    /// The channel of the last frame (most inputs have one).
+    last: usize,
+    /// Frames on channels past [`MAX_CHANNELS`].
+    pub(crate) ignored: u64,
+    /// Identifiers followed so far, over all channels.
+    ids: usize,
+}
+
+struct ChannelTraffic {
+    name: Box<[u8]>,
+    frames: u64,
+    error_frames: u64,
+    /// Index into `ids` plus one, by standard identifier (0: none yet).
+    standard: Box<[u16; 2048]>,
+    extended: Vec<(u32, u16)>,
+    other_ids: u64,
+    ids: Vec<IdTraffic>,
+    load: Load,
+}
+
+/// One identifier's frames on a channel.
+struct IdTraffic {
+    cob_id: u32,
+    extended: bool,
+    /// Its service is sent in cycles (SYNC, TIME, PDOs, heartbeats, and
+    /// ids outside the predefined set): it has a period, and gaps that
+    /// miss cycles. EMCY, SDO, NMT and LSS frames come when something
+    /// happens; their intervals say nothing.
+    cyclic: bool,
+    count: u64,
+    last: Option<Timestamp>,
+    /// The line of the last frame: where a missed cycle's gap began.
+    last_line: u64,
+    median: Median,
+    /// Sum of |interval - period| over the intervals that missed no cycle,
+    /// in microseconds, and how many (jitter: their mean).
+    deviation: f64,
+    regular: u64,
+    max_gap: Option<Span>,
+    missed: u64,
+}
+
+/// Bits on the wire per window of [`WINDOW_SECS`].
+#[derive(Default)]
+struct Load {
+    bits: u64,
+    /// The current window: its start, and the bits in it.
+    window: Option<(Timestamp, u64)>,
+    peak_bits: u64,
+    first: Option<Timestamp>,
+    last: Option<Timestamp>,
+}
+
+/// SYNC skipped cycles: told as a `sync_missed` event.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SyncMissed {
+    /// The last SYNC before the gap, and the one that ended it (`None`:
+    /// the gap lasted to the end of the input).
+    pub start: At,
+    pub end: Option<At>,
+    /// The period (the median interval) the gap is measured against.
+    pub period: Span,
+    /// Cycles with no SYNC: the gap over the period, less the one that
+    /// ended it.
+    pub missed: u64,
+}
+
+/// A channel's traffic over an input: the JSON `channel` object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChannelReport {
+    pub channel: String,
+    /// Every frame, error frames included (`None` without `--timing`:
+    /// only the frames the analysis decodes come through, and the others
+    /// are not told apart by channel).
+    pub frames: Option<u64>,
+    pub error_frames: u64,
+    /// Bits on the wire over the channel's span, as a percentage of the
+    /// bit rate: the mean and the busiest window; `None` without a rate.
+    pub load: Option<LoadReport>,
+    /// Every identifier, by id (with `--timing`; else SYNC).
+    pub ids: Vec<IdReport>,
+    /// Frames on identifiers past [`MAX_EXTENDED`] or [`MAX_IDS`]: counted,
+    /// not timed.
+    pub other_ids: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadReport {
+    pub bit_rate: u32,
+    pub bits: u64,
+    pub mean_percent: f64,
+    pub peak_percent: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct IdReport {
+    pub cob_id: u32,
+    pub extended: bool,
+    pub service: &'static str,
+    pub node: Option<NodeId>,
+    pub count: u64,
+    /// The median interval; `None` for a service that is not cyclic, under
+    /// [`LEARN_FROM`] intervals, or without times.
+    pub period: Option<Span>,
+    /// The mean absolute deviation of the intervals from the period, those
+    /// that missed a cycle left out.
+    pub jitter: Option<Span>,
+    pub max_gap: Option<Span>,
+    /// Gaps of more than 1.5 periods (each counted once however many
+    /// cycles it skipped).
+    pub missed: u64,
+}
+
+impl Traffic {
+    pub(crate) fn new(every_frame: bool) -> Self {
+        Traffic {
+            every_frame,
+            channels: Vec::new(),
+            last: 0,
+            ignored: 0,
+            ids: 0,
+        }
+    }
+
+    /// Whether a frame on this id comes here.
+    #[inline]
+    pub(crate) fn wants(&self, id: u32, extended: bool) -> bool {
+        self.every_frame || (id == SYNC_ID && !extended)
+    }
+
+    fn channel(&mut self, name: &[u8]) -> Option<&mut ChannelTraffic> {
+        let i = match self.channels.get(self.last) {
+            Some(c) if *c.name == *name => self.last,
+            _ => match self.channels.iter().position(|c| *c.name == *name) {
+                Some(i) => i,
+                None if self.channels.len() < MAX_CHANNELS => {
+                    self.channels.push(ChannelTraffic::new(name));
+                    self.channels.len() - 1
+                }
+                None => {
+                    self.ignored += 1;
+                    return None;
+                }
+            },
+        };
+        self.last = i;
+        self.channels.get_mut(i)
+    }
+
+    /// An error frame on `channel`: always counted (the analysis decodes
+    /// every error frame); with `--timing` also a frame on the wire.
+    pub(crate) fn error_frame(&mut self, channel: &[u8], time: Option<Timestamp>) {
+        let every_frame = self.every_frame;
+        if let Some(c) = self.channel(channel) {
+            c.error_frames += 1;
+            if every_frame {
+                c.frames += 1;
+                c.load.frame(time, bits(false, FrameKind::Error, 0));
+            }
+        }
+    }
+
+    /// A frame ([`Traffic::wants`] said yes). A SYNC that ends a gap of
+    /// missed cycles gives the event to tell.
+    #[inline]
+    pub(crate) fn frame(
+        &mut self,
+        channel: &[u8],
+        id: u32,
+        extended: bool,
+        kind: FrameKind,
+        len: u8,
+        at: At,
+    ) -> Option<SyncMissed> {
+        let every_frame = self.every_frame;
+        let room = self.ids < MAX_IDS;
+        let c = self.channel(channel)?;
+        if every_frame {
+            c.frames += 1;
+            c.load.frame(at.time, bits(extended, kind, len));
+        }
+        let known = c.ids.len();
+        let i = c.id(id, extended, room)?;
+        let made = c.ids.len() - known;
+        let t = c.ids.get_mut(i)?;
+        t.count += 1;
+        let missed = t.interval(at);
+        self.ids += made;
+        (id == SYNC_ID && !extended).then_some(missed).flatten()
+    }
+
+    /// The end of the input at `end` (the last frame's time): a SYNC
+    /// producer silent since more than 1.5 periods before it stopped.
+    pub(crate) fn finish(&mut self, end: Option<Timestamp>) -> Vec<(String, SyncMissed)> {
+        let mut out = Vec::new();
+        let Some(end) = end else {
+            return out;
+        };
+        for c in &mut self.channels {
+            let Some(&i) = c.standard.get(SYNC_ID as usize) else {
+                continue;
+            };
+            let Some(t) = (i as usize).checked_sub(1).and_then(|i| c.ids.get_mut(i)) else {
+                continue;
+            };
+            if let Some(missed) = t.silent_until(end) {
+                out.push((String::from_utf8_lossy(&c.name).into_owned(), missed));
+            }
+        }
+        out
+    }
+
+    /// The channels' reports, in the order they first had a frame;
+    /// `bit_rate` from `--bitrate` or the trace's header.
+    pub(crate) fn into_report(self, bit_rate: Option<u32>) -> Vec<ChannelReport> {
+        self.channels
+            .into_iter()
+            .map(|c| c.into_report(bit_rate, self.every_frame))
+            .collect()
+    }
+}
+
+impl ChannelTraffic {
+    fn new(name: &[u8]) -> Self {
+        ChannelTraffic {
+            name: name.into(),
+            frames: 0,
+            error_frames: 0,
+            standard: Box::new([0; 2048]),
+            extended: Vec::new(),
+            other_ids: 0,
+            ids: Vec::new(),
+            load: Load::default(),
+        }
+    }
+
+    /// The index in `ids` of `id`'s traffic, made when `room` allows.
+    #[inline]
+    fn id(&mut self, id: u32, extended: bool, room: bool) -> Option<usize> {
+        let slot = if extended {
+            match self.extended.binary_search_by_key(&id, |e| e.0) {
+                Ok(i) => self.extended.get(i).map(|e| e.1),
+                Err(i) if room && self.extended.len() < MAX_EXTENDED => {
+                    let slot = self.new_id(id, true);
+                    self.extended.insert(i, (id, slot));
+                    Some(slot)
+                }
+                Err(_) => None,
+            }
+        } else {
+            match self.standard.get(id as usize).copied() {
+                Some(0) if room => {
+                    let slot = self.new_id(id, false);
+                    if let Some(s) = self.standard.get_mut(id as usize) {
+                        *s = slot;
+                    }
+                    Some(slot)
+                }
+                Some(0) | None => None,
+                Some(slot) => Some(slot),
+            }
+        };
+        match slot {
+            Some(slot) => Some(usize::from(slot) - 1),
+            None => {
+                self.other_ids += 1;
+                None
+            }
+        }
+    }
+
+    /// A new identifier's slot (its index in `ids` plus one); at most
+    /// 2048 + [`MAX_EXTENDED`] of them, so it fits.
+    fn new_id(&mut self, cob_id: u32, extended: bool) -> u16 {
+        let (service, _) = cob_id::service(cob_id, extended);
+        self.ids.push(IdTraffic {
+            cob_id,
+            extended,
+            cyclic: !matches!(
+                service,
+                "emcy" | "sdo_request" | "sdo_response" | "nmt" | "lss_request" | "lss_response"
+            ),
+            count: 0,
+            last: None,
+            last_line: 0,
+            median: Median::default(),
+            deviation: 0.0,
+            regular: 0,
+            max_gap: None,
+            missed: 0,
+        });
+        self.ids.len() as u16
+    }
+
+    fn into_report(mut self, bit_rate: Option<u32>, every_frame: bool) -> ChannelReport {
+        self.ids.sort_by_key(|t| (t.extended, t.cob_id));
+        ChannelReport {
+            channel: String::from_utf8_lossy(&self.name).into_owned(),
+            frames: every_frame.then_some(self.frames),
+            error_frames: self.error_frames,
+            load: bit_rate
+                .filter(|_| every_frame)
+                .and_then(|rate| self.load.report(rate)),
+            ids: self.ids.iter().map(IdTraffic::report).collect(),
+            other_ids: self.other_ids,
+        }
+    }
+}
+
+impl IdTraffic {
+    /// The interval since the last frame, into the statistics; a gap of
+    /// missed cycles once the period is known.
+    #[inline]
+    fn interval(&mut self, at: At) -> Option<SyncMissed> {
+        let now = at.time?;
+        let last = self.last.replace(now);
+        let start = At {
+            time: last,
+            line: std::mem::replace(&mut self.last_line, at.line),
+        };
+        let gap = now.since(last?);
+        if gap.is_negative() {
+            return None;
+        }
+        if self.max_gap.is_none_or(|m| gap > m) {
+            self.max_gap = Some(gap);
+        }
+        let us = micros(gap);
+        if !self.cyclic {
+            return None;
+        }
+        let period = self.median.current();
+        self.median.push(us);
+        let period = period.filter(|p| *p > 0.0)?;
+        if us > MISSED_FACTOR * period {
+            self.missed += 1;
+            return Some(SyncMissed {
+                start,
+                end: Some(at),
+                period: Span::from_micros(period.round() as i64),
+                missed: ((us / period).round() as u64).saturating_sub(1).max(1),
+            });
+        }
+        self.deviation += (us - period).abs();
+        self.regular += 1;
+        None
+    }
+
+    /// Silent from the last frame to `end` for more than 1.5 periods.
+    fn silent_until(&mut self, end: Timestamp) -> Option<SyncMissed> {
+        let last = self.last?;
+        let period = self.median.current()?;
+        let us = micros(end.since(last));
+        (period > 0.0 && us > MISSED_FACTOR * period).then(|| {
+            self.missed += 1;
+            SyncMissed {
+                start: At {
+                    time: Some(last),
+                    line: self.last_line,
+                },
+                end: None,
+                period: Span::from_micros(period.round() as i64),
+                // The cycles due before the end, the one at it not yet.
+                missed: ((us / period).round() as u64).saturating_sub(1).max(1),
+            }
+        })
+    }
+
+    fn report(&self) -> IdReport {
+        let (service, node) = cob_id::service(self.cob_id, self.extended);
+        // Under LEARN_FROM intervals no period is trusted: said as none.
+        let period = (self.cyclic && self.median.count >= LEARN_FROM).then(|| self.median.value());
+        IdReport {
+            cob_id: self.cob_id,
+            extended: self.extended,
+            service,
+            node,
+            count: self.count,
+            period: period.map(|p| Span::from_micros(p.round() as i64)),
+            jitter: (self.regular > 0)
+                .then(|| Span::from_micros((self.deviation / self.regular as f64).round() as i64)),
+            max_gap: self.max_gap,
+            missed: self.missed,
+        }
+    }
+}
+
+/// A span in microseconds, for the statistics (exact to well under a
+/// microsecond for any gap a trace can hold).
+fn micros(s: Span) -> f64 {
+    s.attos() as f64 / 1e12
+}
+
+impl Load {
+    #[inline]
+    fn frame(&mut self, time: Option<Timestamp>, bits: u64) {
+        self.bits += bits;
+        let Some(t) = time else {
+            return;
+        };
+        self.first.get_or_insert(t);
+        self.last = Some(t);
+        match &mut self.window {
+            Some((start, n)) if t.secs() < start.secs() + WINDOW_SECS && t >= *start => *n += bits,
+            w => {
+                if let Some((_, n)) = w {
+                    self.peak_bits = self.peak_bits.max(*n);
+                }
+                *w = Some((t, bits));
+            }
+        }
+    }
+
+    fn report(&self, bit_rate: u32) -> Option<LoadReport> {
+        let rate = f64::from(bit_rate);
+        let span = match (self.first, self.last) {
+            (Some(a), Some(b)) => b.since(a).as_f64(),
+            _ => 0.0,
+        };
+        let peak = self.peak_bits.max(self.window.map_or(0, |w| w.1));
+        // A span under a window is measured as one window.
+        let secs = span.max(WINDOW_SECS as f64);
+        Some(LoadReport {
+            bit_rate,
+            bits: self.bits,
+            mean_percent: 100.0 * self.bits as f64 / (rate * secs),
+            peak_percent: 100.0 * peak as f64 / (rate * WINDOW_SECS as f64),
+        })
+    }
+}
+
+/// The bits a frame puts on the wire at the nominal bit rate: its fields
+/// (ISO 11898-1) and the most stuff bits they can need, one per four bits
+/// of the stuffed part after the first (start of frame to CRC). Real
+/// frames need fewer, so load is an upper bound, within about 10% of the
+/// truth for typical data. CAN FD frames are counted at the nominal rate
+/// too (the trace does not say the data phase's): an upper bound again.
+pub(crate) fn bits(extended: bool, kind: FrameKind, len: u8) -> u64 {
+    let data = match kind {
+        FrameKind::Remote | FrameKind::Error => 0,
+        FrameKind::Data => 8 * u64::from(len.min(8)),
+        FrameKind::Fd => 8 * u64::from(len.min(64)),
+    };
+    if kind == FrameKind::Error {
+        // An error flag (6 bits, up to 12 with the others' echo) and the
+        // error delimiter (8), then intermission (3).
+        return 23;
+    }
+    // Arbitration and control: SOF, id, RTR or SRR/IDE/RTR, IDE/r0, DLC.
+    let head = if extended { 39 } else { 19 };
+    let crc = match kind {
+        FrameKind::Fd if len > 16 => 21 + 5,
+        FrameKind::Fd => 17 + 4,
+        _ => 15,
+    };
+    let stuffed = head + data + crc;
+    // CRC delimiter, ACK slot and delimiter, end of frame, intermission.
+    let tail = 1 + 2 + 7 + 3;
+    stuffed + (stuffed - 1) / 4 + tail
+}
+
+/// Intervals kept for the median: when full, every other is dropped and
+/// from then on only every other interval is kept (then every fourth, ...),
+/// so the sample spreads evenly over the whole input in bounded memory.
+const SAMPLE: usize = 256;
+
+/// The median of a stream of intervals, from an evenly thinned sample of
+/// them: exact for a steady period (every kept value is the period), and
+/// robust to the gaps and bursts a real bus has. The period a new interval
+/// is judged against is the median of the first [`LEARN_FROM`], then of
+/// the sample each time it is thinned (sorting 256 values once per 128 or
+/// more intervals).
+#[derive(Default)]
+struct Median {
+    count: u64,
+    sample: Vec<f64>,
+    /// Keep one interval in this many; `skip` more to pass over first.
+    stride: u64,
+    skip: u64,
+    current: Option<f64>,
+}
+
+impl Median {
+    fn push(&mut self, x: f64) {
+        self.count += 1;
+        if self.skip > 0 {
+            self.skip -= 1;
+            return;
+        }
+        self.stride = self.stride.max(1);
+        self.skip = self.stride - 1;
+        self.sample.push(x);
+        if self.sample.len() == LEARN_FROM as usize && self.current.is_none() {
+            self.current = Some(median(&mut self.sample.clone()));
+        }
+        if self.sample.len() >= SAMPLE {
+            let mut i = 0;
+            self.sample.retain(|_| {
+                i += 1;
+                i % 2 == 1
+            });
+            self.stride *= 2;
+            self.skip = self.stride - 1;
+            self.current = Some(median(&mut self.sample.clone()));
+        }
+    }
+
+    /// The period new intervals are judged against, once learnt.
+    fn current(&self) -> Option<f64> {
+        self.current
+    }
+
+    /// The median of the sample.
+    fn value(&self) -> f64 {
+        median(&mut self.sample.clone())
+    }
+}
+
+/// The median of `values` (reordered); zero for none.
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_unstable_by(f64::total_cmp);
+    let n = values.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => values[n / 2],
+        _ => (values[n / 2 - 1] + values[n / 2]) / 2.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn at(ms: u64, line: u64) -> At {
+        At {
+            time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
+            line,
+        }
+    }
+
+    #[test]
+    fn frame_bits_by_iso_11898() {
+        // 8 data bytes, standard id: 19 + 64 + 15 = 98 stuffed bits, at
+        // most 24 stuff bits, 13 after: 135 (the usual worst case).
+        assert_eq!(bits(false, FrameKind::Data, 8), 135);
+        // Empty standard frame: 34 stuffed, 8 stuff, 13: 55.
+        assert_eq!(bits(false, FrameKind::Data, 0), 55);
+        // Extended with 8 bytes: 39 + 64 + 15 = 118, 29 stuff, 13: 160.
+        assert_eq!(bits(true, FrameKind::Data, 8), 160);
+        assert_eq!(bits(false, FrameKind::Remote, 8), 55, "no data bits");
+        assert_eq!(bits(false, FrameKind::Data, 200), 135, "at most 8 bytes");
+        assert_eq!(bits(false, FrameKind::Error, 8), 23);
+        assert!(bits(false, FrameKind::Fd, 64) > bits(false, FrameKind::Fd, 16));
+    }
+
+    #[test]
+    fn the_median_of_few_values_is_exact() {
+        let mut m = Median::default();
+        assert_eq!(m.value(), 0.0);
+        for (x, want) in [(5.0, 5.0), (1.0, 3.0), (9.0, 5.0), (3.0, 4.0), (7.0, 5.0)] {
+            m.push(x);
+            assert_eq!(m.value(), want);
+        }
+        assert_eq!(m.current(), None, "judged by nothing before 8 intervals");
+    }
+
+    #[test]
+    fn the_sample_is_thinned_evenly_and_stays_bounded() {
+        let mut m = Median::default();
+        // A period that changes halfway: the median sees both halves.
+        for i in 0..100_000u32 {
+            m.push(if i < 60_000 { 100.0 } else { 200.0 });
+            assert!(m.sample.len() < SAMPLE);
+        }
+        assert_eq!(m.value(), 100.0);
+        assert_eq!(m.current(), Some(100.0));
+        assert!(m.sample.contains(&200.0), "the later half is sampled");
+    }
+
+    proptest! {
+        #[test]
+        fn the_median_finds_a_period_among_jitter_and_gaps(
+            period in 1_000u32..2_000_000,
+            jitter in proptest::collection::vec(-50i32..50, 50..400),
+            gaps in proptest::collection::vec(0usize..400, 0..5),
+        ) {
+            let mut m = Median::default();
+            for (i, j) in jitter.iter().enumerate() {
+                let mut x = f64::from(period) + f64::from(*j);
+                if gaps.contains(&i) {
+                    x *= 3.0;
+                }
+                m.push(x);
+            }
+            let err = (m.value() - f64::from(period)).abs();
+            prop_assert!(err <= 50.0, "{} for {}", m.value(), period);
+            if jitter.iter().all(|j| *j == 0) {
+                prop_assert_eq!(m.value(), f64::from(period), "a steady period is exact");
+            }
+        }
+    }
+
+    #[test]
+    fn sync_gaps_are_told_once_per_gap() {
+        let mut t = Traffic::new(false);
+        let sync = |t: &mut Traffic, ms, line| {
+            t.frame(b"can0", SYNC_ID, false, FrameKind::Data, 0, at(ms, line))
+        };
+        let mut told = Vec::new();
+        let mut ms = 0;
+        for line in 1..=20 {
+            told.extend(sync(&mut t, ms, line));
+            ms += 10;
+        }
+        assert!(told.is_empty(), "a steady 10 ms SYNC: {told:?}");
+        // Three cycles skipped: one event, three missed.
+        ms += 30;
+        let gap = sync(&mut t, ms, 21).expect("a gap of 40 ms");
+        assert_eq!(gap.missed, 3);
+        assert_eq!(gap.period, Span::from_micros(10_000));
+        assert_eq!(gap.start, at(ms - 40, 20));
+        assert_eq!(gap.end, Some(at(ms, 21)));
+        // 14 ms is under 1.5 periods: late, not missed.
+        ms += 14;
+        assert_eq!(sync(&mut t, ms, 22), None);
+        // Silent to the end of the input.
+        let end = Timestamp::from_parts((ms + 100) / 1000, (ms + 100) % 1000, 3);
+        let at_end = t.finish(Some(end));
+        assert_eq!(at_end.len(), 1);
+        assert_eq!(at_end[0].1.end, None);
+        assert_eq!(at_end[0].1.missed, 9);
+        let report = t.into_report(Some(500_000));
+        assert_eq!(report[0].frames, None, "not counted without --timing");
+        let sync = &report[0].ids[0];
+        assert_eq!((sync.service, sync.count, sync.missed), ("sync", 22, 2));
+        assert_eq!(sync.max_gap, Some(Span::from_millis(40)));
+        assert!(report[0].load.is_none(), "no bits counted, no load");
+    }
+
+    #[test]
+    fn without_timing_only_sync_comes_and_nothing_is_loaded() {
+        let t = Traffic::new(false);
+        assert!(t.wants(SYNC_ID, false));
+        assert!(!t.wants(SYNC_ID, true));
+        assert!(!t.wants(0x181, false));
+        assert!(Traffic::new(true).wants(0x181, false));
+    }
+
+    #[test]
+    fn load_is_bits_over_the_bit_rate_per_window() {
+        let mut t = Traffic::new(true);
+        // 100 frames of 8 bytes in each of two seconds, 200 in a third.
+        let mut line = 0;
+        for (second, n) in [(0, 100), (1, 100), (2, 200)] {
+            for i in 0..n {
+                line += 1;
+                let ms = second * 1000 + i * 1000 / n;
+                t.frame(b"can0", 0x181, false, FrameKind::Data, 8, at(ms, line));
+            }
+        }
+        t.error_frame(b"can0", None);
+        let report = t.into_report(Some(125_000));
+        let c = &report[0];
+        assert_eq!((c.frames, c.error_frames), (Some(401), 1));
+        let load = c.load.expect("a bit rate");
+        assert_eq!(load.bits, 400 * 135 + 23);
+        // The busiest second: 200 x 135 bits of 125 000.
+        assert!((load.peak_percent - 21.6).abs() < 0.01, "{load:?}");
+        assert!(load.mean_percent < load.peak_percent);
+        let id = &c.ids[0];
+        assert_eq!(
+            (id.cob_id, id.service, id.node, id.count),
+            (0x181, "tpdo1", Some(1), 400)
+        );
+    }
+
+    #[test]
+    fn channels_and_extended_ids_are_bounded() {
+        let mut t = Traffic::new(true);
+        for i in 0..(MAX_CHANNELS as u32 + 3) {
+            let name = format!("can{i}");
+            t.frame(name.as_bytes(), 1, false, FrameKind::Data, 0, at(0, 1));
+        }
+        assert_eq!(t.ignored, 3);
+        let mut t = Traffic::new(true);
+        for id in 0..(MAX_EXTENDED as u32 + 2) {
+            t.frame(b"can0", id, true, FrameKind::Data, 0, at(0, 1));
+        }
+        let r = t.into_report(None);
+        assert_eq!(r[0].ids.len(), MAX_EXTENDED);
+        assert_eq!(r[0].other_ids, 2);
+        assert_eq!(r[0].frames, Some(MAX_EXTENDED as u64 + 2));
+    }
+}
+
+#[cfg(test)]
+mod event_driven {
+    use super::*;
+
+    #[test]
+    fn event_driven_services_have_no_period_and_miss_nothing() {
+        let mut t = Traffic::new(true);
+        for (i, ms) in [0u64, 10, 20, 30, 40, 50, 60, 70, 80, 90, 500]
+            .iter()
+            .enumerate()
+        {
+            let at = At {
+                time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
+                line: i as u64 + 1,
+            };
+            t.frame(b"can0", 0x085, false, FrameKind::Data, 8, at);
+            t.frame(b"can0", 0x185, false, FrameKind::Data, 8, at);
+        }
+        let r = t.into_report(None);
+        let emcy = &r[0].ids[0];
+        assert_eq!((emcy.service, emcy.period, emcy.missed), ("emcy", None, 0));
+        assert_eq!(emcy.max_gap, Some(Span::from_millis(410)));
+        let pdo = &r[0].ids[1];
+        assert_eq!((pdo.service, pdo.missed), ("tpdo1", 1));
+        assert_eq!(pdo.period, Some(Span::from_micros(10_000)));
+    }
+}
