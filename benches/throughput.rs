@@ -415,6 +415,14 @@ fn main() {
         if !label.starts_with("pcapng") && !label.starts_with("MF4") {
             cases.push(("ndjson -j1", vec!["--format", "ndjson", "-j1", &f]));
         }
+        // Every frame counted and timed per id: its cost against the
+        // default's on the same file (a build without the flag gets no row).
+        if label == "candump log" || label.starts_with("bus:") {
+            cases.push((
+                "ndjson --timing",
+                vec!["--format", "ndjson", "--timing", &f],
+            ));
+        }
         if label == DRIVES || label.starts_with("bus:") {
             let assume = "--assume-cia402-pdo";
             cases.push(("ndjson axis", vec!["--format", "ndjson", assume, &f]));

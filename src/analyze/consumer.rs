@@ -470,10 +470,10 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         Ok(())
     }
 
-    /// A frame for the channel's traffic ([`Traffic::wants`]): counted and
-    /// timed there, a gap in SYNC told. `true` when that is all the frame
-    /// is for (SYNC, and with `--timing` any frame the analysis does not
-    /// decode): it is then counted as a frame, and nothing else happens.
+    /// A frame for the channel's traffic (`--timing`): counted and timed
+    /// there, a gap in SYNC told. `true` when that is all the frame is for
+    /// (one the analysis does not decode, SYNC among them): it is then
+    /// counted as a frame, and nothing else happens.
     fn traffic(&mut self, idx: u64, frame: &Frame<'_>) -> Result<bool, OutputError> {
         let line = self.line_no(idx);
         let at = At {
@@ -598,9 +598,8 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
     }
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
-        let only_traffic = frame.kind != FrameKind::Error
-            && self.traffic.wants(frame.id, frame.extended)
-            && self.traffic(idx, frame)?;
+        let only_traffic =
+            frame.kind != FrameKind::Error && self.traffic.wants() && self.traffic(idx, frame)?;
         // Heartbeats are the most frequent frames decoded.
         if !only_traffic && foreign.is_none() && self.steady_heartbeat(idx, frame) {
             return Ok(());

@@ -10,7 +10,6 @@ use super::analysis::OutputError;
 use super::classify::{FoldedRun, LineSink};
 use super::consumer::Consumer;
 use super::monitor::{NmtMonitor, TakenFold};
-use crate::canopen::cob_id::SYNC_ID;
 use crate::canopen::nmt;
 use crate::timeline::At;
 use crate::trace::{Frame, FrameKind, Inner, Payload, Timestamp};
@@ -59,12 +58,10 @@ impl<E: Write> Consumer<'_, '_, E> {
             .iter()
             .all(|f| nmt::error_control_node(f.id).is_some())
             && run.inner.iter().all(|i| {
-                // SYNC only counts and times itself (`Consumer::traffic`).
-                i.id() == SYNC_ID
-                    || self.wanted.interest.wants(i.id(), false)
-                        && self.facts.emcy_node(i.id(), false).is_some()
-                        && drive.slot(i.id(), false).is_none()
-                        && !drive.watches(i.id())
+                self.wanted.interest.wants(i.id(), false)
+                    && self.facts.emcy_node(i.id(), false).is_some()
+                    && drive.slot(i.id(), false).is_none()
+                    && !drive.watches(i.id())
             })
     }
 

@@ -6,7 +6,6 @@ use std::sync::{Arc, RwLock};
 
 use super::options::Options;
 use crate::canopen::cia402;
-use crate::canopen::cob_id;
 use crate::canopen::emcy;
 use crate::canopen::nmt;
 use crate::canopen::pdo;
@@ -26,8 +25,6 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     let requests = sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127;
     i.add_standard_range(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
     i.add_standard(nmt::COMMAND_ID);
-    // SYNC: timed per frame, for its period and the cycles it skips.
-    i.add_standard(cob_id::SYNC_ID);
     for ids in [nmt.clone(), responses, requests] {
         i.add_standard_range(ids.clone());
         i.filter_content(ids, filter);
@@ -39,7 +36,6 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     if folding() {
         i.fold(nmt);
         i.keep_inside(emcy::FIRST_EMCY_ID..=emcy::LAST_EMCY_ID);
-        i.keep_inside(cob_id::SYNC_ID..=cob_id::SYNC_ID);
     }
     for e in &opts.emcy_ids {
         add_emcy_id(&mut i, e.id, e.extended);

@@ -58,7 +58,8 @@ fn every_busmaster_fixture_decodes_like_the_candump_log() {
         if scenario == "canopennode" {
             // Its first line is SYNC in decimal (`0128`), which the
             // candump twin lacks: timed as SYNC, not read as an EMCY.
-            let sync: Vec<_> = bm
+            let timed = ndjson(&[flags, &["--timing", bm_path.as_str()]].concat());
+            let sync: Vec<_> = timed
                 .iter()
                 .filter(|o| o["type"] == "channel")
                 .flat_map(|o| o["ids"].as_array().cloned().unwrap_or_default())

@@ -36,6 +36,8 @@ pub(crate) fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
         "cia402-dcf" => &["--dcf", "5=fixtures/cia402-drive.dcf"],
         // Nodes 3 and 7 are no drives by their device type.
         "cia402-not-drive" => &["--assume-cia402-pdo"],
+        // SYNC's gaps, every id's timing and the load need --timing.
+        "sync-gaps" => &["--bitrate", "500k"],
         _ => &[],
     }
 }

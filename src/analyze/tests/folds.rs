@@ -434,7 +434,7 @@ fn incidents_are_the_same_with_folds() {
             "repeated",
             &include_bytes!("../../../fixtures/incident-repeated.log")[..],
         ),
-        // SYNC frames stay inside runs of folded heartbeats.
+        // Heartbeats among a 1 kHz SYNC and its PDOs.
         (
             "sync gaps",
             &include_bytes!("../../../fixtures/sync-gaps.log")[..],
