@@ -86,7 +86,11 @@ pub(super) fn style_sheet(panels: &[&Panel]) -> String {
         .iter()
         .flat_map(|p| p.shades.iter().copied())
         .collect();
-    chart::style_sheet(&shades, panels.iter().any(|p| p.drives))
+    chart::style_sheet(
+        &shades,
+        panels.iter().any(|p| p.drives),
+        panels.iter().any(|p| p.bus),
+    )
 }
 
 /// `EMCY timeline: a.log, b.asc`.

@@ -1,6 +1,6 @@
 //! The bus's traffic through the command line, on the SYNC fixture
-//! (scripts/make_sync_fixtures.py): SYNC timed always and its gaps told
-//! once each, every identifier with `--timing`, the load with a bit rate
+//! (scripts/make_sync_fixtures.py), with `--timing`: SYNC's gaps told once
+//! each, every identifier counted and timed, the load with a bit rate
 //! given or recorded, and the same result on one thread and on two (split
 //! anywhere: `analyze::tests::parallel`; folded or not:
 //! `analyze::tests::folds`).
@@ -23,8 +23,8 @@ fn id(channel: &Value, cob_id: u64) -> &Value {
 }
 
 #[test]
-fn sync_gaps_are_events_once_per_gap_without_any_flag() {
-    let objects = ndjson([TRACE]);
+fn sync_gaps_are_events_once_per_gap() {
+    let objects = ndjson(["--timing", TRACE]);
     let gaps = of_type(&objects, "sync_missed");
     assert_eq!(gaps.len(), 2, "{gaps:?}");
     // Four cycles skipped, ended by the SYNC at 1.05 s.
@@ -37,12 +37,10 @@ fn sync_gaps_are_events_once_per_gap_without_any_flag() {
     assert!(gaps[1]["end"].is_null());
     assert_eq!(gaps[1]["start_text"], "2023-11-14T22:13:21.800000Z");
     assert_eq!(gaps[1]["missed"], 39);
-    // The channel object: SYNC only, no frame count, no load.
     let channels = of_type(&objects, "channel");
     assert_eq!(channels.len(), 1);
     let c = channels[0];
-    assert!(c["frames"].is_null() && c["load"].is_null());
-    assert_eq!(c["ids"].as_array().map(Vec::len), Some(1));
+    assert!(c["load"].is_null(), "no bit rate");
     let sync = id(c, 0x80);
     assert_eq!(sync["service"], "sync");
     assert_eq!(sync["count"], 177);
@@ -50,11 +48,16 @@ fn sync_gaps_are_events_once_per_gap_without_any_flag() {
     assert_eq!(sync["max_gap"].as_f64(), Some(0.05));
     // The input object stays the last line.
     assert_eq!(objects.last().unwrap()["type"], "input");
+    // Without --timing SYNC is not followed: no gaps, no channel object
+    // (the trace has no error frames).
+    let plain = ndjson([TRACE]);
+    assert!(of_type(&plain, "sync_missed").is_empty());
+    assert!(of_type(&plain, "channel").is_empty());
 }
 
 #[test]
 fn the_sync_error_follows_from_the_gap_in_its_incident() {
-    let objects = ndjson([TRACE]);
+    let objects = ndjson(["--timing", TRACE]);
     let incidents = of_type(&objects, "incident");
     assert_eq!(incidents.len(), 1);
     let i = incidents[0];
@@ -103,11 +106,17 @@ fn timing_counts_and_times_every_identifier() {
     assert_eq!(heartbeat["missed"], 0);
     let emcy = id(c, 0x82);
     assert!(emcy["period"].is_null(), "an EMCY is no cycle");
-    // The analysis is the same with and without --timing.
+    // The analysis is the same with and without --timing, but for what
+    // SYNC's gaps add.
     let plain = ndjson([TRACE]);
     let events = |o: &[Value]| -> Vec<Value> {
         o.iter()
-            .filter(|v| !matches!(v["type"].as_str(), Some("channel")))
+            .filter(|v| {
+                !matches!(
+                    v["type"].as_str(),
+                    Some("channel" | "sync_missed" | "incident")
+                )
+            })
             .cloned()
             .collect()
     };
@@ -176,11 +185,39 @@ fn the_tables_say_the_bus() {
         text.contains("bus: 932 frames, SYNC every 10 ms (2 gaps), load 8.6% (peak 10.6%)"),
         "{text}"
     );
-    // Without --timing, no Timing table; the Bus table still says SYNC.
+    // Without --timing, neither table.
     let out = emcy_decode().arg(TRACE).output().unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
-        !text.contains("\nTiming\n") && text.contains("\nBus\n"),
+        !text.contains("\nTiming\n") && !text.contains("\nBus\n"),
         "{text}"
     );
+}
+
+#[test]
+fn the_chart_has_a_bus_strip_where_the_bus_had_trouble() {
+    let svg = |args: &[&str]| {
+        let out = emcy_decode()
+            .args(["--format", "svg"])
+            .args(args)
+            .output()
+            .unwrap();
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let count =
+        |text: &str, class: &str| text.matches(&format!("<rect class=\"{class}\" x=")).count();
+    // Three bursts, three bus-offs (two nodes', the controller's).
+    let bus_off = svg(&["fixtures/bus-off.log"]);
+    assert_eq!((count(&bus_off, "be"), count(&bus_off, "bo")), (3, 3));
+    assert!(
+        bus_off.contains(">error frames<"),
+        "the legend names the bands"
+    );
+    assert!(bus_off.contains(".ec .bus .bo{"), "the strip's style");
+    // SYNC's two gaps, with --timing only.
+    assert_eq!(count(&svg(&["--timing", TRACE]), "sg"), 2);
+    assert_eq!(count(&svg(&[TRACE]), "sg"), 0);
+    // A quiet bus: no strip, no style for it.
+    let quiet = svg(&["fixtures/s300.log"]);
+    assert!(!quiet.contains("class=\"bus\"") && !quiet.contains(".ec .bus"));
 }

@@ -127,11 +127,14 @@ pub(super) fn write_panel(
         )?;
         return Ok(LANES_TOP + 32.0);
     }
+    // The bus's strip, when the bus had anything to show, above the lanes.
+    let bus_h = if streamed.bus.is_empty() { 0.0 } else { BUS_H };
+    let lanes_top = LANES_TOP + bus_h;
     let lanes_h: f64 = lanes.iter().map(|l| l.height).sum();
-    let time_scale_y = LANES_TOP + lanes_h;
+    let time_scale_y = lanes_top + lanes_h;
 
     // Alternate lane backgrounds, then the grid over them, then the lanes.
-    let mut y = LANES_TOP;
+    let mut y = lanes_top;
     for (i, lane) in lanes.iter().enumerate() {
         if i % 2 == 0 {
             writeln!(
@@ -145,15 +148,92 @@ pub(super) fn write_panel(
         y += lane.height;
     }
     write_time_scale(out, clock, scale, time_scale_y)?;
-    let mut y = LANES_TOP;
+    write_bus_strip(out, clock, scale, streamed)?;
+    let mut y = lanes_top;
     for lane in lanes {
         write_lane(out, clock, scale, lane, keys, y)?;
         y += lane.height;
     }
     write_incident_bands(out, clock, scale, streamed, time_scale_y)?;
     let incidents = !streamed.incidents.is_empty();
-    let legend_h = write_legend(out, lanes, keys, incidents, time_scale_y + 44.0)?;
+    let mut bus = [false; 3];
+    for m in &streamed.bus {
+        if let Some(i) = BUS_KEYS.iter().position(|(class, _)| *class == m.class) {
+            bus[i] = true;
+        }
+    }
+    let legend_h = write_legend(out, lanes, keys, (incidents, bus), time_scale_y + 44.0)?;
     Ok(time_scale_y + 44.0 + legend_h)
+}
+
+/// The height of the bus strip above the lanes.
+const BUS_H: f64 = 16.0;
+
+/// The bus strip's bands: CSS class and what the legend calls them.
+const BUS_KEYS: [(&str, &str); 3] = [
+    ("be", "error frames"),
+    ("bo", "bus-off"),
+    ("sg", "SYNC gap"),
+];
+
+/// The bus strip: its label and a band per burst of error frames, bus-off
+/// and SYNC gap (at least 2 px; one still going at the end runs to it),
+/// each with its tooltip.
+fn write_bus_strip(
+    out: &mut String,
+    clock: &Clock,
+    scale: Scale,
+    streamed: &Streamed,
+) -> fmt::Result {
+    if streamed.bus.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "<g class=\"bus\" transform=\"translate(0,{})\">",
+        N(LANES_TOP)
+    )?;
+    let label = match streamed.bus_not_drawn {
+        0 => "bus".to_string(),
+        n => format!("bus ({n} more not drawn)"),
+    };
+    writeln!(
+        out,
+        "<text class=\"lbl2\" x=\"10\" y=\"{}\">{}</text>",
+        N(BUS_H / 2.0 + 4.0),
+        esc(&label)
+    )?;
+    for m in &streamed.bus {
+        let Some(a) = clock.value(&m.start) else {
+            continue;
+        };
+        let b = match &m.end {
+            Some(end) => clock.value(end).unwrap_or(a),
+            None => scale.end,
+        };
+        let x0 = scale.x(a);
+        let x1 = scale.x(b.max(a)).max(x0 + 2.0);
+        // Bursts along the top half, what they caused (a bus-off, a SYNC
+        // gap) along the bottom: a bus-off spans its burst and would hide
+        // it.
+        let y = if m.class == "be" {
+            2.0
+        } else {
+            BUS_H / 2.0 + 1.0
+        };
+        writeln!(
+            out,
+            "<rect class=\"{}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"><title>{}</title></rect>",
+            m.class,
+            N(x0),
+            N(y),
+            N(x1 - x0),
+            N(BUS_H / 2.0 - 3.0),
+            esc(&m.title)
+        )?;
+    }
+    out.push_str("</g>\n");
+    Ok(())
 }
 
 /// Incidents as numbered bands over every lane, from the first event to
@@ -484,7 +564,7 @@ fn write_legend(
     out: &mut String,
     lanes: &[Lane<'_>],
     keys: &CodeKeys,
-    incidents: bool,
+    (incidents, bus): (bool, [bool; 3]),
     y: f64,
 ) -> Result<f64, fmt::Error> {
     let (mut merged, mut open) = (false, false);
@@ -639,6 +719,13 @@ fn write_legend(
             "",
             None,
         )?;
+    }
+    for ((class, text), _) in BUS_KEYS.iter().zip(bus).filter(|(_, seen)| *seen) {
+        let glyph = format!(
+            "<g class=\"bus\"><rect class=\"{class}\" width=\"11\" height=\"{}\"/></g>",
+            N(BAR_H)
+        );
+        entry(out, std::mem::take(&mut row), &glyph, text, "", None)?;
     }
     out.push_str("</g>\n");
     Ok(y - y0 + 18.0)

@@ -130,10 +130,29 @@ pub(super) struct Streamed {
     /// Incidents as numbered bands over every lane: start, end and
     /// summary, the first [`MAX_INCIDENT_BANDS`].
     pub(super) incidents: Vec<(At, At, String)>,
+    /// The bus's own events for the bus strip above the lanes, the first
+    /// [`MAX_BUS_MARKS`]; how many more were not drawn.
+    pub(super) bus: Vec<BusMark>,
+    pub(super) bus_not_drawn: u64,
 }
 
 /// Incidents a panel draws at most (one band each).
 pub(super) const MAX_INCIDENT_BANDS: usize = 100;
+
+/// Bus events a panel draws at most in its bus strip.
+pub(super) const MAX_BUS_MARKS: usize = 1000;
+
+/// One of the bus's own events as the bus strip shows it: a band from
+/// `start` to `end` (`None`: to the end of the trace).
+#[derive(Debug)]
+pub(super) struct BusMark {
+    /// The CSS class: `be` a burst of error frames, `bo` a bus-off, `sg` a
+    /// gap in SYNC.
+    pub(super) class: &'static str,
+    pub(super) start: At,
+    pub(super) end: Option<At>,
+    pub(super) title: String,
+}
 
 impl Streamed {
     pub(super) fn mark(

@@ -54,7 +54,7 @@ use bars::Bars;
 use draw::write_panel;
 use lane::{Lane, lane_label, shades};
 use legend::CodeKeys;
-use marks::{Mark, Streamed};
+use marks::{BusMark, Mark, Streamed};
 use style::{LANE_MIN_H, ROW_H, X0, X1};
 use time_scale::{Measure, Scale};
 
@@ -127,8 +127,56 @@ impl Collector {
             .mark(ev.channel, ev.node, ev.time, ev.line, mark);
     }
 
-    /// An incident becomes a numbered band over the lanes.
+    /// An incident becomes a numbered band over the lanes; error bursts,
+    /// bus-offs and SYNC gaps bands in the bus strip above them.
     pub(super) fn bus(&mut self, ev: &BusEvent<'_>) {
+        let at = |time| At {
+            time,
+            line: ev.line,
+        };
+        let mark = match ev.bus {
+            Bus::Errors(b) => Some(BusMark {
+                class: "be",
+                start: at(b.start),
+                end: Some(at(b.end)),
+                title: format!(
+                    "{}: {} error frame{}",
+                    ev.channel,
+                    b.frames,
+                    if b.frames == 1 { "" } else { "s" }
+                ),
+            }),
+            Bus::BusOff(off) => Some(BusMark {
+                class: "bo",
+                start: at(off.start),
+                end: off.end.map(|t| at(Some(t))),
+                title: match off.node {
+                    Some(n) => format!("{}: node {n} bus-off", ev.channel),
+                    None => format!("{}: the logging controller bus-off", ev.channel),
+                },
+            }),
+            Bus::SyncMissed(g) => Some(BusMark {
+                class: "sg",
+                start: g.start,
+                end: g.end,
+                title: format!(
+                    "{}: SYNC missed {} cycle{}",
+                    ev.channel,
+                    g.missed,
+                    if g.missed == 1 { "" } else { "s" }
+                ),
+            }),
+            Bus::Lss(_) | Bus::Incident(_) => None,
+        };
+        if let Some(mark) = mark {
+            let c = &mut self.current;
+            if c.bus.len() < marks::MAX_BUS_MARKS {
+                c.bus.push(mark);
+            } else {
+                c.bus_not_drawn += 1;
+            }
+            return;
+        }
         let Bus::Incident(i) = ev.bus else { return };
         let incidents = &mut self.current.incidents;
         if incidents.len() >= marks::MAX_INCIDENT_BANDS {
@@ -192,6 +240,8 @@ pub(in crate::report) struct Panel {
     /// A lane has a CiA 402 drive state strip (the style sheet then has
     /// their fills).
     pub(super) drives: bool,
+    /// It has a bus strip (the style sheet then has its fills).
+    pub(super) bus: bool,
     /// The attributes of the panel's `<g>` that let the HTML page re-lay
     /// the time axis (fill the window, zoom, pan): the plot's edges in px,
     /// the axis values at them, what the axis measures and its origin.
@@ -323,6 +373,7 @@ impl Panel {
             clock.base(),
             u8::from(one_day)
         );
+        let bus = !streamed.bus.is_empty();
         let mut svg = String::new();
         let height = write_panel(&mut svg, input, &clock, scale, &lanes, &keys, &streamed)
             .map_err(|_| io::Error::other("formatting the chart failed"))?;
@@ -345,6 +396,7 @@ impl Panel {
             lanes,
             shades: keys.shades(),
             drives,
+            bus,
             view,
         })
     }

@@ -61,6 +61,14 @@ pub(in crate::report) const STYLE: &str = "\
 .ec .inc text{font-size:10px;font-weight:600;fill:#b2182b}
 ";
 
+/// The bus strip's fills, only in documents whose trace had error frames
+/// or SYNC gaps (every other chart's style sheet stays as it was).
+const BUS_STYLE: &str = "\
+.ec .bus .be{fill:#d62728;fill-opacity:.55}
+.ec .bus .bo{fill:#67001f}
+.ec .bus .sg{fill:#e69f00}
+";
+
 /// The drive state strips' fills, only in documents that have a CiA 402
 /// drive (every other chart's style sheet stays as it was): disabled
 /// states grey, ready and switched on light green, operation enabled
@@ -181,12 +189,16 @@ fn rgb(h: f64, s: f64, l: f64) -> u32 {
 pub(in crate::report) fn style_sheet(
     shades: &std::collections::BTreeSet<(usize, usize)>,
     drives: bool,
+    bus: bool,
 ) -> String {
     use std::fmt::Write as _;
     let mut s = String::with_capacity(STYLE.len() + 1024);
     s.push_str(STYLE);
     if drives {
         s.push_str(DRIVE_STYLE);
+    }
+    if bus {
+        s.push_str(BUS_STYLE);
     }
     for (class, colour) in CLASS_COLOURS {
         let _ = writeln!(s, ".ec .c-{}{{fill:#{colour:06x}}}", class.slug());
