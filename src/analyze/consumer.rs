@@ -304,6 +304,9 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// shared facts first (a profile, a moved EMCY id), then to every
     /// monitor.
     fn learnt(&mut self, channel: &[u8], at: At, learnt: Learnt) -> Result<(), OutputError> {
+        if let Some(text) = &learnt.text {
+            self.monitors.identity.text(channel, at, text);
+        }
         for fact in [learnt.read, learnt.holds, learnt.written, learnt.produced]
             .into_iter()
             .flatten()

@@ -497,6 +497,40 @@ pub struct NodeReport {
     /// Its CiA 402 drive; `None` for a node no statusword, controlword or
     /// PDO mapping was seen of.
     pub drive: Option<Box<DriveReport>>,
+    /// What the node answered when its identity was read; `None` when no
+    /// read of 0x1000 or 0x1018 was answered. Boxed: most nodes of a big
+    /// trace have none, and a report per node is held to the end.
+    pub identity: Option<Box<NodeIdentity>>,
+}
+
+/// What a node said it is: its device type (0x1000), identity object
+/// (0x1018 subs 1-4), device name (0x1008), hardware and software versions
+/// (0x1009, 0x100A), each as it answered a read.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct NodeIdentity {
+    pub device_type: Option<Identified>,
+    pub vendor_id: Option<Identified>,
+    pub product_code: Option<Identified>,
+    pub revision: Option<Identified>,
+    pub serial: Option<Identified>,
+    pub name: Option<IdentifiedText>,
+    pub hardware_version: Option<IdentifiedText>,
+    pub software_version: Option<IdentifiedText>,
+}
+
+/// A text of a node's identity (at most 64 bytes, as the node sent them,
+/// made valid UTF-8) and the line of the answer that completed it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IdentifiedText {
+    pub text: String,
+    pub line: u64,
+}
+
+/// One value of a node's identity and the line of the answer that gave it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Identified {
+    pub value: u32,
+    pub line: u64,
 }
 
 /// A node's CiA 402 drive at the end of an input (the `drive` object).

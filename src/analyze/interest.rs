@@ -118,10 +118,14 @@ fn index_of(lo: u8, hi: u8) -> u16 {
 }
 
 /// Whether some monitor learns from `index`'s value: the followed objects,
-/// PDO parameters, a drive's words. Transfers of others are only counted.
+/// PDO parameters, a drive's words, the texts a node names itself by.
+/// Transfers of others are only counted.
 #[inline]
 pub(super) fn learns_from(index: u16) -> bool {
-    sdo::is_followed(index) || pdo::PdoId::is_pdo_parameter(index) || cia402::is_decoded(index)
+    sdo::is_followed(index)
+        || pdo::PdoId::is_pdo_parameter(index)
+        || cia402::is_decoded(index)
+        || sdo::is_text(index)
 }
 
 /// Whether the consumer may widen the interest when it reads `frame`, one

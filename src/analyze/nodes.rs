@@ -400,6 +400,7 @@ impl Nodes {
                     profile_source: ProfileSource::Default,
                     profile_reason: None,
                     device_type: None,
+                    identity: None,
                     descriptions: CodeTexts::default(),
                     nmt_state: None,
                     nmt_commanded: None,

@@ -289,6 +289,7 @@ pub fn decode_timeline(data: &[u8]) {
             profile_source: ProfileSource::Flag,
             profile_reason: None,
             device_type: None,
+            identity: None,
             descriptions: CodeTexts::new(m.profile, m.timeline.stats().raised.keys().copied()),
             nmt_state: None,
             nmt_commanded: None,

@@ -17,8 +17,8 @@ use crate::analyze::incident::{Incident, Occurrence};
 use crate::analyze::traffic::ChannelReport;
 use crate::analyze::{
     BootEvent, Bus, BusEvent, ChannelErrors, Counts, Diagnostic, DriveReport, EmcyEvent,
-    EvidenceKind, Health, HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeReport,
-    kind_counts,
+    EvidenceKind, Health, HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeIdentity,
+    NodeReport, kind_counts,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
@@ -127,6 +127,55 @@ fn optional_u8(out: &mut Vec<u8>, v: Option<u8>) {
         Some(v) => push_u64(out, u64::from(v)),
         None => out.extend_from_slice(b"null"),
     }
+}
+
+/// A node's identity as it answered reads: each value in hex with the line
+/// of the answer, the device type with the profile it names, the vendor id
+/// with the vendor's name where our profiles know it.
+fn identity(out: &mut Vec<u8>, id: &NodeIdentity) {
+    let mut o = Obj::new(out);
+    let fields = [
+        ("device_type", id.device_type),
+        ("vendor_id", id.vendor_id),
+        ("product_code", id.product_code),
+        ("revision", id.revision),
+        ("serial", id.serial),
+    ];
+    for (key, field) in fields {
+        let Some(f) = field else {
+            o.null(key);
+            continue;
+        };
+        let mut fo = Obj::new(o.key(key));
+        fo.str("value", &format!("0x{:08X}", f.value));
+        match key {
+            "device_type" => fo.str("profile", &device_profile::describe(f.value)),
+            "vendor_id" => match crate::canopen::profile::vendor_name(f.value) {
+                Some(name) => fo.str("name", name),
+                None => fo.null("name"),
+            },
+            _ => {}
+        }
+        fo.u64("line", f.line);
+        fo.end();
+    }
+    let texts = [
+        ("name", &id.name),
+        ("hardware_version", &id.hardware_version),
+        ("software_version", &id.software_version),
+    ];
+    for (key, text) in texts {
+        match text {
+            Some(t) => {
+                let mut to = Obj::new(o.key(key));
+                to.str("value", &t.text);
+                to.u64("line", t.line);
+                to.end();
+            }
+            None => o.null(key),
+        }
+    }
+    o.end();
 }
 
 /// A number already formatted as JSON writes it.
@@ -837,6 +886,10 @@ impl JsonWriter {
                 o.null("device_type");
                 o.null("device_profile");
             }
+        }
+        match &node.identity {
+            Some(id) => identity(o.key("identity"), id),
+            None => o.null("identity"),
         }
         format::push_code_counts(
             o.key("errors_seen"),

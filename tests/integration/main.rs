@@ -31,6 +31,7 @@ mod fuzz_corpus;
 mod golden;
 mod health;
 mod hostile;
+mod identity;
 mod incidents;
 mod inputs;
 mod ixxat;

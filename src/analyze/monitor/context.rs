@@ -109,6 +109,9 @@ pub(in crate::analyze) struct Learnt {
     pub(in crate::analyze) written: Option<Fact>,
     /// A PDO the node sent.
     pub(in crate::analyze) produced: Option<Fact>,
+    /// A text a node named itself by, longer than four bytes (shorter ones
+    /// are read as values).
+    pub(in crate::analyze) text: Option<crate::canopen::sdo::Text>,
 }
 
 /// A fact about a node that one monitor learnt and others may need.

@@ -17,6 +17,7 @@ pub(in crate::analyze) mod context;
 mod deadlines;
 mod drive;
 mod emcy;
+mod identity;
 mod lss;
 mod nmt;
 mod sdo;
@@ -27,6 +28,7 @@ pub(in crate::analyze) use coe::{Carried, CoeMonitor};
 use context::{Emit, Fact, Facts, Monitor, Seen, Step};
 pub(in crate::analyze) use drive::DriveMonitor;
 pub(in crate::analyze) use emcy::EmcyMonitor;
+pub(in crate::analyze) use identity::IdentityMonitor;
 pub(in crate::analyze) use lss::LssMonitor;
 pub(in crate::analyze) use nmt::{NmtMonitor, TakenFold};
 pub(in crate::analyze) use sdo::SdoMonitor;
@@ -127,6 +129,8 @@ monitors! {
     nmt: NmtMonitor,
     /// SDO transfers and the error history read-outs.
     sdo: SdoMonitor,
+    /// What each node said it is (0x1000, 0x1018).
+    identity: IdentityMonitor,
     /// Layer setting services and the TIME object.
     lss: LssMonitor,
     /// CANopen over EtherCAT (fed its mailbox messages, not frames).

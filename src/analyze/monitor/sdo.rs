@@ -73,10 +73,11 @@ impl Monitor for SdoMonitor {
                 value: c.value,
             });
         }
-        if self.uploads_wanted(id, data)
-            && let Some(c) = self.uploads.feed(id, data)
-        {
-            completed(&mut learnt, c, true);
+        if self.uploads_wanted(id, data) {
+            if let Some(c) = self.uploads.feed(id, data) {
+                completed(&mut learnt, c, true);
+            }
+            learnt.text = self.uploads.take_text();
         }
         if following != self.following(id) {
             // Segments name no object, so the content filter keeps them

@@ -678,3 +678,25 @@ fn timing_across_blocks() {
         "the analysis is the same"
     );
 }
+
+/// A node's identity, split anywhere and read on several threads: the
+/// segmented upload of its name widens the interest mid-block, and the
+/// texts and values come out the same.
+#[test]
+fn identity_across_blocks() {
+    let trace = include_bytes!("../../../fixtures/identity.log");
+    let reference = run(trace, 1, 1 << 20).0;
+    assert!(
+        reference.contains("\"name\":{\"value\":\"AKD Servo Drive\""),
+        "{reference}"
+    );
+    for threads in [1, 2, 3] {
+        for block in [1, 7, 64, 300, 4096] {
+            assert_eq!(
+                run(trace, threads, block).0,
+                reference,
+                "{threads} threads, {block}-byte blocks"
+            );
+        }
+    }
+}

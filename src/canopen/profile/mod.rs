@@ -84,6 +84,14 @@ const VENDORS: [(u32, &str, &str); 3] = [
     (0x0000_001D, "festo-cmmp", "Festo"),
 ];
 
+/// The vendor's name, for a vendor id our profiles know.
+pub fn vendor_name(vendor_id: u32) -> Option<&'static str> {
+    VENDORS
+        .iter()
+        .find(|(v, _, _)| *v == vendor_id)
+        .map(|(_, _, name)| *name)
+}
+
 /// CiA 402 in the low 16 bits of object 0x1000: a drive.
 const DRIVE_PROFILE_NUMBER: u32 = 402;
 

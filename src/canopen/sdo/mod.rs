@@ -27,5 +27,5 @@ pub use block::{BlockStep, Blocks};
 #[cfg(test)]
 pub use frame::names_followed_object;
 pub use frame::{begins_segmented_transfer, is_abort, names_object, parse, parse_payload};
-pub use segmented::{Confirmed, Downloads, Uploads};
+pub use segmented::{Confirmed, Downloads, TEXT_BYTES, Text, Uploads, is_text};
 pub use tracker::Tracker;

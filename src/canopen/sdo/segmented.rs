@@ -254,10 +254,31 @@ enum Upload {
     Segments {
         object: Object,
         size: Option<u32>,
-        kept: [u8; KEPT_BYTES],
+        kept: [u8; TEXT_BYTES],
         len: u32,
         toggle: bool,
     },
+}
+
+/// Bytes of a segmented upload kept: a value of at most 4 bytes, or the
+/// text of an object the node names itself by ([`is_text`]); a longer
+/// upload is followed to its end but not kept.
+pub const TEXT_BYTES: usize = 64;
+
+/// The objects a node names itself by, as VISIBLE_STRING (CiA 301): its
+/// device name (0x1008), hardware version (0x1009), software version
+/// (0x100A).
+pub fn is_text(index: u16) -> bool {
+    matches!(index, 0x1008..=0x100A)
+}
+
+/// The text of an upload of a text object ([`is_text`]) longer than four
+/// bytes: whose, which object, and its bytes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Text {
+    pub node: NodeId,
+    pub object: Object,
+    pub bytes: Vec<u8>,
 }
 
 /// Follows segmented uploads, per node, to the value the node reported
@@ -266,11 +287,18 @@ enum Upload {
 #[derive(Clone, Debug, Default)]
 pub struct Uploads {
     transfers: PerNode<Upload>,
+    /// The text the last frame completed, until taken.
+    text: Option<Text>,
 }
 
 impl Uploads {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// The text of a text object the last frame fed completed, if it did.
+    pub fn take_text(&mut self) -> Option<Text> {
+        self.text.take()
     }
 
     /// Whether the node of SDO id `id` has a segmented upload going on:
@@ -306,7 +334,7 @@ impl Uploads {
                             sub,
                         },
                         size: (cmd & 0x01 != 0).then(|| u32::from_le_bytes([b4, b5, b6, b7])),
-                        kept: [0; KEPT_BYTES],
+                        kept: [0; TEXT_BYTES],
                         len: 0,
                         toggle: false,
                     },
@@ -348,13 +376,24 @@ impl Uploads {
                     return None;
                 }
                 *slot = Upload::Idle;
-                if size.is_some_and(|s| s != len) || len as usize > KEPT_BYTES {
+                if size.is_some_and(|s| s != len) {
                     return None;
                 }
+                if len as usize > KEPT_BYTES {
+                    if is_text(object.index) && len as usize <= TEXT_BYTES {
+                        self.text = Some(Text {
+                            node: node as NodeId,
+                            object,
+                            bytes: kept.get(..len as usize).unwrap_or_default().to_vec(),
+                        });
+                    }
+                    return None;
+                }
+                let [a, b, c, d, ..] = kept;
                 Some(Confirmed {
                     node: node as NodeId,
                     object,
-                    value: u32::from_le_bytes(kept),
+                    value: u32::from_le_bytes([a, b, c, d]),
                     len,
                 })
             }
@@ -391,6 +430,43 @@ mod tests {
         );
         assert_eq!((c.node, c.value, c.len), (3, 0x000F_0191, 4));
         assert_eq!(u.feed(0x583, &[0x07, 1, 2, 3, 4, 0, 0, 0]), None, "idle");
+    }
+
+    #[test]
+    fn a_text_object_longer_than_four_bytes_is_kept_as_text() {
+        let mut u = Uploads::new();
+        // 0x1008 in two segments, 7 bytes and 1 (no size given).
+        u.feed(0x585, &[0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0]);
+        assert_eq!(
+            u.feed(0x585, &[0x00, b'A', b'K', b'D', b' ', b'S', b'e', b'r']),
+            None
+        );
+        assert_eq!(u.take_text(), None, "not done yet");
+        assert_eq!(u.feed(0x585, &[0x1D, b'v', 0, 0, 0, 0, 0, 0]), None);
+        let text = u.take_text().expect("a text");
+        assert_eq!(
+            (text.node, text.object.index, text.object.sub),
+            (5, 0x1008, 0)
+        );
+        assert_eq!(text.bytes, b"AKD Serv");
+        assert_eq!(u.take_text(), None, "taken once");
+        // A size that the segments do not keep to: nothing.
+        u.feed(0x585, &[0x41, 0x0A, 0x10, 0x00, 9, 0, 0, 0]);
+        u.feed(0x585, &[0x00, 1, 2, 3, 4, 5, 6, 7]);
+        u.feed(0x585, &[0x1D, 8, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(u.take_text(), None, "8 bytes of 9");
+        // Another object's long value, and a text past 64 bytes: nothing.
+        u.feed(0x585, &[0x40, 0x00, 0x20, 0x00, 0, 0, 0, 0]);
+        u.feed(0x585, &[0x00, 1, 2, 3, 4, 5, 6, 7]);
+        u.feed(0x585, &[0x1D, 8, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(u.take_text(), None, "0x2000 is no text");
+        u.feed(0x585, &[0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0]);
+        for i in 0..10u8 {
+            u.feed(0x585, &[(i % 2) << 4, 1, 2, 3, 4, 5, 6, 7]);
+        }
+        u.feed(0x585, &[0x01, 1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(u.take_text(), None, "77 bytes");
+        assert!(is_text(0x1008) && is_text(0x100A) && !is_text(0x1007) && !is_text(0x100B));
     }
 
     #[test]

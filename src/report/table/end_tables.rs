@@ -8,6 +8,7 @@ use std::io::{self, Write};
 use comfy_table::{CellAlignment, Table, presets};
 
 use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut};
+use super::inventory::write_inventory;
 use super::page::{BOLD, Page, write_in_two_passes};
 use super::timeline::{NodeTexts, write_timeline};
 use super::traffic::{period_text, write_bus, write_timing};
@@ -43,6 +44,7 @@ pub(super) fn write_end_of_input<W: Write>(
     writeln!(page.out)?;
     write_incidents(page, incidents)?;
     write_nodes(page, input)?;
+    write_inventory(page, input)?;
     write_health(page, input)?;
     write_drives(page, input)?;
     write_bus_errors(page, input)?;
@@ -113,12 +115,15 @@ pub(super) fn write_incidents<W: Write>(
 pub(super) fn write_summary<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
     if !input.nodes.is_empty() {
         write_nodes(page, input)?;
+        write_inventory(page, input)?;
         write_codes(page, input)?;
         write_health(page, input)?;
         write_drives(page, input)?;
     }
     write_bus_errors(page, input)?;
-    if !input.bus_errors.is_empty() {
+    write_bus(page, input)?;
+    write_timing(page, input)?;
+    if !input.bus_errors.is_empty() || input.channels.iter().any(|c| c.frames.is_some()) {
         writeln!(page.out)?;
     }
     write_bus_line(page, input)?;

@@ -8,7 +8,7 @@
 //!
 //! Each file imports only the ones below it in this list: `mod.rs` (the
 //! [`TableReport`], whose [`Sink`] methods only dispatch), `end_tables`,
-//! `traffic`, `timeline`, `events`, `page`, `fit`.
+//! `traffic`, `inventory`, `timeline`, `events`, `page`, `fit`.
 
 use std::io::{self, Write};
 
@@ -21,6 +21,7 @@ use crate::text::printable;
 mod end_tables;
 mod events;
 mod fit;
+mod inventory;
 mod page;
 mod timeline;
 mod traffic;

@@ -61,6 +61,12 @@ pub fn without(object: &Value, keys: &[&str]) -> Value {
                 *e = without(e, keys);
             }
         }
+        // A node's identity names the lines of its answers.
+        if let Some(Value::Object(identity)) = o.get_mut("identity") {
+            for value in identity.values_mut() {
+                *value = without(value, keys);
+            }
+        }
     }
     v
 }
