@@ -292,6 +292,30 @@ fn end_facts(node: &NodeReport) -> Vec<(&'static str, String)> {
     if let Some(t) = node.device_type {
         facts.push(("device_type", format!("{t:#010x}")));
     }
+    // Who the node said it is: a replaced device or new firmware shows here.
+    if let Some(id) = &node.identity {
+        let values = [
+            ("vendor_id", id.vendor_id),
+            ("product_code", id.product_code),
+            ("revision", id.revision),
+            ("serial", id.serial),
+        ];
+        for (key, v) in values {
+            if let Some(v) = v {
+                facts.push((key, format!("{:#010x}", v.value)));
+            }
+        }
+        let texts = [
+            ("name", &id.name),
+            ("hardware_version", &id.hardware_version),
+            ("software_version", &id.software_version),
+        ];
+        for (key, t) in texts {
+            if let Some(t) = t {
+                facts.push((key, t.text.clone()));
+            }
+        }
+    }
     let active: Vec<String> = node.active.iter().map(|c| format!("{c:#06x}")).collect();
     facts.push(("active", words_or_none(&active)));
     if let Some(drive) = &node.drive {

@@ -156,3 +156,28 @@ fn diff_outputs_match_their_golden_files() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+#[test]
+fn new_firmware_on_a_node_is_the_difference() {
+    // The same start-up, but node 2 answers its software version "1.03".
+    let dir = tempfile::tempdir().unwrap();
+    let updated = dir.path().join("updated.log");
+    let text = std::fs::read_to_string("fixtures/identity.log").unwrap();
+    assert!(text.contains("582#430A1000312E3032"));
+    std::fs::write(
+        &updated,
+        text.replace("582#430A1000312E3032", "582#430A1000312E3033"),
+    )
+    .unwrap();
+    let (out, err, code) = run(
+        &["diff", "fixtures/identity.log", updated.to_str().unwrap()],
+        b"",
+    );
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(out.contains("software_version"), "{out}");
+    assert!(out.contains("1.02") && out.contains("1.03"), "{out}");
+    let (v, _) = json("fixtures/identity.log", updated.to_str().unwrap());
+    let nodes = v["nodes"].as_array().unwrap();
+    assert_eq!(nodes.len(), 1, "only node 2 differs: {v:#}");
+    assert_eq!(nodes[0]["node"], 2);
+}
