@@ -389,10 +389,7 @@ mod tests {
     use crate::trace::can_error::class;
 
     fn at(ms: u64, line: u64) -> At {
-        At {
-            time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
-            line,
-        }
+        At::ms(ms, line)
     }
 
     fn t(ms: u64) -> Timestamp {

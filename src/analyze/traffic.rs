@@ -603,10 +603,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn at(ms: u64, line: u64) -> At {
-        At {
-            time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
-            line,
-        }
+        At::ms(ms, line)
     }
 
     #[test]
@@ -797,10 +794,7 @@ mod event_driven {
             .iter()
             .enumerate()
         {
-            let at = At {
-                time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
-                line: i as u64 + 1,
-            };
+            let at = At::ms(*ms, i as u64 + 1);
             t.frame(b"can0", 0x085, false, FrameKind::Data, 8, at);
             t.frame(b"can0", 0x185, false, FrameKind::Data, 8, at);
         }

@@ -39,6 +39,18 @@ pub struct At {
     pub line: u64,
 }
 
+#[cfg(test)]
+impl At {
+    /// `ms` milliseconds after the epoch (three fraction digits), at `line`:
+    /// the place of a test's frame.
+    pub(crate) fn ms(ms: u64, line: u64) -> At {
+        At {
+            time: Some(Timestamp::from_parts(ms / 1000, ms % 1000, 3)),
+            line,
+        }
+    }
+}
+
 /// One error from the EMCY that raised it to the frame that cleared it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Interval {
