@@ -518,8 +518,9 @@ pub struct NodeIdentity {
     pub software_version: Option<IdentifiedText>,
 }
 
-/// A text of a node's identity (at most 64 bytes, as the node sent them,
-/// made valid UTF-8) and the line of the answer that completed it.
+/// A text of a node's identity (at most 64 bytes as the node sent them,
+/// read as UTF-8, else Latin-1) and the line of the answer that completed
+/// it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct IdentifiedText {
     pub text: String,

@@ -109,7 +109,7 @@ impl IdentityMonitor {
         };
         if let Some(identity) = self.node(channel, node) {
             // Padding after the text is no part of it.
-            let text = String::from_utf8_lossy(bytes)
+            let text = text_of_bytes(bytes)
                 .trim_end_matches(['\0', ' '])
                 .to_string();
             *field(identity) = Some(IdentifiedText {
@@ -171,5 +171,50 @@ impl Field {
             Field::Revision => &mut id.revision,
             Field::Serial => &mut id.serial,
         }
+    }
+}
+
+/// A VISIBLE_STRING's bytes as text. CiA 301 means ASCII; devices also
+/// send UTF-8, and (German machine builders among them) Latin-1, whose
+/// bytes over 0x7F are no valid UTF-8: read as Latin-1 then, so
+/// "Sonderger\u{e4}t" is not a replacement character.
+fn text_of_bytes(bytes: &[u8]) -> String {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => text.to_string(),
+        Err(_) => bytes.iter().map(|&b| char::from(b)).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn texts_are_utf8_else_latin1() {
+        assert_eq!(text_of_bytes(b"AKD"), "AKD");
+        assert_eq!(text_of_bytes("Gerät".as_bytes()), "Gerät");
+        assert_eq!(text_of_bytes(b"Ger\xe4t"), "Gerät");
+        assert_eq!(text_of_bytes(b""), "");
+    }
+
+    #[test]
+    fn identity_objects_and_texts_by_index_and_sub() {
+        assert!(Field::of(0x1000, 0).is_some());
+        assert!(Field::of(0x1000, 1).is_none());
+        for sub in 1..=4 {
+            assert!(Field::of(0x1018, sub).is_some(), "{sub}");
+        }
+        assert!(Field::of(0x1018, 0).is_none() && Field::of(0x1018, 5).is_none());
+        for index in 0x1008..=0x100A {
+            assert!(text_of(Object { index, sub: 0 }).is_some());
+            assert!(text_of(Object { index, sub: 1 }).is_none());
+        }
+        assert!(
+            text_of(Object {
+                index: 0x1007,
+                sub: 0
+            })
+            .is_none()
+        );
     }
 }
