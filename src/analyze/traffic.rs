@@ -780,6 +780,22 @@ mod tests {
         assert_eq!(r[0].ids.len(), MAX_EXTENDED);
         assert_eq!(r[0].other_ids, 2);
         assert_eq!(r[0].frames, Some(MAX_EXTENDED as u64 + 2));
+        // Every standard id on nine channels: 18 432 ids, 16 384 followed.
+        let mut t = Traffic::new(true);
+        for c in 0..9 {
+            let name = format!("can{c}");
+            for id in 0..2048 {
+                t.frame(name.as_bytes(), id, false, FrameKind::Data, 0, at(0, 1));
+            }
+        }
+        let r = t.into_report(None);
+        let followed: usize = r.iter().map(|c| c.ids.len()).sum();
+        let other: u64 = r.iter().map(|c| c.other_ids).sum();
+        assert_eq!((followed, other), (MAX_IDS, 9 * 2048 - MAX_IDS as u64));
+        assert!(
+            r.iter().all(|c| c.frames == Some(2048)),
+            "every frame counted"
+        );
     }
 }
 
