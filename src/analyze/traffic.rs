@@ -43,6 +43,10 @@ const LEARN_FROM: u64 = 8;
 /// Load is measured over windows of this many seconds.
 const WINDOW_SECS: u64 = 1;
 
+fn window() -> Span {
+    Span::from_millis(WINDOW_SECS * 1000)
+}
+
 /// The traffic of one input.
 pub(crate) struct Traffic {
     /// `--timing`: every frame comes here, every identifier is reported.
@@ -454,7 +458,7 @@ impl Load {
         self.first.get_or_insert(t);
         self.last = Some(t);
         match &mut self.window {
-            Some((start, n)) if t.secs() < start.secs() + WINDOW_SECS && t >= *start => *n += bits,
+            Some((start, n)) if t >= *start && t.since(*start) < window() => *n += bits,
             w => {
                 if let Some((_, n)) = w {
                     self.peak_bits = self.peak_bits.max(*n);
@@ -734,6 +738,21 @@ mod tests {
         let r = t.into_report(Some(500_000));
         assert_eq!((r[0].frames, r[0].error_frames), (None, 1));
         assert!(r[0].ids.is_empty() && r[0].load.is_none());
+    }
+
+    #[test]
+    fn times_at_the_end_of_the_clock_are_no_overflow() {
+        let mut t = Traffic::new(true);
+        for (i, atto) in [0u64, 5, 7].iter().enumerate() {
+            let at = At {
+                time: Timestamp::from_raw(u64::MAX, *atto, 18),
+                line: i as u64 + 1,
+            };
+            t.frame(b"can0", 0x181, false, FrameKind::Data, 8, at);
+        }
+        let r = t.into_report(Some(1_000_000));
+        assert_eq!(r[0].frames, Some(3));
+        assert_eq!(r[0].load.map(|l| l.bits), Some(3 * 135));
     }
 
     #[test]

@@ -285,6 +285,47 @@ pub fn detect(data: &[u8]) {
     assert_eq!(split.report.counts, reference.report.counts);
     assert_eq!(split.errors_raised, reference.errors_raised);
 
+    // --timing: every frame counted once on its channel, split or not, and
+    // the analysis the same but for what SYNC's gaps add.
+    let timing = |o: &Options| Options {
+        timing: true,
+        bit_rate: Some(500_000),
+        ..o.clone()
+    };
+    let timed = run(data, gzip, &timing(&base), Output::Ndjson);
+    check_run(&timed, None, plain);
+    let timed_split = run(data, gzip, &timing(&small), Output::Ndjson);
+    assert_eq!(
+        String::from_utf8_lossy(&timed_split.out),
+        String::from_utf8_lossy(&timed.out),
+        "--timing ndjson differs with {} threads and {}-byte blocks",
+        small.threads,
+        small.block_size
+    );
+    let counted: u64 = timed.report.channels.iter().filter_map(|c| c.frames).sum();
+    let ignored_channels = timed.report.channels.len() >= crate::analyze::traffic::MAX_CHANNELS;
+    assert!(
+        counted == timed.report.counts.frames || ignored_channels,
+        "--timing counted {counted} of {} frames",
+        timed.report.counts.frames
+    );
+    let story = |out: &[u8]| -> Vec<Value> {
+        ndjson_values(out)
+            .into_iter()
+            .filter(|v| {
+                !matches!(
+                    v["type"].as_str(),
+                    Some("channel" | "sync_missed" | "incident")
+                )
+            })
+            .collect()
+    };
+    assert_eq!(
+        story(&timed.out),
+        story(&reference.out),
+        "--timing changes the analysis"
+    );
+
     // Threads are tested above; one each is enough for the other renderers
     // (thread start-up would dominate the time per input).
     let small = Options {
