@@ -434,7 +434,8 @@ impl IdTraffic {
             node,
             count: self.count,
             period: period.map(|p| Span::from_micros(p.round() as i64)),
-            jitter: (self.regular > 0)
+            // Deviation from a period the intervals did not keep to is none.
+            jitter: (self.regular > 0 && period.is_some())
                 .then(|| Span::from_micros((self.deviation / self.regular as f64).round() as i64)),
             max_gap: self.max_gap,
             missed: self.missed,
@@ -647,6 +648,28 @@ mod tests {
         }
         assert_eq!(m.current(), None);
         assert_eq!(m.period(), None);
+        // A node steady for a while, then at random: no period, no jitter.
+        let mut t = Traffic::new(true);
+        let mut ms = 0;
+        let mut x: u64 = 7;
+        for line in 0..300 {
+            ms += if line < 20 {
+                100
+            } else {
+                x = x * 1_103_515_245 % 2_147_483_648 + 12_345;
+                1 + x % 5000
+            };
+            t.frame(
+                b"can0",
+                0x70F,
+                false,
+                FrameKind::Data,
+                1,
+                At::ms(ms, line + 1),
+            );
+        }
+        let r = t.into_report(None);
+        assert_eq!((r[0].ids[0].period, r[0].ids[0].jitter), (None, None));
         // One late frame in eight still has one.
         let mut m = Median::default();
         for i in 0..64 {
