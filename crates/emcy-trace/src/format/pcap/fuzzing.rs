@@ -85,7 +85,11 @@ pub fn fuzz_pcap(data: &[u8]) {
     let mut interest = Interest::none();
     interest.add_standard_range(0x81..=0xFF);
     let wanted = |p: &Parsed<'_>| match p {
-        Parsed::Frame(f) => f.kind == FrameKind::Data && interest.wants(f.id, f.extended),
+        Parsed::Frame(f) => match f.kind {
+            FrameKind::Data | FrameKind::Remote => interest.wants(f.id, f.extended),
+            FrameKind::Fd => interest.wants_fd() && interest.wants(f.id, f.extended),
+            FrameKind::Error => false,
+        },
         _ => true,
     };
     // What a packet shows (an EtherCAT frame's messages are part of it),

@@ -303,14 +303,15 @@ struct Head {
 }
 
 impl Head {
-    /// Only counted: not a data frame, or on an id `interest` does not want.
+    /// Only counted: on an id `interest` does not want (CAN FD frames
+    /// also unless it wants those), as the text readers count.
     #[inline]
     fn plain(self, interest: &Interest) -> bool {
         match self.kind {
             // Rare, and always decoded whole, whatever the interest.
             FrameKind::Error => false,
-            FrameKind::Data => !interest.wants(self.id, self.extended),
-            FrameKind::Remote | FrameKind::Fd => true,
+            FrameKind::Data | FrameKind::Remote => !interest.wants(self.id, self.extended),
+            FrameKind::Fd => !(interest.wants_fd() && interest.wants(self.id, self.extended)),
         }
     }
 }
@@ -625,8 +626,11 @@ mod tests {
         assert_eq!(c.data, Payload::from_slice(&[0x10, 0x43, 8]).unwrap());
         let pdo = can([0, 0, 0x01, 0x81], 8, 0, &[0; 8]);
         assert_eq!(decode(227, &pdo, 16, Order::Big, BE, i), Packet::Plain);
-        let rtr = can([0x40, 0, 0, 0x81], 0, 0, &[]);
+        // A remote frame is counted or decoded by its id, as a data frame.
+        let rtr = can([0x40, 0, 0x01, 0x81], 0, 0, &[]);
         assert_eq!(decode(227, &rtr, 8, Order::Big, BE, i), Packet::Plain);
+        let rtr = can([0x40, 0, 0, 0x81], 0, 0, &[]);
+        assert_eq!(decoded(decode(227, &rtr, 8, Order::Big, BE, i)).kind, FrameKind::Remote);
         let cut = can([0, 0, 0x01, 0x81], 8, 0, &[0; 3]);
         assert!(malformed(decode(227, &cut, 11, Order::Big, BE, i)).contains("3 of the frame's 8"));
     }
