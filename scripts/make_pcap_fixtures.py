@@ -26,6 +26,8 @@ fixtures/s300.log (the S300 sequence: boot-up, SDO identity reads, EMCYs
 - bus-errors.pcap     pcap, link type 227: fixtures/bus-errors.log with
                       its error frames (written by fixtures/make_fixtures.py,
                       run that first).
+- network-guarding.pcap  pcap, link type 227: fixtures/network-guarding.log,
+                      its guard requests as remote frames (CAN_RTR_FLAG).
 - mixed.pcapng        pcapng, big-endian section: link type 227 (id word
                       big-endian) and LINUX_SLL with CAN FD (a 72-byte
                       canfd_frame, FD by length, and protocol 0x000D), a
@@ -71,14 +73,18 @@ def log_frames(name):
     """(seconds, microseconds, id word, data) of a candump log fixture,
     error frames (id with the error flag) included."""
     frames = []
-    pattern = re.compile(r"\((\d+)\.(\d{6})\) can0 ([0-9A-F]{3}|[0-9A-F]{8})#([0-9A-F]*)")
+    pattern = re.compile(r"\((\d+)\.(\d{6})\) can0 ([0-9A-F]{3}|[0-9A-F]{8})#(R|[0-9A-F]*)$")
     with open(os.path.join(FIXTURES, name)) as f:
         for line in f:
-            m = pattern.match(line)
+            m = pattern.match(line.strip())
             if m:
-                frames.append(
-                    (int(m[1]), int(m[2]), int(m[3], 16), bytes.fromhex(m[4]))
-                )
+                word = int(m[3], 16)
+                data = b""
+                if m[4] == "R":
+                    word |= 0x40000000  # CAN_RTR_FLAG: a remote request
+                else:
+                    data = bytes.fromhex(m[4])
+                frames.append((int(m[1]), int(m[2]), word, data))
     return frames
 
 
@@ -251,6 +257,20 @@ def main():
     out += epb(o, 1, t + 1_200_000, sll(0x000C, can_frame(o, 0x81, nine)))  # 9 bytes
     out += epb(o, 0, t + 1_300_000, can_frame(">", 0x81, reset))  # the reset, read
     write("mixed.pcapng", out)
+
+    # network-guarding.pcap: node guarding, its requests remote frames.
+    write(
+        "network-guarding.pcap",
+        pcap(
+            "<",
+            False,
+            227,
+            [
+                (s, us, can_frame(">", word, data))
+                for s, us, word, data in log_frames("network-guarding.log")
+            ],
+        ),
+    )
 
     # bus-errors.pcap: fixtures/bus-errors.log (SYNC with a gap, a burst of
     # error frames of every class the kernel sends, counters rising to bus

@@ -63,6 +63,20 @@ fn every_s300_capture_decodes_like_the_candump_log() {
 }
 
 #[test]
+fn node_guarding_from_a_capture_is_as_from_the_candump_log() {
+    // The guard requests are remote frames on 0x700 + node: a capture
+    // hands them to node guarding as the text readers do.
+    let log = semantic_6(&ndjson(&["fixtures/network-guarding.log"]));
+    let capture = semantic_6(&ndjson(&["fixtures/network-guarding.pcap"]));
+    assert!(
+        log.iter()
+            .any(|o| o["type"] == "node" && o["heartbeat"]["via"] == "guarding"),
+        "the log is guarded"
+    );
+    assert_eq!(capture, log);
+}
+
+#[test]
 fn pcapng_interfaces_are_channels_by_if_name_and_non_can_packets_are_skipped() {
     let v = ndjson(&["fixtures/s300.pcapng"]);
     let i = input(&v);

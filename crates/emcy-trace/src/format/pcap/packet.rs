@@ -630,7 +630,10 @@ mod tests {
         let rtr = can([0x40, 0, 0x01, 0x81], 0, 0, &[]);
         assert_eq!(decode(227, &rtr, 8, Order::Big, BE, i), Packet::Plain);
         let rtr = can([0x40, 0, 0, 0x81], 0, 0, &[]);
-        assert_eq!(decoded(decode(227, &rtr, 8, Order::Big, BE, i)).kind, FrameKind::Remote);
+        assert_eq!(
+            decoded(decode(227, &rtr, 8, Order::Big, BE, i)).kind,
+            FrameKind::Remote
+        );
         let cut = can([0, 0, 0x01, 0x81], 8, 0, &[0; 3]);
         assert!(malformed(decode(227, &cut, 11, Order::Big, BE, i)).contains("3 of the frame's 8"));
     }
