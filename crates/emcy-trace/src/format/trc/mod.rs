@@ -277,6 +277,15 @@ impl LineParser for TrcParser {
             return Scan::Parse;
         }
         match self.row(line, interest) {
+            // An error frame's id is its class bits, no identifier: it is
+            // wanted as error frames are.
+            Ok(Some(f)) if f.kind == FrameKind::Error => {
+                if interest.wants_error_frames() {
+                    Scan::Frame(f)
+                } else {
+                    Scan::Plain
+                }
+            }
             Ok(Some(f)) if !interest.wants(f.id, f.extended) => Scan::Plain,
             Ok(Some(f))
                 if f.kind == FrameKind::Data
@@ -921,6 +930,21 @@ mod tests {
             p.scan(b"     2)      1842      0705  1  00", &interest),
             Scan::Frame(f) if f.data.as_slice() == [0]
         ));
+    }
+
+    #[test]
+    fn an_error_row_is_wanted_as_error_frames_are_not_by_its_class_bits() {
+        let mut p = TrcParser::new();
+        p.parse(b";$FILEVERSION=1.1", &Interest::none());
+        // Class bits 0x0008 are no id anyone asked for.
+        let line = b"     6)      1349.2  Error      0008  4  00 19 08 08 ";
+        let mut errors = Interest::none();
+        errors.add_error_frames();
+        assert!(matches!(
+            p.scan(line, &errors),
+            Scan::Frame(f) if f.kind == FrameKind::Error
+        ));
+        assert_eq!(p.scan(line, &Interest::none()), Scan::Plain);
     }
 
     #[test]
