@@ -252,3 +252,28 @@ fn python_can_finds_the_same_error_frames() {
         }
     }
 }
+
+/// The analysis reads with a narrow interest, through each reader's
+/// id-first scan path, not the whole-record path above: every format's
+/// error frames must reach it there too (TRC's error rows once did not).
+#[test]
+fn the_analysis_gets_every_formats_error_frames() {
+    for entry in std::fs::read_dir("fixtures").expect("fixtures") {
+        let path = entry.expect("entry").path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        if !name.starts_with("bus-errors.") {
+            continue;
+        }
+        let objects = crate::support::ndjson([path.as_os_str()]);
+        let input = objects
+            .iter()
+            .find(|o| o["type"] == "input")
+            .expect("input object");
+        assert_eq!(input["bus_errors"][0]["error_frames"], 9, "{name}");
+        let bursts = objects.iter().filter(|o| o["type"] == "bus_error").count();
+        assert_eq!(bursts, 1, "{name}");
+    }
+}
