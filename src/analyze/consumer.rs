@@ -21,7 +21,6 @@ use super::nodes::Nodes;
 use super::options::Options;
 use super::sink::Sink;
 use super::traffic::Traffic;
-use crate::canopen::cob_id::SYNC_ID;
 use crate::canopen::profile::Profile;
 use crate::canopen::{NodeId, emcy};
 use crate::timeline::At;
@@ -475,8 +474,8 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
 
     /// A frame for the channel's traffic (`--timing`): counted and timed
     /// there, a gap in SYNC told. `true` when that is all the frame is for
-    /// (one the analysis does not decode, SYNC among them): it is then
-    /// counted as a frame, and nothing else happens.
+    /// (one the analysis does not decode): it is then counted as a frame,
+    /// and nothing else happens.
     fn traffic(&mut self, idx: u64, frame: &Frame<'_>) -> Result<bool, OutputError> {
         let line = self.line_no(idx);
         let at = At {
@@ -492,19 +491,15 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             at,
         );
         if let Some(gap) = gap {
-            let mut told = std::mem::take(&mut self.told);
-            told.push(Told {
+            let mut told = vec![Told {
                 channel: String::from_utf8_lossy(frame.channel).into_owned(),
                 at,
                 bus: Bus::SyncMissed(gap),
-            });
+            }];
             let (_, _, _, emit) = parts!(self);
             emit.bus(&mut told)?;
-            self.told = told;
         }
-        let analysed = (frame.id != SYNC_ID || frame.extended)
-            && self.wanted.interest.wants(frame.id, frame.extended);
-        Ok(!analysed)
+        Ok(!self.wanted.interest.wants(frame.id, frame.extended))
     }
 
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted

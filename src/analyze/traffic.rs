@@ -20,11 +20,10 @@
 use crate::canopen::NodeId;
 use crate::canopen::cob_id::{self, SYNC_ID};
 use crate::timeline::At;
+// Intervals seen before a period is trusted (to call a gap a miss), as for
+// a heartbeat's: the median of fewer is one odd interval from wrong.
+use crate::timeline::heartbeat::LEARN_FROM;
 use crate::trace::{FrameKind, Span, Timestamp};
-
-/// Channels followed; frames on more are counted in [`Traffic::ignored`],
-/// so a hostile input cannot grow the state without bound.
-pub(crate) const MAX_CHANNELS: usize = 256;
 
 /// Extended identifiers followed per channel, and identifiers followed
 /// over all channels; frames on more are counted in the channel's
@@ -36,12 +35,14 @@ pub(crate) const MAX_IDS: usize = 16_384;
 /// A gap this many periods long (x 3/2) skipped at least one cycle.
 const MISSED_FACTOR: f64 = 1.5;
 
-/// Intervals seen before the period is trusted to call a gap a miss: the
-/// median of fewer is one odd interval away from wrong.
-const LEARN_FROM: u64 = 8;
-
 /// Load is measured over windows of this many seconds.
 const WINDOW_SECS: u64 = 1;
+
+/// Channels followed (the bound the error frames' channels have); frames on
+/// more are counted in [`Traffic::ignored`], so a hostile input cannot grow
+/// the state without bound. Not `bus::MAX_CHANNELS` itself: the bus state
+/// imports the events, which import this file's reports.
+pub(crate) const MAX_CHANNELS: usize = 256;
 
 fn window() -> Span {
     Span::from_millis(WINDOW_SECS * 1000)
@@ -214,8 +215,8 @@ impl Traffic {
         }
     }
 
-    /// A frame ([`Traffic::wants`] said yes). A SYNC that ends a gap of
-    /// missed cycles gives the event to tell.
+    /// A frame (`--timing`). A SYNC that ends a gap of missed cycles gives
+    /// the event to tell.
     #[inline]
     pub(crate) fn frame(
         &mut self,
@@ -226,13 +227,10 @@ impl Traffic {
         len: u8,
         at: At,
     ) -> Option<SyncMissed> {
-        let every_frame = self.every_frame;
         let room = self.ids < MAX_IDS;
         let c = self.channel(channel)?;
-        if every_frame {
-            c.frames += 1;
-            c.load.frame(at.time, bits(extended, kind, len));
-        }
+        c.frames += 1;
+        c.load.frame(at.time, bits(extended, kind, len));
         let known = c.ids.len();
         let i = c.id(id, extended, room)?;
         let made = c.ids.len() - known;
@@ -424,7 +422,7 @@ impl IdTraffic {
         let (service, node) = cob_id::service(self.cob_id, self.extended);
         // Under LEARN_FROM intervals no period is trusted, and intervals
         // that do not keep to one have none: said as none.
-        let period = (self.cyclic && self.median.count >= LEARN_FROM)
+        let period = (self.cyclic && self.median.count >= LEARN_FROM as u64)
             .then(|| self.median.period())
             .flatten();
         IdReport {
@@ -548,7 +546,7 @@ impl Median {
         self.stride = self.stride.max(1);
         self.skip = self.stride - 1;
         self.sample.push(x);
-        if self.sample.len() == LEARN_FROM as usize && self.current.is_none() {
+        if self.sample.len() == LEARN_FROM && self.current.is_none() {
             self.current = steady_median(&self.sample);
         }
         if self.sample.len() >= SAMPLE {
