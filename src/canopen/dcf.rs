@@ -44,12 +44,26 @@ pub struct Dcf {
     pub node_id: Option<u32>,
     /// The valid PDO mappings it declares, source [`Source::Dcf`].
     pub mappings: Vec<Mapping>,
+    /// Every object entry's `ParameterName`, and whether its `DataType`
+    /// is VISIBLE_STRING: SDO transfers are named and shown by them.
+    pub objects: BTreeMap<Object, Declared>,
     /// Malformed lines and values, in file order (the first
     /// [`MAX_PROBLEMS`]).
     pub problems: Vec<Problem>,
     /// All problems, kept or not.
     pub problem_count: u64,
 }
+
+/// What a DCF declares of one object entry.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Declared {
+    pub name: Option<String>,
+    /// `DataType=0x0009` (VISIBLE_STRING): its values are text.
+    pub text: bool,
+}
+
+/// CiA 306 data type VISIBLE_STRING.
+const VISIBLE_STRING: u32 = 0x0009;
 
 /// A line that could not be read, or a value of a used object that is not
 /// a number.
@@ -96,8 +110,9 @@ impl Entry {
 enum Section {
     DeviceInfo,
     Commissioning,
-    /// An object entry the decoder uses.
-    Used(Object),
+    /// An object entry (the decoder evaluates the values of the ones it
+    /// uses, [`used`]).
+    Entry(Object),
     /// Anything else: its keys are skipped.
     Other,
 }
@@ -199,8 +214,8 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
                 Section::Commissioning
             } else {
                 match object_of_section(name) {
-                    Some(o) if used(o) => Section::Used(o),
-                    _ => Section::Other,
+                    Some(o) => Section::Entry(o),
+                    None => Section::Other,
                 }
             };
             continue;
@@ -219,7 +234,16 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
             line: line_no,
         };
         match section {
-            Section::Used(object) => {
+            Section::Entry(object) if key.eq_ignore_ascii_case("ParameterName") => {
+                dcf.objects.entry(object).or_default().name = Some(raw().text);
+            }
+            Section::Entry(object) if key.eq_ignore_ascii_case("DataType") => {
+                // A type that is no number names no string; the object's
+                // values stay hex.
+                dcf.objects.entry(object).or_default().text =
+                    integer(value.trim(), node) == Ok(VISIBLE_STRING);
+            }
+            Section::Entry(object) if used(object) => {
                 let entry = entries.entry((object.index, object.sub)).or_default();
                 if key.eq_ignore_ascii_case("ParameterValue") {
                     entry.parameter = Some(raw());
@@ -415,6 +439,39 @@ DefaultValue=0x60640020
                 (Some(Direction::Tpdo), 0x185, vec![0x6041_0010, 0x603F_0010]),
                 (Some(Direction::Rpdo), 0x205, vec![0x6040_0010]),
             ]
+        );
+    }
+
+    #[test]
+    fn object_names_and_string_types() {
+        let text = "[2001]\nParameterName=Axis label\nDataType=0x0009\n\
+                    [2002sub3]\nDataType=7\nParameterName=Gain\n[2003]\nDataType=x\n";
+        let dcf = parse(text.as_bytes(), 5);
+        let declared = |index, sub| dcf.objects.get(&Object { index, sub }).cloned();
+        assert_eq!(
+            declared(0x2001, 0),
+            Some(Declared {
+                name: Some("Axis label".into()),
+                text: true
+            })
+        );
+        assert_eq!(
+            declared(0x2002, 3),
+            Some(Declared {
+                name: Some("Gain".into()),
+                text: false
+            })
+        );
+        assert_eq!(declared(0x2003, 0), Some(Declared::default()));
+        assert_eq!(
+            parse(DRIVE.as_bytes(), 5)
+                .objects
+                .get(&Object {
+                    index: 0x1018,
+                    sub: 1
+                })
+                .and_then(|d| d.name.as_deref()),
+            Some("Vendor-ID")
         );
     }
 

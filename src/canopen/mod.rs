@@ -6,6 +6,7 @@ pub mod cob_id;
 pub mod codes;
 pub mod dcf;
 pub mod device_profile;
+pub mod dictionary;
 pub mod emcy;
 pub mod lss;
 pub mod nmt;

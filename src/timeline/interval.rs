@@ -79,3 +79,11 @@ impl Interval {
         Some(self.end?.time?.since(self.start.time?))
     }
 }
+
+/// SDO transfers are followed in frames' [`At`]s: the time for their
+/// timeout, the line to tell.
+impl crate::canopen::sdo::transfer::Moment for At {
+    fn time(&self) -> Option<Timestamp> {
+        self.time
+    }
+}

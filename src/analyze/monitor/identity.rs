@@ -14,8 +14,8 @@ use crate::analyze::analysis::OutputError;
 use crate::analyze::event::{Identified, IdentifiedText, NodeIdentity, NodeReport};
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
-use crate::canopen::NodeId;
 use crate::canopen::sdo::{DEVICE_TYPE, IDENTITY, Object, Text};
+use crate::canopen::{NodeId, dictionary};
 use crate::timeline::At;
 use crate::timeline::health::NodeHealth;
 
@@ -108,10 +108,7 @@ impl IdentityMonitor {
             return;
         };
         if let Some(identity) = self.node(channel, node) {
-            // Padding after the text is no part of it.
-            let text = text_of_bytes(bytes)
-                .trim_end_matches(['\0', ' '])
-                .to_string();
+            let text = dictionary::visible_string(bytes);
             *field(identity) = Some(IdentifiedText {
                 text,
                 line: at.line,
@@ -174,28 +171,9 @@ impl Field {
     }
 }
 
-/// A VISIBLE_STRING's bytes as text. CiA 301 means ASCII; devices also
-/// send UTF-8, and (German machine builders among them) Latin-1, whose
-/// bytes over 0x7F are no valid UTF-8: read as Latin-1 then, so
-/// "Sonderger\u{e4}t" is not a replacement character.
-fn text_of_bytes(bytes: &[u8]) -> String {
-    match std::str::from_utf8(bytes) {
-        Ok(text) => text.to_string(),
-        Err(_) => bytes.iter().map(|&b| char::from(b)).collect(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn texts_are_utf8_else_latin1() {
-        assert_eq!(text_of_bytes(b"AKD"), "AKD");
-        assert_eq!(text_of_bytes("Gerät".as_bytes()), "Gerät");
-        assert_eq!(text_of_bytes(b"Ger\xe4t"), "Gerät");
-        assert_eq!(text_of_bytes(b""), "");
-    }
 
     #[test]
     fn identity_objects_and_texts_by_index_and_sub() {

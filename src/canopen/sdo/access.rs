@@ -57,7 +57,7 @@ pub enum Sdo {
 }
 
 /// An object dictionary entry.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Object {
     pub index: u16,
     pub sub: u8,

@@ -9,6 +9,8 @@
 //!   segmented, and segmented uploads, for PDO mapping learning;
 //! - [`block`]: following block transfers, so that their segments are
 //!   never read as commands, and the small values they carry;
+//! - [`transfer`]: every transfer, from its first frame to its end, for
+//!   the user (the others learn values for the decoder);
 //! - [`abort`]: what abort codes mean.
 
 pub mod abort;
@@ -17,6 +19,7 @@ pub mod block;
 mod frame;
 pub mod segmented;
 mod tracker;
+pub mod transfer;
 
 pub use access::{
     COB_ID_EMCY, CONSUMER_HEARTBEAT, DEVICE_TYPE, ERROR_HISTORY, GUARD_TIME, IDENTITY,
