@@ -23,6 +23,8 @@ fixtures/s300.log (the S300 sequence: boot-up, SDO identity reads, EMCYs
                       1700000000 s, an ARP packet (another protocol:
                       skipped) and node 6's EMCYs; a name resolution and an
                       interface statistics block (not lines).
+- sdo-startup.pcap    pcap, link type 227: fixtures/sdo-startup.log (written
+                      by scripts/make_sdo_fixtures.py, run that first).
 - bus-errors.pcap     pcap, link type 227: fixtures/bus-errors.log with
                       its error frames (written by fixtures/make_fixtures.py,
                       run that first).
@@ -268,6 +270,21 @@ def main():
             [
                 (s, us, can_frame(">", word, data))
                 for s, us, word, data in log_frames("network-guarding.log")
+            ],
+        ),
+    )
+
+    # sdo-startup.pcap: fixtures/sdo-startup.log (every kind of SDO
+    # transfer), for the cross-check of our SDO decoding with tshark's.
+    write(
+        "sdo-startup.pcap",
+        pcap(
+            "<",
+            False,
+            227,
+            [
+                (s, us, can_frame(">", word, data))
+                for s, us, word, data in log_frames("sdo-startup.log")
             ],
         ),
     )

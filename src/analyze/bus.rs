@@ -404,7 +404,11 @@ mod tests {
         out.iter()
             .filter_map(|t| match &t.bus {
                 Bus::Errors(b) => Some(b),
-                Bus::BusOff(_) | Bus::Lss(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
+                Bus::BusOff(_)
+                | Bus::Lss(_)
+                | Bus::Incident(_)
+                | Bus::SyncMissed(_)
+                | Bus::Sdo(_) => None,
             })
             .collect()
     }
@@ -550,7 +554,11 @@ mod tests {
             .iter()
             .filter_map(|t| match &t.bus {
                 Bus::BusOff(o) => Some(o),
-                Bus::Errors(_) | Bus::Lss(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
+                Bus::Errors(_)
+                | Bus::Lss(_)
+                | Bus::Incident(_)
+                | Bus::SyncMissed(_)
+                | Bus::Sdo(_) => None,
             })
             .collect();
         assert_eq!(offs.len(), 1);

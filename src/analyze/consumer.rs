@@ -506,9 +506,12 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]
     fn steady_heartbeat(&mut self, idx: u64, frame: &Frame<'_>) -> bool {
-        // An incident due to close closes on the frame path, as it would
-        // frame by frame.
-        if frame.time.is_some_and(|t| self.incidents.passed(t)) {
+        // An incident due to close, or an SDO transfer due to run out,
+        // closes on the frame path, as it would frame by frame.
+        if frame
+            .time
+            .is_some_and(|t| self.incidents.passed(t) || self.monitors.sdo.passed(t))
+        {
             return false;
         }
         let line_base = self.line_base;
@@ -661,6 +664,10 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
             if self.monitors.nmt.passed(t) {
                 let (monitors, nodes, _, emit) = parts!(self);
                 monitors.nmt.deadlines_passed(t, line_no, nodes, emit)?;
+            }
+            if self.monitors.sdo.passed(t) {
+                let (monitors, _, facts, emit) = parts!(self);
+                monitors.sdo.expire(t, facts, emit)?;
             }
             if self.facts.bus.passed(t) {
                 let mut told = std::mem::take(&mut self.told);

@@ -14,11 +14,13 @@ use crate::canopen::nmt::{Command, NmtState};
 use crate::canopen::pdo::Mapping;
 use crate::canopen::profile::{Decoded, Profile};
 use crate::canopen::profile_choice::{Chosen, ProfileSource};
+use crate::canopen::sdo::Object;
+use crate::canopen::sdo::transfer::{Data, Direction, Outcome, Protocol};
 use crate::timeline::drive::{self, DriveState, Fault};
 use crate::timeline::heartbeat::{Outage, Supervision, TimeoutSource};
 use crate::timeline::history::ErrorHistory;
 use crate::timeline::nmt::{GuardCounts, Via};
-use crate::timeline::{NodeStats, State};
+use crate::timeline::{At, NodeStats, State};
 use crate::trace::can_error::ErrorKind;
 use crate::trace::deltas::TimeMode;
 use crate::trace::{Format, Span, Timestamp};
@@ -97,6 +99,11 @@ pub enum Bus {
     Incident(Box<super::incident::Incident>),
     /// SYNC skipped cycles (one event per gap).
     SyncMissed(super::traffic::SyncMissed),
+    /// An SDO transfer between the master and a node ended (told by the
+    /// frame that ended it; an unanswered one by the client's last frame,
+    /// once the timeout passed). A node that never answered is made no
+    /// node by it.
+    Sdo(Box<SdoTransfer>),
 }
 
 impl Bus {
@@ -108,8 +115,47 @@ impl Bus {
             Bus::Lss(_) => "lss",
             Bus::Incident(_) => "incident",
             Bus::SyncMissed(_) => "sync_missed",
+            Bus::Sdo(_) => "sdo",
         }
     }
+
+    /// The node the event is of: a node's bus-off, the node-id an LSS
+    /// frame configures or inquires, an SDO transfer's node; `None` for
+    /// the bus's own events (a burst, the logging controller's bus-off).
+    pub fn node(&self) -> Option<NodeId> {
+        match self {
+            Bus::BusOff(off) => off.node,
+            Bus::Lss(l) => l.node,
+            Bus::Sdo(t) => Some(t.node),
+            Bus::Errors(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
+        }
+    }
+}
+
+/// An SDO transfer that ended: what the master asked of which object of
+/// the node, the data that moved, and how it ended
+/// ([`crate::canopen::sdo::transfer`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SdoTransfer {
+    pub node: NodeId,
+    pub direction: Direction,
+    pub object: Object,
+    /// The object's name: from the node's DCF, else the CiA tables.
+    pub name: Option<Cow<'static, str>>,
+    /// `None` for an upload the node never answered.
+    pub protocol: Option<Protocol>,
+    /// The size the initiate gave.
+    pub indicated: Option<u32>,
+    /// The data that moved; `None` when none did.
+    pub data: Option<Data>,
+    /// The data as text, for a VISIBLE_STRING object shown whole.
+    pub text: Option<String>,
+    pub outcome: Outcome,
+    /// An abort code's meaning.
+    pub abort_text: Option<&'static str>,
+    /// Its first frame and the one that ended it.
+    pub start: At,
+    pub end: At,
 }
 
 /// An LSS frame, with what the frames before it said: the node-id a

@@ -57,11 +57,10 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     if emcy::is_nmt_error_control(id) {
         data.len() <= 1
     } else if sdo::is_sdo_id(id) {
-        // Asked of every SDO frame of a trace: the command and index are
-        // read once, from the three bytes the reader parsed.
+        // Asked of every SDO frame of a trace: the command is read once,
+        // from the bytes the reader parsed.
         match *data.head() {
-            [cmd, lo, hi] => sdo_frame_matters(id, cmd, Some(index_of(lo, hi))),
-            [cmd, ..] => sdo_frame_matters(id, cmd, None),
+            [cmd, ..] => sdo_frame_matters(id, cmd),
             [] => false,
         }
     } else {
@@ -69,29 +68,40 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
     }
 }
 
-/// Whether an SDO frame with command byte `cmd` (and bytes 1-2 `index`)
-/// can matter to the SDO monitor:
+/// Whether an SDO frame with command byte `cmd` can matter to the SDO
+/// monitor:
 ///
-/// - a command that carries an index (an initiate or its response) of an
-///   object some monitor learns from ([`learns_from`]);
+/// - a command that carries an index (an initiate or its answer), of any
+///   object: every transfer is told (`sdo` events), the monitor follows
+///   those of objects some monitor learns from to their values;
 /// - a command of the block transfers, an abort, or a segment that may be
 ///   a sub-block's first: the SDO monitor follows every block transfer
 ///   with these alone (a block's segments carry sequence numbers where
 ///   other frames carry commands, so it must know where one goes on to
-///   read any frame of its node right).
+///   read any frame of its node right);
+/// - a segmented transfer's last segment (c = 1): a long transfer whose
+///   segments are not read ends with it.
 ///
-/// Segments of segmented transfers never name an object, and their data
-/// bytes are never read as one: the SDO monitor takes a node's SDO ids out
-/// of the filter while it follows a segmented transfer of an object some
-/// monitor learns from, and puts them back at its end.
+/// The other segments of segmented transfers never name an object, and
+/// their data bytes are never read as one: the SDO monitor takes a node's
+/// SDO ids out of the filter while it reads a segmented transfer's every
+/// segment (a short one, or one of an object some monitor learns from),
+/// and puts them back at its end. A firmware download's thousands of
+/// segments stay behind the filter.
 #[inline]
-fn sdo_frame_matters(id: u32, cmd: u8, index: Option<u16>) -> bool {
+fn sdo_frame_matters(id: u32, cmd: u8) -> bool {
     let cs = cmd >> 5;
-    if (4..=6).contains(&cs) || cmd == FIRST_BLOCK_SEGMENT {
-        return true;
-    }
-    carries_index(id, cs) && index.is_some_and(learns_from)
+    (4..=6).contains(&cs)
+        || cmd == FIRST_BLOCK_SEGMENT
+        || carries_index(id, cs)
+        || cmd & 0xE1 == LAST_SEGMENT
 }
+
+/// A segment's command byte, masked with 0xE1 (the command specifier and
+/// the c bit), when it is its transfer's last: command specifier 0 (a
+/// download segment from the client, an upload segment from the node)
+/// with c = 1.
+const LAST_SEGMENT: u8 = 0x01;
 
 /// A sub-block's segment 1 when it is not the transfer's last: the block
 /// monitor learns from it where a sub-block begins (and a kept value fits
@@ -153,7 +163,6 @@ pub(super) fn may_widen(frame: &Frame<'_>, interest: &Interest) -> bool {
                 || index == sdo::DEVICE_TYPE
                 || pdo::PdoId::is_pdo_parameter(index)
                 || sdo::begins_segmented_transfer(frame.id, frame.data.as_slice())
-                    && learns_from(index)
         }
         _ => true,
     }
@@ -297,30 +306,11 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The objects some monitor learns from, listed out.
-    fn learnt(index: u16) -> bool {
-        matches!(
-            index,
-            0x1000
-                | 0x1003
-                | 0x1008..=0x100A
-                | 0x100C
-                | 0x100D
-                | 0x1014
-                | 0x1016
-                | 0x1017
-                | 0x1018
-                | 0x1400..=0x1BFF
-                | 0x603F
-                | 0x6040
-                | 0x6041
-        )
-    }
-
     proptest! {
         /// The one-pass filter says what CiA 301's commands say, spelt out
-        /// by direction: initiates of a learnt object, every block
-        /// command, abort and possible first block segment; no segment.
+        /// by direction: every initiate and its answer, every block
+        /// command, abort and possible first block segment, and a
+        /// segmented transfer's last segment; no other segment.
         #[test]
         fn content_matters_is_the_command_table(
             id in prop_oneof![0u32..0x800, 0x581u32..0x600, 0x601u32..0x680, 0x701u32..0x780],
@@ -343,10 +333,9 @@ mod tests {
             } else if sdo::is_sdo_id(id) {
                 let client = id >= 0x600;
                 let initiate = matches!((client, cmd >> 5), (true, 1 | 2) | (false, 2 | 3));
+                let last_segment = cmd >> 5 == 0 && cmd & 0x01 == 1;
                 !data.is_empty()
-                    && (matches!(cmd >> 5, 4..=6)
-                        || cmd == 0x01
-                        || initiate && data.len() >= 3 && learnt(index))
+                    && (matches!(cmd >> 5, 4..=6) || cmd == 0x01 || initiate || last_segment)
             } else {
                 true
             };
@@ -355,7 +344,7 @@ mod tests {
     }
 
     #[test]
-    fn segments_never_pass_whatever_their_data() {
+    fn only_last_segments_pass_whatever_their_data() {
         // A download segment whose data reads as 0x1A00, its confirmation,
         // an upload segment request and a server's upload segment.
         for (id, data) in [
@@ -370,12 +359,18 @@ mod tests {
                 "{id:X} {data:02X?}"
             );
         }
-        // The initiates of the same objects pass, an unlearnt one does not.
+        // Initiates of any object pass: every transfer is told.
         assert!(content_matters(0x605, DataHead::of(&[0x21, 0x00, 0x1A, 1])));
         assert!(content_matters(0x585, DataHead::of(&[0x4B, 0x41, 0x60, 0])));
-        assert!(!content_matters(
+        assert!(content_matters(0x605, DataHead::of(&[0x21, 0x50, 0x1F, 1])));
+        // A download's and an upload's last segment end a long transfer.
+        assert!(content_matters(
             0x605,
-            DataHead::of(&[0x21, 0x50, 0x1F, 1])
+            DataHead::of(&[0x0B, 1, 2, 3, 4, 0, 0, 0])
+        ));
+        assert!(content_matters(
+            0x585,
+            DataHead::of(&[0x1D, 1, 0, 0, 0, 0, 0, 0])
         ));
     }
 
@@ -420,6 +415,11 @@ mod tests {
         ));
         assert!(may_widen(
             &frame(0x601, &[0x21, 0x41, 0x60, 0, 2, 0, 0, 0]),
+            &i
+        ));
+        // Any segmented transfer short enough to be read segment by segment.
+        assert!(may_widen(
+            &frame(0x601, &[0x21, 0x00, 0x20, 0, 12, 0, 0, 0]),
             &i
         ));
         assert!(!may_widen(

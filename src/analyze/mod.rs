@@ -53,7 +53,8 @@ pub use event::{
     BURST_GAP_MS, BootEvent, Bus, BusEvent, BusOff, BusOffRecord, ChannelErrors, Counts,
     Diagnostic, DriveReport, EmcyEvent, ErrorBurst, Evidence, EvidenceKind, GuardingReport, Health,
     HealthEvent, HeartbeatReport, HistoryReport, Identified, IdentifiedText, InputReport,
-    LssIdentity, LssReport, NodeIdentity, NodeReport, TimeProducer, Unanswered, kind_counts,
+    LssIdentity, LssReport, NodeIdentity, NodeReport, SdoTransfer, TimeProducer, Unanswered,
+    kind_counts,
 };
 use nodes::Capped;
 pub use options::{EmcyId, MAX_NODES, Options};

@@ -22,6 +22,11 @@ use crate::trace::lines::{DEFAULT_BLOCK, DEFAULT_MAX_LINE};
 /// reported.
 pub const MAX_NODES: usize = 100_000;
 
+/// `--sdo-timeout`'s default, in ms: CANopenNode's and most masters' SDO
+/// client timeouts are 500 ms to 1 s, so a node silent for a second did
+/// not answer.
+pub const DEFAULT_SDO_TIMEOUT_MS: u64 = 1000;
+
 /// What the user asked for that shapes reading and selection.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -57,6 +62,9 @@ pub struct Options {
     pub cancel: Cancel,
     /// `--heartbeat-timeout`: every node's heartbeat timeout.
     pub heartbeat_timeout: Option<Span>,
+    /// `--sdo-timeout`: an SDO transfer whose node gives no answer this
+    /// long after the client's frame is unanswered.
+    pub sdo_timeout: Span,
     /// `--pdo`: PDO mappings the user gives (source `option`).
     pub pdo: Vec<Mapping>,
     /// `--dcf NODE=FILE`, read: mappings (source `dcf`) and identities.
@@ -106,6 +114,7 @@ impl Default for Options {
             profiles: ProfileChoice::default(),
             cancel: Cancel::new(),
             heartbeat_timeout: None,
+            sdo_timeout: Span::from_millis(DEFAULT_SDO_TIMEOUT_MS),
             pdo: Vec::new(),
             dcf: Vec::new(),
             assume_cia402_pdo: false,

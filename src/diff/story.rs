@@ -1,7 +1,7 @@
 //! A trace told as each node's CANopen story: the steps that mean something
 //! at the CANopen level (boot-ups, NMT states, EMCY codes, CiA 402 drive
-//! states, fault resets, SDO aborts, heartbeat losses, bus-offs, LSS
-//! services), without their times and without process data, so that two
+//! states, fault resets, SDO transfers and aborts, heartbeat losses,
+//! bus-offs, LSS services), without their times and without process data, so that two
 //! runs of the same machine can be compared step by step. [`Recorder`] is
 //! the analysis [`Sink`] that writes it.
 
@@ -14,6 +14,7 @@ use crate::analyze::{InputReport, NodeReport, Sink};
 use crate::canopen::NodeId;
 use crate::canopen::nmt::NmtState;
 use crate::canopen::pdo::Mapping;
+use crate::canopen::sdo::transfer::{Direction, Outcome, SHOWN_BYTES};
 use crate::timeline::drive::DriveState;
 use crate::timeline::nmt::Via;
 
@@ -46,6 +47,17 @@ pub enum Step {
         abort_code: u32,
         by_server: bool,
     },
+    /// An SDO transfer that did not abort (aborts are [`Step::SdoAbort`]):
+    /// a download with the value written (its size and hash), an upload
+    /// without the value read, which is the node's state of the moment
+    /// (process data when the master polls it).
+    Sdo {
+        direction: Direction,
+        index: u16,
+        subindex: u8,
+        written: Option<Written>,
+        result: Outcome,
+    },
     /// The node's heartbeat or guarding deadline passed.
     HeartbeatLost,
     /// A lost node was heard again (`restarted`: with a boot-up).
@@ -67,6 +79,7 @@ impl Step {
             Step::DriveState(_) => "axis_state",
             Step::FaultReset => "fault_reset",
             Step::SdoAbort { .. } => "sdo_abort",
+            Step::Sdo { .. } => "sdo",
             Step::HeartbeatLost => "heartbeat_lost",
             Step::HeartbeatBack { .. } => "heartbeat_back",
             Step::BusOff => "bus_off",
@@ -102,11 +115,61 @@ impl fmt::Display for Step {
                     crate::canopen::sdo::abort::describe(*abort_code)
                 )
             }
+            Step::Sdo {
+                direction,
+                index,
+                subindex,
+                written,
+                result,
+            } => {
+                write!(f, "SDO {} {index:#06x}.{subindex:02x}", direction.name())?;
+                match written {
+                    Some(w) if w.hex.is_empty() => write!(f, " of {} bytes", w.size)?,
+                    Some(w) if w.size as usize <= SHOWN_BYTES => write!(f, " = {}", w.hex)?,
+                    Some(w) => write!(
+                        f,
+                        " = {}... ({} bytes, hash {:016x})",
+                        w.hex, w.size, w.hash
+                    )?,
+                    None => {}
+                }
+                write!(f, ": {}", result.name())
+            }
             Step::HeartbeatLost => f.write_str("heartbeat lost"),
             Step::HeartbeatBack { restarted: true } => f.write_str("heard again, rebooted"),
             Step::HeartbeatBack { restarted: false } => f.write_str("heard again"),
             Step::BusOff => f.write_str("bus-off"),
             Step::Lss(words) => write!(f, "LSS {words}"),
+        }
+    }
+}
+
+/// A value an SDO download wrote, as the story compares it: its size and
+/// hash, and its bytes in hex (the first 64) to show.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Written {
+    pub size: u32,
+    pub hash: u64,
+    pub hex: String,
+}
+
+impl Written {
+    /// A value whose segments were not read (a long download) is known by
+    /// its size alone.
+    fn of(data: &crate::canopen::sdo::transfer::Data) -> Written {
+        if !data.whole {
+            return Written {
+                size: data.size,
+                hash: 0,
+                hex: String::new(),
+            };
+        }
+        let mut hex = Vec::new();
+        crate::report::format::push_hex(&mut hex, data.shown());
+        Written {
+            size: data.size,
+            hash: data.hash,
+            hex: String::from_utf8_lossy(&hex).into_owned(),
         }
     }
 }
@@ -179,6 +242,15 @@ impl Recorder {
             (told.lines, told.steps) = pairs.into_iter().unzip();
         }
         self.story
+    }
+
+    /// The last step told of a teller.
+    fn last_step(&self, channel: &str, node: Option<NodeId>) -> Option<&Step> {
+        let teller = Teller {
+            channel: channel.to_string(),
+            node,
+        };
+        self.story.tellers.get(&teller)?.steps.last()
     }
 
     fn push(&mut self, channel: &str, node: Option<NodeId>, line: u64, step: Step) {
@@ -262,6 +334,26 @@ impl Sink for Recorder {
             Bus::Incident(_) => return Ok(()),
             // A late SYNC is timing.
             Bus::SyncMissed(_) => return Ok(()),
+            // An abort is its own step (`sdo_abort`).
+            Bus::Sdo(t) if matches!(t.outcome, Outcome::Abort { .. }) => return Ok(()),
+            Bus::Sdo(t) => {
+                let step = Step::Sdo {
+                    direction: t.direction,
+                    index: t.object.index,
+                    subindex: t.object.sub,
+                    written: t
+                        .data
+                        .filter(|_| t.direction == Direction::Download)
+                        .map(|d| Written::of(&d)),
+                    result: t.outcome,
+                };
+                // A master polling an object repeats the same step as
+                // often as the trace is long: once is the story.
+                if self.last_step(e.channel, Some(t.node)) == Some(&step) {
+                    return Ok(());
+                }
+                (Some(t.node), step)
+            }
         };
         self.push(e.channel, node, e.line, step);
         Ok(())

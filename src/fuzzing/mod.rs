@@ -630,6 +630,27 @@ fn check_run(run: &Run, forced: Option<Format>, plain: Option<&[u8]>) {
                     assert!(v.get(key).is_some(), "{key} in {v}");
                 }
             }
+            Some("sdo") => {
+                // Told at its end, by the line that ended it: within the
+                // input, at or after its first line; what it shows is what
+                // it carried, at most 64 bytes.
+                let start = v["start_line"].as_u64().expect("start_line");
+                let end = v["line"].as_u64().expect("line");
+                assert!(start <= end && end <= c.lines, "sdo lines: {v}");
+                let result = v["result"].as_str().expect("result");
+                assert!(
+                    ["ok", "abort", "unanswered", "incomplete"].contains(&result),
+                    "{v}"
+                );
+                assert_eq!(v["abort_code"].is_null(), result != "abort", "{v}");
+                if let Some(hex) = v["value"].as_str() {
+                    let size = v["size"].as_u64().expect("a value has a size");
+                    assert_eq!(hex.len() as u64, 2 * size.min(64), "{v}");
+                    assert_eq!(v["value_hash"].is_null(), size <= 64, "{v}");
+                }
+                let node = v["node"].as_u64().expect("node");
+                assert!((1..=127).contains(&node), "{v}");
+            }
             Some("node") => {
                 nodes += 1;
                 node_emcy += v["emcy_count"].as_u64().expect("emcy_count");

@@ -24,7 +24,7 @@ use super::jsonw::{JsonWriter, push_decoded};
 use super::table::{bus_description, health_description};
 use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
-    BootEvent, Bus, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, NodeReport, Sink,
+    BootEvent, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, NodeReport, Sink,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
@@ -534,12 +534,14 @@ impl<W: Write> Sink for Csv<W> {
             return Ok(());
         }
         self.header()?;
-        let node = match ev.bus {
-            Bus::BusOff(off) => off.node,
-            Bus::Lss(l) => l.node,
-            Bus::Errors(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
-        };
-        self.head(ev.bus.slug(), ev.file, ev.line, ev.time, ev.channel, node);
+        self.head(
+            ev.bus.slug(),
+            ev.file,
+            ev.line,
+            ev.time,
+            ev.channel,
+            ev.bus.node(),
+        );
         let description = bus_description(ev.bus, &self.times);
         self.json.clear();
         self.jsonw.bus(&mut self.json, ev);

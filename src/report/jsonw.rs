@@ -18,7 +18,7 @@ use crate::analyze::traffic::ChannelReport;
 use crate::analyze::{
     BootEvent, Bus, BusEvent, ChannelErrors, Counts, Diagnostic, DriveReport, EmcyEvent,
     EvidenceKind, Health, HealthEvent, HeartbeatReport, HistoryReport, InputReport, NodeIdentity,
-    NodeReport, kind_counts,
+    NodeReport, SdoTransfer, kind_counts,
 };
 use crate::cache::{Cache, profile_key, slot};
 use crate::canopen::device_profile;
@@ -27,6 +27,7 @@ use crate::canopen::lss::{self, Lss};
 use crate::canopen::pdo::{Direction, Mapped};
 use crate::canopen::profile::{Decoded, FieldValue};
 use crate::canopen::register::Register;
+use crate::canopen::sdo::transfer::Outcome;
 use crate::timeline::Interval;
 use crate::timeline::drive::Via as DriveVia;
 use crate::trace::can_error::ErrorKind;
@@ -726,6 +727,58 @@ impl JsonWriter {
         o.str("summary", &i.summary);
     }
 
+    /// An SDO transfer's members (docs/guide/output.md): `value` is the
+    /// data in hex, its first 64 bytes when longer (`size`
+    /// says how long, `value_hash` tells two long values apart), `null`
+    /// when no data moved or the segments were not read.
+    fn sdo(&mut self, o: &mut Obj<'_>, t: &SdoTransfer) {
+        o.u64("node", u64::from(t.node));
+        o.str("direction", t.direction.name());
+        push_code(o.key("index"), t.object.index);
+        o.u64("subindex", u64::from(t.object.sub));
+        match &t.name {
+            Some(name) => o.str("name", name),
+            None => o.null("name"),
+        }
+        let shown = t.data.filter(|d| d.whole);
+        match t.data.map(|d| d.size).or(t.indicated) {
+            Some(size) => o.u64("size", u64::from(size)),
+            None => o.null("size"),
+        }
+        match shown {
+            Some(d) => push_hex(o.key("value"), d.shown()),
+            None => o.null("value"),
+        }
+        match shown.filter(|d| !d.complete()) {
+            Some(d) => o.str("value_hash", &format!("fnv1a64:{:016x}", d.hash)),
+            None => o.null("value_hash"),
+        }
+        match &t.text {
+            Some(text) => o.str("text", text),
+            None => o.null("text"),
+        }
+        match t.protocol {
+            Some(p) => o.str("transfer", p.name()),
+            None => o.null("transfer"),
+        }
+        o.str("result", t.outcome.name());
+        match t.outcome {
+            Outcome::Abort { code, by_server } => {
+                o.str("abort_code", &format!("0x{code:08X}"));
+                o.str("abort_text", t.abort_text.unwrap_or_default());
+                o.str("by", if by_server { "server" } else { "client" });
+            }
+            _ => {
+                o.null("abort_code");
+                o.null("abort_text");
+                o.null("by");
+            }
+        }
+        self.time_pair(o, ["start", "start_text"], t.start.time);
+        o.u64("start_line", t.start.line);
+        self.time_pair(o, ["end", "end_text"], t.end.time);
+    }
+
     /// `node`, `kind`, `code`, `time`, `time_text`, `line` of an incident's event.
     fn occurrence(&mut self, o: &mut Obj<'_>, e: &Occurrence) {
         match e.node {
@@ -792,6 +845,7 @@ impl JsonWriter {
                 }
                 buf.push(b']');
             }
+            Bus::Sdo(t) => self.sdo(&mut o, t),
             Bus::Lss(l) => {
                 match l.node {
                     Some(n) => o.u64("node", u64::from(n)),

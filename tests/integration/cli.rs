@@ -844,7 +844,9 @@ fn json_is_one_document_with_the_four_arrays() {
     let events = doc["events"].as_array().unwrap();
     let of = |t: &str| events.iter().filter(|e| e["type"] == t).count();
     assert_eq!((of("emcy"), of("boot"), of("incident")), (7, 2, 2));
-    assert_eq!(of("nmt") + 11, events.len());
+    // And the master's reads of node 1's device type and vendor id.
+    assert_eq!(of("sdo"), 2);
+    assert_eq!(of("nmt") + 13, events.len());
 }
 
 #[test]
@@ -921,6 +923,7 @@ fn ndjson_order_is_events_then_nodes_then_inputs() {
         | "heartbeat_lost"
         | "heartbeat_back"
         | "sdo_abort"
+        | "sdo"
         | "error_history"
         | "error_history_cleared"
         | "incident" => 0,

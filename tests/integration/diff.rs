@@ -24,10 +24,12 @@ fn an_aborted_write_is_the_one_difference_and_exit_1() {
     assert_eq!(code, 1);
     assert_eq!(v["same"], false);
     assert_eq!(v["differences"], 1, "{v:#}");
+    // The write went through in one and was aborted in the other.
     let first = &v["first"];
     assert_eq!(first["node"], 2);
-    assert_eq!(first["kind"], "added");
-    assert_eq!(first["good"], Value::Null);
+    assert_eq!(first["kind"], "changed");
+    assert_eq!(first["good"]["kind"], "sdo");
+    assert_eq!(first["good"]["line"], 10);
     assert_eq!(first["bad"]["kind"], "sdo_abort");
     assert_eq!(first["bad"]["index"], "0x1017");
     assert_eq!(first["bad"]["subindex"], 0);
@@ -35,15 +37,19 @@ fn an_aborted_write_is_the_one_difference_and_exit_1() {
     assert_eq!(first["bad"]["line"], 10);
     let nodes = v["nodes"].as_array().unwrap();
     assert_eq!(nodes.len(), 1, "only node 2 differs");
-    assert_eq!(nodes[0]["equal_before"], 1, "its boot-up is told alike");
+    assert_eq!(
+        nodes[0]["equal_before"], 2,
+        "its boot-up and the read of its device type are told alike"
+    );
 }
 
 #[test]
 fn the_other_way_round_the_abort_is_removed() {
     let (v, code) = json(ABORTED, GOOD);
     assert_eq!(code, 1);
-    assert_eq!(v["first"]["kind"], "removed");
+    assert_eq!(v["first"]["kind"], "changed");
     assert_eq!(v["first"]["good"]["abort_code"], "0x06090030");
+    assert_eq!(v["first"]["bad"]["kind"], "sdo");
 }
 
 #[test]

@@ -38,6 +38,8 @@ pub(crate) fn scenario_flags(fixture: &Path) -> &'static [&'static str] {
         "cia402-not-drive" => &["--assume-cia402-pdo"],
         // SYNC's gaps, every id's timing and the load need --timing.
         "sync-gaps" => &["--bitrate", "500k"],
+        // Every SDO transfer in the table too.
+        "sdo-startup" => &["--show", "sdo"],
         _ => &[],
     }
 }

@@ -51,6 +51,7 @@ fn every_health_event_has_the_common_keys_and_line_order() {
         "heartbeat_back",
         "heartbeat_lost",
         "nmt",
+        "sdo",
         "sdo_abort",
     ];
     assert_eq!(types.into_iter().collect::<Vec<_>>(), expected);

@@ -377,12 +377,7 @@ impl<E: Write> Emit<'_, E> {
             }
         }
         for t in told.drain(..) {
-            // An LSS frame's node-id is the one it configures or inquires.
-            let node = match &t.bus {
-                Bus::BusOff(off) => off.node,
-                Bus::Lss(l) => l.node,
-                Bus::Errors(_) | Bus::Incident(_) | Bus::SyncMissed(_) => None,
-            };
+            let node = t.bus.node();
             // An event of no node (a burst, the logging controller's
             // bus-off) is no node's: `--node` leaves it out.
             let selected = match node {

@@ -1,24 +1,27 @@
 //! The SDO monitor: SDO transfers (expedited, segmented and block) followed
 //! to the values nodes hold and report (the facts other monitors need:
 //! device type, identity, the EMCY id, the heartbeat times, PDO parameters,
-//! a drive's words), aborts, and the error history (0x1003) read-outs.
+//! a drive's words), aborts, the error history (0x1003) read-outs, and
+//! every transfer told as an `sdo` event when it ends.
 
+use std::borrow::Cow;
 use std::io::Write;
 
 use super::context::{Emit, Fact, Facts, Learnt, Monitor, Seen, Step};
 use crate::analyze::analysis::OutputError;
-use crate::analyze::event::{Health, HistoryItem, HistoryReport, NodeReport};
+use crate::analyze::bus::Told;
+use crate::analyze::event::{Bus, Health, HistoryItem, HistoryReport, NodeReport, SdoTransfer};
 use crate::analyze::interest::learns_from;
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
-use crate::canopen::NodeId;
 use crate::canopen::sdo::abort as sdo_abort;
+use crate::canopen::sdo::transfer::{Direction, Ended, Outcome, Transfers};
 use crate::canopen::sdo::{self, BlockStep, Blocks, Confirmed, Downloads, Sdo, Uploads};
+use crate::canopen::{NodeId, device_profile, dictionary};
 use crate::timeline::At;
 use crate::timeline::error_history::ReadOut;
 use crate::timeline::health::NodeHealth;
 
-#[derive(Default)]
 pub(in crate::analyze) struct SdoMonitor {
     /// Expedited transfers of the followed objects, to the values they carry.
     tracker: sdo::Tracker,
@@ -29,14 +32,31 @@ pub(in crate::analyze) struct SdoMonitor {
     downloads: Downloads,
     /// Segmented uploads of the objects some monitor learns from.
     uploads: Uploads,
+    /// Every transfer, to tell it when it ends.
+    transfers: Transfers<At>,
+    /// The channel each node's SDO frames came on last (by node id).
+    channels: Vec<Vec<u8>>,
     /// Buffers reused from frame to frame.
     events: Vec<(At, Health)>,
     read_outs: Vec<ReadOut>,
+    ended: Vec<Ended<At>>,
+    told: Vec<Told>,
 }
 
 impl Monitor for SdoMonitor {
-    fn new(_opts: &Options) -> Self {
-        SdoMonitor::default()
+    fn new(opts: &Options) -> Self {
+        SdoMonitor {
+            tracker: sdo::Tracker::default(),
+            blocks: Blocks::default(),
+            downloads: Downloads::default(),
+            uploads: Uploads::default(),
+            transfers: Transfers::new(opts.sdo_timeout),
+            channels: vec![Vec::new(); 128],
+            events: Vec::new(),
+            read_outs: Vec::new(),
+            ended: Vec::new(),
+            told: Vec::new(),
+        }
     }
 
     /// A frame on a CAN SDO id.
@@ -51,10 +71,43 @@ impl Monitor for SdoMonitor {
             return Ok(Step::Pass);
         }
         let (id, data) = (frame.id, frame.data);
+        let node = (id & 0x7F) as NodeId;
+        if let Some(channel) = self.channels.get_mut(usize::from(node))
+            && channel.as_slice() != frame.channel
+        {
+            channel.clear();
+            channel.extend_from_slice(frame.channel);
+        }
         match self.blocks.feed(id, data, learns_from) {
             BlockStep::Other => {}
-            BlockStep::Part => return Ok(Step::Done),
-            BlockStep::Done { upload, value, .. } => {
+            BlockStep::Part => {
+                // Only the client's initiate leaves a transfer just begun.
+                if id >= sdo::REQUEST_BASE
+                    && let Some((upload, object, size)) = self.blocks.begun(node)
+                {
+                    let direction = if upload {
+                        Direction::Upload
+                    } else {
+                        Direction::Download
+                    };
+                    let cut = self
+                        .transfers
+                        .block_begun(node, direction, object, size, frame.at);
+                    self.ended.extend(cut);
+                    self.tell(facts, emit)?;
+                }
+                return Ok(Step::Done);
+            }
+            BlockStep::Done {
+                upload,
+                value,
+                size,
+                ..
+            } => {
+                let kept = value.map(|c| (c.value, c.len));
+                let done = self.transfers.block_done(node, size, kept, frame.at);
+                self.ended.extend(done);
+                self.tell(facts, emit)?;
                 let mut learnt = Learnt::default();
                 if let Some(c) = value {
                     completed(&mut learnt, c, upload);
@@ -63,6 +116,8 @@ impl Monitor for SdoMonitor {
             }
         }
         let following = self.following(id);
+        let told = self.transfers.feed(id, data, frame.at);
+        self.ended.extend(told);
         let mut learnt = Learnt::default();
         if self.downloads.wants(id, data)
             && let Some(c) = self.downloads.feed(id, data)
@@ -101,6 +156,7 @@ impl Monitor for SdoMonitor {
             learnt.read = learnt.read.or(more.read);
             learnt.holds = learnt.holds.or(more.holds);
         }
+        self.tell(facts, emit)?;
         Ok(Step::Learnt(learnt))
     }
 
@@ -161,7 +217,8 @@ impl Monitor for SdoMonitor {
     }
 
     /// Read-outs going on end as partial (their events at the last line,
-    /// after every event before; the node keeps the read-out's own line).
+    /// after every event before; the node keeps the read-out's own line);
+    /// transfers going on end unanswered or incomplete.
     fn finish<E: Write>(
         &mut self,
         end: At,
@@ -169,6 +226,8 @@ impl Monitor for SdoMonitor {
         facts: &Facts<'_>,
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
+        self.transfers.finish(&mut self.ended);
+        self.tell(facts, emit)?;
         let reading = nodes.picked(|tl| tl.health().is_some_and(|h| h.history.is_reading()));
         for (id, node) in reading {
             let Some(slot) = nodes.slot_by_id(id, node) else {
@@ -236,7 +295,54 @@ impl SdoMonitor {
     /// Whether the node of SDO id `id` has a segmented transfer going on
     /// that this monitor follows (of an object some monitor learns from).
     fn following(&self, id: u32) -> bool {
-        self.downloads.in_segments(id) || self.uploads.in_progress(id)
+        self.downloads.in_segments(id)
+            || self.uploads.in_progress(id)
+            || self.transfers.reads_segments(id)
+    }
+
+    /// Whether a transfer waiting for its node may have run out by `now`.
+    #[inline]
+    pub(in crate::analyze) fn passed(&self, now: crate::trace::Timestamp) -> bool {
+        self.transfers.passed(now)
+    }
+
+    /// Transfers whose node did not answer in time by `now` are told as
+    /// unanswered.
+    pub(in crate::analyze) fn expire<E: Write>(
+        &mut self,
+        now: crate::trace::Timestamp,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<(), OutputError> {
+        self.transfers.expire(now, &mut self.ended);
+        self.tell(facts, emit)
+    }
+
+    /// The transfers that ended, told as `sdo` events.
+    fn tell<E: Write>(
+        &mut self,
+        facts: &Facts<'_>,
+        emit: &mut Emit<'_, E>,
+    ) -> Result<(), OutputError> {
+        if self.ended.is_empty() {
+            return Ok(());
+        }
+        for e in self.ended.drain(..) {
+            let channel = self
+                .channels
+                .get(usize::from(e.node))
+                .map(|c| String::from_utf8_lossy(c).into_owned())
+                .unwrap_or_default();
+            self.told.push(Told {
+                channel,
+                at: e.end,
+                bus: Bus::Sdo(Box::new(transfer_report(e, facts, emit.opts))),
+            });
+        }
+        let mut told = std::mem::take(&mut self.told);
+        let result = emit.bus(&mut told);
+        self.told = told;
+        result
     }
 
     /// Whether a frame can matter to a segmented upload: the server's
@@ -373,6 +479,60 @@ impl SdoMonitor {
                 .health_mut(emit.opts.heartbeat_timeout)
                 .last_read_out = Some(r);
         }
+    }
+}
+
+/// A transfer as told: named by the node's DCF, else the CiA tables (a
+/// drive's objects only for a node known to be a drive), its data as text
+/// when the object holds one.
+fn transfer_report(e: Ended<At>, facts: &Facts<'_>, opts: &Options) -> SdoTransfer {
+    let object = e.object;
+    let declared = opts
+        .dcf
+        .iter()
+        .find(|(n, _)| *n == e.node)
+        .and_then(|(_, dcf)| {
+            let whole = sdo::Object { sub: 0, ..object };
+            dcf.objects.get(&object).or_else(|| dcf.objects.get(&whole))
+        });
+    let drive = || {
+        facts
+            .profiles
+            .device_type(e.node)
+            .is_some_and(device_profile::is_drive)
+    };
+    let name = declared
+        .and_then(|d| d.name.clone())
+        .map(Cow::Owned)
+        .or_else(|| dictionary::communication_name(object).map(Cow::Borrowed))
+        .or_else(|| {
+            drive()
+                .then(|| dictionary::drive_name(object.index))
+                .flatten()
+                .map(Cow::Borrowed)
+        });
+    let is_text = dictionary::is_text(object) || declared.is_some_and(|d| d.text);
+    let text = e
+        .data
+        .filter(|d| is_text && d.complete())
+        .map(|d| dictionary::visible_string(d.shown()));
+    let abort_text = match e.outcome {
+        Outcome::Abort { code, .. } => Some(sdo_abort::describe(code)),
+        _ => None,
+    };
+    SdoTransfer {
+        node: e.node,
+        direction: e.direction,
+        object,
+        name,
+        protocol: e.protocol,
+        indicated: e.indicated,
+        data: e.data,
+        text,
+        outcome: e.outcome,
+        abort_text,
+        start: e.start,
+        end: e.end,
     }
 }
 

@@ -152,6 +152,14 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub heartbeat_timeout: Option<Span>,
 
+    /// An SDO transfer the node does not answer within this many seconds is unanswered [default: 1]
+    ///
+    /// An SDO transfer whose node gives no answer this many seconds after the client's
+    /// frame (or before the client asks something else, or the trace ends) is told with
+    /// result `unanswered` (default 1)
+    #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
+    pub sdo_timeout: Option<Span>,
+
     /// Fault-like events further apart than this (seconds) start a new incident [default: 2]
     ///
     /// Fault-like events of any node or the bus (an error EMCY, a heartbeat loss, a reboot
@@ -217,6 +225,14 @@ pub struct DecodeArgs {
     /// and per bus (summary)
     #[arg(long, value_enum, default_value_t = View::Full, value_name = "VIEW", help_heading = OUTPUT)]
     pub view: View,
+
+    /// Table rows beyond the default: sdo (every SDO transfer)
+    ///
+    /// Table rows beyond the default: `sdo`, every SDO transfer (the table shows
+    /// unanswered ones always, aborts as `sdo_abort` rows). The JSON formats always
+    /// hold every transfer
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "WHAT", help_heading = OUTPUT)]
+    pub show: Vec<Show>,
 
     /// Exit 2 when any line is malformed
     #[arg(long, help_heading = CI)]
@@ -432,6 +448,13 @@ pub enum View {
     /// One line per node (state, errors seen, time in error, longest error,
     /// first/last EMCY) and a bus line per input
     Summary,
+}
+
+/// `--show`: rows the table leaves out by default.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Show {
+    /// Every SDO transfer
+    Sdo,
 }
 
 /// `--color`.
@@ -836,6 +859,7 @@ impl DecodeArgs {
             emcy_ids: self.emcy_id.clone(),
             profiles: profile_choice::resolve(&self.profile, &self.profile_file)?,
             heartbeat_timeout: self.heartbeat_timeout,
+            sdo_timeout: self.sdo_timeout.unwrap_or(Options::default().sdo_timeout),
             incident_gap: self.incident_gap.unwrap_or(Options::default().incident_gap),
             timing: self.timing || self.bitrate.is_some(),
             bit_rate: self.bitrate,

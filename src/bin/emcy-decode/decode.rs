@@ -10,7 +10,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use globset::{Glob, GlobSet, GlobSetBuilder};
 
-use super::cli::{ColorChoice, DecodeArgs, OutputFormat, View};
+use super::cli::{ColorChoice, DecodeArgs, OutputFormat, Show, View};
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals};
 use emcy_decode::analyze::fail_on::{self, FailOn, Tally};
 use emcy_decode::analyze::{
@@ -102,6 +102,11 @@ pub(super) fn run(args: &DecodeArgs) -> Result<ExitCode> {
                 .time_style(time_style)
                 .fit_width(width);
             let table = if summary { table.summary_only() } else { table };
+            let table = if args.show.contains(&Show::Sdo) {
+                table.show_sdo()
+            } else {
+                table
+            };
             // A live table shows each input's header as it starts.
             if live {
                 Box::new(table)

@@ -60,6 +60,9 @@ pub enum BlockStep {
         object: Object,
         upload: bool,
         value: Option<Confirmed>,
+        /// Bytes the receiver acknowledged, less those unused in the last
+        /// segment.
+        size: u32,
     },
 }
 
@@ -98,8 +101,13 @@ struct Transfer {
     last_in_order: bool,
     /// Whether the last acknowledgement covered the transfer's last segment.
     last_acked: bool,
-    /// Bytes acknowledged in earlier sub-blocks.
+    /// Bytes acknowledged in earlier sub-blocks, of segments received in
+    /// order (the data kept is placed by it).
     acked: u32,
+    /// Bytes the receiver said it took, whether the trace showed their
+    /// segments or not (the content filter keeps most of them back): the
+    /// transfer's size.
+    carried: u32,
     /// The transfer's first bytes, as far as received.
     kept: [u8; KEPT_BYTES],
     /// Whether the data kept can be trusted: a frame of the transfer was
@@ -151,6 +159,16 @@ impl Blocks {
             _ => {}
         }
         step
+    }
+
+    /// The block transfer `node` just began (its client's initiate, no
+    /// answer yet): whether it is an upload, its object and the size the
+    /// initiate gave.
+    pub fn begun(&self, node: NodeId) -> Option<(bool, Object, Option<u32>)> {
+        self.transfers
+            .get(u32::from(node))
+            .filter(|t| t.phase == Phase::Initiating)
+            .map(|t| (t.upload, t.object, t.size))
     }
 
     /// Whether `node` has a block transfer going on.
@@ -260,6 +278,7 @@ fn step(
                 object: t.object,
                 upload,
                 value: value(t, node),
+                size: t.carried,
             };
             *t = Transfer::default();
             done
@@ -356,6 +375,9 @@ fn acknowledged(t: &mut Transfer, ackseq: u8) {
     }
     let taken = ackseq.min(t.in_order);
     t.acked = t.acked.saturating_add(u32::from(taken) * SEGMENT_BYTES);
+    t.carried = t
+        .carried
+        .saturating_add(u32::from(ackseq & 0x7F) * SEGMENT_BYTES);
     t.last_acked = t.last_in_order && ackseq >= t.in_order;
     t.in_order = 0;
     t.last_in_order = false;
@@ -369,6 +391,7 @@ fn end(t: &mut Transfer, cmd: u8, data: &[u8]) -> BlockStep {
         t.whole = false;
     }
     let unused = u32::from((cmd >> 2) & 0x07);
+    t.carried = t.carried.saturating_sub(unused);
     let len = t.acked.saturating_sub(unused);
     if t.size.is_some_and(|s| s != len) {
         t.whole = false;
@@ -473,11 +496,49 @@ mod tests {
                     object: DEVICE_TYPE,
                     value: 0x0002_0192,
                     len: 4
-                })
+                }),
+                size: 4,
             }
         );
         assert!(!b.going(4));
         assert_eq!(b.going, 0);
+    }
+
+    #[test]
+    fn the_size_is_what_the_receiver_acknowledged_seen_or_not() {
+        let mut b = Blocks::new();
+        // 20 bytes to 0x2010 sub 1; segment 2 never reaches the follower
+        // (the content filter keeps it back).
+        feed(&mut b, 0x603, &[0xC2, 0x10, 0x20, 1, 20, 0, 0, 0]);
+        assert_eq!(
+            b.begun(3),
+            Some((
+                false,
+                Object {
+                    index: 0x2010,
+                    sub: 1
+                },
+                Some(20)
+            ))
+        );
+        feed(&mut b, 0x583, &[0xA0, 0x10, 0x20, 1, 127, 0, 0, 0]);
+        assert_eq!(b.begun(3), None, "answered");
+        feed(&mut b, 0x603, &[0x01, 1, 2, 3, 4, 5, 6, 7]);
+        feed(&mut b, 0x603, &[0x83, 15, 16, 17, 18, 19, 20, 0]);
+        feed(&mut b, 0x583, &[0xA2, 3, 127, 0, 0, 0, 0, 0]);
+        feed(&mut b, 0x603, &[0xC5, 0, 0, 0, 0, 0, 0, 0]);
+        let done = feed(&mut b, 0x583, &[0xA1, 0, 0, 0, 0, 0, 0, 0]);
+        assert!(
+            matches!(
+                done,
+                BlockStep::Done {
+                    size: 20,
+                    value: None,
+                    ..
+                }
+            ),
+            "{done:?}"
+        );
     }
 
     #[test]
@@ -542,7 +603,8 @@ mod tests {
                     sub: 1
                 },
                 upload: false,
-                value: None
+                value: None,
+                size: 33,
             }
         );
         // The same with 0x85 as the fifth segment of a sub-block.

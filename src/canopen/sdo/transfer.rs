@@ -189,7 +189,9 @@ pub struct Ended<M> {
     pub node: NodeId,
     pub direction: Direction,
     pub object: Object,
-    pub protocol: Protocol,
+    /// `None` for an upload the node never answered: the node chooses
+    /// between expedited and segmented.
+    pub protocol: Option<Protocol>,
     /// The size the initiate (or the node's answer to an upload) gave.
     pub indicated: Option<u32>,
     /// What it carried; `None` when no data moved (an upload aborted before
@@ -265,11 +267,12 @@ impl<M: Moment> Going<M> {
 
     fn end(self, node: NodeId, outcome: Outcome, at: M) -> Ended<M> {
         let moved = self.moved || self.direction == Direction::Download;
+        let chosen = moved || self.protocol == Protocol::Block;
         Ended {
             node,
             direction: self.direction,
             object: self.object,
-            protocol: self.protocol,
+            protocol: chosen.then_some(self.protocol),
             indicated: self.indicated,
             data: moved.then_some(self.data),
             outcome,
@@ -758,7 +761,7 @@ mod tests {
                 5,
                 Direction::Download,
                 object(0x1017, 0),
-                Protocol::Expedited,
+                Some(Protocol::Expedited),
                 Outcome::Ok
             )
         );
@@ -798,7 +801,7 @@ mod tests {
         assert!(d.complete());
         assert_eq!(
             (e.protocol, e.indicated, e.start, e.end),
-            (Protocol::Segmented, Some(9), L(1), L(6))
+            (Some(Protocol::Segmented), Some(9), L(1), L(6))
         );
         assert!(!t.reads_segments(0x583));
         assert_eq!(d.hash, Data::of(b"Servo X12").hash);
@@ -900,7 +903,7 @@ mod tests {
         let e = t.block_done(4, 300, None, L(9)).unwrap();
         assert_eq!(
             (e.protocol, e.outcome, e.data.unwrap().size),
-            (Protocol::Block, Outcome::Ok, 300)
+            (Some(Protocol::Block), Outcome::Ok, 300)
         );
         // An abort ends one.
         t.block_begun(4, Direction::Upload, object(0x2000, 0), None, L(10));

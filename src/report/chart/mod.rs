@@ -166,7 +166,7 @@ impl Collector {
                     if g.missed == 1 { "" } else { "s" }
                 ),
             }),
-            Bus::Lss(_) | Bus::Incident(_) => None,
+            Bus::Lss(_) | Bus::Incident(_) | Bus::Sdo(_) => None,
         };
         if let Some(mark) = mark {
             let c = &mut self.current;

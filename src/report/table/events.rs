@@ -14,10 +14,13 @@ use super::fit::{
     CHANNEL_MAX, Fit, blanks, display_width, pad_to, push_cut, push_padded, write_row,
 };
 use super::page::{BOLD, GREEN, Page, RED, YELLOW};
-use crate::analyze::{BootEvent, Bus, BusEvent, EmcyEvent, Health, HealthEvent, HistoryReport};
+use crate::analyze::{
+    BootEvent, Bus, BusEvent, EmcyEvent, Health, HealthEvent, HistoryReport, SdoTransfer,
+};
 use crate::canopen::NodeId;
 use crate::canopen::emcy::Warning;
 use crate::canopen::profile::{Decoded, FieldValue};
+use crate::canopen::sdo::transfer::Outcome;
 use crate::report::format::{
     TABLE_LIST, code_text, codes_list, push_code, push_codes, push_hex_byte,
 };
@@ -307,6 +310,11 @@ impl EventLines {
             Bus::Lss(l) => ("lss", l.node, None),
             Bus::Incident(_) => ("incident", None, Some(RED)),
             Bus::SyncMissed(_) => ("sync", None, Some(YELLOW)),
+            Bus::Sdo(t) => match t.outcome {
+                Outcome::Ok => ("sdo", Some(t.node), None),
+                Outcome::Abort { .. } => ("sdo", Some(t.node), Some(RED)),
+                Outcome::Unanswered | Outcome::Incomplete => ("sdo", Some(t.node), Some(YELLOW)),
+            },
         };
         self.write_tagged(
             page,
@@ -747,6 +755,7 @@ pub(crate) fn bus_description(bus: &Bus, times: &TimeFormat) -> String {
             };
             format!("{who} bus-off{until}")
         }
+        Bus::Sdo(t) => sdo_description(t),
         Bus::Lss(l) => {
             let mut text = format!(
                 "LSS {}: {}",
@@ -768,6 +777,54 @@ pub(crate) fn bus_description(bus: &Bus, times: &TimeFormat) -> String {
             text
         }
     }
+}
+
+/// An SDO transfer in words: "SDO download 0x1017.0 Producer heartbeat
+/// time = e803 (2 bytes, expedited): ok".
+fn sdo_description(t: &SdoTransfer) -> String {
+    let mut text = format!(
+        "SDO {} 0x{:04X}.{}",
+        t.direction.name(),
+        t.object.index,
+        t.object.sub
+    );
+    if let Some(name) = &t.name {
+        text.push(' ');
+        text.push_str(name);
+    }
+    match (&t.text, t.data) {
+        (Some(s), _) => text.push_str(&format!(" = \"{s}\"")),
+        (None, Some(d)) if d.whole && d.size > 0 => {
+            let mut hex = Vec::new();
+            crate::report::format::push_hex(&mut hex, d.shown());
+            let more = if d.complete() { "" } else { "..." };
+            text.push_str(&format!(" = {}{more}", String::from_utf8_lossy(&hex)));
+        }
+        _ => {}
+    }
+    let size = t
+        .data
+        .map(|d| d.size)
+        .or(t.indicated)
+        .map(|n| format!("{n} byte{}", if n == 1 { "" } else { "s" }));
+    let how: Vec<String> = size
+        .into_iter()
+        .chain(t.protocol.map(|p| p.name().to_string()))
+        .collect();
+    if !how.is_empty() {
+        text.push_str(&format!(" ({})", how.join(", ")));
+    }
+    match t.outcome {
+        Outcome::Abort { code, by_server } => text.push_str(&format!(
+            ": aborted by the {}, 0x{code:08X} {}",
+            if by_server { "node" } else { "client" },
+            t.abort_text.unwrap_or_default()
+        )),
+        Outcome::Unanswered => text.push_str(": unanswered"),
+        Outcome::Incomplete => text.push_str(": incomplete (the client did not go on)"),
+        Outcome::Ok => text.push_str(": ok"),
+    }
+    text
 }
 
 pub(crate) fn health_description(health: &Health, times: &TimeFormat) -> String {

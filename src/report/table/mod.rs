@@ -16,6 +16,7 @@ use super::timefmt::{TimeFormat, TimeStyle};
 use crate::analyze::{
     BootEvent, Bus, BusEvent, Diagnostic, EmcyEvent, HealthEvent, InputReport, Sink,
 };
+use crate::canopen::sdo::transfer::Outcome;
 use crate::text::printable;
 
 mod end_tables;
@@ -40,6 +41,8 @@ pub struct TableReport<W: Write> {
     summary_only: bool,
     /// The input's incidents so far, for the section that opens its end.
     incidents: end_tables::Incidents,
+    /// `--show sdo`: a row for every SDO transfer, not only unanswered ones.
+    show_sdo: bool,
 }
 
 impl<W: Write> TableReport<W> {
@@ -55,6 +58,7 @@ impl<W: Write> TableReport<W> {
             flush_each,
             summary_only: false,
             incidents: end_tables::Incidents::default(),
+            show_sdo: false,
         }
     }
 
@@ -74,6 +78,12 @@ impl<W: Write> TableReport<W> {
     /// The summary view: what a CI log should show.
     pub fn summary_only(mut self) -> Self {
         self.summary_only = true;
+        self
+    }
+
+    /// A row for every SDO transfer (`--show sdo`).
+    pub fn show_sdo(mut self) -> Self {
+        self.show_sdo = true;
         self
     }
 
@@ -129,6 +139,14 @@ impl<W: Write> Sink for TableReport<W> {
             self.incidents.push(ev.channel, i);
         }
         if self.summary_only {
+            return Ok(());
+        }
+        // A transfer that went through is detail; one the node never
+        // answered is a warning (an abort has its own row).
+        if let Bus::Sdo(t) = ev.bus
+            && !self.show_sdo
+            && !matches!(t.outcome, Outcome::Unanswered | Outcome::Incomplete)
+        {
             return Ok(());
         }
         self.events.write_bus_event(&mut self.page, ev)?;
