@@ -506,12 +506,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     /// and timed. `false`: not that case, nothing was changed.
     #[inline]
     fn steady_heartbeat(&mut self, idx: u64, frame: &Frame<'_>) -> bool {
-        // An incident due to close, or an SDO transfer due to run out,
-        // closes on the frame path, as it would frame by frame.
-        if frame
-            .time
-            .is_some_and(|t| self.incidents.passed(t) || self.monitors.sdo.passed(t))
-        {
+        // An incident due to close closes on the frame path, as it would
+        // frame by frame. (An SDO transfer that ran out need not: what it
+        // says does not depend on the frame that tells it, and every other
+        // event is told on the frame path, which tells it first.)
+        if frame.time.is_some_and(|t| self.incidents.passed(t)) {
             return false;
         }
         let line_base = self.line_base;

@@ -166,6 +166,44 @@ fn assert_fold_independent(name: &str, t: &[u8], opts: &Options) -> (u64, u64) {
     tally
 }
 
+/// An unanswered SDO transfer is told before the events after its timeout,
+/// folding or not (the fold paths leave it to the next frame the frame
+/// path reads, which tells it before its own events).
+#[test]
+fn unanswered_sdo_transfers_are_told_on_the_same_frame_with_folds() {
+    let (taken, refused) = assert_fold_independent(
+        "sdo-startup",
+        include_bytes!("../../../fixtures/sdo-startup.log"),
+        &base_options(),
+    );
+    assert!(taken + refused > 0, "{taken} taken, {refused} refused");
+    // Four nodes beating every 100 ms for 10 s; node 1 is asked at 2.05 s
+    // and never answers, and raises an EMCY at 3.15 s, after the timeout
+    // passed (3.05 s): runs of heartbeats (with the EMCY inside) fold on
+    // either side of it, and the transfer is told before the EMCY.
+    let mut t: Vec<u8> = Vec::new();
+    for tick in 0..100u32 {
+        for node in 1..=4u32 {
+            let at = format!("({}.{:03}0)", 1000 + tick / 10, tick % 10 * 100 + node);
+            t.extend(format!("{at} can0 {:03X}#05\n", 0x700 + node).bytes());
+        }
+        if tick == 20 {
+            t.extend(b"(1002.0500) can0 601#4000100000000000\n");
+        }
+        if tick == 31 {
+            t.extend(b"(1003.1500) can0 081#1043090000000000\n");
+        }
+    }
+    let (taken, _) = assert_fold_independent("unanswered", &t, &base_options());
+    assert!(taken > 0, "runs folded");
+    let out = run_with(&t, base_options()).0;
+    let told = |what: &str| out.find(what).unwrap_or(usize::MAX);
+    assert!(
+        told("\"type\":\"sdo\"") < told("\"type\":\"emcy\""),
+        "{out}"
+    );
+}
+
 /// A burst of error frames closes where the frame path closes it, folding
 /// or not: a run of steady heartbeats past the burst's end is refused.
 #[test]

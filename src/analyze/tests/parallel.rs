@@ -700,3 +700,23 @@ fn identity_across_blocks() {
         }
     }
 }
+
+/// Every kind of SDO transfer, split anywhere and read on several threads:
+/// short segmented transfers take their node's ids out of the filter
+/// mid-block, the long one does not, unanswered ones are told when their
+/// timeout passes; the events come out the same.
+#[test]
+fn sdo_transfers_across_blocks() {
+    let trace = include_bytes!("../../../fixtures/sdo-startup.log");
+    let reference = run(trace, 1, 1 << 20).0;
+    assert_eq!(reference.matches("\"type\":\"sdo\"").count(), 18);
+    for threads in [1, 2, 3] {
+        for block in [1, 7, 64, 300, 4096] {
+            assert_eq!(
+                run(trace, threads, block).0,
+                reference,
+                "{threads} threads, {block}-byte blocks"
+            );
+        }
+    }
+}

@@ -268,13 +268,18 @@ impl<M: Moment> Going<M> {
     fn end(self, node: NodeId, outcome: Outcome, at: M) -> Ended<M> {
         let moved = self.moved || self.direction == Direction::Download;
         let chosen = moved || self.protocol == Protocol::Block;
+        // What a transfer that did not complete carried is known only as
+        // far as it was read: not of a block transfer (its segments are
+        // not read) nor of a long one.
+        let known = outcome == Outcome::Ok
+            || !(self.unread || self.protocol == Protocol::Block && !self.moved);
         Ended {
             node,
             direction: self.direction,
             object: self.object,
             protocol: chosen.then_some(self.protocol),
             indicated: self.indicated,
-            data: moved.then_some(self.data),
+            data: (moved && known).then_some(self.data),
             outcome,
             start: self.start,
             end: at,
@@ -911,6 +916,14 @@ mod tests {
             .feed(0x604, &[0x80, 0x00, 0x20, 0, 0x01, 0x00, 0x04, 0x05], L(11))
             .unwrap();
         assert_eq!(e.outcome.name(), "abort");
+        assert_eq!(e.data, None, "its segments were not read");
+        // A long download aborted: nothing read, nothing told of its data.
+        t.feed(0x602, &[0x21, 0x50, 0x1F, 1, 0xA0, 0x86, 0x01, 0], L(20));
+        t.feed(0x582, &[0x60, 0x50, 0x1F, 1, 0, 0, 0, 0], L(21));
+        let e = t
+            .feed(0x582, &[0x80, 0x50, 0x1F, 1, 0, 0, 0x04, 0x05], L(22))
+            .unwrap();
+        assert_eq!((e.data, e.indicated), (None, Some(100_000)));
     }
 
     #[test]
