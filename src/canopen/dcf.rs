@@ -60,6 +60,21 @@ pub struct Declared {
     pub name: Option<String>,
     /// `DataType=0x0009` (VISIBLE_STRING): its values are text.
     pub text: bool,
+    /// `ParameterValue` and `DefaultValue` as written, with their lines.
+    pub parameter: Option<(String, u64)>,
+    pub default: Option<(String, u64)>,
+}
+
+impl Declared {
+    /// The value the device is configured with: ParameterValue if written
+    /// and not empty, else DefaultValue; as written, with its line.
+    pub fn value(&self) -> Option<(&str, u64)> {
+        self.parameter
+            .as_ref()
+            .filter(|(t, _)| !t.is_empty())
+            .or(self.default.as_ref())
+            .map(|(t, line)| (t.as_str(), *line))
+    }
 }
 
 /// CiA 306 data type VISIBLE_STRING.
@@ -147,7 +162,7 @@ fn object_of_section(name: &str) -> Option<Object> {
 
 /// An integer as CiA 306 writes them: `0x` hex, leading-zero octal, else
 /// decimal; `$NODEID` terms (`$NODEID+0x180`) are `node`.
-fn integer(text: &str, node: NodeId) -> Result<u32, String> {
+pub fn integer(text: &str, node: NodeId) -> Result<u32, String> {
     let mut sum: u32 = 0;
     for term in text.split('+') {
         let term = term.trim();
@@ -243,12 +258,22 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
                 dcf.objects.entry(object).or_default().text =
                     integer(value.trim(), node) == Ok(VISIBLE_STRING);
             }
-            Section::Entry(object) if used(object) => {
-                let entry = entries.entry((object.index, object.sub)).or_default();
-                if key.eq_ignore_ascii_case("ParameterValue") {
-                    entry.parameter = Some(raw());
-                } else if key.eq_ignore_ascii_case("DefaultValue") {
-                    entry.default = Some(raw());
+            Section::Entry(object) if key.eq_ignore_ascii_case("ParameterValue") => {
+                dcf.objects.entry(object).or_default().parameter = Some((raw().text, line_no));
+                if used(object) {
+                    entries
+                        .entry((object.index, object.sub))
+                        .or_default()
+                        .parameter = Some(raw());
+                }
+            }
+            Section::Entry(object) if key.eq_ignore_ascii_case("DefaultValue") => {
+                dcf.objects.entry(object).or_default().default = Some((raw().text, line_no));
+                if used(object) {
+                    entries
+                        .entry((object.index, object.sub))
+                        .or_default()
+                        .default = Some(raw());
                 }
             }
             Section::DeviceInfo if key.eq_ignore_ascii_case("VendorNumber") => {
@@ -452,14 +477,16 @@ DefaultValue=0x60640020
             declared(0x2001, 0),
             Some(Declared {
                 name: Some("Axis label".into()),
-                text: true
+                text: true,
+                ..Declared::default()
             })
         );
         assert_eq!(
             declared(0x2002, 3),
             Some(Declared {
                 name: Some("Gain".into()),
-                text: false
+                text: false,
+                ..Declared::default()
             })
         );
         assert_eq!(declared(0x2003, 0), Some(Declared::default()));
@@ -473,6 +500,22 @@ DefaultValue=0x60640020
                 .and_then(|d| d.name.as_deref()),
             Some("Vendor-ID")
         );
+        // Every object's value as written, ParameterValue first.
+        let drive = parse(DRIVE.as_bytes(), 5);
+        let value = |index, sub| {
+            drive
+                .objects
+                .get(&Object { index, sub })
+                .and_then(|d| d.value())
+                .map(|(t, _)| t.to_string())
+        };
+        assert_eq!(value(0x1800, 1).as_deref(), Some("0x180 + $NodeId"));
+        assert_eq!(
+            value(0x1A00, 2).as_deref(),
+            Some("0x603F0010"),
+            "empty parameter"
+        );
+        assert_eq!(value(0x1018, 1).as_deref(), Some("0x00000001"));
     }
 
     #[test]

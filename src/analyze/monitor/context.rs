@@ -377,30 +377,42 @@ impl<E: Write> Emit<'_, E> {
             }
         }
         for t in told.drain(..) {
-            let node = t.bus.node();
-            // An event of no node (a burst, the logging controller's
-            // bus-off) is no node's: `--node` leaves it out.
-            let selected = match node {
-                Some(node) => self.opts.selects(&t.channel, node),
-                None => {
-                    self.opts.nodes.is_empty()
-                        && (self.opts.channels.is_empty()
-                            || self.opts.channels.contains(&t.channel))
-                }
-            };
-            if selected {
-                self.sink
-                    .bus(&BusEvent {
-                        file: self.file,
-                        line: t.at.line,
-                        time: t.at.time,
-                        channel: &t.channel,
-                        bus: &t.bus,
-                    })
-                    .map_err(OutputError)?;
-            }
+            self.bus_event(&t.channel, t.at, &t.bus)?;
         }
         self.tell_incidents()
+    }
+
+    /// One bus event to the sink, if the options select it; what the
+    /// incidents hear of it is [`Emit::bus`]'s part (an SDO transfer, told
+    /// here directly, is nothing to them).
+    pub(in crate::analyze) fn bus_event(
+        &mut self,
+        channel: &str,
+        at: At,
+        bus: &Bus,
+    ) -> Result<(), OutputError> {
+        let selected = match bus.node() {
+            Some(node) => self.opts.selects(channel, node),
+            // An event of no node (a burst, the logging controller's
+            // bus-off) is no node's: `--node` leaves it out.
+            None => {
+                self.opts.nodes.is_empty()
+                    && (self.opts.channels.is_empty()
+                        || self.opts.channels.iter().any(|c| c == channel))
+            }
+        };
+        if selected {
+            self.sink
+                .bus(&BusEvent {
+                    file: self.file,
+                    line: at.line,
+                    time: at.time,
+                    channel,
+                    bus,
+                })
+                .map_err(OutputError)?;
+        }
+        Ok(())
     }
 
     /// A diagnostic at `line` of the input.

@@ -9,7 +9,6 @@ use std::io::Write;
 
 use super::context::{Emit, Fact, Facts, Learnt, Monitor, Seen, Step};
 use crate::analyze::analysis::OutputError;
-use crate::analyze::bus::Told;
 use crate::analyze::event::{Bus, Health, HistoryItem, HistoryReport, NodeReport, SdoTransfer};
 use crate::analyze::interest::learns_from;
 use crate::analyze::nodes::Nodes;
@@ -40,7 +39,9 @@ pub(in crate::analyze) struct SdoMonitor {
     events: Vec<(At, Health)>,
     read_outs: Vec<ReadOut>,
     ended: Vec<Ended<At>>,
-    told: Vec<Told>,
+    /// The event told last, its box reused for the next: SDO-heavy buses
+    /// tell hundreds of thousands.
+    told: Option<Bus>,
 }
 
 impl Monitor for SdoMonitor {
@@ -55,7 +56,7 @@ impl Monitor for SdoMonitor {
             events: Vec::new(),
             read_outs: Vec::new(),
             ended: Vec::new(),
-            told: Vec::new(),
+            told: None,
         }
     }
 
@@ -331,18 +332,18 @@ impl SdoMonitor {
             let channel = self
                 .channels
                 .get(usize::from(e.node))
-                .map(|c| String::from_utf8_lossy(c).into_owned())
+                .map(|c| String::from_utf8_lossy(c))
                 .unwrap_or_default();
-            self.told.push(Told {
-                channel,
-                at: e.end,
-                bus: Bus::Sdo(Box::new(transfer_report(e, facts, emit.opts))),
-            });
+            let report = transfer_report(e, facts, emit.opts);
+            match &mut self.told {
+                Some(Bus::Sdo(told)) => **told = report,
+                _ => self.told = Some(Bus::Sdo(Box::new(report))),
+            }
+            if let Some(bus) = &self.told {
+                emit.bus_event(&channel, e.end, bus)?;
+            }
         }
-        let mut told = std::mem::take(&mut self.told);
-        let result = emit.bus(&mut told);
-        self.told = told;
-        result
+        Ok(())
     }
 
     /// Whether a frame can matter to a segmented upload: the server's
@@ -367,11 +368,13 @@ impl SdoMonitor {
     ) -> Result<Learnt, OutputError> {
         let mut learnt = Learnt::default();
         match access {
+            // Only objects some monitor learns from are worth a fact: every
+            // monitor hears each one.
             Sdo::Uploaded {
                 node,
                 object,
                 value,
-            } => {
+            } if learns_from(object.index) => {
                 learnt.read = Some(Fact::Read {
                     node,
                     object,

@@ -12,7 +12,7 @@ use anyhow::{Result, bail};
 use super::cli::{DiffArgs, ExplainFormat};
 use super::decode::auto_threads;
 use super::{EXIT_ERROR, EXIT_FAIL_ON, EXIT_OK, signals, write_stdout};
-use emcy_decode::analyze::{self, DiagnosticLog, Options, OutputError};
+use emcy_decode::analyze::{self, DiagnosticLog, Options, OutputError, Sink};
 use emcy_decode::diff::{self, Recorder, Story};
 use emcy_decode::trace::input::{self, ReadMode, Source};
 
@@ -58,6 +58,19 @@ fn read<E: io::Write>(
     opts: &Options,
     log: &mut DiagnosticLog<E>,
 ) -> Result<Option<Story>> {
+    let mut recorder = Recorder::new();
+    let whole = read_whole(path, opts, log, &mut recorder)?;
+    Ok(whole.then(|| recorder.into_story()))
+}
+
+/// Reads the trace at `path` (`-`: stdin) into `sink`; whether it was read
+/// whole (when not, its `error:` line is out).
+pub(super) fn read_whole<E: io::Write>(
+    path: &Path,
+    opts: &Options,
+    log: &mut DiagnosticLog<E>,
+    sink: &mut dyn Sink,
+) -> Result<bool> {
     let source = Source::from_arg(path);
     // A pipe may be quiet for long: read so that a signal ends the wait.
     let mode = if matches!(source, Source::Stdin) && input::stdin_is_stream() {
@@ -65,19 +78,15 @@ fn read<E: io::Write>(
     } else {
         ReadMode::Finite
     };
-    let mut recorder = Recorder::new();
     let analysis = analyze::analyze_source(
         &source,
         mode,
         opts,
         auto_threads,
         |_, reader| reader,
-        &mut recorder,
+        sink,
         log,
     )
     .map_err(|OutputError(e)| anyhow::Error::from(e))?;
-    if analysis.report.error.is_some() {
-        return Ok(None);
-    }
-    Ok(Some(recorder.into_story()))
+    Ok(analysis.report.error.is_none())
 }
