@@ -642,8 +642,9 @@ impl DriveArgs {
 const DIFF_HELP: &str = "\
 Each trace is told as its nodes' stories: boot-ups, NMT states (said by the
 node, or commanded), EMCY codes, CiA 402 drive states, fault resets, SDO
-aborts, heartbeat losses, bus-offs and LSS services, in order, without their
-times and without process data. The stories are aligned node by node; the
+transfers (a download with its value, an upload without it) and aborts,
+heartbeat losses, bus-offs and LSS services, in order, without their times
+and without process data. The stories are aligned node by node; the
 output names where the traces part first, then every difference per node,
 then what differs in how each node ended (NMT state, active errors, PDO
 mappings). Traces that differ only in timing or process data are the same.
