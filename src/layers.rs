@@ -1,6 +1,7 @@
 //! The rule the folders show, checked: every import points down.
 //!
 //! ```text
+//! config     the configuration a trace wrote into its nodes
 //! diff       two traces' CANopen stories and their comparison
 //! baseline   CI baseline model and comparison
 //! report     renderers (implement analyze's Sink)
@@ -34,8 +35,8 @@
 use std::path::{Path, PathBuf};
 
 /// Bottom first.
-const LAYERS: [&str; 7] = [
-    "trace", "canopen", "timeline", "analyze", "report", "baseline", "diff",
+const LAYERS: [&str; 8] = [
+    "trace", "canopen", "timeline", "analyze", "report", "baseline", "diff", "config",
 ];
 
 /// The rank of a top-level module; `None` for ones outside the stack.

@@ -63,6 +63,8 @@ pub(crate) mod cache;
 #[doc(hidden)]
 pub mod canopen;
 #[doc(hidden)]
+pub mod config;
+#[doc(hidden)]
 pub mod diff;
 #[cfg(feature = "fuzzing")]
 #[doc(hidden)]

@@ -21,6 +21,7 @@ mod busmaster;
 mod chart;
 mod cia402;
 mod cli;
+mod config;
 mod csv;
 mod diff;
 mod differential;

@@ -78,6 +78,7 @@ fn every_option_of_every_command_is_in_the_readme_option_tables() {
         Some("baseline"),
         Some("check"),
         Some("diff"),
+        Some("config"),
         Some("man"),
     ] {
         let opts = options(sub);

@@ -146,7 +146,7 @@ fn read_traces(args: &TraceArgs, unwritten: &str) -> Result<Result<Traces, Unrea
 /// or a new path through a temporary file in the same directory, so a reader
 /// (or a crash) never sees half a baseline; into a FIFO or character device
 /// as it is; `-` is stdout.
-fn write_file(given: &Path, text: &str) -> Result<()> {
+pub(super) fn write_file(given: &Path, text: &str) -> Result<()> {
     let fail = |e: io::Error| anyhow!("writing {}: {}", given.display(), describe_io(&e));
     match destination(given)? {
         Dest::Stdout => write_stdout(text),

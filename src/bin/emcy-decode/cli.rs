@@ -97,6 +97,9 @@ pub enum Command {
     /// Compare two traces by CANopen meaning: exit 0 same, 1 different, 2 trouble
     #[command(after_help = DIFF_HELP)]
     Diff(DiffArgs),
+    /// The configuration a trace wrote into its nodes, per node, as a DCF or JSON
+    #[command(after_help = CONFIG_HELP)]
+    Config(ConfigArgs),
 }
 
 /// Headings of `--help`, grouped as ripgrep groups its options.
@@ -669,6 +672,53 @@ pub struct DiffArgs {
     /// Output format of the differences
     #[arg(long, short = 'f', value_enum, default_value_t = ExplainFormat::Text, help_heading = OUTPUT)]
     pub format: ExplainFormat,
+}
+
+const CONFIG_HELP: &str = "\
+Every object an SDO download of the trace wrote and the node confirmed, per
+node: the last confirmed value wins; writes the node aborted, never answered
+or the client left incomplete are comments, never values. As a DCF-style INI
+file ([1A00sub1], ParameterName, ParameterValue=0x60410010, `;` comments
+naming the lines) or JSON (-f json). With --dcf NODE=FILE, the objects whose
+values differ from the file's (ParameterValue, else DefaultValue) are listed.
+
+With -o DIR, one file per node (node3.dcf; can1-node3.dcf when the trace has
+several channels) or config.json; a file there that this command did not
+write is left as it is (an error line, exit 2).
+
+Exit status: 0 written, 2 trouble (a trace that cannot be read whole, a file
+that cannot be written).";
+
+/// `config TRACE`.
+#[derive(Args, Debug)]
+pub struct ConfigArgs {
+    /// The trace (`-` reads stdin)
+    #[arg(value_name = "TRACE")]
+    pub trace: PathBuf,
+
+    /// Only these nodes (repeatable or comma list)
+    #[arg(long, value_delimiter = ',', value_parser = parse_node, value_name = "N", help_heading = OUTPUT)]
+    pub node: Vec<NodeId>,
+
+    /// Write the files into DIR (made if missing) instead of stdout
+    #[arg(long, short = 'o', value_name = "DIR", help_heading = OUTPUT)]
+    pub output: Option<PathBuf>,
+
+    /// Output format: a DCF-style INI file per node, or one JSON document
+    #[arg(long, short = 'f', value_enum, default_value_t = ConfigFormat::Dcf, help_heading = OUTPUT)]
+    pub format: ConfigFormat,
+
+    #[command(flatten)]
+    pub reading: ReadArgs,
+}
+
+/// `config -f`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ConfigFormat {
+    /// A DCF-style INI file per node
+    Dcf,
+    /// One JSON document
+    Json,
 }
 
 /// How to read a trace: the same for `baseline`, `check` and `diff`, so a

@@ -8,6 +8,7 @@
 
 mod baseline;
 mod cli;
+mod config;
 mod decode;
 mod diff;
 mod explain;
@@ -54,6 +55,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Some(Command::Baseline(args)) => baseline::baseline(&args),
         Some(Command::Check(args)) => baseline::check(&args),
         Some(Command::Diff(args)) => diff::run(&args),
+        Some(Command::Config(args)) => config::run(&args),
         None => decode::run(&cli.decode),
     }
 }
