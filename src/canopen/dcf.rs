@@ -258,22 +258,26 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
                 dcf.objects.entry(object).or_default().text =
                     integer(value.trim(), node) == Ok(VISIBLE_STRING);
             }
-            Section::Entry(object) if key.eq_ignore_ascii_case("ParameterValue") => {
-                dcf.objects.entry(object).or_default().parameter = Some((raw().text, line_no));
+            Section::Entry(object)
+                if key.eq_ignore_ascii_case("ParameterValue")
+                    || key.eq_ignore_ascii_case("DefaultValue") =>
+            {
+                let parameter = key.eq_ignore_ascii_case("ParameterValue");
+                let declared = dcf.objects.entry(object).or_default();
+                let slot = if parameter {
+                    &mut declared.parameter
+                } else {
+                    &mut declared.default
+                };
+                *slot = Some((raw().text, line_no));
                 if used(object) {
-                    entries
-                        .entry((object.index, object.sub))
-                        .or_default()
-                        .parameter = Some(raw());
-                }
-            }
-            Section::Entry(object) if key.eq_ignore_ascii_case("DefaultValue") => {
-                dcf.objects.entry(object).or_default().default = Some((raw().text, line_no));
-                if used(object) {
-                    entries
-                        .entry((object.index, object.sub))
-                        .or_default()
-                        .default = Some(raw());
+                    let entry = entries.entry((object.index, object.sub)).or_default();
+                    let slot = if parameter {
+                        &mut entry.parameter
+                    } else {
+                        &mut entry.default
+                    };
+                    *slot = Some(raw());
                 }
             }
             Section::DeviceInfo if key.eq_ignore_ascii_case("VendorNumber") => {

@@ -492,6 +492,19 @@ fn expedited(cmd: u8, data: &[u8]) -> Data {
     Data::of(data.get(4..4 + used).unwrap_or_default())
 }
 
+/// An abort (its code in bytes 4-7) ends the transfer going on, if any.
+fn aborted<M: Moment>(
+    slot: &mut Option<Going<M>>,
+    node: NodeId,
+    data: &[u8],
+    by_server: bool,
+    at: M,
+) -> Option<Ended<M>> {
+    let code = size_of(data).unwrap_or(0);
+    let g = slot.take()?;
+    Some(g.end(node, Outcome::Abort { code, by_server }, at))
+}
+
 /// A frame of the client's (request id).
 fn client<M: Moment>(
     slot: &mut Option<Going<M>>,
@@ -502,18 +515,7 @@ fn client<M: Moment>(
     at: M,
 ) -> Option<Ended<M>> {
     match (cs, slot.as_mut()) {
-        (CS_ABORT, Some(_)) => {
-            let code = size_of(data).unwrap_or(0);
-            let g = slot.take()?;
-            return Some(g.end(
-                node,
-                Outcome::Abort {
-                    code,
-                    by_server: false,
-                },
-                at,
-            ));
-        }
+        (CS_ABORT, Some(_)) => return aborted(slot, node, data, false, at),
         (CS_ABORT, None) => return None,
         (CCS_DOWNLOAD_SEGMENT, Some(g))
             if g.direction == Direction::Download && matches!(g.phase, Phase::Segments { .. }) =>
@@ -588,16 +590,7 @@ fn server<M: Moment>(
     at: M,
 ) -> Option<Ended<M>> {
     if cs == CS_ABORT {
-        let code = size_of(data).unwrap_or(0);
-        let g = slot.take()?;
-        return Some(g.end(
-            node,
-            Outcome::Abort {
-                code,
-                by_server: true,
-            },
-            at,
-        ));
+        return aborted(slot, node, data, true, at);
     }
     match cs {
         SCS_UPLOAD_INITIATE => {
