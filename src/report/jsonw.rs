@@ -774,9 +774,10 @@ impl JsonWriter {
                 o.null("by");
             }
         }
-        // `time` and `line` are its end: the frame that ended it.
+        // `time` and `line` are its end too: the frame that ended it.
         self.time_pair(o, ["start", "start_text"], t.start.time);
         o.u64("start_line", t.start.line);
+        self.time_pair(o, ["end", "end_text"], t.end.time);
     }
 
     /// `node`, `kind`, `code`, `time`, `time_text`, `line` of an incident's event.
