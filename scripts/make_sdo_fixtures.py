@@ -28,6 +28,11 @@ master then:
 
 Both heartbeat every 500 ms throughout.
 
+Two copies for `diff`: fixtures/sdo-startup-aborted.log, where node 3
+aborts the 70-byte download after its first segment (0x08000020: data
+cannot be stored), and fixtures/sdo-startup-retimed.log, the same frames an
+hour later with every gap 1.25 times as long.
+
 Run from the repository root:  python3 scripts/make_sdo_fixtures.py
 then  python3 scripts/make_pcap_fixtures.py  (fixtures/sdo-startup.pcap)
 and refresh the golden outputs:
@@ -44,19 +49,19 @@ def le(v, n=4):
     return v.to_bytes(n, "little").hex().upper()
 
 
-def main():
+def write(file_name, abort_2000=False, stretch=1.0, t0=T0):
     lines = []
     t = [0.0]
     beat = [0.5]
 
     def add(dt, cob, data):
-        t[0] += dt
+        t[0] += dt * stretch
         # Heartbeats every 500 ms, between the master's frames.
         while t[0] >= beat[0]:
             for node in (3, 4):
-                lines.append(f"({T0 + beat[0]:.6f}) can0 {0x700 + node:03X}#05")
+                lines.append(f"({t0 + beat[0]:.6f}) can0 {0x700 + node:03X}#05")
             beat[0] += 0.5
-        lines.append(f"({T0 + t[0]:.6f}) can0 {cob:03X}#{data}")
+        lines.append(f"({t0 + t[0]:.6f}) can0 {cob:03X}#{data}")
 
     def idx(index, sub):
         return le(index, 2) + f"{sub:02X}"
@@ -74,7 +79,7 @@ def main():
         else:
             add(0.001, 0x580 + node, f"80{idx(index, sub)}{le(abort)}")
 
-    def segmented_download(node, index, sub, data):
+    def segmented_download(node, index, sub, data, abort=None):
         add(0.002, 0x600 + node, f"21{idx(index, sub)}{le(len(data))}")
         add(0.001, 0x580 + node, f"60{idx(index, sub)}00000000")
         toggle = 0
@@ -83,6 +88,9 @@ def main():
             last = i + 7 >= len(data)
             cmd = toggle << 4 | (7 - len(chunk)) << 1 | int(last)
             add(0.001, 0x600 + node, f"{cmd:02X}" + (chunk + bytes(7 - len(chunk))).hex().upper())
+            if abort is not None:
+                add(0.001, 0x580 + node, f"80{idx(index, sub)}{le(abort)}")
+                return
             add(0.001, 0x580 + node, f"{0x20 | toggle << 4:02X}00000000000000")
             toggle ^= 1
 
@@ -126,7 +134,7 @@ def main():
     write(3, 0x1A00, 0, 1, size=1)
     write(3, 0x1800, 1, 0x00000183)
     # 70 bytes to node 3's 0x2000: shown by its first 64 and its hash.
-    segmented_download(3, 0x2000, 0, bytes(range(70)))
+    segmented_download(3, 0x2000, 0, bytes(range(70)), 0x08000020 if abort_2000 else None)
     # Node 4 has no 0x6200 sub 1.
     write(4, 0x6200, 1, 0xFF, size=1, abort=0x06020000)
     # Firmware to node 4: 4100 bytes.
@@ -139,10 +147,16 @@ def main():
     add(1.500, 0x603, f"40{idx(0x1000, 0)}00000000")
     add(0.001, 0x583, f"43{idx(0x1000, 0)}{le(0x00020192)}")
 
-    path = os.path.join(FIXTURES, "sdo-startup.log")
+    path = os.path.join(FIXTURES, file_name)
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
-    print(f"fixtures/sdo-startup.log: {len(lines)} lines")
+    print(f"fixtures/{file_name}: {len(lines)} lines")
+
+
+def main():
+    write("sdo-startup.log")
+    write("sdo-startup-aborted.log", abort_2000=True)
+    write("sdo-startup-retimed.log", stretch=1.25, t0=T0 + 3600)
 
 
 if __name__ == "__main__":

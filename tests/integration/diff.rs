@@ -187,3 +187,30 @@ fn new_firmware_on_a_node_is_the_difference() {
     assert_eq!(nodes.len(), 1, "only node 2 differs: {v:#}");
     assert_eq!(nodes[0]["node"], 2);
 }
+
+/// The SDO start-up (scripts/make_sdo_fixtures.py) with one write aborted
+/// is that one difference; retimed (an hour later, every gap a quarter
+/// longer), none.
+#[test]
+fn an_sdo_start_up_differs_by_its_aborted_write_only() {
+    const STARTUP: &str = "fixtures/sdo-startup.log";
+    let (v, code) = json(STARTUP, "fixtures/sdo-startup-aborted.log");
+    assert_eq!(code, 1);
+    assert_eq!(v["differences"], 1, "{v:#}");
+    let first = &v["first"];
+    assert_eq!(
+        (&first["node"], &first["kind"]),
+        (&3.into(), &"changed".into())
+    );
+    assert_eq!(first["good"]["kind"], "sdo");
+    assert!(
+        first["good"]["text"]
+            .as_str()
+            .is_some_and(|t| t.starts_with("SDO download 0x2000.00 = 000102")),
+        "{first}"
+    );
+    assert_eq!(first["bad"]["kind"], "sdo_abort");
+    assert_eq!(first["bad"]["abort_code"], "0x08000020");
+    let (out, err, code) = run(&["diff", STARTUP, "fixtures/sdo-startup-retimed.log"], b"");
+    assert_eq!(code, 0, "{out}{err}");
+}
