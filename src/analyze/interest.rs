@@ -19,7 +19,7 @@ use crate::trace::{ContentFilter, DataHead, Frame, Interest};
 /// frames matter ([`content_matters`]); the readers only time the others.
 pub(crate) fn interest(opts: &Options) -> Interest {
     let mut i = Interest::none();
-    let filter = ContentFilter(content_matters);
+    let filter = sdo_filter(false);
     let nmt = emcy::NMT_ERROR_CONTROL_BASE + 1..=emcy::NMT_ERROR_CONTROL_BASE + 127;
     let responses = sdo::RESPONSE_BASE + 1..=sdo::RESPONSE_BASE + 127;
     let requests = sdo::REQUEST_BASE + 1..=sdo::REQUEST_BASE + 127;
@@ -54,13 +54,37 @@ pub(crate) fn interest(opts: &Options) -> Interest {
 /// segments of every transfer nobody follows (a firmware download's
 /// thousands), skips all further work.
 pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
+    matters::<false>(id, data)
+}
+
+/// [`content_matters`] while some node has a long segmented transfer going
+/// on: its segments are not read, and its last one (c = 1) passes too.
+/// Apart from that time the last segments stay out: their command bytes
+/// (odd, under 0x20) are those of a block sub-block's segments 1 to 31,
+/// which a block firmware download sends by the thousand.
+fn content_matters_in_long_transfers(id: u32, data: DataHead) -> bool {
+    matters::<true>(id, data)
+}
+
+/// The content filter: with the last segments of segmented transfers
+/// (`long`) or without.
+pub(super) fn sdo_filter(long: bool) -> ContentFilter {
+    if long {
+        ContentFilter(content_matters_in_long_transfers)
+    } else {
+        ContentFilter(content_matters)
+    }
+}
+
+#[inline]
+fn matters<const LAST_SEGMENTS: bool>(id: u32, data: DataHead) -> bool {
     if emcy::is_nmt_error_control(id) {
         data.len() <= 1
     } else if sdo::is_sdo_id(id) {
         // Asked of every SDO frame of a trace: the command is read once,
         // from the bytes the reader parsed.
         match *data.head() {
-            [cmd, ..] => sdo_frame_matters(id, cmd),
+            [cmd, ..] => sdo_frame_matters(id, cmd, LAST_SEGMENTS),
             [] => false,
         }
     } else {
@@ -79,7 +103,8 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
 ///   with these alone (a block's segments carry sequence numbers where
 ///   other frames carry commands, so it must know where one goes on to
 ///   read any frame of its node right);
-/// - a segmented transfer's last segment (c = 1): a long transfer whose
+/// - with `last_segments` (while a long segmented transfer goes on), a
+///   segmented transfer's last segment (c = 1): a long transfer whose
 ///   segments are not read ends with it.
 ///
 /// The other segments of segmented transfers never name an object, and
@@ -89,12 +114,12 @@ pub(super) fn content_matters(id: u32, data: DataHead) -> bool {
 /// and puts them back at its end. A firmware download's thousands of
 /// segments stay behind the filter.
 #[inline]
-fn sdo_frame_matters(id: u32, cmd: u8) -> bool {
+fn sdo_frame_matters(id: u32, cmd: u8, last_segments: bool) -> bool {
     let cs = cmd >> 5;
     (4..=6).contains(&cs)
         || cmd == FIRST_BLOCK_SEGMENT
         || carries_index(id, cs)
-        || cmd & 0xE1 == LAST_SEGMENT
+        || last_segments && cmd & 0xE1 == LAST_SEGMENT
 }
 
 /// A segment's command byte, masked with 0xE1 (the command specifier and
@@ -309,8 +334,9 @@ mod tests {
     proptest! {
         /// The one-pass filter says what CiA 301's commands say, spelt out
         /// by direction: every initiate and its answer, every block
-        /// command, abort and possible first block segment, and a
-        /// segmented transfer's last segment; no other segment.
+        /// command, abort and possible first block segment, and while a
+        /// long transfer goes on a segmented transfer's last segment; no
+        /// other segment.
         #[test]
         fn content_matters_is_the_command_table(
             id in prop_oneof![0u32..0x800, 0x581u32..0x600, 0x601u32..0x680, 0x701u32..0x780],
@@ -323,6 +349,7 @@ mod tests {
             ],
             rest in prop::collection::vec(any::<u8>(), 0..6),
             len in 0usize..9,
+            long in any::<bool>(),
         ) {
             let [lo, hi] = index.to_le_bytes();
             let mut data = vec![cmd, lo, hi];
@@ -333,18 +360,18 @@ mod tests {
             } else if sdo::is_sdo_id(id) {
                 let client = id >= 0x600;
                 let initiate = matches!((client, cmd >> 5), (true, 1 | 2) | (false, 2 | 3));
-                let last_segment = cmd >> 5 == 0 && cmd & 0x01 == 1;
+                let last_segment = long && cmd >> 5 == 0 && cmd & 0x01 == 1;
                 !data.is_empty()
                     && (matches!(cmd >> 5, 4..=6) || cmd == 0x01 || initiate || last_segment)
             } else {
                 true
             };
-            prop_assert_eq!(content_matters(id, DataHead::of(&data)), expected);
+            prop_assert_eq!((sdo_filter(long).0)(id, DataHead::of(&data)), expected);
         }
     }
 
     #[test]
-    fn only_last_segments_pass_whatever_their_data() {
+    fn segments_pass_only_when_last_while_a_long_transfer_goes_on() {
         // A download segment whose data reads as 0x1A00, its confirmation,
         // an upload segment request and a server's upload segment.
         for (id, data) in [
@@ -363,15 +390,18 @@ mod tests {
         assert!(content_matters(0x605, DataHead::of(&[0x21, 0x00, 0x1A, 1])));
         assert!(content_matters(0x585, DataHead::of(&[0x4B, 0x41, 0x60, 0])));
         assert!(content_matters(0x605, DataHead::of(&[0x21, 0x50, 0x1F, 1])));
-        // A download's and an upload's last segment end a long transfer.
-        assert!(content_matters(
-            0x605,
-            DataHead::of(&[0x0B, 1, 2, 3, 4, 0, 0, 0])
-        ));
-        assert!(content_matters(
-            0x585,
-            DataHead::of(&[0x1D, 1, 0, 0, 0, 0, 0, 0])
-        ));
+        // A download's and an upload's last segment end a long transfer:
+        // they pass while one goes on (they read as block segments 11 and
+        // 29 otherwise, which stay out).
+        let long = sdo_filter(true).0;
+        let last = [
+            (0x605, [0x0B, 1, 2, 3, 4, 0, 0, 0]),
+            (0x585, [0x1D, 1, 0, 0, 0, 0, 0, 0]),
+        ];
+        for (id, data) in last {
+            assert!(long(id, DataHead::of(&data)));
+            assert!(!content_matters(id, DataHead::of(&data)));
+        }
     }
 
     #[test]

@@ -170,6 +170,19 @@ impl Interest {
         }
     }
 
+    /// Changes the content filter, leaving which ids are under it as they
+    /// are; whether it changed.
+    pub fn set_content(&mut self, content: ContentFilter) -> bool {
+        let changed = self.content != content;
+        self.content = content;
+        changed
+    }
+
+    /// The content filter.
+    pub fn content(&self) -> ContentFilter {
+        self.content
+    }
+
     /// Takes a standard id out of the content filter: all its frames
     /// matter, one by one.
     pub fn unfilter(&mut self, id: u32) {

@@ -10,7 +10,7 @@ use std::io::Write;
 use super::context::{Emit, Fact, Facts, Learnt, Monitor, Seen, Step};
 use crate::analyze::analysis::OutputError;
 use crate::analyze::event::{Bus, Health, HistoryItem, HistoryReport, NodeReport, SdoTransfer};
-use crate::analyze::interest::learns_from;
+use crate::analyze::interest::{learns_from, sdo_filter};
 use crate::analyze::nodes::Nodes;
 use crate::analyze::options::Options;
 use crate::canopen::sdo::abort as sdo_abort;
@@ -33,6 +33,9 @@ pub(in crate::analyze) struct SdoMonitor {
     uploads: Uploads,
     /// Every transfer, to tell it when it ends.
     transfers: Transfers<At>,
+    /// Whether the content filter lets the last segments of segmented
+    /// transfers through: while some node has a long one going on.
+    long_filter: bool,
     /// The channel each node's SDO frames came on last (by node id).
     channels: Vec<Vec<u8>>,
     /// Buffers reused from frame to frame.
@@ -52,6 +55,7 @@ impl Monitor for SdoMonitor {
             downloads: Downloads::default(),
             uploads: Uploads::default(),
             transfers: Transfers::new(opts.sdo_timeout),
+            long_filter: false,
             channels: vec![Vec::new(); 128],
             events: Vec::new(),
             read_outs: Vec::new(),
@@ -117,8 +121,12 @@ impl Monitor for SdoMonitor {
             }
         }
         let following = self.following(id);
+        let long = self.transfers.is_long(id);
         let told = self.transfers.feed(id, data, frame.at);
         self.ended.extend(told);
+        if long != self.transfers.is_long(id) {
+            self.sync_filter(emit);
+        }
         let mut learnt = Learnt::default();
         if self.downloads.wants(id, data)
             && let Some(c) = self.downloads.feed(id, data)
@@ -316,7 +324,26 @@ impl SdoMonitor {
         emit: &mut Emit<'_, E>,
     ) -> Result<(), OutputError> {
         self.transfers.expire(now, &mut self.ended);
+        self.sync_filter(emit);
         self.tell(facts, emit)
+    }
+
+    /// The content filter with the last segments of segmented transfers
+    /// while a long one goes on, without them otherwise (see
+    /// [`sdo_filter`]).
+    fn sync_filter<E: Write>(&mut self, emit: &mut Emit<'_, E>) {
+        let long = self.transfers.any_long();
+        if long == self.long_filter {
+            return;
+        }
+        self.long_filter = long;
+        if long {
+            emit.wanted.widen(|i| {
+                i.set_content(sdo_filter(true));
+            });
+        } else {
+            emit.wanted.narrow(|i| i.set_content(sdo_filter(false)));
+        }
     }
 
     /// The transfers that ended, told as `sdo` events.

@@ -328,6 +328,20 @@ impl<M: Moment> Transfers<M> {
         })
     }
 
+    /// Whether the node of SDO id `id` has a long segmented transfer going
+    /// on (its initiate gave a size over [`READ_LIMIT`]): its last segment
+    /// must pass the content filter, which other transfers' segments need
+    /// not.
+    pub fn is_long(&self, id: u32) -> bool {
+        self.going
+            .going_on(id, |g| g.as_ref().is_some_and(|g| g.unread))
+    }
+
+    /// Whether any node has a long segmented transfer going on.
+    pub fn any_long(&self) -> bool {
+        (1..=127).any(|node| self.is_long(super::REQUEST_BASE + node))
+    }
+
     /// Feeds one frame on an SDO id that no block transfer took.
     pub fn feed(&mut self, id: u32, data: &[u8], at: M) -> Option<Ended<M>> {
         let (request, node, slot) = self.going.by_id(id)?;
@@ -564,6 +578,7 @@ fn client<M: Moment>(
             } else {
                 g.protocol = Protocol::Segmented;
                 g.indicated = (cmd & 0x01 != 0).then(|| size_of(data)).flatten();
+                g.unread = g.indicated.is_some_and(|s| s > READ_LIMIT);
             }
             *slot = Some(g);
         }
@@ -640,7 +655,6 @@ fn server<M: Moment>(
                 let g = slot.take()?;
                 return Some(g.end(node, Outcome::Ok, at));
             }
-            g.unread = g.indicated.is_some_and(|s| s > READ_LIMIT);
             g.phase = Phase::Segments { toggle: false };
             None
         }
@@ -829,11 +843,14 @@ mod tests {
         t.feed(0x602, &[0x21, 0x50, 0x1F, 1, 0xA0, 0x86, 0x01, 0], L(1));
         t.feed(0x582, &[0x60, 0x50, 0x1F, 1, 0, 0, 0, 0], L(2));
         assert!(!t.reads_segments(0x602), "segments left to the filter");
+        assert!(t.is_long(0x602) && t.is_long(0x582) && t.any_long());
+        assert!(!t.is_long(0x603));
         t.feed(0x602, &[0x0B, 1, 2, 3, 4, 0, 0, 0], L(900));
         assert!(t.reads_segments(0x602), "the answer to the last segment");
         let e = t.feed(0x582, &[0x30, 0, 0, 0, 0, 0, 0, 0], L(901)).unwrap();
         let d = e.data.unwrap();
         assert_eq!((d.size, d.whole, e.outcome), (100_000, false, Outcome::Ok));
+        assert!(!t.any_long(), "over");
         assert!(!d.complete());
     }
 
