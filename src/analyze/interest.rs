@@ -118,8 +118,25 @@ fn sdo_frame_matters(id: u32, cmd: u8, last_segments: bool) -> bool {
     let cs = cmd >> 5;
     (4..=6).contains(&cs)
         || cmd == FIRST_BLOCK_SEGMENT
-        || carries_index(id, cs)
+        || is_initiate(id, cmd)
         || last_segments && cmd & 0xE1 == LAST_SEGMENT
+}
+
+/// Whether `cmd` on SDO id `id` is an initiate or its answer with the
+/// bits CiA 301 leaves unused clear, as devices send them: the client's
+/// download initiate (0x20-0x2F: n, e, s) and upload initiate (0x40), the
+/// node's upload answer (0x40-0x4F) and download answer (0x60). A block
+/// transfer's segments carry every sequence number in that byte: 17 of
+/// 127 look like this, where 64 have command specifier 1 or 2 (measured:
+/// a block firmware download 1.66x the time before this test, with the
+/// specifier alone).
+#[inline]
+fn is_initiate(id: u32, cmd: u8) -> bool {
+    if id >= sdo::REQUEST_BASE {
+        cmd & 0xF0 == 0x20 || cmd == 0x40
+    } else {
+        cmd & 0xF0 == 0x40 || cmd == 0x60
+    }
 }
 
 /// A segment's command byte, masked with 0xE1 (the command specifier and
@@ -359,7 +376,10 @@ mod tests {
                 data.len() <= 1
             } else if sdo::is_sdo_id(id) {
                 let client = id >= 0x600;
-                let initiate = matches!((client, cmd >> 5), (true, 1 | 2) | (false, 2 | 3));
+                let initiate = match client {
+                    true => (0x20..=0x2F).contains(&cmd) || cmd == 0x40,
+                    false => (0x40..=0x4F).contains(&cmd) || cmd == 0x60,
+                };
                 let last_segment = long && cmd >> 5 == 0 && cmd & 0x01 == 1;
                 !data.is_empty()
                     && (matches!(cmd >> 5, 4..=6) || cmd == 0x01 || initiate || last_segment)
