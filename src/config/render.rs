@@ -152,7 +152,14 @@ pub fn ini(
             let _ = writeln!(out, "; differences from {name}:");
             for d in &diffs {
                 let file = match &d.file {
-                    Some((v, line)) => format!("{v} (line {line})"),
+                    // A value written with `$NODEID` or in decimal, as the
+                    // trace's is written too.
+                    Some((v, line)) => match dcf::integer(v, key.node) {
+                        Ok(n) if !v.eq_ignore_ascii_case(&format!("0x{n:08X}")) => {
+                            format!("{v} = 0x{n:08X} (line {line})")
+                        }
+                        _ => format!("{v} (line {line})"),
+                    },
                     None => "no value".to_string(),
                 };
                 let _ = writeln!(

@@ -131,7 +131,9 @@ fn a_dcf_gives_the_differences_from_the_trace() {
     let (out, err, code) = run(&["config", "--node", "3", "--dcf", &spec, TRACE], b"");
     assert_eq!(code, 0, "{err}");
     assert!(
-        out.contains(";   [1800sub1] trace 0x00000183, file $NODEID+0x80000180 (line 14)"),
+        out.contains(
+            ";   [1800sub1] trace 0x00000183, file $NODEID+0x80000180 = 0x80000183 (line 14)"
+        ),
         "{out}"
     );
     assert!(
