@@ -61,19 +61,18 @@ pub struct Declared {
     /// `DataType=0x0009` (VISIBLE_STRING): its values are text.
     pub text: bool,
     /// `ParameterValue` and `DefaultValue` as written, with their lines.
-    pub parameter: Option<(String, u64)>,
-    pub default: Option<(String, u64)>,
+    pub parameter: Option<Raw>,
+    pub default: Option<Raw>,
 }
 
 impl Declared {
     /// The value the device is configured with: ParameterValue if written
     /// and not empty, else DefaultValue; as written, with its line.
-    pub fn value(&self) -> Option<(&str, u64)> {
+    pub fn value(&self) -> Option<&Raw> {
         self.parameter
             .as_ref()
-            .filter(|(t, _)| !t.is_empty())
+            .filter(|r| !r.text.is_empty())
             .or(self.default.as_ref())
-            .map(|(t, line)| (t.as_str(), *line))
     }
 }
 
@@ -96,28 +95,10 @@ impl std::fmt::Display for Problem {
 }
 
 /// A value as written, with its line: evaluated only if used.
-#[derive(Clone, Debug)]
-struct Raw {
-    text: String,
-    line: u64,
-}
-
-/// The value keys of one object entry.
-#[derive(Clone, Debug, Default)]
-struct Entry {
-    parameter: Option<Raw>,
-    default: Option<Raw>,
-}
-
-impl Entry {
-    /// ParameterValue (what the device is configured with) if written and
-    /// not empty, else DefaultValue.
-    fn value(&self) -> Option<&Raw> {
-        self.parameter
-            .as_ref()
-            .filter(|r| !r.text.is_empty())
-            .or(self.default.as_ref())
-    }
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Raw {
+    pub text: String,
+    pub line: u64,
 }
 
 /// The section being read.
@@ -202,7 +183,6 @@ fn problem(dcf: &mut Dcf, line: u64, reason: String) {
 /// Reads a DCF for `node` (the node the user named: `$NODEID`).
 pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
     let mut dcf = Dcf::default();
-    let mut entries: BTreeMap<(u16, u8), Entry> = BTreeMap::new();
     let mut info: BTreeMap<&'static str, Raw> = BTreeMap::new();
     let mut section = Section::Other;
     for (n, raw_line) in bytes.split(|&b| b == b'\n').enumerate() {
@@ -269,16 +249,7 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
                 } else {
                     &mut declared.default
                 };
-                *slot = Some((raw().text, line_no));
-                if used(object) {
-                    let entry = entries.entry((object.index, object.sub)).or_default();
-                    let slot = if parameter {
-                        &mut entry.parameter
-                    } else {
-                        &mut entry.default
-                    };
-                    *slot = Some(raw());
-                }
+                *slot = Some(raw());
             }
             Section::DeviceInfo if key.eq_ignore_ascii_case("VendorNumber") => {
                 info.insert("vendor", raw());
@@ -305,13 +276,22 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
             }
         }
     };
-    let identity = |sub| entries.get(&(IDENTITY, sub));
-    let vendor = info.get("vendor").or(identity(1).and_then(Entry::value));
-    dcf.vendor_id = eval(&mut dcf, vendor, "the vendor id is not read from this file");
-    let product = info.get("product").or(identity(2).and_then(Entry::value));
+    let declared = |dcf: &Dcf, index, sub| {
+        dcf.objects
+            .get(&Object { index, sub })
+            .and_then(Declared::value)
+            .cloned()
+    };
+    let vendor = info.get("vendor").cloned().or(declared(&dcf, IDENTITY, 1));
+    dcf.vendor_id = eval(
+        &mut dcf,
+        vendor.as_ref(),
+        "the vendor id is not read from this file",
+    );
+    let product = info.get("product").cloned().or(declared(&dcf, IDENTITY, 2));
     dcf.product_code = eval(
         &mut dcf,
-        product,
+        product.as_ref(),
         "the product code is not read from this file",
     );
     dcf.node_id = eval(
@@ -319,19 +299,22 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
         info.get("node"),
         "the node id is not read from this file",
     );
-    let device_type = entries.get(&(DEVICE_TYPE, 0)).and_then(Entry::value);
+    let device_type = declared(&dcf, DEVICE_TYPE, 0);
     dcf.device_type = eval(
         &mut dcf,
-        device_type,
+        device_type.as_ref(),
         "the device type (0x1000) is not read from this file",
     );
     // The declared values, applied as if the node had confirmed them in
     // index order: the same rules as a mapping learnt from the trace.
     let mut learner = Learner::new();
-    for (&(index, sub), entry) in &entries {
-        if index == IDENTITY || index == DEVICE_TYPE {
-            continue;
-        }
+    let values: Vec<(Object, Raw)> = dcf
+        .objects
+        .iter()
+        .filter(|(o, _)| used(**o) && o.index != IDENTITY && o.index != DEVICE_TYPE)
+        .filter_map(|(&o, d)| Some((o, d.value()?.clone())))
+        .collect();
+    for (Object { index, sub }, raw) in values {
         // Communication parameters: 0x1400-0x15FF (receive), 0x1800-0x19FF (transmit).
         let cob_id = sub == 1 && matches!(index, 0x1400..=0x15FF | 0x1800..=0x19FF);
         let what = if cob_id {
@@ -342,7 +325,7 @@ pub fn parse(bytes: &[u8], node: NodeId) -> Dcf {
         } else {
             format!("0x{index:04X} sub {sub} is not read from this file")
         };
-        if let Some(value) = eval(&mut dcf, entry.value(), &what) {
+        if let Some(value) = eval(&mut dcf, Some(&raw), &what) {
             learner.confirmed(node, Object { index, sub }, value);
         }
     }
@@ -511,7 +494,7 @@ DefaultValue=0x60640020
                 .objects
                 .get(&Object { index, sub })
                 .and_then(|d| d.value())
-                .map(|(t, _)| t.to_string())
+                .map(|r| r.text.clone())
         };
         assert_eq!(value(0x1800, 1).as_deref(), Some("0x180 + $NodeId"));
         assert_eq!(

@@ -130,12 +130,6 @@ pub fn drive_name(index: u16) -> Option<&'static str> {
     })
 }
 
-/// Whether `object` holds a VISIBLE_STRING by CiA 301: a node's device
-/// name, hardware and software versions.
-pub fn is_text(object: Object) -> bool {
-    matches!(object.index, 0x1008..=0x100A)
-}
-
 /// A VISIBLE_STRING's bytes as text. CiA 301 means ASCII; devices also
 /// send UTF-8, and (German machine builders among them) Latin-1, whose
 /// bytes over 0x7F are no valid UTF-8: read as Latin-1 then, so
@@ -206,6 +200,5 @@ mod tests {
         assert_eq!(visible_string(b"Ger\xe4t"), "Gerät");
         assert_eq!(visible_string(b"V1.2\0\0 "), "V1.2");
         assert_eq!(visible_string(b""), "");
-        assert!(is_text(o(0x1008, 0)) && is_text(o(0x100A, 0)) && !is_text(o(0x100B, 0)));
     }
 }

@@ -102,15 +102,15 @@ pub fn differences(
             continue;
         };
         let declared = dcf.objects.get(&object).and_then(|d| d.value());
-        let same = declared.is_some_and(|(text, _)| match applied.data.number() {
-            Some(n) if applied.text.is_none() => dcf::integer(text, node) == Ok(n),
-            _ => text == trace,
+        let same = declared.is_some_and(|raw| match applied.data.number() {
+            Some(n) if applied.text.is_none() => dcf::integer(&raw.text, node) == Ok(n),
+            _ => raw.text == trace,
         });
         if !same {
             out.push(Difference {
                 object,
                 trace,
-                file: declared.map(|(t, line)| (t.to_string(), line)),
+                file: declared.map(|raw| (raw.text.clone(), raw.line)),
             });
         }
     }

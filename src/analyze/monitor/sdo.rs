@@ -541,7 +541,7 @@ fn transfer_report(e: Ended<At>, facts: &Facts<'_>, opts: &Options) -> SdoTransf
                 .flatten()
                 .map(Cow::Borrowed)
         });
-    let is_text = dictionary::is_text(object) || declared.is_some_and(|d| d.text);
+    let is_text = sdo::is_text(object.index) || declared.is_some_and(|d| d.text);
     let text = e
         .data
         .filter(|d| is_text && d.complete())
