@@ -7,7 +7,7 @@ use std::borrow::Cow;
 use std::io;
 
 use crate::ethercat::{EthercatCounts, EthercatPacket};
-use crate::{Folds, Format, Frame, Interest, Timestamp};
+use crate::{Folds, Format, Frame, IdCounts, Interest, Timestamp};
 
 /// Why a line is not a frame of the format being read.
 pub type Reason = Cow<'static, str>;
@@ -265,6 +265,13 @@ pub trait FrameSource {
     /// (converting every plain frame's time cost a pcapng 16% and an MF4
     /// 23% more instructions).
     fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
+        None
+    }
+
+    /// Every frame the reader only counted ([`Next::Counted`]: `plain`
+    /// and `timed`), by channel and identifier, over the input so far.
+    /// `None` from a source that hands every frame on.
+    fn counted_ids(&self) -> Option<&IdCounts> {
         None
     }
 }

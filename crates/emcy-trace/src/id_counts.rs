@@ -1,0 +1,337 @@
+//! [`IdCounts`]: every frame of an input counted by channel and identifier,
+//! whether anybody decodes it or not. A reader's hot loop reads a line's
+//! id before it decides the line is of no interest, so counting it there
+//! is one array increment; the traffic report (frames per channel and per
+//! identifier) comes from these counts on every run, not only when every
+//! frame is decoded.
+
+/// Channels counted; frames on more are counted in [`IdCounts::other`], so
+/// a hostile input cannot grow the counts without bound (each channel holds
+/// 16 KiB for its standard ids).
+pub const MAX_CHANNELS: usize = 256;
+
+/// Extended identifiers counted per channel; frames on more are counted in
+/// the channel's [`ChannelCounts::other`].
+pub const MAX_EXTENDED: usize = 4096;
+
+/// What a frame is counted under: its channel and identifier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameKey<'a> {
+    /// The channel as the line or record names it.
+    pub channel: &'a [u8],
+    /// The identifier, without flags.
+    pub id: u32,
+    /// Whether the identifier is a 29-bit one.
+    pub extended: bool,
+}
+
+/// Frames by channel and identifier. Error frames are counted per channel
+/// only: their "identifier" is the error's class.
+#[derive(Clone, Debug, Default)]
+pub struct IdCounts {
+    channels: Vec<ChannelCounts>,
+    /// The channel of the last count (most inputs have one).
+    last: usize,
+    /// Frames on channels past [`MAX_CHANNELS`].
+    pub other: u64,
+}
+
+/// One channel's counts.
+#[derive(Clone, Debug)]
+pub struct ChannelCounts {
+    name: Box<[u8]>,
+    standard: Box<[u64; 2048]>,
+    /// Sorted by id.
+    extended: Vec<(u32, u64)>,
+    error_frames: u64,
+    /// Frames on extended ids past [`MAX_EXTENDED`].
+    pub other: u64,
+}
+
+impl IdCounts {
+    /// No counts.
+    pub fn new() -> Self {
+        IdCounts::default()
+    }
+
+    /// The index of channel `name`, made on its first frame; `None` past
+    /// [`MAX_CHANNELS`] (the caller counts the frame in `other`).
+    #[inline]
+    pub fn channel(&mut self, name: &[u8]) -> Option<usize> {
+        if let Some(c) = self.channels.get(self.last)
+            && *c.name == *name
+        {
+            return Some(self.last);
+        }
+        self.find(name)
+    }
+
+    #[inline(never)]
+    fn find(&mut self, name: &[u8]) -> Option<usize> {
+        let i = match self.channels.iter().position(|c| *c.name == *name) {
+            Some(i) => i,
+            None if self.channels.len() < MAX_CHANNELS => {
+                self.channels.push(ChannelCounts::new(name));
+                self.channels.len() - 1
+            }
+            None => return None,
+        };
+        self.last = i;
+        Some(i)
+    }
+
+    /// One frame.
+    #[inline]
+    pub fn count(&mut self, key: FrameKey<'_>) {
+        match self.channel(key.channel) {
+            Some(c) => self.count_at(c, key.id, key.extended),
+            None => self.other += 1,
+        }
+    }
+
+    /// One frame on the channel [`IdCounts::channel`] gave `c` (a reader
+    /// whose run of lines has one channel finds it once).
+    #[inline]
+    pub fn count_at(&mut self, c: usize, id: u32, extended: bool) {
+        let Some(channel) = self.channels.get_mut(c) else {
+            self.other += 1;
+            return;
+        };
+        match channel.standard.get_mut(id as usize) {
+            Some(n) if !extended => *n += 1,
+            _ => channel.count_extended(id),
+        }
+    }
+
+    /// One error frame on `channel`.
+    pub fn error_frame(&mut self, channel: &[u8]) {
+        match self.channel(channel).and_then(|c| self.channels.get_mut(c)) {
+            Some(c) => c.error_frames += 1,
+            None => self.other += 1,
+        }
+    }
+
+    /// Adds `other`'s counts (the next block's) to these: channels new to
+    /// these come after theirs, in `other`'s order.
+    pub fn add(&mut self, other: &IdCounts) {
+        for theirs in &other.channels {
+            let frames = theirs.frames();
+            if frames == 0 {
+                // A slot kept from an earlier block for its memory.
+                continue;
+            }
+            let Some(c) = self.channel(&theirs.name) else {
+                self.other += frames;
+                continue;
+            };
+            if let Some(ours) = self.channels.get_mut(c) {
+                ours.add(theirs);
+            }
+        }
+        self.other += other.other;
+    }
+
+    /// Every count back to zero, the channels' memory kept for the next
+    /// block.
+    pub fn clear(&mut self) {
+        for c in &mut self.channels {
+            c.standard.fill(0);
+            c.extended.clear();
+            c.error_frames = 0;
+            c.other = 0;
+        }
+        // A cleared channel without frames is no channel: dropped when it
+        // is not reused, by name, in [`IdCounts::channel`] (kept here only
+        // for its memory).
+        self.other = 0;
+    }
+
+    /// The channels that had a frame, in the order of their first.
+    pub fn channels(&self) -> impl Iterator<Item = &ChannelCounts> {
+        self.channels.iter().filter(|c| c.frames() > 0)
+    }
+
+    /// Every frame counted.
+    pub fn frames(&self) -> u64 {
+        self.channels.iter().map(ChannelCounts::frames).sum::<u64>() + self.other
+    }
+}
+
+impl ChannelCounts {
+    fn new(name: &[u8]) -> Self {
+        ChannelCounts {
+            name: name.into(),
+            standard: Box::new([0; 2048]),
+            extended: Vec::new(),
+            error_frames: 0,
+            other: 0,
+        }
+    }
+
+    /// Not inlined: rare on the buses we read, and it kept the hot loop's
+    /// standard-id count one branch long.
+    #[inline(never)]
+    fn count_extended(&mut self, id: u32) {
+        self.add_extended(id, 1);
+    }
+
+    fn add_extended(&mut self, id: u32, n: u64) {
+        match self.extended.binary_search_by_key(&id, |e| e.0) {
+            Ok(i) => {
+                if let Some(e) = self.extended.get_mut(i) {
+                    e.1 += n;
+                }
+            }
+            Err(i) if self.extended.len() < MAX_EXTENDED => self.extended.insert(i, (id, n)),
+            Err(_) => self.other += n,
+        }
+    }
+
+    fn add(&mut self, other: &ChannelCounts) {
+        for (n, m) in self.standard.iter_mut().zip(other.standard.iter()) {
+            *n += m;
+        }
+        for &(id, n) in &other.extended {
+            self.add_extended(id, n);
+        }
+        self.error_frames += other.error_frames;
+        self.other += other.other;
+    }
+
+    /// The channel's name as its lines or records wrote it.
+    pub fn name(&self) -> &[u8] {
+        &self.name
+    }
+
+    /// Every frame on the channel, error frames included.
+    pub fn frames(&self) -> u64 {
+        self.standard.iter().sum::<u64>()
+            + self.extended.iter().map(|e| e.1).sum::<u64>()
+            + self.error_frames
+            + self.other
+    }
+
+    /// Error frames.
+    pub fn error_frames(&self) -> u64 {
+        self.error_frames
+    }
+
+    /// Frames per identifier that had any: `(id, extended, frames)`, the
+    /// standard ids first, each kind by id.
+    pub fn ids(&self) -> impl Iterator<Item = (u32, bool, u64)> + '_ {
+        let standard = (0u32..)
+            .zip(self.standard.iter())
+            .filter(|(_, n)| **n > 0)
+            .map(|(id, n)| (id, false, *n));
+        standard.chain(self.extended.iter().map(|&(id, n)| (id, true, n)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(channel: &[u8], id: u32, extended: bool) -> FrameKey<'_> {
+        FrameKey {
+            channel,
+            id,
+            extended,
+        }
+    }
+
+    #[test]
+    fn counts_by_channel_and_id_in_the_order_channels_came() {
+        let mut c = IdCounts::new();
+        c.count(key(b"can1", 0x181, false));
+        c.count(key(b"can0", 0x181, false));
+        c.count(key(b"can1", 0x181, false));
+        c.count(key(b"can1", 0x181, true));
+        c.error_frame(b"can0");
+        let got: Vec<_> = c
+            .channels()
+            .map(|ch| {
+                (
+                    ch.name().to_vec(),
+                    ch.ids().collect::<Vec<_>>(),
+                    ch.frames(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (
+                    b"can1".to_vec(),
+                    vec![(0x181, false, 2), (0x181, true, 1)],
+                    3
+                ),
+                (b"can0".to_vec(), vec![(0x181, false, 1)], 2),
+            ]
+        );
+        assert_eq!(c.frames(), 5);
+    }
+
+    #[test]
+    fn adding_blocks_equals_counting_them_whole() {
+        let lines = [
+            (b"a".as_slice(), 1u32, false),
+            (b"b", 0x1FFF_FFFF, true),
+            (b"a", 0x7FF, false),
+            (b"c", 2, false),
+            (b"a", 1, false),
+        ];
+        let mut whole = IdCounts::new();
+        for &(ch, id, ext) in &lines {
+            whole.count(key(ch, id, ext));
+        }
+        for split in 0..=lines.len() {
+            let (first, second) = lines.split_at(split);
+            let mut sum = IdCounts::new();
+            let mut block = IdCounts::new();
+            for part in [first, second] {
+                block.clear();
+                for &(ch, id, ext) in part {
+                    block.count(key(ch, id, ext));
+                }
+                sum.add(&block);
+            }
+            let names = |c: &IdCounts| {
+                c.channels()
+                    .map(|ch| ch.name().to_vec())
+                    .collect::<Vec<_>>()
+            };
+            let ids = |c: &IdCounts| {
+                c.channels()
+                    .map(|ch| ch.ids().collect::<Vec<_>>())
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(names(&sum), names(&whole), "split at {split}");
+            assert_eq!(ids(&sum), ids(&whole), "split at {split}");
+        }
+    }
+
+    #[test]
+    fn channels_and_extended_ids_past_the_bounds_are_counted_as_other() {
+        let mut c = IdCounts::new();
+        for i in 0..MAX_CHANNELS + 3 {
+            c.count(key(format!("ch{i}").as_bytes(), 1, false));
+        }
+        assert_eq!(c.channels().count(), MAX_CHANNELS);
+        assert_eq!(c.other, 3);
+        let mut e = IdCounts::new();
+        for id in 0..MAX_EXTENDED as u32 + 5 {
+            e.count(key(b"can0", id, true));
+        }
+        let ch = e.channels().next().expect("one channel");
+        assert_eq!((ch.ids().count(), ch.other), (MAX_EXTENDED, 5));
+        assert_eq!(e.frames(), MAX_EXTENDED as u64 + 5);
+    }
+
+    #[test]
+    fn an_id_past_the_standard_range_without_the_flag_is_counted_as_extended() {
+        let mut c = IdCounts::new();
+        c.count(key(b"x", 0x800, false));
+        let ch = c.channels().next().expect("one channel");
+        assert_eq!(ch.ids().collect::<Vec<_>>(), vec![(0x800, true, 1)]);
+    }
+}
