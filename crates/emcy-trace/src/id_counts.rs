@@ -157,6 +157,42 @@ impl IdCounts {
     }
 }
 
+/// Where a reader counts the frames of a channel it knows by a number (a
+/// pcapng interface, an MF4 bus channel): looked up by name in an
+/// [`IdCounts`] once, so that counting a frame is one increment, not a
+/// comparison of names.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum CountedChannel {
+    /// Not looked up yet.
+    #[default]
+    Unknown,
+    /// The index [`IdCounts::channel`] gave (below [`MAX_CHANNELS`]: kept
+    /// small, as a reader's hot loop passes it around with every frame).
+    At(u32),
+    /// Past [`MAX_CHANNELS`]: its frames are counted in [`IdCounts::other`].
+    Other,
+}
+
+impl IdCounts {
+    /// Where frames on channel `name` are counted (see [`CountedChannel`]).
+    pub(crate) fn counted_channel(&mut self, name: &[u8]) -> CountedChannel {
+        match self.channel(name).and_then(|c| u32::try_from(c).ok()) {
+            Some(c) => CountedChannel::At(c),
+            None => CountedChannel::Other,
+        }
+    }
+
+    /// One frame on `channel`, which [`IdCounts::counted_channel`] gave
+    /// (an unknown one is counted in `other`, as one past the limit).
+    #[inline]
+    pub(crate) fn count_in(&mut self, channel: CountedChannel, id: u32, extended: bool) {
+        match channel {
+            CountedChannel::At(c) => self.count_at(c as usize, id, extended),
+            CountedChannel::Unknown | CountedChannel::Other => self.other += 1,
+        }
+    }
+}
+
 impl ChannelCounts {
     fn new(name: &[u8]) -> Self {
         ChannelCounts {
@@ -224,6 +260,174 @@ impl ChannelCounts {
             .filter(|(_, n)| **n > 0)
             .map(|(id, n)| (id, false, *n));
         standard.chain(self.extended.iter().map(|&(id, n)| (id, true, n)))
+    }
+}
+
+/// What the readers' tests (and fuzz target bodies) check
+/// [`FrameSource::counted_ids`] with: the frames a reader hands on, counted
+/// as its caller counts them, plus the frames it only counted, must be
+/// every frame of the input.
+///
+/// [`FrameSource::counted_ids`]: crate::FrameSource::counted_ids
+#[cfg(any(test, feature = "fuzzing"))]
+pub(crate) mod testing {
+    use std::collections::BTreeMap;
+
+    use super::{FrameKey, IdCounts};
+    #[cfg(test)]
+    use crate::{ContentFilter, FrameSource, Interest, Next, Parsed};
+    use crate::{Frame, FrameKind};
+
+    /// What a count is of: an identifier, a channel's error frames, or the
+    /// frames past a bound.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+    pub(crate) enum Counted {
+        Id(u32, bool),
+        ErrorFrames,
+        Other,
+    }
+
+    /// Every count of `ids` by channel (`None`: frames on channels past the
+    /// bound), in an order that does not depend on which came first.
+    pub(crate) fn table(ids: &IdCounts) -> BTreeMap<(Option<Vec<u8>>, Counted), u64> {
+        let mut t = BTreeMap::new();
+        for c in ids.channels() {
+            let name = Some(c.name().to_vec());
+            for (id, extended, n) in c.ids() {
+                t.insert((name.clone(), Counted::Id(id, extended)), n);
+            }
+            for (what, n) in [
+                (Counted::ErrorFrames, c.error_frames()),
+                (Counted::Other, c.other),
+            ] {
+                if n > 0 {
+                    t.insert((name.clone(), what), n);
+                }
+            }
+        }
+        if ids.other > 0 {
+            t.insert((None, Counted::Other), ids.other);
+        }
+        t
+    }
+
+    /// Counts a frame handed on as its caller counts it: an error frame
+    /// per channel, any other by identifier.
+    pub(crate) fn count_frame(ids: &mut IdCounts, f: &Frame<'_>) {
+        if f.kind == FrameKind::Error {
+            ids.error_frame(f.channel);
+        } else {
+            ids.count(FrameKey {
+                channel: f.channel,
+                id: f.id,
+                extended: f.extended,
+            });
+        }
+    }
+
+    /// The interests the readers' tests read with: none, the EMCY ids,
+    /// and the EMCY ids with the heartbeats wanted only when they are a
+    /// boot-up (the others only timed).
+    #[cfg(test)]
+    pub(crate) fn interests() -> Vec<(&'static str, Interest)> {
+        let mut emcy = Interest::none();
+        emcy.add_standard_range(0x81..=0xFF);
+        let mut boot_ups = emcy.clone();
+        boot_ups.add_standard_range(0x701..=0x77F);
+        boot_ups.filter_content(0x701..=0x77F, ContentFilter(|_, d| d.head() == [0]));
+        vec![
+            ("no id wanted", Interest::none()),
+            ("the EMCY ids wanted", emcy),
+            ("boot-ups wanted, other heartbeats timed", boot_ups),
+        ]
+    }
+
+    /// The repository's fixtures whose names end in one of `extensions`,
+    /// with their bytes.
+    #[cfg(test)]
+    pub(crate) fn fixtures(extensions: &[&str]) -> Vec<(String, Vec<u8>)> {
+        // The workspace's fixtures, two folders up from this crate.
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+        let mut found: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
+            .expect("the fixtures folder")
+            .filter_map(|e| {
+                let path = e.ok()?.path();
+                let ext = path.extension()?.to_str()?;
+                if !extensions.contains(&ext) {
+                    return None;
+                }
+                let name = path.file_name()?.to_str()?.to_string();
+                Some((name, std::fs::read(&path).ok()?))
+            })
+            .collect();
+        found.sort();
+        assert!(!found.is_empty(), "no fixture ends in {extensions:?}");
+        found
+    }
+
+    /// What reading a source to its end gave: the frames it handed on,
+    /// counted as a caller counts them (error frames per channel), the
+    /// frames its [`Next::Counted`] items said it only counted (`plain`
+    /// and `timed`), and its [`FrameSource::counted_ids`].
+    #[cfg(test)]
+    pub(crate) struct Read {
+        pub(crate) handed_on: IdCounts,
+        pub(crate) only_counted: u64,
+        pub(crate) counted_ids: Option<IdCounts>,
+    }
+
+    /// Reads `source` to its end (or its first error) with `interest`.
+    #[cfg(test)]
+    pub(crate) fn read(source: &mut impl FrameSource, interest: &Interest) -> Read {
+        let mut handed_on = IdCounts::new();
+        let mut only_counted = 0;
+        while let Ok(Some(next)) = source.next_item(Some(interest)) {
+            match next {
+                Next::Record(Parsed::Frame(f)) => count_frame(&mut handed_on, &f),
+                Next::Counted(c) => only_counted += c.plain + c.timed.map_or(0, |t| t.0),
+                Next::Record(_) | Next::Note(_) => {}
+            }
+        }
+        Read {
+            handed_on,
+            only_counted,
+            counted_ids: source.counted_ids().cloned(),
+        }
+    }
+
+    /// Reads `all` with [`Interest::all`] and `some` (the same input) with
+    /// `interest`: the frames `some` hands on plus its
+    /// [`FrameSource::counted_ids`] must be the frames of `all` by channel
+    /// and identifier, and those counts exactly the frames its
+    /// [`Next::Counted`] items say it only counted, none an error frame.
+    /// Returns how many frames `some` only counted.
+    #[cfg(test)]
+    pub(crate) fn assert_counts_add_up(
+        all: &mut impl FrameSource,
+        some: &mut impl FrameSource,
+        interest: &Interest,
+        what: &str,
+    ) -> u64 {
+        let all = read(all, &Interest::all());
+        assert_eq!(all.only_counted, 0, "{what}: every frame wanted");
+        if let Some(ids) = &all.counted_ids {
+            assert_eq!(ids.frames(), 0, "{what}: nothing only counted");
+        }
+        let some = read(some, interest);
+        let counted = some.counted_ids.unwrap_or_default();
+        assert_eq!(
+            counted.frames(),
+            some.only_counted,
+            "{what}: the counts are the frames only counted"
+        );
+        assert!(
+            counted.channels().all(|c| c.error_frames() == 0),
+            "{what}: error frames are handed on, never only counted"
+        );
+        let mut sum = some.handed_on;
+        sum.add(&counted);
+        assert_eq!(table(&sum), table(&all.handed_on), "{what}");
+        some.only_counted
     }
 }
 

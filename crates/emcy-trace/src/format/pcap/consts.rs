@@ -15,6 +15,9 @@ pub const MAX_PACKET: usize = 262_144;
 pub(super) const BUFFER: usize = 256 * 1024;
 /// Interfaces one pcapng section may describe.
 pub(super) const MAX_INTERFACES: usize = 65_536;
+/// Devices of an interface that captures several whose counted frames'
+/// channel is kept (see `decode::device_counted`).
+pub(super) const MAX_COUNTED_DEVICES: usize = 64;
 /// Link type 227 packets that decide the byte order of its id word.
 pub const SAMPLE: u32 = 32;
 /// Packets held (and their bytes) while the byte order is not known.

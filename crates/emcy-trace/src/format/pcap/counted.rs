@@ -1,17 +1,21 @@
 //! The frames the hot loop only counts, and when they were.
 
-use crate::Timestamp;
 use crate::ethercat::{self, EthercatCounts};
+use crate::id_counts::CountedChannel;
+use crate::{IdCounts, Timestamp};
 
 use super::clock::{self, Clock};
 use super::consts::PLAIN_RUN;
 use super::items::Ts;
+use super::packet::Ident;
 
 /// What the hot loop made of a packet it counts.
 #[derive(Clone, Copy)]
 pub(super) enum Hot {
-    /// A CAN frame only counted, and timed if it has a [`RawTime`].
-    Plain(Option<RawTime>),
+    /// A CAN frame only counted, with where it is counted when its
+    /// interface alone says it (else [`CountedChannel::Unknown`]), and
+    /// timed if it has a [`RawTime`].
+    Plain(Ident, CountedChannel, Option<RawTime>),
     /// An EtherCAT frame without mailbox messages: a skipped line.
     Ethercat(ethercat::Walked),
 }
@@ -56,10 +60,13 @@ impl Timed {
 
 /// Packets only counted since the caller last asked: plain frames (and,
 /// of those, the ones only timed) and quiet EtherCAT frames (skipped
-/// lines); and all EtherCAT seen.
+/// lines); and all EtherCAT seen, and every plain frame by channel and
+/// identifier.
 #[derive(Default)]
 pub(super) struct Counted {
     pub(super) plain: u64,
+    /// Every plain frame so far ([`crate::FrameSource::counted_ids`]).
+    pub(super) ids: IdCounts,
     pub(super) timed: Timed,
     /// The input's first and last plain frames' interfaces and times as
     /// stored (read only when asked for): the input's span.
@@ -75,7 +82,7 @@ impl Counted {
     #[inline]
     pub(super) fn add(&mut self, hot: Hot) -> bool {
         match hot {
-            Hot::Plain(time) => {
+            Hot::Plain(_, _, time) => {
                 self.plain += 1;
                 if let Some(t) = time {
                     self.timed.count(t);
@@ -98,6 +105,12 @@ impl Counted {
             Some((_, last)) => *last = (iface, ts),
             None => self.span = Some(((iface, ts), (iface, ts))),
         }
+    }
+
+    /// A plain frame's channel and identifier.
+    #[inline]
+    pub(super) fn count(&mut self, channel: CountedChannel, ident: Ident) {
+        self.ids.count_in(channel, ident.id, ident.extended);
     }
 
     /// Packets counted and not yet asked for.

@@ -7,12 +7,13 @@ use pcap_parser::Block;
 use pcap_parser::traits::PcapNGPacketBlock;
 
 use crate::ethercat::{self, CoeMessage, EthercatPacket};
-use crate::{Interest, Reason, Timestamp};
+use crate::id_counts::CountedChannel;
+use crate::{IdCounts, Interest, Reason, Timestamp};
 
 use super::clock::{self, Clock};
 use super::consts::{
-    KEEP, KNOWN_BLOCKS, MAX_BLOCK, MAX_INTERFACES, MAX_PACKET, PACKET_BLOCK, bom,
-    is_pcapng_block_type, sane_block,
+    KEEP, KNOWN_BLOCKS, MAX_BLOCK, MAX_COUNTED_DEVICES, MAX_INTERFACES, MAX_PACKET, PACKET_BLOCK,
+    bom, is_pcapng_block_type, sane_block,
 };
 use super::counted::{Hot, RawTime};
 use super::items::{Interface, Item, Ts};
@@ -61,13 +62,50 @@ impl Decoder {
     /// `NAME:INDEX`: a device seen through an interface that captures
     /// several (`any`).
     pub(super) fn device_channel(&self, iface: usize, device: u32) -> Box<[u8]> {
-        let mut name = self
-            .interfaces
-            .get(iface)
-            .map_or_else(Vec::new, |i| i.name.to_vec());
-        name.push(b':');
-        name.extend_from_slice(itoa::Buffer::new().format(device).as_bytes());
-        name.into()
+        device_name(self.interfaces.get(iface).map_or(&[], |i| &i.name), device)
+    }
+
+    /// The device a packet on interface `iface` came from, when it is part
+    /// of its channel's name (see [`Interface::several`]).
+    #[inline]
+    pub(super) fn device(&self, iface: usize, data: &[u8]) -> Option<u32> {
+        self.interfaces.get(iface).and_then(|i| device(i, data))
+    }
+
+    /// [`Decoder::counted_channel`] of a frame on interface `iface` whose
+    /// packet is `data`.
+    #[inline(never)]
+    pub(super) fn counted_channel_of(
+        &mut self,
+        ids: &mut IdCounts,
+        iface: usize,
+        data: &[u8],
+    ) -> CountedChannel {
+        let device = self.device(iface, data);
+        self.counted_channel(ids, iface, device)
+    }
+
+    /// Where a frame only counted on interface `iface` (from `device`) is
+    /// counted: under the channel its frame would name, looked up by name
+    /// on the interface's first such frame (and each device's).
+    #[inline]
+    pub(super) fn counted_channel(
+        &mut self,
+        ids: &mut IdCounts,
+        iface: usize,
+        device: Option<u32>,
+    ) -> CountedChannel {
+        let Some(i) = self.interfaces.get_mut(iface) else {
+            // No packet is read on an interface not described.
+            return CountedChannel::Unknown;
+        };
+        if let Some(device) = device {
+            return device_counted(i, ids, device);
+        }
+        if i.counted == CountedChannel::Unknown {
+            i.counted = ids.counted_channel(&i.name);
+        }
+        i.counted
     }
 
     pub(super) fn time(&self, interface: &Interface, ts: Ts) -> Result<Option<Timestamp>, Reason> {
@@ -110,13 +148,15 @@ impl Decoder {
             self.socketcan,
             interest,
         ) {
-            Packet::Plain => Item::Plain,
+            Packet::Plain(ident) => Item::Plain {
+                iface,
+                device: device(interface, data),
+                ident,
+            },
             Packet::Can(can) => match self.time(interface, ts) {
                 Ok(time) => Item::Frame {
                     iface,
-                    device: (interface.several && interface.linktype == packet::LINUX_SLL2)
-                        .then(|| Order::Big.u32(data, 4))
-                        .flatten(),
+                    device: device(interface, data),
                     time,
                     can,
                 },
@@ -177,18 +217,22 @@ impl Decoder {
             self.socketcan,
             interest,
         ) {
-            packet::Quick::Plain => Some(Hot::Plain(None)),
-            packet::Quick::Timed => {
+            packet::Quick::Plain(ident) => Some(Hot::Plain(ident, i.counted(), None)),
+            packet::Quick::Timed(ident) => {
                 let sure = match ts {
                     Ts::Legacy { .. } => true,
                     Ts::Units(_) => i.clock.infallible(),
                     Ts::None => false,
                 };
-                sure.then_some(Hot::Plain(Some(RawTime {
-                    clock: i.clock,
-                    ts,
-                    nanos: self.nanos,
-                })))
+                sure.then_some(Hot::Plain(
+                    ident,
+                    i.counted(),
+                    Some(RawTime {
+                        clock: i.clock,
+                        ts,
+                        nanos: self.nanos,
+                    }),
+                ))
             }
             packet::Quick::Full => {
                 // Process data and empty polls, nearly every packet of an
@@ -255,13 +299,13 @@ impl Decoder {
                         clock.describe()
                     ));
                 }
-                self.interfaces.push(Interface {
-                    linktype: (idb.linktype.0 & 0xFFFF) as u16,
+                self.interfaces.push(Interface::new(
+                    (idb.linktype.0 & 0xFFFF) as u16,
                     name,
                     several,
                     clock,
-                    snaplen: idb.snaplen,
-                });
+                    idb.snaplen,
+                ));
                 Outcome::Nothing
             }
             Block::EnhancedPacket(epb) => {
@@ -403,6 +447,41 @@ impl Decoder {
         }
         Candidate::Yes
     }
+}
+
+/// The device of a packet on `interface`: part of its channel's name when
+/// the interface captures several and the packet's LINUX_SLL2 header says
+/// which (its interface index).
+#[inline]
+fn device(interface: &Interface, data: &[u8]) -> Option<u32> {
+    interface
+        .by_device()
+        .then(|| Order::Big.u32(data, 4))
+        .flatten()
+}
+
+/// `NAME:INDEX`, the channel of a device seen through interface `NAME`.
+fn device_name(interface: &[u8], device: u32) -> Box<[u8]> {
+    let mut name = interface.to_vec();
+    name.push(b':');
+    name.extend_from_slice(itoa::Buffer::new().format(device).as_bytes());
+    name.into()
+}
+
+/// Where a frame only counted from `device` on interface `i` is counted:
+/// looked up by its channel's name once per device, for the first
+/// [`MAX_COUNTED_DEVICES`] devices (a capture of `any` sees a few; a
+/// damaged one may name any number, each then looked up by name).
+#[inline(never)]
+fn device_counted(i: &mut Interface, ids: &mut IdCounts, device: u32) -> CountedChannel {
+    if let Some(&(_, c)) = i.devices.iter().find(|(d, _)| *d == device) {
+        return c;
+    }
+    let c = ids.counted_channel(&device_name(&i.name, device));
+    if i.devices.len() < MAX_COUNTED_DEVICES {
+        i.devices.push((device, c));
+    }
+    c
 }
 
 /// An EtherCAT frame's walk: its CoE messages kept, the others counted.

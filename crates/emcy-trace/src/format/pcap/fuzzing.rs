@@ -1,7 +1,8 @@
 //! The fuzz targets' side of the reader: a capture built from one packet,
 //! and the body of the `pcap` target.
 
-use crate::{Format, Interest, Parsed};
+use crate::id_counts::testing::{count_frame, table};
+use crate::{Format, FrameSource, IdCounts, Interest, Parsed};
 
 use super::consts::{BOM, BUFFER, EPB, MAX_BLOCK, MAX_HELD};
 use super::reader::PcapReader;
@@ -117,13 +118,19 @@ pub fn fuzz_pcap(data: &[u8]) {
     let mut full = PcapReader::new(data).expect("read once");
     let mut expected = Vec::new();
     let mut plain = 0u64;
+    // Every frame, by channel and identifier.
+    let mut every = IdCounts::new();
     while let Ok(Some(p)) = full.next_packet() {
+        if let Parsed::Frame(f) = &p {
+            count_frame(&mut every, f);
+        }
         let (want, text) = (wanted(&p), shown(&p));
         classify(&mut full, want, text, &mut expected, &mut plain);
     }
     let mut fast = PcapReader::new(data).expect("read once");
     let mut got = Vec::new();
     let mut counted = 0u64;
+    let mut handed_on = IdCounts::new();
     while let Ok(more) = fast.advance(Some(&interest)) {
         counted += fast.take_counted().0 + fast.take_quiet();
         if !more {
@@ -133,6 +140,9 @@ pub fn fuzz_pcap(data: &[u8]) {
         // come out whole: the caller's own check makes them plain (and
         // the quiet EtherCAT frames among them).
         if let Some(p) = fast.take() {
+            if let Parsed::Frame(f) = &p {
+                count_frame(&mut handed_on, f);
+            }
             let (want, text) = (wanted(&p), shown(&p));
             classify(&mut fast, want, text, &mut got, &mut counted);
         }
@@ -150,5 +160,13 @@ pub fn fuzz_pcap(data: &[u8]) {
     assert_eq!(
         counted, plain,
         "the same plain frames after the last packet"
+    );
+    if let Some(ids) = fast.counted_ids() {
+        handed_on.add(ids);
+    }
+    assert_eq!(
+        table(&handed_on),
+        table(&every),
+        "the frames handed on and those only counted are every frame, by channel and id"
     );
 }

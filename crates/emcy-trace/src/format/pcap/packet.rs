@@ -83,13 +83,20 @@ pub struct Can {
     pub data: Payload,
 }
 
+/// The identifier of a frame only counted: what it is counted under.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ident {
+    pub id: u32,
+    pub extended: bool,
+}
+
 /// What one packet is.
 #[derive(Debug, PartialEq, Eq)]
 pub enum Packet<'p> {
     Can(Can),
     /// A valid CAN frame the caller's [`Interest`] does not want (not a
     /// data frame, or on an id it does not decode): only counted.
-    Plain,
+    Plain(Ident),
     /// A LINKTYPE_CAN_SOCKETCAN packet read before the byte order of its id
     /// word is known (see [`evidence`]): decode it later with `socketcan`.
     Undecided(&'p [u8]),
@@ -202,10 +209,10 @@ pub fn decode<'p>(
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quick {
     /// What [`decode`] with the interest says is [`Packet::Plain`].
-    Plain,
+    Plain(Ident),
     /// A valid data frame on a wanted id whose data the interest's content
     /// filter rejects: only its time is needed.
-    Timed,
+    Timed(Ident),
     /// Anything else: [`decode`] it.
     Full,
 }
@@ -225,7 +232,7 @@ pub fn quick(
         return Quick::Full;
     };
     match head(d, reported, order, shape) {
-        Ok(Some(h)) if h.plain(interest) => Quick::Plain,
+        Ok(Some(h)) if h.plain(interest) => Quick::Plain(h.ident()),
         Ok(Some(h))
             if interest.timed_only(
                 h.id,
@@ -233,7 +240,7 @@ pub fn quick(
                 d.get(8..8 + usize::from(h.len)).unwrap_or_default(),
             ) =>
         {
-            Quick::Timed
+            Quick::Timed(h.ident())
         }
         _ => Quick::Full,
     }
@@ -258,7 +265,7 @@ pub fn frame<'p>(
         }
     };
     if interest.is_some_and(|i| head.plain(i)) {
-        return Packet::Plain;
+        return Packet::Plain(head.ident());
     }
     let data = if head.kind == FrameKind::Remote {
         Payload::new()
@@ -303,6 +310,14 @@ struct Head {
 }
 
 impl Head {
+    #[inline]
+    fn ident(self) -> Ident {
+        Ident {
+            id: self.id,
+            extended: self.extended,
+        }
+    }
+
     /// Only counted: on an id `interest` does not want (CAN FD frames
     /// also unless it wants those), as the text readers count.
     #[inline]
@@ -625,10 +640,14 @@ mod tests {
         // Only the frame's bytes, whatever follows them.
         assert_eq!(c.data, Payload::from_slice(&[0x10, 0x43, 8]).unwrap());
         let pdo = can([0, 0, 0x01, 0x81], 8, 0, &[0; 8]);
-        assert_eq!(decode(227, &pdo, 16, Order::Big, BE, i), Packet::Plain);
+        let plain = Packet::Plain(Ident {
+            id: 0x181,
+            extended: false,
+        });
+        assert_eq!(decode(227, &pdo, 16, Order::Big, BE, i), plain);
         // A remote frame is counted or decoded by its id, as a data frame.
         let rtr = can([0x40, 0, 0x01, 0x81], 0, 0, &[]);
-        assert_eq!(decode(227, &rtr, 8, Order::Big, BE, i), Packet::Plain);
+        assert_eq!(decode(227, &rtr, 8, Order::Big, BE, i), plain);
         let rtr = can([0x40, 0, 0, 0x81], 0, 0, &[]);
         assert_eq!(
             decoded(decode(227, &rtr, 8, Order::Big, BE, i)).kind,

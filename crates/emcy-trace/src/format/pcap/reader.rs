@@ -10,8 +10,9 @@ use pcap_parser::traits::PcapReaderIterator;
 use pcap_parser::{LegacyPcapReader, PcapBlockOwned, PcapError, PcapNGReader};
 
 use crate::ethercat::{CoeMessage, EthercatCounts, EthercatPacket};
+use crate::id_counts::CountedChannel;
 use crate::read::read_full;
-use crate::{Format, Frame, FrameSource, Interest, Next, Parsed, Timestamp};
+use crate::{Format, Frame, FrameSource, IdCounts, Interest, Next, Parsed, Timestamp};
 
 use super::clock::Clock;
 use super::consts::{
@@ -74,6 +75,13 @@ impl<R: Read> FrameSource for PcapReader<R> {
 
     fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
         PcapReader::plain_span(self)
+    }
+
+    /// Every frame only counted so far, including those of a
+    /// [`Next::Counted`] not returned yet (counted before the packet now
+    /// ready).
+    fn counted_ids(&self) -> Option<&IdCounts> {
+        Some(&self.counted.ids)
     }
 }
 
@@ -154,13 +162,13 @@ impl<R: Read> PcapReader<R> {
                 Decoder {
                     order,
                     nanos,
-                    interfaces: vec![Interface {
-                        linktype: linktype as u16,
-                        name: CHANNEL.as_bytes().into(),
-                        several: true,
-                        clock: Clock::default(),
-                        snaplen: 0,
-                    }],
+                    interfaces: vec![Interface::new(
+                        linktype as u16,
+                        CHANNEL.as_bytes().into(),
+                        true,
+                        Clock::default(),
+                        0,
+                    )],
                     socketcan: None,
                     notes: VecDeque::new(),
                     fine_noted: false,
@@ -296,7 +304,7 @@ impl<R: Read> PcapReader<R> {
             let interest = if self.held.is_empty() { interest } else { None };
             match self.read_item(interest) {
                 // A long run of plain frames (counted by the reader).
-                Ok(Some(Item::Plain)) => return Ok(true),
+                Ok(Some(Item::Run)) => return Ok(true),
                 Ok(Some(item)) => {
                     if self.held.is_empty() && !matches!(item, Item::Undecided { .. }) {
                         self.ready = Some((item, false));
@@ -407,10 +415,12 @@ impl<R: Read> PcapReader<R> {
                 match packet::frame(CAN_SOCKETCAN, &bytes, reported, order, Shape::Guess, None) {
                     Packet::Can(can) => Parsed::Frame(frame(time, can)),
                     Packet::Malformed(why) => Parsed::Malformed(why),
-                    Packet::NotCan | Packet::Plain | Packet::Undecided(_) => Parsed::Skipped,
+                    Packet::NotCan | Packet::Plain(_) | Packet::Undecided(_) => Parsed::Skipped,
                 }
             }
-            Item::Skipped | Item::Plain | Item::Ethercat { .. } => Parsed::Skipped,
+            Item::Skipped | Item::Plain { .. } | Item::Run | Item::Ethercat { .. } => {
+                Parsed::Skipped
+            }
             Item::Malformed(why) => Parsed::Malformed(why),
         })
     }
@@ -484,19 +494,29 @@ impl<R: Read> PcapReader<R> {
     }
 
     /// The next item that is not a plain frame (those are counted in
-    /// `plain`; [`Item::Plain`] when a long run of them ends the call).
+    /// `plain`; [`Item::Run`] when a long run of them ends the call).
     fn read_item(&mut self, interest: Option<&Interest>) -> io::Result<Option<Item>> {
         loop {
             self.hot(interest);
             if self.counted.run() >= PLAIN_RUN {
-                return Ok(Some(Item::Plain));
+                return Ok(Some(Item::Run));
             }
             let item = match self.stream {
                 Stream::Legacy(_) => self.read_record(interest)?,
                 Stream::Ng(_) => self.read_block(interest)?,
             };
             match item {
-                Some(Item::Plain) => self.counted.plain += 1,
+                Some(Item::Plain {
+                    iface,
+                    device,
+                    ident,
+                }) => {
+                    let channel =
+                        self.decoder
+                            .counted_channel(&mut self.counted.ids, iface, device);
+                    self.counted.count(channel, ident);
+                    self.counted.plain += 1;
+                }
                 // As the hot loop counts them.
                 Some(Item::Ethercat { packet, .. }) if interest.is_some() && packet.quiet() => {
                     self.counted.add(Hot::Ethercat(packet.walked));
@@ -547,8 +567,16 @@ impl<R: Read> PcapReader<R> {
                 else {
                     return;
                 };
-                if let Hot::Plain(_) = hot {
+                if let Hot::Plain(ident, channel, _) = hot {
                     self.counted.saw(iface, Ts::Units(units));
+                    let channel = match channel {
+                        CountedChannel::Unknown => {
+                            self.decoder
+                                .counted_channel_of(&mut self.counted.ids, iface, packet)
+                        }
+                        known => known,
+                    };
+                    self.counted.count(channel, ident);
                 }
                 reader.consume_noshift(len);
                 if !self.counted.add(hot) {
@@ -578,8 +606,16 @@ impl<R: Read> PcapReader<R> {
                 let Some(hot) = self.decoder.quick(0, ts, b.data, b.origlen, interest) else {
                     return;
                 };
-                if let Hot::Plain(_) = hot {
+                if let Hot::Plain(ident, channel, _) = hot {
                     self.counted.saw(0, ts);
+                    let channel = match channel {
+                        CountedChannel::Unknown => {
+                            self.decoder
+                                .counted_channel_of(&mut self.counted.ids, 0, b.data)
+                        }
+                        known => known,
+                    };
+                    self.counted.count(channel, ident);
                 }
                 reader.consume_noshift(len);
                 if !self.counted.add(hot) {

@@ -7,6 +7,7 @@ use proptest::prelude::*;
 use super::consts::{BOM, BUFFER};
 use super::packet::Order;
 use super::*;
+use crate::id_counts::testing::{self, assert_counts_add_up};
 use crate::{FrameKind, FrameSource, Interest, Parsed};
 
 // ---- writers -------------------------------------------------------------------------
@@ -185,7 +186,8 @@ fn read_with(input: impl Read) -> (Vec<Got>, Vec<String>) {
     (got, notes)
 }
 
-/// Reads `bytes` whole and in small pieces: both must agree.
+/// Reads `bytes` whole and in small pieces: both must agree; and the
+/// frames only counted must add up ([`counts_add_up`]).
 fn read(bytes: &[u8]) -> (Vec<Got>, Vec<String>) {
     let whole = read_with(bytes);
     for step in [1, 3, 64] {
@@ -195,7 +197,28 @@ fn read(bytes: &[u8]) -> (Vec<Got>, Vec<String>) {
             "{step}-byte reads"
         );
     }
+    counts_add_up(bytes, "a capture built here");
     whole
+}
+
+/// Reads `bytes` with each of the tests' interests, whole (the hot loop
+/// takes most packets) and 3 bytes at a time (the general path takes
+/// most): the frames only counted, by channel and identifier, plus those
+/// handed on must be every frame. Returns how many were only counted.
+fn counts_add_up(bytes: &[u8], what: &str) -> u64 {
+    let mut counted = 0;
+    for (label, interest) in testing::interests() {
+        for step in [usize::MAX, 3] {
+            let source = || PcapReader::new(Trickle { data: bytes, step }).expect("a header");
+            counted += assert_counts_add_up(
+                &mut source(),
+                &mut source(),
+                &interest,
+                &format!("{what}, {label}, {step}-byte reads"),
+            );
+        }
+    }
+    counted
 }
 
 fn frame(time: &str, channel: &str, id: u32, data: &[u8]) -> Got {
@@ -256,6 +279,105 @@ fn unwanted_frames_are_only_counted_and_the_rest_read_as_without_interest() {
             "plain 0"
         ]
     );
+}
+
+#[test]
+fn the_fixtures_frames_only_counted_add_up_to_every_frame() {
+    let mut counted = 0;
+    for (name, bytes) in testing::fixtures(&["pcap", "pcapng"]) {
+        counted += counts_add_up(&bytes, &name);
+    }
+    assert!(counted > 0, "some frames only counted");
+}
+
+/// Frames only counted outside the hot loop (an enhanced packet block
+/// with options, simple and obsolete packet blocks) and in it, on a
+/// device of an `any` capture and on interfaces of two sections, each
+/// under the channel and identifier its frame would have.
+#[test]
+fn frames_only_counted_are_counted_under_their_frames_channel_and_id() {
+    let o = Order::Little;
+    let emcy = |word: u32| sll(0x0C, &can(o, word, &EMCY));
+    let mut f = shb(o);
+    f.extend(idb(o, 113, &[(2, b"can0")]));
+    f.extend(idb(o, 276, &[(2, b"any")]));
+    // Hot: the EPBs without options.
+    f.extend(epb(o, 0, 1, &emcy(0x181)));
+    f.extend(epb(o, 0, 2, &emcy(0x8000_0181)));
+    f.extend(epb(o, 1, 3, &sll2(0x0C, &can(o, 0x181, &EMCY))));
+    let mut fd = can(o, 0x81, &[0x11; 12]);
+    fd.resize(72, 0);
+    f.extend(epb(o, 0, 4, &sll(0x0D, &fd)));
+    f.extend(epb(o, 0, 5, &emcy(0x2000_0004)));
+    // General: an EPB with a comment, an SPB and an obsolete PB.
+    let mut with_options = epb(o, 0, 6, &emcy(0x281));
+    let opts = options(o, &[(1, b"note")]);
+    let len = with_options.len() + opts.len();
+    with_options.truncate(with_options.len() - 4);
+    with_options.extend(&opts);
+    with_options.extend(u32s(o, len as u32));
+    with_options[4..8].copy_from_slice(&u32s(o, len as u32));
+    f.extend(with_options);
+    let packet = emcy(0x381);
+    let mut spb = u32s(o, packet.len() as u32).to_vec();
+    spb.extend(&packet);
+    f.extend(block(o, 3, &spb));
+    let mut pb = u16s(o, 1).to_vec();
+    pb.extend(u16s(o, 0));
+    pb.extend(u32s(o, 0));
+    pb.extend(u32s(o, 7));
+    let packet = sll2(0x0C, &can(o, 0x481, &EMCY));
+    pb.extend(u32s(o, packet.len() as u32));
+    pb.extend(u32s(o, packet.len() as u32));
+    pb.extend(&packet);
+    f.extend(block(o, 2, &pb));
+    // A second section names its first interface as the first did.
+    f.extend(shb(Order::Big));
+    f.extend(idb(Order::Big, 113, &[(2, b"can0")]));
+    f.extend(epb(
+        Order::Big,
+        0,
+        8,
+        &sll(0x0C, &can(Order::Big, 0x181, &EMCY)),
+    ));
+
+    let mut r = PcapReader::new(&f[..]).expect("a pcapng header");
+    while r
+        .next_item(Some(&Interest::none()))
+        .expect("no I/O error")
+        .is_some()
+    {}
+    let counted = r.counted_ids().expect("counts");
+    let got: Vec<_> = counted
+        .channels()
+        .map(|c| {
+            (
+                String::from_utf8_lossy(c.name()).into_owned(),
+                c.ids().collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (
+                "can0".to_string(),
+                vec![
+                    (0x81, false, 1),
+                    (0x181, false, 2),
+                    (0x281, false, 1),
+                    (0x381, false, 1),
+                    (0x181, true, 1)
+                ]
+            ),
+            (
+                "any:7".to_string(),
+                vec![(0x181, false, 1), (0x481, false, 1)]
+            ),
+        ]
+    );
+    assert_eq!(counted.channels().map(|c| c.error_frames()).sum::<u64>(), 0);
+    read(&f);
 }
 
 #[test]
@@ -941,6 +1063,7 @@ proptest! {
         let (got, notes) = read_with(Trickle { data: &f, step });
         prop_assert_eq!(got, want);
         prop_assert!(notes.is_empty());
+        counts_add_up(&f, "random frames");
         // The hot path (with an interest) reads them as the general one.
         #[cfg(feature = "fuzzing")]
         fuzz_pcap(&f);
