@@ -165,11 +165,51 @@ impl Field {
     }
 }
 
+/// A frame's bus channel as the counting loop reads it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bus {
+    /// Stored as it is in each record (python-can's layout).
+    Stored(Field),
+    /// The same for every record: no `BusChannel` (channel 0), or a
+    /// virtual one converted to a constant (CANedge's).
+    Constant(u64),
+}
+
+impl Bus {
+    fn of(bus: Option<&Channel>) -> Option<Bus> {
+        let Some(c) = bus else {
+            return Some(Bus::Constant(0));
+        };
+        if let Some(f) = Field::of(c) {
+            return Some(Bus::Stored(f));
+        }
+        // A virtual channel's value is the record's index, converted: a
+        // linear conversion without factor makes it a constant, which the
+        // decoder reads as it reads it for any record.
+        match c.conversion {
+            Conversion::Linear { factor, .. } if c.virtual_ && factor == 0.0 => {
+                Some(Bus::Constant(c.uint(&[], 0).unwrap_or(0)))
+            }
+            _ => None,
+        }
+    }
+
+    #[inline]
+    pub fn get(self, record: &[u8]) -> u64 {
+        match self {
+            Bus::Stored(f) => f.get(record).unwrap_or(0),
+            Bus::Constant(v) => v,
+        }
+    }
+}
+
 /// The fields a data frame on an unwanted id is counted by, when all are
 /// stored as they are (python-can's and asammdf's layout): the counting
 /// loop reads only these.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Counting {
+    /// Read only for the frames counted, for their channel.
+    pub bus: Bus,
     pub id: Field,
     pub ide: Option<Field>,
     pub data_length: Field,
@@ -190,6 +230,7 @@ impl Counting {
             return None;
         }
         Some(Counting {
+            bus: Bus::of(fields.bus.as_ref())?,
             id: Field::of(fields.id.as_ref()?)?,
             ide: opt(&fields.ide)?,
             data_length: Field::of(fields.data_length.as_ref()?)?,

@@ -52,9 +52,11 @@
 //!
 //! Speed: with the caller's interest ([`FrameSource::next_item`]), data
 //! frames on ids nobody wants are only counted, by a loop that reads just
-//! ID, IDE, DataLength and EDL where a group stores them as they are; a
-//! DZ block is decoded where it was inflated, and spooled DZ blocks are
-//! inflated ahead on a second thread (`ahead`). 512 MiB of records:
+//! ID, IDE, DataLength and EDL where a group stores them as they are, and
+//! BusChannel for the channel they are counted on
+//! ([`FrameSource::counted_ids`]); a DZ block is decoded where it was
+//! inflated, and spooled DZ blocks are inflated ahead on a second thread
+//! (`ahead`). 512 MiB of records:
 //! 482 MB/s uncompressed; with transposed deflate 1.14x the time of
 //! inflating the DZ blocks alone (docs/performance.md).
 
@@ -70,10 +72,11 @@ use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 
 use crate::error_frame::{ErrorFrame, class, location, protocol};
+use crate::id_counts::CountedChannel;
 use crate::read::{read_full, read_until_stopped};
 use crate::{
-    Counted, Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed,
-    Payload, Reason, Timestamp,
+    Counted, Format, Frame, FrameKind, FrameSource, IdCounts, Interest, Next, NumberedChannel,
+    Parsed, Payload, Reason, Timestamp,
 };
 use block::{Block, HEADER, Header, ID_LEN, Id};
 use layout::{Blocks, Channel, Layout, Raw};
@@ -99,6 +102,9 @@ pub const VLSD_WINDOW: usize = 256;
 const CHUNK: usize = 64 * 1024;
 /// Records decoded before the queue is handed out.
 const RUN: usize = 4096;
+/// Bus channels (from 0) whose [`CountedIds`] channel is kept: a file has
+/// a few; a damaged one may name any number, each then looked up by name.
+const COUNTED_BUSES: usize = 256;
 const ATTO: u128 = 1_000_000_000_000_000_000;
 
 /// What one record is.
@@ -153,6 +159,52 @@ impl PlainTime {
     }
 }
 
+/// The frames only counted, by channel and identifier
+/// ([`FrameSource::counted_ids`]), and where each bus channel's are.
+#[derive(Default)]
+struct CountedIds {
+    ids: IdCounts,
+    /// By bus channel number.
+    buses: Vec<CountedChannel>,
+}
+
+impl CountedIds {
+    /// Where frames only counted on bus channel `bus` are counted: under
+    /// its name as a frame's ([`NumberedChannel`]), looked up once.
+    #[inline]
+    fn channel(&mut self, bus: u64) -> CountedChannel {
+        match usize::try_from(bus).ok().and_then(|b| self.buses.get(b)) {
+            Some(&c) if c != CountedChannel::Unknown => c,
+            _ => self.look_up(bus),
+        }
+    }
+
+    #[inline(never)]
+    fn look_up(&mut self, bus: u64) -> CountedChannel {
+        let c = self
+            .ids
+            .counted_channel(NumberedChannel::default().name(bus));
+        if let Ok(b) = usize::try_from(bus)
+            && b < COUNTED_BUSES
+        {
+            if self.buses.len() <= b {
+                self.buses.resize(b + 1, CountedChannel::Unknown);
+            }
+            if let Some(slot) = self.buses.get_mut(b) {
+                *slot = c;
+            }
+        }
+        c
+    }
+
+    /// One frame only counted.
+    #[inline]
+    fn count(&mut self, bus: u64, id: u32, extended: bool) {
+        let c = self.channel(bus);
+        self.ids.count_in(c, id, extended);
+    }
+}
+
 /// Adds `n` plain frames to the queue's last entry when that is plain
 /// frames too, else queues them.
 fn queue_plain(queue: &mut VecDeque<Out>, n: u64) {
@@ -178,6 +230,13 @@ impl<R: Read> FrameSource for Mf4Reader<R> {
     fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
         let first = self.plain_time(self.plain_first?)?;
         Some((first, self.plain_time(self.plain_last?)?))
+    }
+
+    /// Every frame only counted so far, including those of the
+    /// [`Next::Counted`] items still queued (counted as decoded, up to a
+    /// chunk of records ahead of what was returned).
+    fn counted_ids(&self) -> Option<&IdCounts> {
+        Some(&self.counted_ids.ids)
     }
 }
 
@@ -431,6 +490,8 @@ pub struct Mf4Reader<R> {
     /// The first and last plain frames' times as stored (the input's span).
     plain_first: Option<PlainTime>,
     plain_last: Option<PlainTime>,
+    /// Every plain frame by channel and identifier.
+    counted_ids: CountedIds,
     /// Records taken from the queue so far (queue positions of waiters).
     popped: u64,
     /// Waiting frames by the VLSD record they need: their queue position.
@@ -534,6 +595,7 @@ impl<R: Read> Mf4Reader<R> {
             queue: VecDeque::new(),
             plain_first: None,
             plain_last: None,
+            counted_ids: CountedIds::default(),
             popped: 0,
             waiting: HashMap::new(),
             notes,
@@ -1279,6 +1341,8 @@ impl<R: Read> Mf4Reader<R> {
             if fd || len > 8 || len as usize > stored || interest.wants(id, extended) {
                 break;
             }
+            // Under the channel its frame would name.
+            self.counted_ids.count(c.bus.get(record), id, extended);
             n += 1;
             pos += step;
         }
@@ -1487,6 +1551,10 @@ impl<R: Read> Mf4Reader<R> {
                 }
                 self.plain_last = Some(time);
             }
+            // Under the channel its frame would name: the one field read
+            // for it beyond those that decided it is only counted.
+            self.counted_ids
+                .count(get(&f.bus).unwrap_or(0), id, extended);
             return Ok(Out::Plain(1));
         }
         let time = group
@@ -1862,6 +1930,7 @@ fn time_of(c: &Channel, raw: Raw, start: (u128, u8)) -> Option<Timestamp> {
 /// endless loop, every frame well-formed, the memory bounded.
 #[cfg(feature = "fuzzing")]
 pub fn fuzz_mf4(data: &[u8]) {
+    use crate::id_counts::testing::{count_frame, table};
     let Ok(mut r) = Mf4Reader::new(data) else {
         return;
     };
@@ -1926,10 +1995,16 @@ pub fn fuzz_mf4(data: &[u8]) {
         return;
     };
     let mut without = Vec::new();
+    // Every frame, by channel and identifier.
+    let mut every = IdCounts::new();
     while let Ok(Some(p)) = all.next_record() {
+        if let Parsed::Frame(f) = &p {
+            count_frame(&mut every, f);
+        }
         without.push(summary(&p));
     }
     let mut with = Vec::new();
+    let mut handed_on = IdCounts::new();
     while let Ok(Some(next)) = some.decode_next(Some(&interest), false) {
         match next {
             Next::Counted(c) => {
@@ -1939,11 +2014,22 @@ pub fn fuzz_mf4(data: &[u8]) {
                     "more plain frames than records"
                 );
             }
-            Next::Record(p) => with.push(summary(&p)),
+            Next::Record(p) => {
+                if let Parsed::Frame(f) = &p {
+                    count_frame(&mut handed_on, f);
+                }
+                with.push(summary(&p));
+            }
             Next::Note(_) => {}
         }
     }
     assert_eq!(with, without, "the interest changes what is read");
+    handed_on.add(&some.counted_ids.ids);
+    assert_eq!(
+        table(&handed_on),
+        table(&every),
+        "the frames handed on and those only counted are every frame, by channel and id"
+    );
 }
 
 /// A `CAN_ErrorFrame` record in the SocketCAN representation: the one

@@ -3,6 +3,7 @@ use std::io::Write;
 use proptest::prelude::*;
 
 use super::*;
+use crate::id_counts::testing::{self, assert_counts_add_up};
 
 /// MF4 bytes block by block; links patched afterwards.
 struct B {
@@ -167,7 +168,25 @@ enum Line {
     M(String),
 }
 
+/// Reads `bytes` with each of the tests' interests: the frames only
+/// counted, by channel and identifier, plus those handed on must be every
+/// frame. Returns how many were only counted.
+fn counts_add_up(bytes: &[u8], what: &str) -> u64 {
+    let mut counted = 0;
+    for (label, interest) in testing::interests() {
+        let (Ok(mut all), Ok(mut some)) = (Mf4Reader::new(bytes), Mf4Reader::new(bytes)) else {
+            return counted;
+        };
+        counted +=
+            assert_counts_add_up(&mut all, &mut some, &interest, &format!("{what}, {label}"));
+    }
+    counted
+}
+
+/// Reads `bytes` record by record; the frames only counted must add up
+/// ([`counts_add_up`]).
 fn read(bytes: &[u8]) -> (Vec<Line>, Vec<String>) {
+    counts_add_up(bytes, "a file built here");
     let mut r = Mf4Reader::new(bytes).expect("an MDF 4 file");
     let mut lines = Vec::new();
     let mut notes = Vec::new();
@@ -222,6 +241,115 @@ fn three_frames() -> Vec<Line> {
         f(2_000, 0x1000_0085, true, &[1, 2, 3, 4]),
         f(3_500_001, 0x701, false, &[5]),
     ]
+}
+
+#[test]
+fn the_fixtures_frames_only_counted_add_up_to_every_frame() {
+    let mut counted = 0;
+    for (name, bytes) in testing::fixtures(&["mf4"]) {
+        counted += counts_add_up(&bytes, &name);
+    }
+    assert!(counted > 0, "some frames only counted");
+}
+
+/// How a test group stores its `BusChannel`.
+#[derive(Clone, Copy)]
+enum BusChannel {
+    /// A byte of the record, as it is (the counting loop reads it).
+    Stored,
+    /// A virtual channel converted to this constant (CANedge's).
+    Constant(u8),
+    /// A byte of the record plus one (a conversion: records are decoded).
+    Converted,
+}
+
+/// [`can_group`] with a `BusChannel` after the data bytes (22-byte
+/// records) stored as `bus` says.
+fn bus_group(b: &mut B, bus: BusChannel) -> u64 {
+    let us = b.cc_linear(0.0, 1e-6);
+    let t = b.cn("t", 2, 0, 0, 0, 64, us);
+    let id = b.cn("CAN_DataFrame.ID", 0, 0, 8, 0, 32, 0);
+    let len = b.cn("CAN_DataFrame.DataLength", 0, 0, 12, 0, 8, 0);
+    let data = b.cn("CAN_DataFrame.DataBytes", 0, 10, 13, 0, 64, 0);
+    let channel = match bus {
+        BusChannel::Stored => b.cn("CAN_DataFrame.BusChannel", 0, 0, 21, 0, 8, 0),
+        BusChannel::Constant(v) => {
+            let constant = b.cc_linear(f64::from(v), 0.0);
+            b.cn("CAN_DataFrame.BusChannel", 6, 0, 0, 0, 0, constant)
+        }
+        BusChannel::Converted => {
+            let plus_one = b.cc_linear(1.0, 1.0);
+            b.cn("CAN_DataFrame.BusChannel", 0, 0, 21, 0, 8, plus_one)
+        }
+    };
+    let first = b.chain(&[t, id, len, data, channel]);
+    b.cg("CAN_DataFrame", 1, 22, first, 6)
+}
+
+/// Frames only counted are counted under the channel their frame would
+/// name, read from each record, constant for the group, or converted.
+#[test]
+fn frames_only_counted_are_counted_under_their_bus_channel() {
+    let frames = [
+        (0u8, 0x181, false),
+        (1, 0x181, false),
+        (1, 0x1000_0085, true),
+        (0, 0x81, false),
+        (0, 0x181, false),
+    ];
+    let mut records = Vec::new();
+    for (i, &(bus, id, extended)) in frames.iter().enumerate() {
+        records.push(1);
+        let ide = if extended { 0x8000_0000 } else { 0 };
+        records.extend(record(i as u64 * 1000, id | ide, &[1, 2]));
+        records.push(bus);
+    }
+    let counted = |bus: BusChannel| {
+        let mut b = B::new(b"MDF     ", 0);
+        let hd = b.hd(2);
+        let dg = b.dg(1);
+        let cg = bus_group(&mut b, bus);
+        b.link(dg, 1, cg);
+        b.link(hd, 0, dg);
+        let dt = b.block(b"DT", &[], &records);
+        b.link(dg, 2, dt);
+        assert_eq!(read(&b.out).0.len(), frames.len());
+        let mut r = Mf4Reader::new(&b.out[..]).expect("an MDF 4 file");
+        while r
+            .next_item(Some(&Interest::none()))
+            .expect("no I/O error")
+            .is_some()
+        {}
+        let ids = r.counted_ids().expect("counts");
+        ids.channels()
+            .map(|c| {
+                let name = String::from_utf8_lossy(c.name()).into_owned();
+                (name, c.ids().collect::<Vec<_>>())
+            })
+            .collect::<Vec<_>>()
+    };
+    let on = |name: &str, ids: &[(u32, bool, u64)]| (name.to_string(), ids.to_vec());
+    assert_eq!(
+        counted(BusChannel::Stored),
+        [
+            on("0", &[(0x81, false, 1), (0x181, false, 2)]),
+            on("1", &[(0x181, false, 1), (0x1000_0085, true, 1)]),
+        ]
+    );
+    assert_eq!(
+        counted(BusChannel::Constant(2)),
+        [on(
+            "2",
+            &[(0x81, false, 1), (0x181, false, 3), (0x1000_0085, true, 1)]
+        )]
+    );
+    assert_eq!(
+        counted(BusChannel::Converted),
+        [
+            on("1", &[(0x81, false, 1), (0x181, false, 2)]),
+            on("2", &[(0x181, false, 1), (0x1000_0085, true, 1)]),
+        ]
+    );
 }
 
 #[test]
@@ -517,6 +645,7 @@ proptest! {
                 prop_assert!(n < 1_000_000);
             }
         }
+        counts_add_up(&file, "a damaged file");
     }
 
     /// Block parsers take any bytes.
