@@ -35,8 +35,8 @@ use crate::format::vector;
 use crate::read::{read_full, read_until_stopped};
 use crate::time::{SECS_PER_DAY, days_from_civil};
 use crate::{
-    Format, Frame, FrameKind, FrameSource, Interest, Next, NumberedChannel, Parsed, Payload,
-    Reason, Timestamp,
+    Format, Frame, FrameKind, FrameSource, IdCounts, Interest, Next, NumberedChannel, Parsed,
+    Payload, Reason, Timestamp,
 };
 
 /// The file's magic bytes.
@@ -549,6 +549,13 @@ impl<R: Read> FrameSource for BlfReader<R> {
     fn take_warning(&mut self) -> Option<Reason> {
         self.warning.take()
     }
+
+    /// `None`: every frame is handed on (see [`FrameSource::next_item`]),
+    /// so the caller's count of them is every frame already. A reader that
+    /// came to count frames on ids nobody wants would count them here.
+    fn counted_ids(&self) -> Option<&IdCounts> {
+        None
+    }
 }
 
 /// A `CAN_ERROR_EXT` object's content in the SocketCAN representation:
@@ -849,6 +856,7 @@ pub fn fuzz_blf(data: &[u8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::id_counts::testing::{self, assert_counts_add_up};
 
     #[test]
     fn error_ext_fields() {
@@ -950,7 +958,29 @@ mod tests {
         Malformed(String),
     }
 
+    /// Reads `bytes` with each of the tests' interests: the frames only
+    /// counted (none, while BLF hands every frame on), by channel and
+    /// identifier, plus those handed on must be every frame.
+    fn counts_add_up(bytes: &[u8], what: &str) {
+        for (label, interest) in testing::interests() {
+            let (Ok(mut all), Ok(mut some)) = (BlfReader::new(bytes), BlfReader::new(bytes)) else {
+                return;
+            };
+            assert_counts_add_up(&mut all, &mut some, &interest, &format!("{what}, {label}"));
+        }
+    }
+
+    #[test]
+    fn the_fixtures_frames_only_counted_add_up_to_every_frame() {
+        for (name, bytes) in testing::fixtures(&["blf"]) {
+            counts_add_up(&bytes, &name);
+        }
+    }
+
+    /// Reads `bytes` object by object; the frames only counted must add up
+    /// ([`counts_add_up`]).
     fn read(bytes: &[u8]) -> Vec<Got> {
+        counts_add_up(bytes, "a file built here");
         let mut r = BlfReader::new(bytes).expect("a BLF header");
         let mut out = Vec::new();
         loop {
