@@ -20,7 +20,7 @@ pub(super) struct Interface {
     /// 0: no limit.
     pub(super) snaplen: u32,
     /// Where the frames only counted on it are counted, once one was: its
-    /// own channel, and the last devices' (see `several`).
+    /// own channel, and its first devices' (see `several`).
     pub(super) counted: CountedChannel,
     pub(super) devices: Vec<(u32, CountedChannel)>,
 }
