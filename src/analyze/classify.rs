@@ -7,8 +7,8 @@ use crate::trace::detect::Detector;
 use crate::trace::format::candump_log;
 use crate::trace::lines::{self, Block, RawLine, too_long};
 use crate::trace::{
-    Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, Inner, Interest, Parsed, Reason,
-    Scan, Timestamp,
+    Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, IdCounts, Inner, Interest, Parsed,
+    Reason, Scan, Timestamp,
 };
 
 /// A frame read in another format than the file's: (its format, the file's).
@@ -43,6 +43,11 @@ pub(super) trait LineSink {
     /// The block's folds, every run's ([`FoldedRun::at`] says where each
     /// run's are): a sink that keeps them takes them whole.
     fn block_folds(&mut self, _folds: FoldBuffers) {}
+    /// The counts every frame of the block is added to, by channel and id,
+    /// lent for the block ([`LineSink::put_id_counts`] gives them back).
+    fn take_id_counts(&mut self) -> IdCounts;
+    /// The counts [`LineSink::take_id_counts`] lent, with the block's frames.
+    fn put_id_counts(&mut self, ids: IdCounts);
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     /// After a line outside a run or the frame that ended a run: `lines`
     /// lines of the block are read, the next begins at byte `pos`, and the
@@ -125,6 +130,24 @@ pub(super) fn classify_text(
     detector: &mut Detector,
     sink: &mut impl LineSink,
 ) -> Result<(), OutputError> {
+    // Every frame of the block is counted by channel and id: those the
+    // reader only counts or times in its hot loop, the rest as they are
+    // handed on ([`deliver`]).
+    let mut ids = sink.take_id_counts();
+    let read = classify_lines(bytes, too_long_before, max_line, detector, sink, &mut ids);
+    sink.put_id_counts(ids);
+    read
+}
+
+/// [`classify_text`] with the counts lent.
+fn classify_lines(
+    bytes: &[u8],
+    too_long_before: Option<u64>,
+    max_line: usize,
+    detector: &mut Detector,
+    sink: &mut impl LineSink,
+    ids: &mut IdCounts,
+) -> Result<(), OutputError> {
     // Read before the block moves the detector on (times may chain).
     let first = detector.first_frame_time(bytes, max_line);
     let mut idx = 0u64;
@@ -143,6 +166,7 @@ pub(super) fn classify_text(
             max_line,
             sink.interest(),
             &mut folds,
+            ids,
         );
         pos += run.bytes;
         // A frame the interest lets stay inside a run with folds does not
@@ -156,6 +180,7 @@ pub(super) fn classify_text(
             && folds.keep_inside(frame, run.plain + run.timed)
         {
             inner += 1;
+            ids.count(frame.key());
             // The frame's time, unless lines after it have one.
             last = frame.time;
             run = detector.run(
@@ -163,6 +188,7 @@ pub(super) fn classify_text(
                 max_line,
                 sink.interest(),
                 &mut folds,
+                ids,
             );
             pos += run.bytes;
             plain += run.plain;
@@ -208,7 +234,7 @@ pub(super) fn classify_text(
             }
         }
         if let Some(frame) = run.frame {
-            deliver(sink, idx, &frame, None)?;
+            deliver(sink, ids, idx, &frame, None)?;
             idx += 1;
             sink.line_end(idx, pos, detector);
             continue;
@@ -217,7 +243,7 @@ pub(super) fn classify_text(
             break;
         };
         pos = next;
-        classify_line(raw, idx, detector, sink, max_line)?;
+        classify_line(raw, idx, detector, sink, ids, max_line)?;
         idx += 1;
         sink.line_end(idx, pos, detector);
     }
@@ -234,14 +260,21 @@ fn classify_line(
     idx: u64,
     detector: &mut Detector,
     sink: &mut impl LineSink,
+    ids: &mut IdCounts,
     max_line: usize,
 ) -> Result<(), OutputError> {
     match raw {
         RawLine::TooLong(n) => sink.malformed(idx, too_long(n, max_line)),
         RawLine::Text(text) => match detector.scan(text, sink.interest()) {
-            Scan::Plain => sink.plain_frames(1),
-            Scan::Timed(t) => sink.timed_frames(1, t, t),
-            Scan::Frame(frame) => deliver(sink, idx, &frame, None)?,
+            Scan::Plain(key) => {
+                ids.count(key);
+                sink.plain_frames(1);
+            }
+            Scan::Timed(t, key) => {
+                ids.count(key);
+                sink.timed_frames(1, t, t);
+            }
+            Scan::Frame(frame) => deliver(sink, ids, idx, &frame, None)?,
             Scan::Parse => {
                 let known = detector.format().is_some();
                 match detector.parse(text, sink.interest()) {
@@ -253,7 +286,7 @@ fn classify_line(
                             sink.annotated();
                         }
                         let foreign = detector.take_foreign().zip(detector.format());
-                        deliver(sink, idx, &frame, foreign)?;
+                        deliver(sink, ids, idx, &frame, foreign)?;
                     }
                     Parsed::Skipped => {
                         sink.skipped();
@@ -284,13 +317,18 @@ fn classify_line(
 /// only counted, one that only moves the input's first/last time only timed
 /// (so workers record neither); the rest, and every frame in another format
 /// than the file's (its line gets a diagnostic), go to `frame`, which
-/// applies the same rules in full.
+/// applies the same rules in full. Every frame is counted in `ids`.
 pub(super) fn deliver(
     sink: &mut impl LineSink,
+    ids: &mut IdCounts,
     idx: u64,
     frame: &Frame<'_>,
     foreign: Foreign,
 ) -> Result<(), OutputError> {
+    match frame.kind {
+        FrameKind::Error => ids.error_frame(frame.channel),
+        _ => ids.count(frame.key()),
+    }
     if foreign.is_none() {
         let interest = sink.interest();
         // Remote requests on wanted ids go on too: on 0x700 + node they ask

@@ -27,7 +27,7 @@ use crate::timeline::At;
 use crate::trace::can_error::ErrorFrame;
 use crate::trace::deltas::TimeMode;
 use crate::trace::ethercat::CoeMessage;
-use crate::trace::{FoldBuffers, Format, Frame, FrameKind, Interest, Reason, Timestamp};
+use crate::trace::{FoldBuffers, Format, Frame, FrameKind, IdCounts, Interest, Reason, Timestamp};
 
 /// Turns classified lines into timelines, events and counts, in line order.
 pub(super) struct Consumer<'r, 'l, E: Write> {
@@ -64,6 +64,9 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     told: Vec<Told>,
     pub(super) incidents: Builder,
     pub(super) traffic: Traffic,
+    /// Every frame of the input by channel and id (the readers count
+    /// those they only count; the classifier the rest).
+    pub(super) ids: IdCounts,
     /// The bit rate the input records (a trace header), known at its end.
     pub(super) recorded_bit_rate: Option<u32>,
 }
@@ -133,6 +136,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             told: Vec::new(),
             incidents: Builder::new(opts.incident_gap),
             traffic: Traffic::new(opts.timing),
+            ids: IdCounts::new(),
             recorded_bit_rate: None,
         }
     }
@@ -174,11 +178,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             ));
         }
         let bus = std::mem::take(&mut self.facts.bus);
-        if self.traffic.ignored > 0 {
+        if self.ids.others() > 0 {
             self.log.note(&format!(
                 "{file}: {} frames on channels past the first {} were not counted per channel",
-                self.traffic.ignored,
-                super::traffic::MAX_CHANNELS
+                self.ids.others(),
+                crate::trace::id_counts::MAX_CHANNELS
             ));
         }
         if bus.ignored > 0 {
@@ -281,7 +285,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
                 .into_iter()
                 .collect(),
             channels: std::mem::replace(&mut self.traffic, Traffic::new(false))
-                .into_report(self.opts.bit_rate.or(self.recorded_bit_rate)),
+                .into_report(&self.ids, self.opts.bit_rate.or(self.recorded_bit_rate)),
         };
         self.sink.end_input(&report).map_err(OutputError)?;
         let emcy = &self.monitors.emcy;
@@ -561,6 +565,14 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn block_folds(&mut self, folds: FoldBuffers) {
         self.spare_folds = folds;
+    }
+
+    fn take_id_counts(&mut self) -> IdCounts {
+        std::mem::take(&mut self.ids)
+    }
+
+    fn put_id_counts(&mut self, ids: IdCounts) {
+        self.ids = ids;
     }
 
     fn lines(&mut self, n: u64) {

@@ -43,7 +43,7 @@ use crate::trace::deltas::{self, TimeMode};
 use crate::trace::detect::{self, Detector};
 use crate::trace::input::{self, Opened, ReadMode, Source};
 use crate::trace::lines::BlockReader;
-use crate::trace::{AnyReader, FrameSource, Next};
+use crate::trace::{AnyReader, FrameSource, IdCounts, Next};
 
 pub use analysis::{Analysis, OutputError, Reading};
 use classify::{LineSink, classify_block, deliver};
@@ -216,7 +216,12 @@ impl<E: Write> Visit for ReadRecords<'_, '_, '_, E> {
     type Output = Result<Option<String>, OutputError>;
 
     fn visit<S: FrameSource>(self, source: &mut S) -> Self::Output {
-        let result = read_records(source, self.0);
+        let mut ids = std::mem::take(&mut self.0.ids);
+        let result = read_records(source, self.0, &mut ids);
+        if let Some(counted) = source.counted_ids() {
+            ids.add(counted);
+        }
+        self.0.ids = ids;
         if let Some((first, last)) = source.plain_span() {
             self.0.plain_span(first, last);
         }
@@ -235,6 +240,7 @@ impl<E: Write> Visit for ReadRecords<'_, '_, '_, E> {
 fn read_records<S: FrameSource, E: Write>(
     source: &mut S,
     consumer: &mut Consumer<'_, '_, E>,
+    ids: &mut IdCounts,
 ) -> Result<Option<String>, OutputError> {
     loop {
         let why = match source.next_item(Some(consumer.interest())) {
@@ -267,7 +273,7 @@ fn read_records<S: FrameSource, E: Write>(
             Ok(Some(Next::Record(Parsed::Frame(f)))) => {
                 // Every frame's time, decoded or not, spans the input.
                 consumer.frame_times(f.time, f.time);
-                deliver(consumer, 0, &f, None)?;
+                deliver(consumer, ids, 0, &f, None)?;
                 None
             }
             Ok(Some(Next::Record(Parsed::Skipped))) => Some(None),

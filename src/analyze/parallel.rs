@@ -17,7 +17,8 @@ use super::threads::spawn_scoped;
 use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
 use crate::trace::{
-    Fold, FoldBuffers, Folded, Frame, FrameKind, Inner, Interest, Payload, Reason, Timestamp,
+    Fold, FoldBuffers, Folded, Frame, FrameKind, IdCounts, Inner, Interest, Payload, Reason,
+    Timestamp,
 };
 
 /// What a worker keeps of a line for the consumer.
@@ -77,6 +78,10 @@ struct BlockResult {
     end: Detector,
     lines: u64,
     tally: Tally,
+    /// Every frame of the block by channel and id: interest does not
+    /// change them, so a block's rest read again after a cut has the same
+    /// and these stand for the whole block.
+    ids: IdCounts,
     /// The block's first and last frame times, of any id.
     frame_times: (Option<Timestamp>, Option<Timestamp>),
     records: Vec<BlockRecord>,
@@ -154,6 +159,7 @@ struct Spare {
     folds: Vec<Fold>,
     folded: Vec<Folded>,
     inner: Vec<Inner>,
+    ids: IdCounts,
 }
 
 impl BlockResult {
@@ -167,8 +173,10 @@ impl BlockResult {
             mut folds,
             mut folded,
             mut inner,
+            mut ids,
             ..
         } = self;
+        ids.clear();
         records.clear();
         cuts.clear();
         channels.clear();
@@ -183,6 +191,7 @@ impl BlockResult {
             folds,
             folded,
             inner,
+            ids,
         }
     }
 }
@@ -264,6 +273,14 @@ impl LineSink for Recorder {
         self.result.folds = folds.folds;
         self.result.folded = folds.frames;
         self.result.inner = folds.inner;
+    }
+
+    fn take_id_counts(&mut self) -> IdCounts {
+        std::mem::take(&mut self.result.ids)
+    }
+
+    fn put_id_counts(&mut self, ids: IdCounts) {
+        self.result.ids = ids;
     }
 
     fn lines(&mut self, n: u64) {
@@ -404,6 +421,7 @@ impl<E: Write> Consumer<'_, '_, E> {
         max_line: usize,
     ) -> Result<(Spare, Option<Detector>), OutputError> {
         self.add_tally(r.tally);
+        self.ids.add(&r.ids);
         self.frame_times(r.frame_times.0, r.frame_times.1);
         let mut cuts = std::mem::take(&mut r.cuts);
         // The next cut to reach, and whether the interest widened at it.
@@ -486,7 +504,11 @@ impl<E: Write> Consumer<'_, '_, E> {
         self.lines(cut.lines);
         let mut detector = cut.detector.take().unwrap_or_else(|| r.end.fork());
         let rest = r.block.text().get(cut.pos..).unwrap_or_default();
-        classify_text(rest, None, max_line, &mut detector, self)?;
+        // The rest's frames are in the block's counts already.
+        let counted = std::mem::take(&mut self.ids);
+        let read = classify_text(rest, None, max_line, &mut detector, self);
+        self.ids = counted;
+        read?;
         r.cuts = cuts;
         Ok((r.into_spare(), Some(detector)))
     }
@@ -567,6 +589,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             folds: spare.folds,
                             folded: spare.folded,
                             inner: spare.inner,
+                            ids: spare.ids,
                         },
                     };
                     // A recorder never fails: it only collects.

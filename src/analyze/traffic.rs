@@ -3,11 +3,11 @@
 //! largest gap, missed cycles) and, with a bit rate, the load they put on
 //! the wire.
 //!
-//! Error frames always come here (the analysis decodes every one). With
-//! `--timing` every frame of the input does (the readers then decode every
-//! line's time and data, which the default path spares), the channel report
-//! holds every identifier, and a SYNC producer that skips cycles is a
-//! `sync_missed` event ([`Traffic::frame`] says when).
+//! The counts come from the readers ([`IdCounts`]: every frame by channel
+//! and identifier, on every run). With `--timing` every frame of the input
+//! also comes here to be timed (the readers then decode every line's time
+//! and data, which the default path spares), and a SYNC producer that skips
+//! cycles is a `sync_missed` event ([`Traffic::frame`] says when).
 //!
 //! SYNC is not timed without `--timing`: decoding every SYNC frame of a
 //! 1 kHz bus cost the default path 40-50% more instructions (callgrind,
@@ -23,13 +23,13 @@ use crate::timeline::At;
 // Intervals seen before a period is trusted (to call a gap a miss), as for
 // a heartbeat's: the median of fewer is one odd interval from wrong.
 use crate::timeline::heartbeat::LEARN_FROM;
-use crate::trace::{FrameKind, Span, Timestamp};
+use crate::trace::id_counts::{MAX_CHANNELS, MAX_EXTENDED};
+use crate::trace::{FrameKind, IdCounts, Span, Timestamp};
 
-/// Extended identifiers followed per channel, and identifiers followed
-/// over all channels; frames on more are counted in the channel's
-/// `other_ids`. An identifier holds at most about 2 KiB (its sample of
-/// intervals), so the traffic of an input stays under 40 MiB.
-pub(crate) const MAX_EXTENDED: usize = 4096;
+/// Identifiers timed over all channels (at most [`MAX_EXTENDED`] of them
+/// extended per channel, the bound the counts have); frames on more are
+/// counted, not timed. An identifier holds at most about 2 KiB (its sample
+/// of intervals), so the timing of an input stays under 40 MiB.
 pub(crate) const MAX_IDS: usize = 16_384;
 
 /// A gap this many periods long (x 3/2) skipped at least one cycle.
@@ -37,12 +37,6 @@ const MISSED_FACTOR: f64 = 1.5;
 
 /// Load is measured over windows of this many seconds.
 const WINDOW_SECS: u64 = 1;
-
-/// Channels followed (the bound the error frames' channels have); frames on
-/// more are counted in [`Traffic::ignored`], so a hostile input cannot grow
-/// the state without bound. Not `bus::MAX_CHANNELS` itself: the bus state
-/// imports the events, which import this file's reports.
-pub(crate) const MAX_CHANNELS: usize = 256;
 
 fn window() -> Span {
     Span::from_millis(WINDOW_SECS * 1000)
@@ -55,34 +49,26 @@ pub(crate) struct Traffic {
     channels: Vec<ChannelTraffic>,
     /// The channel of the last frame (most inputs have one).
     last: usize,
-    /// Frames on channels past [`MAX_CHANNELS`].
-    pub(crate) ignored: u64,
     /// Identifiers followed so far, over all channels.
     ids: usize,
 }
 
 struct ChannelTraffic {
     name: Box<[u8]>,
-    frames: u64,
-    error_frames: u64,
     /// Index into `ids` plus one, by standard identifier (0: none yet).
     standard: Box<[u16; 2048]>,
     extended: Vec<(u32, u16)>,
-    other_ids: u64,
     ids: Vec<IdTraffic>,
     load: Load,
 }
 
 /// One identifier's frames on a channel.
 struct IdTraffic {
-    cob_id: u32,
-    extended: bool,
     /// Its service is sent in cycles (SYNC, TIME, PDOs, heartbeats, and
     /// ids outside the predefined set): it has a period, and gaps that
     /// miss cycles. EMCY, SDO, NMT and LSS frames come when something
     /// happens; their intervals say nothing.
     cyclic: bool,
-    count: u64,
     last: Option<Timestamp>,
     /// The line of the last frame: where a missed cycle's gap began.
     last_line: u64,
@@ -124,18 +110,21 @@ pub struct SyncMissed {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ChannelReport {
     pub channel: String,
-    /// Every frame, error frames included (`None` without `--timing`:
-    /// only the frames the analysis decodes come through, and the others
-    /// are not told apart by channel).
-    pub frames: Option<u64>,
+    /// Every frame, error frames included.
+    pub frames: u64,
     pub error_frames: u64,
+    /// Every frame was timed (`--timing`): the identifiers have their
+    /// periods, gaps and misses, and the channel its load.
+    pub timed: bool,
     /// Bits on the wire over the channel's span, as a percentage of the
     /// bit rate: the mean and the busiest window; `None` without a rate.
     pub load: Option<LoadReport>,
-    /// Every identifier, by id (with `--timing`; else none).
+    /// Every identifier that had a frame: standard ids, then extended, each
+    /// by id.
     pub ids: Vec<IdReport>,
-    /// Frames on identifiers past [`MAX_EXTENDED`] or [`MAX_IDS`]: counted,
-    /// not timed.
+    /// Frames on extended identifiers past the bound the counts have
+    /// ([`MAX_EXTENDED`](crate::trace::id_counts::MAX_EXTENDED)): counted
+    /// for the channel, not per id.
     pub other_ids: u64,
 }
 
@@ -155,15 +144,16 @@ pub struct IdReport {
     pub node: Option<NodeId>,
     pub count: u64,
     /// The median interval; `None` for a service that is not cyclic, under
-    /// [`LEARN_FROM`] intervals, or without times.
+    /// [`LEARN_FROM`] intervals, or not timed.
     pub period: Option<Span>,
     /// The mean absolute deviation of the intervals from the period, those
     /// that missed a cycle left out.
     pub jitter: Option<Span>,
+    /// `None` when not timed (or a single frame).
     pub max_gap: Option<Span>,
     /// Gaps of more than 1.5 periods (each counted once however many
-    /// cycles it skipped).
-    pub missed: u64,
+    /// cycles it skipped); `None` when not timed.
+    pub missed: Option<u64>,
 }
 
 impl Traffic {
@@ -172,7 +162,6 @@ impl Traffic {
             every_frame,
             channels: Vec::new(),
             last: 0,
-            ignored: 0,
             ids: 0,
         }
     }
@@ -192,26 +181,22 @@ impl Traffic {
                     self.channels.push(ChannelTraffic::new(name));
                     self.channels.len() - 1
                 }
-                None => {
-                    self.ignored += 1;
-                    return None;
-                }
+                // Those past the bound the counts have: the counts tell
+                // how many frames they had.
+                None => return None,
             },
         };
         self.last = i;
         self.channels.get_mut(i)
     }
 
-    /// An error frame on `channel`: always counted (the analysis decodes
-    /// every error frame); with `--timing` also a frame on the wire.
+    /// An error frame on `channel`: with `--timing`, bits on the wire.
     pub(crate) fn error_frame(&mut self, channel: &[u8], time: Option<Timestamp>) {
-        let every_frame = self.every_frame;
+        if !self.every_frame {
+            return;
+        }
         if let Some(c) = self.channel(channel) {
-            c.error_frames += 1;
-            if every_frame {
-                c.frames += 1;
-                c.load.frame(time, bits(false, FrameKind::Error, 0));
-            }
+            c.load.frame(time, bits(false, FrameKind::Error, 0));
         }
     }
 
@@ -229,13 +214,11 @@ impl Traffic {
     ) -> Option<SyncMissed> {
         let room = self.ids < MAX_IDS;
         let c = self.channel(channel)?;
-        c.frames += 1;
         c.load.frame(at.time, bits(extended, kind, len));
         let known = c.ids.len();
         let i = c.id(id, extended, room)?;
         let made = c.ids.len() - known;
         let t = c.ids.get_mut(i)?;
-        t.count += 1;
         let missed = t.interval(at);
         self.ids += made;
         (id == SYNC_ID && !extended).then_some(missed).flatten()
@@ -262,12 +245,39 @@ impl Traffic {
         out
     }
 
-    /// The channels' reports, in the order they first had a frame;
-    /// `bit_rate` from `--bitrate` or the trace's header.
-    pub(crate) fn into_report(self, bit_rate: Option<u32>) -> Vec<ChannelReport> {
-        self.channels
-            .into_iter()
-            .map(|c| c.into_report(bit_rate, self.every_frame))
+    /// The channels' reports, in the order they first had a frame: the
+    /// counts `ids` has, with the timing followed here; `bit_rate` from
+    /// `--bitrate` or the trace's header.
+    pub(crate) fn into_report(
+        mut self,
+        ids: &IdCounts,
+        bit_rate: Option<u32>,
+    ) -> Vec<ChannelReport> {
+        ids.channels()
+            .map(|counts| {
+                let timed = self
+                    .channels
+                    .iter()
+                    .position(|c| *c.name == *counts.name())
+                    .map(|i| self.channels.swap_remove(i));
+                ChannelReport {
+                    channel: String::from_utf8_lossy(counts.name()).into_owned(),
+                    frames: counts.frames(),
+                    error_frames: counts.error_frames(),
+                    timed: self.every_frame,
+                    load: bit_rate
+                        .filter(|_| self.every_frame)
+                        .and_then(|rate| timed.as_ref().and_then(|t| t.load.report(rate))),
+                    ids: counts
+                        .ids()
+                        .map(|(id, extended, count)| {
+                            let traffic = timed.as_ref().and_then(|t| t.get(id, extended));
+                            IdReport::new(id, extended, count, traffic)
+                        })
+                        .collect(),
+                    other_ids: counts.other,
+                }
+            })
             .collect()
     }
 }
@@ -276,11 +286,8 @@ impl ChannelTraffic {
     fn new(name: &[u8]) -> Self {
         ChannelTraffic {
             name: name.into(),
-            frames: 0,
-            error_frames: 0,
             standard: Box::new([0; 2048]),
             extended: Vec::new(),
-            other_ids: 0,
             ids: Vec::new(),
             load: Load::default(),
         }
@@ -312,13 +319,8 @@ impl ChannelTraffic {
                 Some(slot) => Some(slot),
             }
         };
-        match slot {
-            Some(slot) => Some(usize::from(slot) - 1),
-            None => {
-                self.other_ids += 1;
-                None
-            }
-        }
+        // Past the bounds: counted (by the counts), not timed.
+        slot.map(|slot| usize::from(slot) - 1)
     }
 
     /// A new identifier's slot (its index in `ids` plus one); at most
@@ -326,13 +328,10 @@ impl ChannelTraffic {
     fn new_id(&mut self, cob_id: u32, extended: bool) -> u16 {
         let (service, _) = cob_id::service(cob_id, extended);
         self.ids.push(IdTraffic {
-            cob_id,
-            extended,
             cyclic: !matches!(
                 service,
                 "emcy" | "sdo_request" | "sdo_response" | "nmt" | "lss_request" | "lss_response"
             ),
-            count: 0,
             last: None,
             last_line: 0,
             median: Median::default(),
@@ -344,18 +343,15 @@ impl ChannelTraffic {
         self.ids.len() as u16
     }
 
-    fn into_report(mut self, bit_rate: Option<u32>, every_frame: bool) -> ChannelReport {
-        self.ids.sort_by_key(|t| (t.extended, t.cob_id));
-        ChannelReport {
-            channel: String::from_utf8_lossy(&self.name).into_owned(),
-            frames: every_frame.then_some(self.frames),
-            error_frames: self.error_frames,
-            load: bit_rate
-                .filter(|_| every_frame)
-                .and_then(|rate| self.load.report(rate)),
-            ids: self.ids.iter().map(IdTraffic::report).collect(),
-            other_ids: self.other_ids,
-        }
+    /// The timing of an identifier, if it was followed.
+    fn get(&self, id: u32, extended: bool) -> Option<&IdTraffic> {
+        let slot = if extended {
+            let i = self.extended.binary_search_by_key(&id, |e| e.0).ok()?;
+            self.extended.get(i)?.1
+        } else {
+            *self.standard.get(id as usize)?
+        };
+        self.ids.get(usize::from(slot).checked_sub(1)?)
     }
 }
 
@@ -417,27 +413,39 @@ impl IdTraffic {
             }
         })
     }
+}
 
-    fn report(&self) -> IdReport {
-        let (service, node) = cob_id::service(self.cob_id, self.extended);
-        // Under LEARN_FROM intervals no period is trusted, and intervals
-        // that do not keep to one have none: said as none.
-        let period = (self.cyclic && self.median.count >= LEARN_FROM as u64)
-            .then(|| self.median.period())
-            .flatten();
-        IdReport {
-            cob_id: self.cob_id,
-            extended: self.extended,
+impl IdReport {
+    /// The report of `count` frames on `cob_id`, with the timing `traffic`
+    /// followed if it was.
+    fn new(cob_id: u32, extended: bool, count: u64, traffic: Option<&IdTraffic>) -> IdReport {
+        let (service, node) = cob_id::service(cob_id, extended);
+        let mut report = IdReport {
+            cob_id,
+            extended,
             service,
             node,
-            count: self.count,
-            period: period.map(|p| Span::from_micros(p.round() as i64)),
-            // Deviation from a period the intervals did not keep to is none.
-            jitter: (self.regular > 0 && period.is_some())
-                .then(|| Span::from_micros((self.deviation / self.regular as f64).round() as i64)),
-            max_gap: self.max_gap,
-            missed: self.missed,
-        }
+            count,
+            period: None,
+            jitter: None,
+            max_gap: None,
+            missed: None,
+        };
+        let Some(t) = traffic else {
+            return report;
+        };
+        // Under LEARN_FROM intervals no period is trusted, and intervals
+        // that do not keep to one have none: said as none.
+        let period = (t.cyclic && t.median.count >= LEARN_FROM as u64)
+            .then(|| t.median.period())
+            .flatten();
+        report.period = period.map(|p| Span::from_micros(p.round() as i64));
+        // Deviation from a period the intervals did not keep to is none.
+        report.jitter = (t.regular > 0 && period.is_some())
+            .then(|| Span::from_micros((t.deviation / t.regular as f64).round() as i64));
+        report.max_gap = t.max_gap;
+        report.missed = Some(t.missed);
+        report
     }
 }
 
@@ -603,6 +611,44 @@ fn median(values: &mut [f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::FrameKey;
+
+    /// Traffic with the counts the classifier keeps beside it.
+    pub(super) struct Counted {
+        pub(super) t: Traffic,
+        pub(super) ids: IdCounts,
+    }
+
+    impl Counted {
+        pub(super) fn new(every_frame: bool) -> Self {
+            Counted {
+                t: Traffic::new(every_frame),
+                ids: IdCounts::new(),
+            }
+        }
+
+        pub(super) fn frame(
+            &mut self,
+            channel: &[u8],
+            id: u32,
+            extended: bool,
+            kind: FrameKind,
+            len: u8,
+            at: At,
+        ) -> Option<SyncMissed> {
+            self.ids.count(FrameKey::new(channel, id, extended));
+            self.t.frame(channel, id, extended, kind, len, at)
+        }
+
+        pub(super) fn error_frame(&mut self, channel: &[u8], time: Option<Timestamp>) {
+            self.ids.error_frame(channel);
+            self.t.error_frame(channel, time);
+        }
+
+        pub(super) fn report(self, bit_rate: Option<u32>) -> Vec<ChannelReport> {
+            self.t.into_report(&self.ids, bit_rate)
+        }
+    }
     use proptest::prelude::*;
 
     fn at(ms: u64, line: u64) -> At {
@@ -647,7 +693,7 @@ mod tests {
         assert_eq!(m.current(), None);
         assert_eq!(m.period(), None);
         // A node steady for a while, then at random: no period, no jitter.
-        let mut t = Traffic::new(true);
+        let mut t = Counted::new(true);
         let mut ms = 0;
         let mut x: u64 = 7;
         for line in 0..300 {
@@ -666,7 +712,7 @@ mod tests {
                 At::ms(ms, line + 1),
             );
         }
-        let r = t.into_report(None);
+        let r = t.report(None);
         assert_eq!((r[0].ids[0].period, r[0].ids[0].jitter), (None, None));
         // One late frame in eight still has one.
         let mut m = Median::default();
@@ -715,8 +761,8 @@ mod tests {
 
     #[test]
     fn sync_gaps_are_told_once_per_gap() {
-        let mut t = Traffic::new(false);
-        let sync = |t: &mut Traffic, ms, line| {
+        let mut t = Counted::new(false);
+        let sync = |t: &mut Counted, ms, line| {
             t.frame(b"can0", SYNC_ID, false, FrameKind::Data, 0, at(ms, line))
         };
         let mut told = Vec::new();
@@ -738,32 +784,42 @@ mod tests {
         assert_eq!(sync(&mut t, ms, 22), None);
         // Silent to the end of the input.
         let end = Timestamp::from_parts((ms + 100) / 1000, (ms + 100) % 1000, 3);
-        let at_end = t.finish(Some(end));
+        let at_end = t.t.finish(Some(end));
         assert_eq!(at_end.len(), 1);
         assert_eq!(at_end[0].1.end, None);
         assert_eq!(at_end[0].1.missed, 9);
-        let report = t.into_report(Some(500_000));
-        assert_eq!(report[0].frames, None, "not counted without --timing");
+        let report = t.report(Some(500_000));
+        assert_eq!(report[0].frames, 22, "counted, timed or not");
         let sync = &report[0].ids[0];
-        assert_eq!((sync.service, sync.count, sync.missed), ("sync", 22, 2));
+        assert_eq!(
+            (sync.service, sync.count, sync.missed),
+            ("sync", 22, Some(2))
+        );
         assert_eq!(sync.max_gap, Some(Span::from_millis(40)));
         assert!(report[0].load.is_none(), "no bits counted, no load");
     }
 
     #[test]
-    fn without_timing_only_error_frames_are_counted() {
-        let mut t = Traffic::new(false);
-        assert!(!t.wants());
+    fn without_timing_frames_are_counted_not_timed() {
+        let mut t = Counted::new(false);
+        assert!(!t.t.wants());
         assert!(Traffic::new(true).wants());
         t.error_frame(b"can0", None);
-        let r = t.into_report(Some(500_000));
-        assert_eq!((r[0].frames, r[0].error_frames), (None, 1));
-        assert!(r[0].ids.is_empty() && r[0].load.is_none());
+        // The classifier counts a frame the traffic is not given.
+        t.ids.count(FrameKey::new(b"can0", 0x181, false));
+        let r = t.report(Some(500_000));
+        assert_eq!((r[0].frames, r[0].error_frames, r[0].timed), (2, 1, false));
+        let id = &r[0].ids[0];
+        assert_eq!(
+            (id.cob_id, id.count, id.missed, id.max_gap),
+            (0x181, 1, None, None)
+        );
+        assert!(r[0].load.is_none(), "no load without timing");
     }
 
     #[test]
     fn times_at_the_end_of_the_clock_are_no_overflow() {
-        let mut t = Traffic::new(true);
+        let mut t = Counted::new(true);
         for (i, atto) in [0u64, 5, 7].iter().enumerate() {
             let at = At {
                 time: Timestamp::from_raw(u64::MAX, *atto, 18),
@@ -771,14 +827,14 @@ mod tests {
             };
             t.frame(b"can0", 0x181, false, FrameKind::Data, 8, at);
         }
-        let r = t.into_report(Some(1_000_000));
-        assert_eq!(r[0].frames, Some(3));
+        let r = t.report(Some(1_000_000));
+        assert_eq!(r[0].frames, 3);
         assert_eq!(r[0].load.map(|l| l.bits), Some(3 * 135));
     }
 
     #[test]
     fn load_is_bits_over_the_bit_rate_per_window() {
-        let mut t = Traffic::new(true);
+        let mut t = Counted::new(true);
         // 100 frames of 8 bytes in each of two seconds, 200 in a third.
         let mut line = 0;
         for (second, n) in [(0, 100), (1, 100), (2, 200)] {
@@ -789,9 +845,9 @@ mod tests {
             }
         }
         t.error_frame(b"can0", None);
-        let report = t.into_report(Some(125_000));
+        let report = t.report(Some(125_000));
         let c = &report[0];
-        assert_eq!((c.frames, c.error_frames), (Some(401), 1));
+        assert_eq!((c.frames, c.error_frames), (401, 1));
         let load = c.load.expect("a bit rate");
         assert_eq!(load.bits, 400 * 135 + 23);
         // The busiest second: 200 x 135 bits of 125 000.
@@ -806,46 +862,45 @@ mod tests {
 
     #[test]
     fn channels_and_extended_ids_are_bounded() {
-        let mut t = Traffic::new(true);
+        let mut t = Counted::new(true);
         for i in 0..(MAX_CHANNELS as u32 + 3) {
             let name = format!("can{i}");
             t.frame(name.as_bytes(), 1, false, FrameKind::Data, 0, at(0, 1));
         }
-        assert_eq!(t.ignored, 3);
-        let mut t = Traffic::new(true);
+        assert_eq!(t.ids.others(), 3);
+        assert_eq!(t.report(None).len(), MAX_CHANNELS);
+        let mut t = Counted::new(true);
         for id in 0..(MAX_EXTENDED as u32 + 2) {
             t.frame(b"can0", id, true, FrameKind::Data, 0, at(0, 1));
         }
-        let r = t.into_report(None);
+        let r = t.report(None);
         assert_eq!(r[0].ids.len(), MAX_EXTENDED);
         assert_eq!(r[0].other_ids, 2);
-        assert_eq!(r[0].frames, Some(MAX_EXTENDED as u64 + 2));
+        assert_eq!(r[0].frames, MAX_EXTENDED as u64 + 2);
         // Every standard id on nine channels: 18 432 ids, 16 384 followed.
-        let mut t = Traffic::new(true);
+        let mut t = Counted::new(true);
         for c in 0..9 {
             let name = format!("can{c}");
             for id in 0..2048 {
                 t.frame(name.as_bytes(), id, false, FrameKind::Data, 0, at(0, 1));
             }
         }
-        let r = t.into_report(None);
-        let followed: usize = r.iter().map(|c| c.ids.len()).sum();
-        let other: u64 = r.iter().map(|c| c.other_ids).sum();
-        assert_eq!((followed, other), (MAX_IDS, 9 * 2048 - MAX_IDS as u64));
-        assert!(
-            r.iter().all(|c| c.frames == Some(2048)),
-            "every frame counted"
-        );
+        let r = t.report(None);
+        let ids = || r.iter().flat_map(|c| &c.ids);
+        let timed = ids().filter(|i| i.missed.is_some()).count();
+        assert_eq!((ids().count(), timed), (9 * 2048, MAX_IDS));
+        assert!(r.iter().all(|c| c.frames == 2048), "every frame counted");
     }
 }
 
 #[cfg(test)]
 mod event_driven {
+    use super::tests::Counted;
     use super::*;
 
     #[test]
     fn event_driven_services_have_no_period_and_miss_nothing() {
-        let mut t = Traffic::new(true);
+        let mut t = Counted::new(true);
         for (i, ms) in [0u64, 10, 20, 30, 40, 50, 60, 70, 80, 90, 500]
             .iter()
             .enumerate()
@@ -854,12 +909,15 @@ mod event_driven {
             t.frame(b"can0", 0x085, false, FrameKind::Data, 8, at);
             t.frame(b"can0", 0x185, false, FrameKind::Data, 8, at);
         }
-        let r = t.into_report(None);
+        let r = t.report(None);
         let emcy = &r[0].ids[0];
-        assert_eq!((emcy.service, emcy.period, emcy.missed), ("emcy", None, 0));
+        assert_eq!(
+            (emcy.service, emcy.period, emcy.missed),
+            ("emcy", None, Some(0))
+        );
         assert_eq!(emcy.max_gap, Some(Span::from_millis(410)));
         let pdo = &r[0].ids[1];
-        assert_eq!((pdo.service, pdo.missed), ("tpdo1", 1));
+        assert_eq!((pdo.service, pdo.missed), ("tpdo1", Some(1)));
         assert_eq!(pdo.period, Some(Span::from_micros(10_000)));
     }
 }

@@ -118,8 +118,8 @@ impl Detector {
     /// The id-first shortcut the analysis takes once the format is known.
     pub fn scan(&mut self, line: &[u8]) -> Scanned {
         match self.detector.scan(line, &self.interest) {
-            Scan::Plain => Scanned::Plain,
-            Scan::Timed(t) => Scanned::Timed(t),
+            Scan::Plain(_) => Scanned::Plain,
+            Scan::Timed(t, _) => Scanned::Timed(t),
             Scan::Frame(f) => Scanned::Frame(CanFrame::of(0, &f)),
             Scan::Parse => Scanned::Parse,
         }

@@ -302,12 +302,40 @@ pub fn detect(data: &[u8]) {
         small.threads,
         small.block_size
     );
-    let counted: u64 = timed.report.channels.iter().filter_map(|c| c.frames).sum();
-    let ignored_channels = timed.report.channels.len() >= crate::analyze::traffic::MAX_CHANNELS;
-    assert!(
-        counted == timed.report.counts.frames || ignored_channels,
-        "--timing counted {counted} of {} frames",
-        timed.report.counts.frames
+    // Every frame is counted once on its channel, by its id, whether it
+    // was timed or not.
+    for (what, r) in [("default", &reference), ("--timing", &timed)] {
+        let counted: u64 = r.report.channels.iter().map(|c| c.frames).sum();
+        let by_id: u64 = r
+            .report
+            .channels
+            .iter()
+            .map(|c| c.error_frames + c.other_ids + c.ids.iter().map(|i| i.count).sum::<u64>())
+            .sum();
+        let ignored_channels = r.report.channels.len() >= crate::trace::id_counts::MAX_CHANNELS;
+        assert!(
+            counted == r.report.counts.frames || ignored_channels,
+            "{what} counted {counted} of {} frames",
+            r.report.counts.frames
+        );
+        assert_eq!(counted, by_id, "{what}: a channel's frames are its ids'");
+    }
+    // A channel's name, frames, and (id, extended, frames) per id.
+    type Counts = Vec<(String, u64, Vec<(u32, bool, u64)>)>;
+    let counts = |r: &Run| -> Counts {
+        r.report
+            .channels
+            .iter()
+            .map(|c| {
+                let ids = c.ids.iter().map(|i| (i.cob_id, i.extended, i.count));
+                (c.channel.clone(), c.frames, ids.collect())
+            })
+            .collect()
+    };
+    assert_eq!(
+        counts(&timed),
+        counts(&reference),
+        "--timing changes the counts"
     );
     let story = |out: &[u8]| -> Vec<Value> {
         ndjson_values(out)
@@ -702,10 +730,15 @@ fn lines_agree(format: Format, data: &[u8]) {
         let a = p_all.parse(line, &all);
         let w = p_wanted.parse(line, &wanted);
         let mut timed = None;
+        let mut key = None;
         let q = match p_scan.scan(line, &wanted) {
-            Scan::Plain => None,
-            Scan::Timed(t) => {
+            Scan::Plain(k) => {
+                key = Some(k);
+                None
+            }
+            Scan::Timed(t, k) => {
                 timed = Some(t);
+                key = Some(k);
                 Some(w.clone())
             }
             Scan::Frame(f) => Some(Parsed::Frame(f)),
@@ -744,6 +777,9 @@ fn lines_agree(format: Format, data: &[u8]) {
                 "the interest changed the classification of {:?}: {a:?} vs {w:?}",
                 shown()
             ),
+        }
+        if let (Some(key), Parsed::Frame(f)) = (key, &a) {
+            assert_eq!(key, f.key(), "counted under another key: {:?}", shown());
         }
         match q {
             None => {

@@ -1304,10 +1304,7 @@ impl JsonWriter {
         o.str("type", "channel");
         o.str("file", &input.file);
         o.str("channel", &c.channel);
-        match c.frames {
-            Some(n) => o.u64("frames", n),
-            None => o.null("frames"),
-        }
+        o.u64("frames", c.frames);
         o.u64("error_frames", c.error_frames);
         match &c.load {
             Some(l) => {
@@ -1338,7 +1335,10 @@ impl JsonWriter {
             push_span(io.key("period"), id.period);
             push_span(io.key("jitter"), id.jitter);
             push_span(io.key("max_gap"), id.max_gap);
-            io.u64("missed", id.missed);
+            match id.missed {
+                Some(n) => io.u64("missed", n),
+                None => io.null("missed"),
+            }
             io.end();
         }
         list.push(b']');

@@ -928,7 +928,8 @@ fn ndjson_order_is_events_then_nodes_then_inputs() {
         | "error_history_cleared"
         | "incident" => 0,
         "node" => 1,
-        "input" => 2,
+        // Each input's channels come right before it.
+        "channel" | "input" => 2,
         other => panic!("unknown type {other}"),
     };
     assert!(

@@ -48,11 +48,29 @@ fn sync_gaps_are_events_once_per_gap() {
     assert_eq!(sync["max_gap"].as_f64(), Some(0.05));
     // The input object stays the last line.
     assert_eq!(objects.last().unwrap()["type"], "input");
-    // Without --timing SYNC is not followed: no gaps, no channel object
-    // (the trace has no error frames).
+    // Without --timing SYNC is not followed: no gaps; the channel object
+    // counts every frame by id all the same, its timing null.
     let plain = ndjson([TRACE]);
     assert!(of_type(&plain, "sync_missed").is_empty());
-    assert!(of_type(&plain, "channel").is_empty());
+    let channels = of_type(&plain, "channel");
+    assert_eq!(channels.len(), 1);
+    assert_eq!(channels[0]["frames"], c["frames"]);
+    let untimed = id(channels[0], 0x80);
+    assert_eq!(untimed["count"], 177);
+    for key in ["period", "jitter", "max_gap", "missed"] {
+        assert!(untimed[key].is_null(), "{key} without --timing");
+    }
+    let counts = |c: &Value| {
+        let ids = c["ids"].as_array().cloned().unwrap_or_default();
+        ids.iter()
+            .map(|i| (i["cob_id"].clone(), i["count"].clone()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        counts(channels[0]),
+        counts(c),
+        "the same counts, timed or not"
+    );
 }
 
 #[test]
@@ -220,4 +238,31 @@ fn the_chart_has_a_bus_strip_where_the_bus_had_trouble() {
     // A quiet bus: no strip, no style for it.
     let quiet = svg(&["fixtures/s300.log"]);
     assert!(!quiet.contains("class=\"bus\"") && !quiet.contains(".ec .bus"));
+}
+
+/// Every frame of every fixture is counted once on its channel, by its id,
+/// whatever the reader and whether the analysis decoded it or only counted
+/// it: the channels' frames add up to the input's, and each channel's to
+/// its ids'.
+#[test]
+fn every_frame_of_every_fixture_is_counted_by_channel_and_id() {
+    for fixture in crate::support::golden::fixtures() {
+        let path = fixture.to_string_lossy().into_owned();
+        let objects = ndjson([path.as_str()]);
+        let input = objects
+            .iter()
+            .rev()
+            .find(|o| o["type"] == "input")
+            .unwrap_or_else(|| panic!("{path}: no input object"));
+        let channels = of_type(&objects, "channel");
+        let frames: u64 = channels.iter().filter_map(|c| c["frames"].as_u64()).sum();
+        assert_eq!(Some(frames), input["frames"].as_u64(), "{path}");
+        for c in channels {
+            let ids = c["ids"].as_array().cloned().unwrap_or_default();
+            let by_id: u64 = ids.iter().filter_map(|i| i["count"].as_u64()).sum::<u64>()
+                + c["error_frames"].as_u64().unwrap_or(0)
+                + c["other_ids"].as_u64().unwrap_or(0);
+            assert_eq!(c["frames"].as_u64(), Some(by_id), "{path}: {c}");
+        }
+    }
 }

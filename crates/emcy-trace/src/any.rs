@@ -12,7 +12,9 @@ use crate::format::mf4::Mf4Reader;
 use crate::format::pcap::PcapReader;
 use crate::format::{asc, busmaster, candump_log, candump_screen, ixxat, trc};
 use crate::text::TextReader;
-use crate::{Folds, Format, FrameSource, Interest, LineParser, Next, Parsed, Reason, Run, Scan};
+use crate::{
+    Folds, Format, FrameSource, IdCounts, Interest, LineParser, Next, Parsed, Reason, Run, Scan,
+};
 
 /// One parser of each text format, dispatched by `match`: the set is closed,
 /// and a match lets the hot path inline where a trait object would not.
@@ -140,15 +142,16 @@ impl LineParser for AnyParser {
         max_line: usize,
         interest: &Interest,
         folds: &mut Folds,
+        ids: &mut IdCounts,
     ) -> Run<'a> {
         match self {
-            AnyParser::CandumpLog(p) => p.run(bytes, max_line, interest, folds),
-            AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest, folds),
-            AnyParser::Asc(p) => p.run(bytes, max_line, interest, folds),
-            AnyParser::Trc(p) => p.run(bytes, max_line, interest, folds),
-            AnyParser::Busmaster(p) => p.run(bytes, max_line, interest, folds),
-            AnyParser::Ixxat(p) => p.run(bytes, max_line, interest, folds),
-            AnyParser::Binary(p) => p.run(bytes, max_line, interest, folds),
+            AnyParser::CandumpLog(p) => p.run(bytes, max_line, interest, folds, ids),
+            AnyParser::CandumpScreen(p) => p.run(bytes, max_line, interest, folds, ids),
+            AnyParser::Asc(p) => p.run(bytes, max_line, interest, folds, ids),
+            AnyParser::Trc(p) => p.run(bytes, max_line, interest, folds, ids),
+            AnyParser::Busmaster(p) => p.run(bytes, max_line, interest, folds, ids),
+            AnyParser::Ixxat(p) => p.run(bytes, max_line, interest, folds, ids),
+            AnyParser::Binary(p) => p.run(bytes, max_line, interest, folds, ids),
         }
     }
 

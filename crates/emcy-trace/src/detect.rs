@@ -19,7 +19,9 @@ use super::deltas::{self, DeltaClock};
 use super::format::blf;
 use super::format::{mf4, pcap};
 use super::read::read_full;
-use super::{AnyParser, Folds, Format, Interest, LineParser, Parsed, Run, Scan, Timestamp};
+use super::{
+    AnyParser, Folds, Format, IdCounts, Interest, LineParser, Parsed, Run, Scan, Timestamp,
+};
 
 /// The input with the bytes [`sniff_binary`] read put back in front.
 pub type Sniffed<R> = io::Chain<io::Cursor<Vec<u8>>, R>;
@@ -230,12 +232,13 @@ impl Detector {
         max_line: usize,
         interest: &Interest,
         folds: &mut Folds,
+        ids: &mut IdCounts,
     ) -> Run<'a> {
         if self.deltas.is_some() {
             return Run::default();
         }
         match self.primary.and_then(|i| self.parsers.get_mut(i)) {
-            Some(p) => p.run(bytes, max_line, interest, folds),
+            Some(p) => p.run(bytes, max_line, interest, folds, ids),
             None => Run::default(),
         }
     }
@@ -253,13 +256,14 @@ impl Detector {
         }
         match scan {
             // Not decoded, but its delta moves the clock all the same.
-            Scan::Plain => {
+            Scan::Plain(key) => {
                 self.sum(self.format(), line, None);
-                Scan::Plain
+                Scan::Plain(key)
             }
-            Scan::Timed(delta) => {
-                Scan::Timed(self.sum(self.format(), line, Some(delta)).unwrap_or(delta))
-            }
+            Scan::Timed(delta, key) => Scan::Timed(
+                self.sum(self.format(), line, Some(delta)).unwrap_or(delta),
+                key,
+            ),
             Scan::Frame(mut frame) => {
                 frame.time = self.sum(self.format(), line, frame.time).or(frame.time);
                 Scan::Frame(frame)
@@ -638,7 +642,7 @@ mod tests {
         wanted.add_standard(0x81);
         assert!(matches!(
             d.scan(b"(000.100000) can0 701#05", &wanted),
-            Scan::Plain
+            Scan::Plain(key) if key == crate::FrameKey::new(b"can0", 0x701, false)
         ));
         match d.scan(b"(000.100000) can0 081#00", &wanted) {
             Scan::Frame(f) => assert_eq!(f.time.map(|t| t.to_string()), Some("1.950010".into())),
@@ -650,7 +654,8 @@ mod tests {
                 b"(000.1) can0 701#05\n",
                 100,
                 &Interest::none(),
-                &mut Folds::default()
+                &mut Folds::default(),
+                &mut IdCounts::new()
             )
             .bytes,
             0

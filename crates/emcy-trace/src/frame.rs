@@ -3,7 +3,7 @@
 
 use std::fmt;
 
-use crate::Timestamp;
+use crate::{FrameKey, Timestamp};
 
 /// What kind of frame a line carries. Only `Data` frames can be EMCY.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -166,6 +166,16 @@ pub struct Frame<'a> {
 }
 
 impl<'a> Frame<'a> {
+    /// What the frame is counted under ([`IdCounts`](crate::IdCounts)).
+    #[inline]
+    pub fn key(&self) -> FrameKey<'a> {
+        FrameKey {
+            channel: self.channel,
+            id: self.id,
+            extended: self.extended,
+        }
+    }
+
     /// An error frame as the text formats write one: no class bits, no data.
     pub fn error(time: Option<Timestamp>, channel: &'a [u8]) -> Frame<'a> {
         Frame {

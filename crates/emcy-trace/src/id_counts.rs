@@ -32,8 +32,11 @@ pub struct IdCounts {
     channels: Vec<ChannelCounts>,
     /// The channel of the last count (most inputs have one).
     last: usize,
-    /// Frames on channels past [`MAX_CHANNELS`].
-    pub other: u64,
+    /// Frames on channels past [`MAX_CHANNELS`] ([`IdCounts::others`]).
+    other: u64,
+    /// Where [`IdCounts::channel_mut`] counts frames on channels past
+    /// [`MAX_CHANNELS`] (added to `other` when asked).
+    overflow: Option<Box<ChannelCounts>>,
 }
 
 /// One channel's counts.
@@ -46,6 +49,17 @@ pub struct ChannelCounts {
     error_frames: u64,
     /// Frames on extended ids past [`MAX_EXTENDED`].
     pub other: u64,
+}
+
+impl<'a> FrameKey<'a> {
+    /// The key of a frame on `channel` with `id`.
+    pub const fn new(channel: &'a [u8], id: u32, extended: bool) -> Self {
+        FrameKey {
+            channel,
+            id,
+            extended,
+        }
+    }
 }
 
 impl IdCounts {
@@ -80,6 +94,35 @@ impl IdCounts {
         Some(i)
     }
 
+    /// The index of channel `name` for [`IdCounts::count_at`]; past
+    /// [`MAX_CHANNELS`] one that counts in `other`.
+    #[inline]
+    pub fn index(&mut self, name: &[u8]) -> usize {
+        self.channel(name).unwrap_or(MAX_CHANNELS)
+    }
+
+    /// The counts of channel `name`, for a reader whose run of lines is
+    /// on one channel: it finds them once and counts each line with
+    /// [`ChannelCounts::count`]. Past [`MAX_CHANNELS`], counts that only
+    /// add to [`IdCounts::other`] (see [`IdCounts::settle`]).
+    #[inline]
+    pub fn channel_mut(&mut self, name: &[u8]) -> &mut ChannelCounts {
+        match self.channel(name) {
+            Some(i) if i < self.channels.len() => &mut self.channels[i],
+            _ => self
+                .overflow
+                .get_or_insert_with(|| Box::new(ChannelCounts::new(b""))),
+        }
+    }
+
+    /// Moves what [`IdCounts::channel_mut`] counted past the bound into
+    /// `other`.
+    fn settle(&mut self) {
+        if let Some(o) = self.overflow.take() {
+            self.other += o.frames();
+        }
+    }
+
     /// One frame.
     #[inline]
     pub fn count(&mut self, key: FrameKey<'_>) {
@@ -93,13 +136,9 @@ impl IdCounts {
     /// whose run of lines has one channel finds it once).
     #[inline]
     pub fn count_at(&mut self, c: usize, id: u32, extended: bool) {
-        let Some(channel) = self.channels.get_mut(c) else {
-            self.other += 1;
-            return;
-        };
-        match channel.standard.get_mut(id as usize) {
-            Some(n) if !extended => *n += 1,
-            _ => channel.count_extended(id),
+        match self.channels.get_mut(c) {
+            Some(channel) => channel.count(id, extended),
+            None => self.other += 1,
         }
     }
 
@@ -114,6 +153,10 @@ impl IdCounts {
     /// Adds `other`'s counts (the next block's) to these: channels new to
     /// these come after theirs, in `other`'s order.
     pub fn add(&mut self, other: &IdCounts) {
+        self.settle();
+        if let Some(o) = &other.overflow {
+            self.other += o.frames();
+        }
         for theirs in &other.channels {
             let frames = theirs.frames();
             if frames == 0 {
@@ -144,6 +187,7 @@ impl IdCounts {
         // is not reused, by name, in [`IdCounts::channel`] (kept here only
         // for its memory).
         self.other = 0;
+        self.overflow = None;
     }
 
     /// The channels that had a frame, in the order of their first.
@@ -153,7 +197,12 @@ impl IdCounts {
 
     /// Every frame counted.
     pub fn frames(&self) -> u64 {
-        self.channels.iter().map(ChannelCounts::frames).sum::<u64>() + self.other
+        self.channels.iter().map(ChannelCounts::frames).sum::<u64>() + self.others()
+    }
+
+    /// Frames on channels past [`MAX_CHANNELS`].
+    pub fn others(&self) -> u64 {
+        self.other + self.overflow.as_ref().map_or(0, |o| o.frames())
     }
 }
 
@@ -201,6 +250,15 @@ impl ChannelCounts {
             extended: Vec::new(),
             error_frames: 0,
             other: 0,
+        }
+    }
+
+    /// One frame on `id`.
+    #[inline]
+    pub fn count(&mut self, id: u32, extended: bool) {
+        match self.standard.get_mut(id as usize) {
+            Some(n) if !extended => *n += 1,
+            _ => self.count_extended(id),
         }
     }
 
@@ -305,8 +363,8 @@ pub(crate) mod testing {
                 }
             }
         }
-        if ids.other > 0 {
-            t.insert((None, Counted::Other), ids.other);
+        if ids.others() > 0 {
+            t.insert((None, Counted::Other), ids.others());
         }
         t
     }
@@ -521,7 +579,7 @@ mod tests {
             c.count(key(format!("ch{i}").as_bytes(), 1, false));
         }
         assert_eq!(c.channels().count(), MAX_CHANNELS);
-        assert_eq!(c.other, 3);
+        assert_eq!(c.others(), 3);
         let mut e = IdCounts::new();
         for id in 0..MAX_EXTENDED as u32 + 5 {
             e.count(key(b"can0", id, true));

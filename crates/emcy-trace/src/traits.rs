@@ -7,7 +7,7 @@ use std::borrow::Cow;
 use std::io;
 
 use crate::ethercat::{EthercatCounts, EthercatPacket};
-use crate::{Folds, Format, Frame, IdCounts, Interest, Timestamp};
+use crate::{Folds, Format, Frame, FrameKey, IdCounts, Interest, Timestamp};
 
 /// Why a line is not a frame of the format being read.
 pub type Reason = Cow<'static, str>;
@@ -26,13 +26,13 @@ pub enum Parsed<'a> {
 /// What [`LineParser::scan`] made of a line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Scan<'a> {
-    /// A valid frame whose id is not wanted: count it.
-    Plain,
+    /// A valid frame whose id is not wanted: count it, under its key.
+    Plain(FrameKey<'a>),
     /// A valid frame on a wanted id, as `parse` returns it.
     Frame(Frame<'a>),
     /// A valid frame on a wanted id whose data the content filter rejects:
-    /// only its time is needed.
-    Timed(Timestamp),
+    /// only its time is needed (and its key, to count it).
+    Timed(Timestamp, FrameKey<'a>),
     /// Not the common shape: call `parse`.
     Parse,
 }
@@ -97,6 +97,8 @@ pub trait LineParser: Send {
     /// after a wanted frame or before any other line (too long, `\r\n`,
     /// no newline, or not the common shape), which the caller then reads
     /// one at a time. Saves the per-line dispatch of the general loop.
+    /// Every frame only counted or timed is counted in `ids`; the frame
+    /// that ends the run is the caller's to count.
     #[inline]
     fn run<'a>(
         &mut self,
@@ -104,6 +106,7 @@ pub trait LineParser: Send {
         max_line: usize,
         interest: &Interest,
         _folds: &mut Folds,
+        ids: &mut IdCounts,
     ) -> Run<'a> {
         let mut run = Run::default();
         while let Some(rest) = bytes.get(run.bytes..)
@@ -113,11 +116,13 @@ pub trait LineParser: Send {
             && line.last() != Some(&b'\r')
         {
             match self.scan(line, interest) {
-                Scan::Plain => {
+                Scan::Plain(key) => {
+                    ids.count(key);
                     run.plain += 1;
                     run.bytes += len + 1;
                 }
-                Scan::Timed(t) => {
+                Scan::Timed(t, key) => {
+                    ids.count(key);
                     run.timed(t);
                     run.bytes += len + 1;
                 }

@@ -172,12 +172,13 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub incident_gap: Option<Span>,
 
-    /// Count and time every frame per channel and id: period, jitter, gaps, missed cycles
+    /// Time every frame per channel and id: period, jitter, gaps, missed cycles, SYNC gaps
     ///
-    /// Count and time every frame per channel and identifier: each id's period (median
-    /// interval), jitter, largest gap and missed cycles, in the `channel` objects and the
-    /// Bus table. The readers then decode every line's time, which the default path
-    /// spares (see the manual for the cost). SYNC is timed always
+    /// Time every frame per channel and identifier: each id's period (median interval),
+    /// jitter, largest gap and missed cycles, in the `channel` objects and the Timing
+    /// table, and SYNC's gaps as `sync_missed` events. The readers then decode every
+    /// line's time, which the default path spares (see the manual for the cost). Every
+    /// frame is counted per channel and identifier without it
     #[arg(long, help_heading = DECODING)]
     pub timing: bool,
 

@@ -11,7 +11,7 @@ use super::fit::{CHANNEL_MAX, Fit, display_width, push_cut};
 use super::inventory::write_inventory;
 use super::page::{BOLD, Page, write_in_two_passes};
 use super::timeline::{NodeTexts, write_timeline};
-use super::traffic::{period_text, write_bus, write_timing};
+use super::traffic::{period_text, shows_bus, write_bus, write_timing};
 use crate::analyze::incident::Incident;
 use crate::analyze::{DriveReport, HistoryReport, InputReport, NodeReport, kind_counts};
 use crate::report::format::{TABLE_LIST, code_text, push_code, push_code_counts, push_codes};
@@ -35,7 +35,7 @@ pub(super) fn write_end_of_input<W: Write>(
         write_bus_errors(page, input)?;
         write_bus(page, input)?;
         write_timing(page, input)?;
-        if !input.bus_errors.is_empty() || input.channels.iter().any(|c| c.frames.is_some()) {
+        if !input.bus_errors.is_empty() || shows_bus(input) {
             writeln!(page.out)?;
         }
         write_bus_line(page, input)?;
@@ -123,7 +123,7 @@ pub(super) fn write_summary<W: Write>(page: &mut Page<W>, input: &InputReport) -
     write_bus_errors(page, input)?;
     write_bus(page, input)?;
     write_timing(page, input)?;
-    if !input.bus_errors.is_empty() || input.channels.iter().any(|c| c.frames.is_some()) {
+    if !input.bus_errors.is_empty() || shows_bus(input) {
         writeln!(page.out)?;
     }
     write_bus_line(page, input)?;
@@ -501,8 +501,8 @@ fn write_bus_line<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Resu
                 .find(|i| i.service == "sync" && i.period.is_some())
             {
                 frames.push_str(&format!(", SYNC every {}", period_text(sync)));
-                if sync.missed > 0 {
-                    frames.push_str(&format!(" ({})", plural(sync.missed, "gap", "gaps")));
+                if let Some(n) = sync.missed.filter(|n| *n > 0) {
+                    frames.push_str(&format!(" ({})", plural(n, "gap", "gaps")));
                 }
             }
             if let Some(l) = &one.load {

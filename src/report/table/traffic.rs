@@ -11,18 +11,29 @@ use crate::analyze::traffic::{ChannelReport, IdReport};
 use crate::report::timefmt::human_span;
 use crate::text::printable;
 
-/// The Bus table, where a channel has anything to say past its error
-/// frames (which the Bus errors table tells): SYNC, or `--timing`.
+/// Whether the Bus table has a row for `c`: where the channel has anything
+/// to say past its error frames (which the Bus errors table tells) and the
+/// input's frame count (the `bus:` line): SYNC, `--timing`, or other
+/// channels to tell it from.
+fn shows(input: &InputReport, c: &ChannelReport) -> bool {
+    c.timed || sync(c).is_some() || input.channels.len() > 1
+}
+
+/// Whether the Bus table has any row.
+pub(super) fn shows_bus(input: &InputReport) -> bool {
+    input.channels.iter().any(|c| shows(input, c))
+}
+
+/// The Bus table: a row per channel [`shows`] lets through.
 pub(super) fn write_bus<W: Write>(page: &mut Page<W>, input: &InputReport) -> io::Result<()> {
-    let shown = |c: &&ChannelReport| c.frames.is_some() || sync(c).is_some();
     write_in_two_passes(
         page,
         ("Bus", true),
         (&BUS_HEADER, &BUS_RIGHT, &BUS_FIT),
-        || input.channels.iter().filter(shown),
+        || input.channels.iter().filter(|c| shows(input, c)),
         |cells, c| {
             cells[0] = printable(&c.channel).into_owned();
-            cells[1] = c.frames.map_or("-".to_string(), |n| n.to_string());
+            cells[1] = c.frames.to_string();
             cells[2] = c.error_frames.to_string();
             cells[3] = match &c.load {
                 Some(l) => format!(
@@ -34,7 +45,10 @@ pub(super) fn write_bus<W: Write>(page: &mut Page<W>, input: &InputReport) -> io
                 None => "-".to_string(),
             };
             (cells[4], cells[5]) = match sync(c) {
-                Some(s) => (period_text(s), s.missed.to_string()),
+                Some(s) => (
+                    period_text(s),
+                    s.missed.map_or("-".to_string(), |n| n.to_string()),
+                ),
                 None => ("-".to_string(), "-".to_string()),
             };
             std::array::from_fn(|i| display_width(&cells[i]))
@@ -48,7 +62,7 @@ pub(super) fn write_timing<W: Write>(page: &mut Page<W>, input: &InputReport) ->
         input
             .channels
             .iter()
-            .filter(|c| c.frames.is_some())
+            .filter(|c| c.timed)
             .flat_map(|c| c.ids.iter().map(move |id| (c, id)))
     };
     write_in_two_passes(
@@ -69,10 +83,9 @@ pub(super) fn write_timing<W: Write>(page: &mut Page<W>, input: &InputReport) ->
             cells[5] = id.period.map_or("-".to_string(), human_span);
             cells[6] = id.jitter.map_or("-".to_string(), human_span);
             cells[7] = id.max_gap.map_or("-".to_string(), human_span);
-            cells[8] = if id.period.is_some() {
-                id.missed.to_string()
-            } else {
-                "-".to_string()
+            cells[8] = match (id.period, id.missed) {
+                (Some(_), Some(n)) => n.to_string(),
+                _ => "-".to_string(),
             };
             std::array::from_fn(|i| display_width(&cells[i]))
         },

@@ -85,13 +85,13 @@ impl LineParser for AscParser {
         };
         if !interest.wants(shape.id, shape.extended) {
             self.now = shape.time;
-            return Scan::Plain;
+            return Scan::Plain(shape.key(line));
         }
         match shape.frame(line, true) {
             Some(frame) => {
                 self.now = shape.time;
                 if interest.timed_only(frame.id, frame.extended, frame.data.as_slice()) {
-                    Scan::Timed(shape.time)
+                    Scan::Timed(shape.time, frame.key())
                 } else {
                     Scan::Frame(frame)
                 }
@@ -647,7 +647,7 @@ mod tests {
             let mut p = parser(true, 5);
             assert_eq!(
                 p.scan(b"   0.5 1  181  Rx   d 1 00", &interest),
-                Scan::Plain
+                Scan::Plain(crate::FrameKey::new(b"1", 0x181, false))
             );
             assert_eq!(p.now.to_string(), "5.750");
             let Scan::Frame(f) = p.scan(b"   0.25 1  81  Rx   d 2 10 8A", &interest) else {
@@ -676,7 +676,10 @@ mod tests {
             let mut p = parser(false, 0);
             assert_eq!(
                 p.scan(b"   2.500000 1  705             Rx   d 1 05", &interest),
-                Scan::Timed(Timestamp::from_parts(2, 500_000, 6))
+                Scan::Timed(
+                    Timestamp::from_parts(2, 500_000, 6),
+                    crate::FrameKey::new(b"1", 0x705, false)
+                )
             );
             assert!(matches!(
                 p.scan(b"   3.000000 1  705             Rx   d 1 00", &interest),

@@ -1,7 +1,7 @@
 //! The fast path's shape of a canonical classic line, and the layout of
 //! the last one, which the next line is compared with.
 
-use crate::{Frame, FrameKind, Payload, Timestamp, trim_end, trim_start};
+use crate::{Frame, FrameKey, FrameKind, Payload, Timestamp, trim_end, trim_start};
 use crate::{hex, scan};
 
 /// Where the fields of a canonical classic line are.
@@ -65,6 +65,16 @@ impl AscLayout {
 }
 
 impl AscShape {
+    /// What the line's frame is counted under.
+    #[inline]
+    pub(super) fn key<'a>(&self, line: &'a [u8]) -> FrameKey<'a> {
+        FrameKey {
+            channel: line.get(self.channel.clone()).unwrap_or_default(),
+            id: self.id,
+            extended: self.extended,
+        }
+    }
+
     /// The frame of the line the shape was taken from; data bytes are
     /// converted only when `wanted`.
     #[inline]

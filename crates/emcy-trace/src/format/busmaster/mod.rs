@@ -53,8 +53,8 @@
 use crate::error_frame::{ErrorFrame, class};
 use crate::time::{SECS_PER_DAY, unix_midnight};
 use crate::{
-    Format, Frame, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan, Timestamp,
-    show_token as show,
+    Format, Frame, FrameKey, FrameKind, Interest, LineParser, Parsed, Payload, Reason, Scan,
+    Timestamp, show_token as show,
 };
 use crate::{hex, is_blank, trim_start};
 
@@ -227,16 +227,21 @@ impl LineParser for BusmasterParser {
         let Some(c) = self.common(line) else {
             return Scan::Parse;
         };
+        let key = FrameKey {
+            channel: c.channel,
+            id: c.id,
+            extended: c.extended,
+        };
         let wanted = interest.wants(c.id, c.extended);
         if !wanted && self.mode != TimeMode::Relative {
             // `common` checked the time; only a relative one moves the state.
-            return Scan::Plain;
+            return Scan::Plain(key);
         }
         let Ok(t) = self.commit(c.time) else {
             return Scan::Parse;
         };
         if !wanted {
-            return Scan::Plain;
+            return Scan::Plain(key);
         }
         let mut data = Payload::new();
         let mut at = c.data;
@@ -246,7 +251,7 @@ impl LineParser for BusmasterParser {
             at = next;
         }
         if interest.timed_only(c.id, c.extended, data.as_slice()) {
-            return Scan::Timed(t);
+            return Scan::Timed(t, key);
         }
         Scan::Frame(Frame {
             time: Some(t),
@@ -921,8 +926,11 @@ pub fn fuzz_busmaster(data: &[u8]) {
             assert!(f.id <= EXTENDED_MAX);
             assert!(f.time.is_some());
         }
-        if scan == Scan::Plain {
-            assert!(matches!(parsed, Parsed::Frame(_)), "scan took a non-frame");
+        if let Scan::Plain(key) = scan {
+            let Parsed::Frame(f) = &parsed else {
+                panic!("scan took a non-frame");
+            };
+            assert_eq!(key, f.key(), "counted under another key than the frame's");
             assert_eq!(scanned.context(), p.context());
             assert_eq!(scanned.now, p.now);
         }
@@ -1284,7 +1292,7 @@ mod tests {
         interest.add_standard(0x81);
         assert_eq!(
             p.scan(b"22:13:20:0000 Rx 1 0x181 s 1 00", &interest),
-            Scan::Plain
+            Scan::Plain(FrameKey::new(b"1", 0x181, false))
         );
         assert!(matches!(
             p.scan(b"22:13:20:0000 Rx 1 0x081 s 1 10", &interest),
@@ -1432,8 +1440,8 @@ mod tests {
                 let scan = scanned.scan(line.as_bytes(), &Interest::none());
                 let parsed = p.parse(line.as_bytes(), &Interest::none());
                 match scan {
-                    Scan::Plain => {
-                        prop_assert!(matches!(parsed, Parsed::Frame(_)), "{}", line);
+                    Scan::Plain(key) => {
+                        prop_assert!(matches!(&parsed, Parsed::Frame(f) if f.key() == key), "{}", line);
                         prop_assert_eq!(scanned.now, p.now);
                         prop_assert_eq!(scanned.context(), p.context());
                     }

@@ -12,8 +12,8 @@
 use crate::Format;
 use crate::time::MAX_FRACTION_DIGITS;
 use crate::{
-    DataHead, Folds, Frame, FrameKind, HexText, Interest, LineParser, Parsed, Payload, Reason, Run,
-    Scan, Ticks, Timestamp, is_blank, split_token, trim_end, trim_start,
+    DataHead, Folds, Frame, FrameKey, FrameKind, HexText, IdCounts, Interest, LineParser, Parsed,
+    Payload, Reason, Run, Scan, Ticks, Timestamp, is_blank, split_token, trim_end, trim_start,
 };
 use crate::{hex, scan};
 
@@ -78,20 +78,36 @@ impl LineParser for CandumpLogParser {
         max_line: usize,
         interest: &Interest,
         folds: &mut Folds,
+        ids: &mut IdCounts,
     ) -> Run<'a> {
         let mut run = Run::default();
         let Some(layout) = self.layout.as_ref() else {
             return run;
         };
         let mut last_timed = None;
+        // Every line of the layout has its `) DEV ` bytes, so its channel:
+        // found in the counts once per run, if the run has a line. (Found
+        // on the first line counted instead, or by parsing the first line
+        // twice, it cost every line 10-20 instructions more: callgrind, the
+        // bench's traces.)
+        if !layout.sep.matches(bytes, layout.close) {
+            return run;
+        }
+        let channel = ids.channel_mut(layout.channel(bytes));
         while let Some(rest) = bytes.get(run.bytes..)
             && let Some((shape, len)) = layout.line(rest)
             && len <= max_line
         {
             let line = rest.get(..len).unwrap_or_default();
+            // Counted where the line is only counted or timed: a frame
+            // handed on is the caller's to count.
             match shape.kind(line, interest) {
-                Kind::Plain => run.plain += 1,
+                Kind::Plain => {
+                    channel.count(shape.id, shape.extended);
+                    run.plain += 1;
+                }
                 Kind::Timed => {
+                    channel.count(shape.id, shape.extended);
                     // Of a run of these (folded frames among them) only the
                     // first and last time count.
                     if run.first_time.is_none() {
@@ -111,8 +127,10 @@ impl LineParser for CandumpLogParser {
                 // line 7-15 instructions (callgrind: the 20 MB heartbeat
                 // trace went 160.6M -> 164-170M).
                 Kind::Fold => {
+                    let (id, extended) = (shape.id, shape.extended);
                     match fold_line(folds, shape, line, run.plain + run.timed, interest) {
                         Kind::Timed => {
+                            channel.count(id, extended);
                             if run.first_time.is_none() {
                                 run.first_time = time_at(line, layout.dot, layout.close);
                             }
@@ -398,6 +416,16 @@ impl Shape {
         time_at(line, self.dot, self.close)
     }
 
+    /// What the line's frame is counted under.
+    #[inline]
+    fn key<'a>(&self, line: &'a [u8]) -> FrameKey<'a> {
+        FrameKey {
+            channel: line.get(self.channel.clone()).unwrap_or_default(),
+            id: self.id,
+            extended: self.extended,
+        }
+    }
+
     /// The time as [`Ticks`] (what folding compares); `None` past 19 digits.
     #[inline]
     fn ticks(&self, line: &[u8]) -> Option<Ticks> {
@@ -436,8 +464,10 @@ impl Shape {
             kind => kind,
         };
         match kind {
-            Kind::Plain => Scan::Plain,
-            Kind::Timed => self.time(line).map_or(Scan::Parse, Scan::Timed),
+            Kind::Plain => Scan::Plain(self.key(line)),
+            Kind::Timed => self
+                .time(line)
+                .map_or(Scan::Parse, |t| Scan::Timed(t, self.key(line))),
             Kind::Frame(frame) => Scan::Frame(frame),
             Kind::Fold | Kind::Parse => Scan::Parse,
         }
@@ -811,6 +841,7 @@ pub fn parse_data(text: &[u8], max: usize, mut out: Option<&mut Payload>) -> Res
 mod tests {
     use super::*;
     use crate::ContentFilter;
+    use crate::id_counts::testing::{Counted, table};
 
     fn parse(line: &str) -> Parsed<'_> {
         CandumpLogParser::new().parse(line.as_bytes(), &Interest::all())
@@ -1122,6 +1153,7 @@ mod tests {
         max_line: usize,
         interest: &Interest,
         folds: &mut Folds,
+        ids: &mut IdCounts,
     ) -> Run<'a> {
         let mut run = Run::default();
         while let Some(rest) = bytes.get(run.bytes..)
@@ -1131,8 +1163,14 @@ mod tests {
         {
             let line = &rest[..len];
             match p.scan(line, interest) {
-                Scan::Plain => run.plain += 1,
-                Scan::Timed(t) => run.timed(t),
+                Scan::Plain(key) => {
+                    ids.count(key);
+                    run.plain += 1;
+                }
+                Scan::Timed(t, key) => {
+                    ids.count(key);
+                    run.timed(t);
+                }
                 Scan::Frame(f) => {
                     let idx = run.plain + run.timed;
                     // The data's digits, as the line wrote them.
@@ -1149,6 +1187,7 @@ mod tests {
                         _ => None,
                     };
                     if let Some(t) = folded {
+                        ids.count(f.key());
                         run.timed(t);
                         if run.fold_channel.is_empty() {
                             run.fold_channel = f.channel;
@@ -1244,10 +1283,14 @@ mod tests {
                 // It may stop early (a line of another layout), but the lines
                 // it read, read one by one, give the same.
                 let (mut fast_folds, mut slow_folds) = (Folds::default(), Folds::default());
-                let got = fast.run(&bytes[at..], max_line, &interest, &mut fast_folds);
+                let (mut fast_ids, mut slow_ids) = (IdCounts::new(), IdCounts::new());
+                let got = fast.run(&bytes[at..], max_line, &interest, &mut fast_folds, &mut fast_ids);
                 let consumed = &bytes[at..at + got.bytes];
-                let want = run_by_lines(&mut slow, consumed, max_line, &interest, &mut slow_folds);
+                let want = run_by_lines(&mut slow, consumed, max_line, &interest, &mut slow_folds, &mut slow_ids);
                 proptest::prop_assert_eq!(fields(&got, &interest), fields(&want, &interest));
+                proptest::prop_assert_eq!(table(&fast_ids), table(&slow_ids));
+                // Every line read is counted but the frame that ended the run.
+                proptest::prop_assert_eq!(fast_ids.frames(), got.plain + got.timed);
                 proptest::prop_assert_eq!(fast_folds.as_slice(), slow_folds.as_slice());
                 proptest::prop_assert_eq!(fast_folds.frames(), slow_folds.frames());
                 at += got.bytes;
@@ -1290,24 +1333,32 @@ mod tests {
         interest.add_standard(0x81);
         let mut p = CandumpLogParser::new();
         let folds = &mut Folds::default();
+        let ids = &mut IdCounts::new();
         assert_eq!(
-            p.run(block, 100, &interest, folds).bytes,
+            p.run(block, 100, &interest, folds, ids).bytes,
             0,
             "no layout yet"
         );
         p.scan(b"(9.000000) can0 080#", &interest);
-        let run = p.run(block, 100, &interest, folds);
+        let run = p.run(block, 100, &interest, folds, ids);
         assert_eq!((run.bytes, run.plain), (94, 3));
         assert_eq!(run.frame.map(|f| f.id), Some(0x81));
-        let run = p.run(&block[94..], 100, &interest, folds);
+        let run = p.run(&block[94..], 100, &interest, folds, ids);
         assert_eq!((run.bytes, run.plain, run.frame), (21, 1, None));
+        // Every plain line counted by its id, the wanted 0x081 not (the
+        // caller counts the frame it is handed).
+        let can0 = |id| (Some(b"can0".to_vec()), Counted::Id(id, false));
         assert_eq!(
-            p.run(&block[..22], 100, &interest, folds).bytes,
+            table(ids),
+            [(can0(0x181), 2), (can0(0x281), 1), (can0(0x381), 1)].into()
+        );
+        assert_eq!(
+            p.run(&block[..22], 100, &interest, folds, ids).bytes,
             0,
             "no newline"
         );
         assert_eq!(
-            p.run(block, 20, &interest, folds).bytes,
+            p.run(block, 20, &interest, folds, ids).bytes,
             0,
             "longer than max_line"
         );
@@ -1318,7 +1369,10 @@ mod tests {
         let mut p = CandumpLogParser::new();
         let mut interest = Interest::none();
         interest.add_standard(0x81);
-        assert_eq!(p.scan(b"(1.000000) can0 181#1122", &interest), Scan::Plain);
+        assert_eq!(
+            p.scan(b"(1.000000) can0 181#1122", &interest),
+            Scan::Plain(FrameKey::new(b"can0", 0x181, false))
+        );
         let line = b"(1.000000) can0 081#1122";
         assert_eq!(
             p.scan(line, &interest),

@@ -279,19 +279,21 @@ impl LineParser for TrcParser {
         match self.row(line, interest) {
             // An error frame's id is its class bits, no identifier: it is
             // wanted as error frames are.
+            // (Unwanted, it is parsed and counted as an error frame, which
+            // no key can say.)
             Ok(Some(f)) if f.kind == FrameKind::Error => {
                 if interest.wants_error_frames() {
                     Scan::Frame(f)
                 } else {
-                    Scan::Plain
+                    Scan::Parse
                 }
             }
-            Ok(Some(f)) if !interest.wants(f.id, f.extended) => Scan::Plain,
+            Ok(Some(f)) if !interest.wants(f.id, f.extended) => Scan::Plain(f.key()),
             Ok(Some(f))
                 if f.kind == FrameKind::Data
                     && interest.timed_only(f.id, f.extended, f.data.as_slice()) =>
             {
-                f.time.map_or(Scan::Parse, Scan::Timed)
+                f.time.map_or(Scan::Parse, |t| Scan::Timed(t, f.key()))
             }
             Ok(Some(f)) => Scan::Frame(f),
             _ => Scan::Parse,
@@ -694,7 +696,10 @@ pub fn fuzz_trc(data: &[u8]) {
     let all = Interest::all();
     let none = Interest::none();
     for line in data.split(|b| *b == b'\n') {
-        let plain = p.clone().scan(line, &none) == Scan::Plain;
+        let plain = match p.clone().scan(line, &none) {
+            Scan::Plain(key) => Some(key),
+            _ => None,
+        };
         let parsed = p.parse(line, &all);
         if let Parsed::Frame(f) = &parsed {
             assert!(usize::from(f.len) <= Payload::MAX);
@@ -705,8 +710,11 @@ pub fn fuzz_trc(data: &[u8]) {
             assert!(f.id <= 0x1FFF_FFFF);
             assert!(f.time.is_some());
         }
-        if plain {
-            assert!(matches!(parsed, Parsed::Frame(_)), "scan took a non-frame");
+        if let Some(key) = plain {
+            let Parsed::Frame(f) = &parsed else {
+                panic!("scan took a non-frame");
+            };
+            assert_eq!(key, f.key(), "counted under another key than the frame's");
         }
     }
 }
@@ -922,7 +930,7 @@ mod tests {
         interest.add_standard(0x705);
         interest.filter_content(0x705..=0x705, crate::ContentFilter(|_, d| d.head() == [0]));
         let mut p = TrcParser::new();
-        let Scan::Timed(t) = p.scan(b"     1)      1841      0705  1  05", &interest) else {
+        let Scan::Timed(t, _) = p.scan(b"     1)      1841      0705  1  05", &interest) else {
             panic!("a heartbeat is only timed");
         };
         assert_eq!(t.to_string(), "1.841");
@@ -944,7 +952,8 @@ mod tests {
             p.scan(line, &errors),
             Scan::Frame(f) if f.kind == FrameKind::Error
         ));
-        assert_eq!(p.scan(line, &Interest::none()), Scan::Plain);
+        // Unwanted, it is parsed, so that it is counted as an error frame.
+        assert_eq!(p.scan(line, &Interest::none()), Scan::Parse);
     }
 
     #[test]
@@ -959,7 +968,10 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
-        assert_eq!(p.scan(line, &Interest::none()), Scan::Plain);
+        assert_eq!(
+            p.scan(line, &Interest::none()),
+            Scan::Plain(crate::FrameKey::new(b"1", 0x181, false))
+        );
         let Parsed::Frame(wanted) = p.clone().parse(line, &Interest::all()) else {
             panic!("a frame line");
         };
