@@ -5,7 +5,7 @@
 //! identifier) comes from these counts on every run, not only when every
 //! frame is decoded.
 
-/// Channels counted; frames on more are counted in [`IdCounts::other`], so
+/// Channels counted; frames on more are counted in [`IdCounts::others`], so
 /// a hostile input cannot grow the counts without bound (each channel holds
 /// 16 KiB for its standard ids).
 pub const MAX_CHANNELS: usize = 256;
@@ -104,7 +104,7 @@ impl IdCounts {
     /// The counts of channel `name`, for a reader whose run of lines is
     /// on one channel: it finds them once and counts each line with
     /// [`ChannelCounts::count`]. Past [`MAX_CHANNELS`], counts that only
-    /// add to [`IdCounts::other`] (see [`IdCounts::settle`]).
+    /// add to [`IdCounts::others`].
     #[inline]
     pub fn channel_mut(&mut self, name: &[u8]) -> &mut ChannelCounts {
         match self.channel(name) {
@@ -218,7 +218,7 @@ pub(crate) enum CountedChannel {
     /// The index [`IdCounts::channel`] gave (below [`MAX_CHANNELS`]: kept
     /// small, as a reader's hot loop passes it around with every frame).
     At(u32),
-    /// Past [`MAX_CHANNELS`]: its frames are counted in [`IdCounts::other`].
+    /// Past [`MAX_CHANNELS`]: its frames are counted in [`IdCounts::others`].
     Other,
 }
 
