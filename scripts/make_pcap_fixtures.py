@@ -30,6 +30,8 @@ fixtures/s300.log (the S300 sequence: boot-up, SDO identity reads, EMCYs
                       run that first).
 - network-guarding.pcap  pcap, link type 227: fixtures/network-guarding.log,
                       its guard requests as remote frames (CAN_RTR_FLAG).
+- sync-gaps.pcap      pcap, link type 227: fixtures/sync-gaps.log (written by
+                      scripts/make_sync_fixtures.py, run that first).
 - mixed.pcapng        pcapng, big-endian section: link type 227 (id word
                       big-endian) and LINUX_SLL with CAN FD (a 72-byte
                       canfd_frame, FD by length, and protocol 0x000D), a
@@ -270,6 +272,22 @@ def main():
             [
                 (s, us, can_frame(">", word, data))
                 for s, us, word, data in log_frames("network-guarding.log")
+            ],
+        ),
+    )
+
+    # sync-gaps.pcap: fixtures/sync-gaps.log (SYNC, PDOs and heartbeats
+    # with periods, SYNC gaps), so that timing every frame decoded (pcap)
+    # can be held to timing the candump hot loop's lines.
+    write(
+        "sync-gaps.pcap",
+        pcap(
+            "<",
+            False,
+            227,
+            [
+                (s, us, can_frame(">", word, data))
+                for s, us, word, data in log_frames("sync-gaps.log")
             ],
         ),
     )

@@ -8,7 +8,7 @@ use crate::trace::format::candump_log;
 use crate::trace::lines::{self, Block, RawLine, too_long};
 use crate::trace::{
     Fold, FoldBuffers, Folded, Folds, Format, Frame, FrameKind, IdCounts, Inner, Interest, Parsed,
-    Reason, Scan, Timestamp,
+    Reason, Scan, TimedLine, Timestamp,
 };
 
 /// A frame read in another format than the file's: (its format, the file's).
@@ -48,6 +48,15 @@ pub(super) trait LineSink {
     fn take_id_counts(&mut self) -> IdCounts;
     /// The counts [`LineSink::take_id_counts`] lent, with the block's frames.
     fn put_id_counts(&mut self, ids: IdCounts);
+    /// With every frame timed: frames of a run the reader only counted
+    /// (also counted by `plain_frames`), on `channel`, each at its index
+    /// from `idx`, for their times.
+    fn timed_lines(
+        &mut self,
+        idx: u64,
+        channel: &[u8],
+        lines: &[TimedLine],
+    ) -> Result<(), OutputError>;
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     /// After a line outside a run or the frame that ended a run: `lines`
     /// lines of the block are read, the next begins at byte `pos`, and the
@@ -169,6 +178,12 @@ fn classify_lines(
             ids,
         );
         pos += run.bytes;
+        // Every frame timed: the run's plain lines before the frame that
+        // ended it (no run has folds then, so none goes on past it).
+        if !ids.timed_lines.is_empty() {
+            sink.timed_lines(idx, run.channel, &ids.timed_lines)?;
+            ids.timed_lines.clear();
+        }
         // A frame the interest lets stay inside a run with folds does not
         // end it: the reader goes on (with the same layout, so the same
         // channel), the stretches' counts and times adding up.

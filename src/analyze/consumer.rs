@@ -20,14 +20,16 @@ use super::monitor::{Carried, Monitors, TakenFold};
 use super::nodes::Nodes;
 use super::options::Options;
 use super::sink::Sink;
-use super::traffic::Traffic;
+use super::traffic::{SyncMissed, Traffic};
 use crate::canopen::profile::Profile;
 use crate::canopen::{NodeId, emcy};
 use crate::timeline::At;
 use crate::trace::can_error::ErrorFrame;
 use crate::trace::deltas::TimeMode;
 use crate::trace::ethercat::CoeMessage;
-use crate::trace::{FoldBuffers, Format, Frame, FrameKind, IdCounts, Interest, Reason, Timestamp};
+use crate::trace::{
+    FoldBuffers, Format, Frame, FrameKind, IdCounts, Interest, Reason, TimedLine, Timestamp,
+};
 
 /// Turns classified lines into timelines, events and counts, in line order.
 pub(super) struct Consumer<'r, 'l, E: Write> {
@@ -495,15 +497,20 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             at,
         );
         if let Some(gap) = gap {
-            let mut told = vec![Told {
-                channel: String::from_utf8_lossy(frame.channel).into_owned(),
-                at,
-                bus: Bus::SyncMissed(gap),
-            }];
-            let (_, _, _, emit) = parts!(self);
-            emit.bus(&mut told)?;
+            self.sync_missed(frame.channel, at, gap)?;
         }
         Ok(!self.wanted.interest.wants(frame.id, frame.extended))
+    }
+
+    /// A gap in SYNC, ended at `at`: told.
+    fn sync_missed(&mut self, channel: &[u8], at: At, gap: SyncMissed) -> Result<(), OutputError> {
+        let mut told = vec![Told {
+            channel: String::from_utf8_lossy(channel).into_owned(),
+            at,
+            bus: Bus::SyncMissed(gap),
+        }];
+        let (_, _, _, emit) = parts!(self);
+        emit.bus(&mut told)
     }
 
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted
@@ -573,6 +580,30 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn put_id_counts(&mut self, ids: IdCounts) {
         self.ids = ids;
+    }
+
+    fn timed_lines(
+        &mut self,
+        idx: u64,
+        channel: &[u8],
+        lines: &[TimedLine],
+    ) -> Result<(), OutputError> {
+        let Some(c) = self.traffic.channel_index(channel) else {
+            return Ok(());
+        };
+        for l in lines {
+            let at = At {
+                time: l.time.map(|t| t.timestamp()),
+                line: self.line_no(idx + l.idx),
+            };
+            if let Some(gap) = self
+                .traffic
+                .frame_in(c, l.id, l.extended, l.kind, l.len, at)
+            {
+                self.sync_missed(channel, at, gap)?;
+            }
+        }
+        Ok(())
     }
 
     fn lines(&mut self, n: u64) {

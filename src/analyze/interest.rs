@@ -228,20 +228,19 @@ pub(super) struct Wanted {
     pub(super) widened: u64,
     /// Set while workers run: where they read the interest from.
     pub(super) shared: Option<SharedInterest>,
-    /// `--timing`: what the readers decode (every frame), wider than what
-    /// the analysis wants; it never changes, so no block read with it
-    /// lacks a frame the analysis comes to want.
+    /// `--timing`: what the readers read, the analysis's interest with
+    /// every frame timed ([`Interest::every_frame`]), kept in step with it.
     pub(super) reading: Option<Interest>,
 }
 
 impl Wanted {
     pub(super) fn new(interest: Interest, every_frame: bool) -> Self {
         Wanted {
-            interest,
             generation: 0,
             widened: 0,
             shared: None,
-            reading: every_frame.then(Interest::all),
+            reading: every_frame.then(|| interest.every_frame()),
+            interest,
         }
     }
 
@@ -257,8 +256,7 @@ impl Wanted {
         let before = self.interest.clone();
         add(&mut self.interest);
         if self.interest != before {
-            self.publish();
-            self.widened_now();
+            self.changed(true);
         }
     }
 
@@ -268,7 +266,7 @@ impl Wanted {
     /// they parsed with the wider one stays good.
     pub(super) fn narrow(&mut self, remove: impl FnOnce(&mut Interest) -> bool) {
         if remove(&mut self.interest) {
-            self.publish();
+            self.changed(false);
         }
     }
 
@@ -276,15 +274,32 @@ impl Wanted {
     /// it are decoded from here on.
     pub(super) fn add_emcy_id(&mut self, id: u32, extended: bool) {
         add_emcy_id(&mut self.interest, id, extended);
-        self.publish();
-        self.widened_now();
+        self.changed(true);
     }
 
-    /// The interest grew: blocks read before may lack frames it wants, so
-    /// they are read again, unless the readers decode every frame.
+    /// The interest grew: blocks read before may lack frames it wants
+    /// decoded (with every frame timed, they have them only timed), so
+    /// they are read again.
     fn widened_now(&mut self) {
-        if self.reading.is_none() {
-            self.widened = self.generation;
+        self.widened = self.generation;
+    }
+
+    /// The analysis's interest changed (`widened`: it may have grown):
+    /// the workers read with the new one, and blocks read before it grew
+    /// are read again. With `--timing` the readers' interest follows it,
+    /// and when that stays the same (a content filter changed, which it
+    /// has none of) nothing else changes.
+    fn changed(&mut self, widened: bool) {
+        if let Some(reading) = &mut self.reading {
+            let follows = self.interest.every_frame();
+            if *reading == follows {
+                return;
+            }
+            *reading = follows;
+        }
+        self.publish();
+        if widened {
+            self.widened_now();
         }
     }
 

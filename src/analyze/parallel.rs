@@ -18,7 +18,7 @@ use crate::trace::detect::Detector;
 use crate::trace::lines::{Block, BlockReader};
 use crate::trace::{
     Fold, FoldBuffers, Folded, Frame, FrameKind, IdCounts, Inner, Interest, Payload, Reason,
-    Timestamp,
+    TimedLine, Timestamp,
 };
 
 /// What a worker keeps of a line for the consumer.
@@ -46,6 +46,13 @@ enum BlockRecord {
     /// A wanted frame that only moves the input's first/last time (already
     /// counted in `plain_frames`).
     Time(Timestamp),
+    /// With every frame timed: a run's frames only counted, `lines` of the
+    /// block's timed lines, on `channel` of the channel bytes.
+    TimedLines {
+        idx: u64,
+        channel: Range<usize>,
+        lines: Range<usize>,
+    },
     /// A run with folded frames ([`FoldedRun`]): its channel is `channel`
     /// of the channel bytes, its folds and frames those of the block's.
     Folded {
@@ -92,6 +99,8 @@ struct BlockResult {
     folds: Vec<Fold>,
     folded: Vec<Folded>,
     inner: Vec<Inner>,
+    /// The timed lines of the block's [`BlockRecord::TimedLines`].
+    timed_lines: Vec<TimedLine>,
 }
 
 /// What a worker counted of a block's lines (or of its lines up to a
@@ -160,6 +169,7 @@ struct Spare {
     folded: Vec<Folded>,
     inner: Vec<Inner>,
     ids: IdCounts,
+    timed_lines: Vec<TimedLine>,
 }
 
 impl BlockResult {
@@ -174,9 +184,11 @@ impl BlockResult {
             mut folded,
             mut inner,
             mut ids,
+            mut timed_lines,
             ..
         } = self;
         ids.clear();
+        timed_lines.clear();
         records.clear();
         cuts.clear();
         channels.clear();
@@ -192,6 +204,7 @@ impl BlockResult {
             folded,
             inner,
             ids,
+            timed_lines,
         }
     }
 }
@@ -281,6 +294,25 @@ impl LineSink for Recorder {
 
     fn put_id_counts(&mut self, ids: IdCounts) {
         self.result.ids = ids;
+    }
+
+    fn timed_lines(
+        &mut self,
+        idx: u64,
+        channel: &[u8],
+        lines: &[TimedLine],
+    ) -> Result<(), OutputError> {
+        self.flush_time();
+        let c = self.result.channels.len();
+        self.result.channels.extend_from_slice(channel);
+        let at = self.result.timed_lines.len();
+        self.result.timed_lines.extend_from_slice(lines);
+        self.result.records.push(BlockRecord::TimedLines {
+            idx,
+            channel: c..self.result.channels.len(),
+            lines: at..self.result.timed_lines.len(),
+        });
+        Ok(())
     }
 
     fn lines(&mut self, n: u64) {
@@ -432,6 +464,15 @@ impl<E: Write> Consumer<'_, '_, E> {
                 BlockRecord::Malformed { idx, reason } => self.malformed(idx, reason),
                 BlockRecord::Warning { idx, reason } => self.warning(idx, reason),
                 BlockRecord::Time(t) => self.time(t),
+                BlockRecord::TimedLines {
+                    idx,
+                    channel,
+                    lines,
+                } => {
+                    let channel = r.channels.get(channel).unwrap_or_default();
+                    let lines = r.timed_lines.get(lines).unwrap_or_default();
+                    self.timed_lines(idx, channel, lines)?;
+                }
                 BlockRecord::Folded {
                     idx,
                     plain,
@@ -590,6 +631,7 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             folded: spare.folded,
                             inner: spare.inner,
                             ids: spare.ids,
+                            timed_lines: spare.timed_lines,
                         },
                     };
                     // A recorder never fails: it only collects.

@@ -5,14 +5,16 @@
 //!
 //! The counts come from the readers ([`IdCounts`]: every frame by channel
 //! and identifier, on every run). With `--timing` every frame of the input
-//! also comes here to be timed (the readers then decode every line's time
-//! and data, which the default path spares), and a SYNC producer that skips
-//! cycles is a `sync_missed` event ([`Traffic::frame`] says when).
+//! also comes here to be timed: the frames the analysis decodes, and the
+//! others with their times only (the candump hot loop's
+//! [`TimedLine`](crate::trace::TimedLine)s; the other readers decode
+//! them), and a SYNC producer that skips cycles is a `sync_missed` event
+//! ([`Traffic::frame`] says when).
 //!
 //! SYNC is not timed without `--timing`: decoding every SYNC frame of a
 //! 1 kHz bus cost the default path 40-50% more instructions (callgrind,
-//! the bench's bus traces), against a budget of 5%. Cheap SYNC timing
-//! needs the readers to fold SYNC runs with their interval statistics.
+//! the bench's bus traces), against a budget of 5%. The timed lines would
+//! carry it cheaply, but they come with `--timing` only.
 //!
 //! Memory is bounded per identifier: counts, running sums and a thinned
 //! sample of at most 256 intervals for the median, nothing per frame.
@@ -173,6 +175,13 @@ impl Traffic {
     }
 
     fn channel(&mut self, name: &[u8]) -> Option<&mut ChannelTraffic> {
+        let i = self.channel_index(name)?;
+        self.channels.get_mut(i)
+    }
+
+    /// The index of channel `name` for [`Traffic::frame_in`], made on its
+    /// first frame; `None` past [`MAX_CHANNELS`].
+    pub(crate) fn channel_index(&mut self, name: &[u8]) -> Option<usize> {
         let i = match self.channels.get(self.last) {
             Some(c) if *c.name == *name => self.last,
             _ => match self.channels.iter().position(|c| *c.name == *name) {
@@ -187,7 +196,7 @@ impl Traffic {
             },
         };
         self.last = i;
-        self.channels.get_mut(i)
+        Some(i)
     }
 
     /// An error frame on `channel`: with `--timing`, bits on the wire.
@@ -212,8 +221,25 @@ impl Traffic {
         len: u8,
         at: At,
     ) -> Option<SyncMissed> {
+        let c = self.channel_index(channel)?;
+        self.frame_in(c, id, extended, kind, len, at)
+    }
+
+    /// [`Traffic::frame`] on the channel [`Traffic::channel_index`] gave
+    /// (a run of frames on one channel finds it once: comparing its name
+    /// for every frame was a tenth of `--timing`'s instructions).
+    #[inline]
+    pub(crate) fn frame_in(
+        &mut self,
+        c: usize,
+        id: u32,
+        extended: bool,
+        kind: FrameKind,
+        len: u8,
+        at: At,
+    ) -> Option<SyncMissed> {
         let room = self.ids < MAX_IDS;
-        let c = self.channel(channel)?;
+        let c = self.channels.get_mut(c)?;
         c.load.frame(at.time, bits(extended, kind, len));
         let known = c.ids.len();
         let i = c.id(id, extended, room)?;
@@ -452,7 +478,13 @@ impl IdReport {
 /// A span in microseconds, for the statistics (exact to well under a
 /// microsecond for any gap a trace can hold).
 fn micros(s: Span) -> f64 {
-    s.attos() as f64 / 1e12
+    // Through i64 when it fits (gaps under 9 s): converting an i128 to
+    // f64 is a library call, a tenth of `--timing`'s instructions.
+    let attos = s.attos();
+    match i64::try_from(attos) {
+        Ok(a) => a as f64 / 1e12,
+        Err(_) => attos as f64 / 1e12,
+    }
 }
 
 impl Load {

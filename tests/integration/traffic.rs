@@ -266,3 +266,50 @@ fn every_frame_of_every_fixture_is_counted_by_channel_and_id() {
         }
     }
 }
+
+/// With `--timing`, the candump hot loop hands the lines it only counts
+/// over with their times instead of decoding them; the pcap reader decodes
+/// every frame. The same frames in either must time the same: every
+/// identifier's count, period, jitter, largest gap and misses, and the load.
+#[test]
+fn timing_is_the_same_from_the_hot_loop_and_from_decoded_frames() {
+    for twin in [
+        "fixtures/sync-gaps",
+        "fixtures/network-guarding",
+        "fixtures/sdo-startup",
+    ] {
+        let (log, pcap) = (format!("{twin}.log"), format!("{twin}.pcap"));
+        let timing = |path: &str| {
+            let objects = ndjson(["--bitrate", "500k", path]);
+            let channels = of_type(&objects, "channel");
+            assert_eq!(channels.len(), 1, "{path}");
+            let c = channels[0].clone();
+            let gaps: Vec<_> = of_type(&objects, "sync_missed")
+                .iter()
+                .map(|g| {
+                    (
+                        g["line"].clone(),
+                        g["start_line"].clone(),
+                        g["missed"].clone(),
+                    )
+                })
+                .collect();
+            (
+                c["ids"].clone(),
+                c["load"].clone(),
+                c["frames"].clone(),
+                gaps,
+            )
+        };
+        let got = timing(&log);
+        assert!(!got.1.is_null(), "{log}: a load with a bit rate");
+        if twin.ends_with("sync-gaps") {
+            let periods = got.0.as_array().map_or(0, |ids| {
+                ids.iter().filter(|i| !i["period"].is_null()).count()
+            });
+            assert!(periods > 1, "{log}: ids with periods");
+            assert_eq!(got.3.len(), 2, "{log}: the two SYNC gaps");
+        }
+        assert_eq!(got, timing(&pcap), "{twin}");
+    }
+}

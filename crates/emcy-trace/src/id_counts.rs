@@ -5,6 +5,8 @@
 //! identifier) comes from these counts on every run, not only when every
 //! frame is decoded.
 
+use crate::{FrameKind, Ticks};
+
 /// Channels counted; frames on more are counted in [`IdCounts::others`], so
 /// a hostile input cannot grow the counts without bound (each channel holds
 /// 16 KiB for its standard ids).
@@ -37,6 +39,29 @@ pub struct IdCounts {
     /// Where [`IdCounts::channel_mut`] counts frames on channels past
     /// [`MAX_CHANNELS`] (added to `other` when asked).
     overflow: Option<Box<ChannelCounts>>,
+    /// With every frame timed ([`Interest::every_frame`](crate::Interest::every_frame)):
+    /// the lines a reader's hot loop counted without decoding them, with
+    /// their times, for the caller to time; the caller empties it after
+    /// each run ([`Run::channel`](crate::Run::channel) names their channel).
+    pub timed_lines: Vec<TimedLine>,
+}
+
+/// A frame a reader only counted while every frame is timed: what timing
+/// it needs, without its data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TimedLine {
+    /// Its line, as an index into the run's lines.
+    pub idx: u64,
+    /// Its time, as the line wrote it (`None`: too many digits to read so).
+    pub time: Option<Ticks>,
+    /// Its identifier.
+    pub id: u32,
+    /// Whether the identifier is a 29-bit one.
+    pub extended: bool,
+    /// Data, remote or FD.
+    pub kind: FrameKind,
+    /// Its data length.
+    pub len: u8,
 }
 
 /// One channel's counts.
@@ -107,12 +132,24 @@ impl IdCounts {
     /// add to [`IdCounts::others`].
     #[inline]
     pub fn channel_mut(&mut self, name: &[u8]) -> &mut ChannelCounts {
-        match self.channel(name) {
-            Some(i) if i < self.channels.len() => &mut self.channels[i],
-            _ => self
-                .overflow
-                .get_or_insert_with(|| Box::new(ChannelCounts::new(b""))),
-        }
+        self.run_parts(name).0
+    }
+
+    /// [`IdCounts::channel_mut`] and the timed lines, for a reader's run.
+    #[inline]
+    pub fn run_parts(&mut self, name: &[u8]) -> (&mut ChannelCounts, &mut Vec<TimedLine>) {
+        let i = self.channel(name);
+        let IdCounts {
+            channels,
+            overflow,
+            timed_lines,
+            ..
+        } = self;
+        let counts = match i.and_then(|i| channels.get_mut(i)) {
+            Some(c) => c,
+            None => overflow.get_or_insert_with(|| Box::new(ChannelCounts::new(b""))),
+        };
+        (counts, timed_lines)
     }
 
     /// Moves what [`IdCounts::channel_mut`] counted past the bound into
@@ -183,6 +220,7 @@ impl IdCounts {
             c.error_frames = 0;
             c.other = 0;
         }
+        self.timed_lines.clear();
         // A cleared channel without frames is no channel: dropped when it
         // is not reused, by name, in [`IdCounts::channel`] (kept here only
         // for its memory).

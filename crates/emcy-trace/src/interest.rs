@@ -40,6 +40,8 @@ pub struct Interest {
     /// CAN FD frames on wanted ids are wanted too (the analysis decodes no
     /// FD frame; counting every frame per id and timing it needs them).
     fd: bool,
+    /// Every frame is timed ([`Interest::every_frame`]).
+    every_frame: bool,
 }
 
 /// candump's flag for an error frame in an extended id.
@@ -140,6 +142,7 @@ impl Interest {
             inside: [0; 32],
             errors: true,
             fd: true,
+            every_frame: false,
         }
     }
 
@@ -157,7 +160,34 @@ impl Interest {
             inside: [0; 32],
             errors: false,
             fd: false,
+            every_frame: false,
         }
+    }
+
+    /// This interest with every frame timed: every frame is wanted
+    /// ([`Interest::wants`]), but a reader that can time a line without
+    /// decoding it (the candump hot loop) decodes only the frames this
+    /// interest [`decodes`](Interest::decodes) and hands the others over
+    /// with their times ([`IdCounts::timed_lines`](crate::IdCounts::timed_lines)).
+    /// No frame is only timed or folded: every one counts on its own.
+    pub fn every_frame(&self) -> Interest {
+        Interest {
+            filtered: [0; 32],
+            foldable: [0; 32],
+            fold_masks: Vec::new(),
+            untimed: [0; 32],
+            inside: [0; 32],
+            errors: true,
+            fd: true,
+            every_frame: true,
+            ..self.clone()
+        }
+    }
+
+    /// Whether every frame is timed ([`Interest::every_frame`]).
+    #[inline]
+    pub fn times_every_frame(&self) -> bool {
+        self.every_frame
     }
 
     /// Puts wanted standard ids under a content filter (one for all).
@@ -355,9 +385,17 @@ impl Interest {
         }
     }
 
-    /// Whether a frame on `id` is wanted.
+    /// Whether a frame on `id` is wanted: decoded, or with every frame
+    /// timed, any frame.
     #[inline]
     pub fn wants(&self, id: u32, extended: bool) -> bool {
+        self.every_frame || self.decodes(id, extended)
+    }
+
+    /// Whether a frame on `id` is to be decoded: [`Interest::wants`] but
+    /// for the frames only timed when every frame is.
+    #[inline]
+    pub fn decodes(&self, id: u32, extended: bool) -> bool {
         if extended {
             return self.all_extended
                 || (self.errors && id & ERROR_FLAG != 0)
@@ -404,6 +442,32 @@ mod tests {
         // Only ids with candump's error flag: other extended ids are not.
         assert!(!i.wants(0x0000_0004, true));
         assert!(!i.wants(0x1234_5678, true));
+    }
+
+    #[test]
+    fn with_every_frame_timed_every_frame_is_wanted_and_only_its_own_decoded() {
+        let mut i = Interest::none();
+        i.add_standard_range(0x700..=0x77F);
+        i.filter_content(0x700..=0x77F, ContentFilter(|_, d| d.head() == [0]));
+        i.fold(0x701..=0x77F);
+        i.untime(0x181);
+        i.keep_inside(0x81..=0xFF);
+        assert!(!i.times_every_frame());
+        let every = i.every_frame();
+        assert!(every.times_every_frame());
+        for (id, extended) in [(0x181, false), (0x7FF, false), (0x1234_5678, true)] {
+            assert!(every.wants(id, extended), "{id:#x}");
+            assert_eq!(
+                every.decodes(id, extended),
+                i.wants(id, extended),
+                "{id:#x}"
+            );
+        }
+        assert!(every.decodes(0x705, false));
+        // No frame is only timed, folded, untimed or kept inside a run.
+        assert!(!every.filters(0x705) && !every.folds(0x705));
+        assert!(every.times(0x181, false) && !every.keeps_inside(0x85));
+        assert!(every.wants_error_frames() && every.wants_fd());
     }
 
     #[test]

@@ -64,7 +64,7 @@ pub use fold::{Fold, FoldBuffers, FoldRule, Folded, Folds, HexText, Inner};
 pub use format::Format;
 pub use frame::NumberedChannel;
 pub use frame::{Frame, FrameKind, HexBytes, Payload};
-pub use id_counts::{FrameKey, IdCounts};
+pub use id_counts::{FrameKey, IdCounts, TimedLine};
 pub use interest::{ContentFilter, DataHead, Interest};
 pub use time::{Span, Step, Ticks, Timestamp};
 pub use token::{is_blank, show_token, split_token, trim_end, trim_start};

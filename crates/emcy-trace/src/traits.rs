@@ -60,6 +60,9 @@ pub struct Run<'a> {
     /// The channel of the frames folded into the run's [`Folds`] (counted
     /// in `timed`; a run has one layout, so one channel).
     pub fold_channel: &'a [u8],
+    /// The channel of the lines the run added to
+    /// [`IdCounts::timed_lines`] (counted in `plain`).
+    pub channel: &'a [u8],
 }
 
 impl Run<'_> {

@@ -13,7 +13,8 @@ use crate::Format;
 use crate::time::MAX_FRACTION_DIGITS;
 use crate::{
     DataHead, Folds, Frame, FrameKey, FrameKind, HexText, IdCounts, Interest, LineParser, Parsed,
-    Payload, Reason, Run, Scan, Ticks, Timestamp, is_blank, split_token, trim_end, trim_start,
+    Payload, Reason, Run, Scan, Ticks, TimedLine, Timestamp, is_blank, split_token, trim_end,
+    trim_start,
 };
 use crate::{hex, scan};
 
@@ -93,7 +94,13 @@ impl LineParser for CandumpLogParser {
         if !layout.sep.matches(bytes, layout.close) {
             return run;
         }
-        let channel = ids.channel_mut(layout.channel(bytes));
+        let (channel, timed_lines) = ids.run_parts(layout.channel(bytes));
+        // With every frame timed, each line only counted is handed over
+        // with its time.
+        let every_frame = interest.times_every_frame();
+        if every_frame {
+            run.channel = layout.channel(bytes);
+        }
         while let Some(rest) = bytes.get(run.bytes..)
             && let Some((shape, len)) = layout.line(rest)
             && len <= max_line
@@ -104,6 +111,16 @@ impl LineParser for CandumpLogParser {
             match shape.kind(line, interest) {
                 Kind::Plain => {
                     channel.count(shape.id, shape.extended);
+                    if every_frame {
+                        timed_lines.push(TimedLine {
+                            idx: run.plain,
+                            time: shape.ticks(line),
+                            id: shape.id,
+                            extended: shape.extended,
+                            kind: shape.kind,
+                            len: (shape.data.len() / 2) as u8,
+                        });
+                    }
                     run.plain += 1;
                 }
                 Kind::Timed => {
@@ -464,6 +481,11 @@ impl Shape {
             kind => kind,
         };
         match kind {
+            // With every frame timed, one outside the hot loop is decoded
+            // (as every frame once was: it is rare there).
+            Kind::Plain if interest.times_every_frame() => {
+                self.frame(line, true).map_or(Scan::Parse, Scan::Frame)
+            }
             Kind::Plain => Scan::Plain(self.key(line)),
             Kind::Timed => self
                 .time(line)
@@ -477,7 +499,7 @@ impl Shape {
     /// timed (a run needs only the first and last of those).
     #[inline(always)]
     fn kind<'a>(&self, line: &'a [u8], interest: &Interest) -> Kind<'a> {
-        if !interest.wants(self.id, self.extended) {
+        if !interest.decodes(self.id, self.extended) {
             return Kind::Plain;
         }
         if self.kind == FrameKind::Data && !self.extended && interest.folds(self.id) {
@@ -1362,6 +1384,51 @@ mod tests {
             0,
             "longer than max_line"
         );
+    }
+
+    #[test]
+    fn with_every_frame_timed_the_hot_loop_hands_counted_lines_over_with_their_times() {
+        let block = b"(1.000001) can0 181#00\n(1.000002) can0 281#0102 T\n\
+                      (1.000003) can0 381#\n(1.000004) can0 081#10\n";
+        let mut interest = Interest::none();
+        interest.add_standard(0x81);
+        let every = interest.every_frame();
+        let mut p = CandumpLogParser::new();
+        p.scan(b"(9.000000) can0 080#", &interest);
+        let (folds, ids) = (&mut Folds::default(), &mut IdCounts::new());
+        let run = p.run(block, 100, &every, folds, ids);
+        assert_eq!((run.plain, run.channel), (3, &b"can0"[..]));
+        assert_eq!(run.frame.map(|f| f.id), Some(0x81), "its own still decoded");
+        let got: Vec<_> = ids
+            .timed_lines
+            .iter()
+            .map(|l| {
+                (
+                    l.idx,
+                    l.time.map(|t| t.timestamp().to_string()),
+                    l.id,
+                    l.kind,
+                    l.len,
+                )
+            })
+            .collect();
+        let at = |us: u8| Some(format!("1.00000{us}"));
+        assert_eq!(
+            got,
+            vec![
+                (0, at(1), 0x181, FrameKind::Data, 1),
+                (1, at(2), 0x281, FrameKind::Data, 2),
+                (2, at(3), 0x381, FrameKind::Data, 0),
+            ]
+        );
+        // Without every frame timed, none is handed over.
+        let ids = &mut IdCounts::new();
+        p.run(block, 100, &interest, folds, ids);
+        assert!(ids.timed_lines.is_empty());
+        // Outside the hot loop, a line only counted is decoded instead.
+        let line = b"(1.000001) can0 181#00";
+        assert!(matches!(p.scan(line, &every), Scan::Frame(f) if f.time.is_some()));
+        assert!(matches!(p.scan(line, &interest), Scan::Plain(_)));
     }
 
     #[test]
