@@ -271,15 +271,17 @@ impl Traffic {
         out
     }
 
-    /// The channels' reports, in the order they first had a frame: the
-    /// counts `ids` has, with the timing followed here; `bit_rate` from
-    /// `--bitrate` or the trace's header.
+    /// The channels' reports, by name as the node reports are (the order
+    /// channels first had a frame in is the binary readers' to know only
+    /// for the frames they hand on): the counts `ids` has, with the timing
+    /// followed here; `bit_rate` from `--bitrate` or the trace's header.
     pub(crate) fn into_report(
         mut self,
         ids: &IdCounts,
         bit_rate: Option<u32>,
     ) -> Vec<ChannelReport> {
-        ids.channels()
+        let mut reports: Vec<ChannelReport> = ids
+            .channels()
             .map(|counts| {
                 let timed = self
                     .channels
@@ -304,7 +306,9 @@ impl Traffic {
                     other_ids: counts.other,
                 }
             })
-            .collect()
+            .collect();
+        reports.sort_by(|a, b| a.channel.cmp(&b.channel));
+        reports
     }
 }
 

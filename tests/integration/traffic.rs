@@ -243,12 +243,32 @@ fn the_chart_has_a_bus_strip_where_the_bus_had_trouble() {
 /// Every frame of every fixture is counted once on its channel, by its id,
 /// whatever the reader and whether the analysis decoded it or only counted
 /// it: the channels' frames add up to the input's, and each channel's to
-/// its ids'.
+/// its ids'; timing every frame counts the same, channels in the same order.
 #[test]
 fn every_frame_of_every_fixture_is_counted_by_channel_and_id() {
+    // Each channel's name, frames, and (cob_id, count) per id.
+    type Counts = Vec<(Value, Value, Vec<(Value, Value)>)>;
+    let counts = |objects: &[Value]| -> Counts {
+        of_type(objects, "channel")
+            .iter()
+            .map(|c| {
+                let ids = c["ids"].as_array().cloned().unwrap_or_default();
+                let ids = ids
+                    .iter()
+                    .map(|i| (i["cob_id"].clone(), i["count"].clone()));
+                (c["channel"].clone(), c["frames"].clone(), ids.collect())
+            })
+            .collect()
+    };
     for fixture in crate::support::golden::fixtures() {
         let path = fixture.to_string_lossy().into_owned();
         let objects = ndjson([path.as_str()]);
+        let timed = ndjson(["--timing", path.as_str()]);
+        assert_eq!(
+            counts(&objects),
+            counts(&timed),
+            "{path}: --timing counts otherwise"
+        );
         let input = objects
             .iter()
             .rev()
