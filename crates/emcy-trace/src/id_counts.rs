@@ -36,8 +36,8 @@ pub struct IdCounts {
     last: usize,
     /// Frames on channels past [`MAX_CHANNELS`] ([`IdCounts::others`]).
     other: u64,
-    /// Where [`IdCounts::channel_mut`] counts frames on channels past
-    /// [`MAX_CHANNELS`] (added to `other` when asked).
+    /// Where [`IdCounts::run_parts`] counts frames on channels past
+    /// [`MAX_CHANNELS`] (part of [`IdCounts::others`]).
     overflow: Option<Box<ChannelCounts>>,
     /// With every frame timed ([`Interest::every_frame`](crate::Interest::every_frame)):
     /// the lines a reader's hot loop counted without decoding them, with
@@ -119,23 +119,10 @@ impl IdCounts {
         Some(i)
     }
 
-    /// The index of channel `name` for [`IdCounts::count_at`]; past
-    /// [`MAX_CHANNELS`] one that counts in `other`.
-    #[inline]
-    pub fn index(&mut self, name: &[u8]) -> usize {
-        self.channel(name).unwrap_or(MAX_CHANNELS)
-    }
-
-    /// The counts of channel `name`, for a reader whose run of lines is
-    /// on one channel: it finds them once and counts each line with
-    /// [`ChannelCounts::count`]. Past [`MAX_CHANNELS`], counts that only
-    /// add to [`IdCounts::others`].
-    #[inline]
-    pub fn channel_mut(&mut self, name: &[u8]) -> &mut ChannelCounts {
-        self.run_parts(name).0
-    }
-
-    /// [`IdCounts::channel_mut`] and the timed lines, for a reader's run.
+    /// The counts of channel `name` and the timed lines, for a reader
+    /// whose run of lines is on one channel: it finds the counts once and
+    /// counts each line with [`ChannelCounts::count`]. Past
+    /// [`MAX_CHANNELS`], counts that only add to [`IdCounts::others`].
     #[inline]
     pub fn run_parts(&mut self, name: &[u8]) -> (&mut ChannelCounts, &mut Vec<TimedLine>) {
         let i = self.channel(name);
@@ -150,14 +137,6 @@ impl IdCounts {
             None => overflow.get_or_insert_with(|| Box::new(ChannelCounts::new(b""))),
         };
         (counts, timed_lines)
-    }
-
-    /// Moves what [`IdCounts::channel_mut`] counted past the bound into
-    /// `other`.
-    fn settle(&mut self) {
-        if let Some(o) = self.overflow.take() {
-            self.other += o.frames();
-        }
     }
 
     /// One frame.
@@ -190,10 +169,6 @@ impl IdCounts {
     /// Adds `other`'s counts (the next block's) to these: channels new to
     /// these come after theirs, in `other`'s order.
     pub fn add(&mut self, other: &IdCounts) {
-        self.settle();
-        if let Some(o) = &other.overflow {
-            self.other += o.frames();
-        }
         for theirs in &other.channels {
             let frames = theirs.frames();
             if frames == 0 {
@@ -208,7 +183,7 @@ impl IdCounts {
                 ours.add(theirs);
             }
         }
-        self.other += other.other;
+        self.other += other.others();
     }
 
     /// Every count back to zero, the channels' memory kept for the next
@@ -369,7 +344,7 @@ impl ChannelCounts {
 pub(crate) mod testing {
     use std::collections::BTreeMap;
 
-    use super::{FrameKey, IdCounts};
+    use super::IdCounts;
     #[cfg(test)]
     use crate::{ContentFilter, FrameSource, Interest, Next, Parsed};
     use crate::{Frame, FrameKind};
@@ -413,11 +388,7 @@ pub(crate) mod testing {
         if f.kind == FrameKind::Error {
             ids.error_frame(f.channel);
         } else {
-            ids.count(FrameKey {
-                channel: f.channel,
-                id: f.id,
-                extended: f.extended,
-            });
+            ids.count(f.key());
         }
     }
 
@@ -625,6 +596,23 @@ mod tests {
         let ch = e.channels().next().expect("one channel");
         assert_eq!((ch.ids().count(), ch.other), (MAX_EXTENDED, 5));
         assert_eq!(e.frames(), MAX_EXTENDED as u64 + 5);
+    }
+
+    #[test]
+    fn a_run_on_a_channel_past_the_bound_counts_in_others_and_adds_up() {
+        let mut block = IdCounts::new();
+        for i in 0..MAX_CHANNELS {
+            block.count(key(format!("ch{i}").as_bytes(), 1, false));
+        }
+        let (past, _) = block.run_parts(b"one too many");
+        past.count(0x181, false);
+        past.count(0x181, false);
+        assert_eq!((block.others(), block.frames()), (2, MAX_CHANNELS as u64 + 2));
+        let mut input = IdCounts::new();
+        input.add(&block);
+        input.add(&block);
+        assert_eq!(input.others(), 4);
+        assert_eq!(input.frames(), 2 * (MAX_CHANNELS as u64 + 2));
     }
 
     #[test]
