@@ -607,7 +607,10 @@ mod tests {
         let (past, _) = block.run_parts(b"one too many");
         past.count(0x181, false);
         past.count(0x181, false);
-        assert_eq!((block.others(), block.frames()), (2, MAX_CHANNELS as u64 + 2));
+        assert_eq!(
+            (block.others(), block.frames()),
+            (2, MAX_CHANNELS as u64 + 2)
+        );
         let mut input = IdCounts::new();
         input.add(&block);
         input.add(&block);
