@@ -42,6 +42,10 @@ pub struct Interest {
     fd: bool,
     /// Every frame is timed ([`Interest::every_frame`]).
     every_frame: bool,
+    /// Standard ids whose frames are only timed, one by one: a reader
+    /// that can time a line without decoding it hands it over so
+    /// ([`Interest::hand_over`]), the others decode it.
+    handed: [u64; 32],
 }
 
 /// candump's flag for an error frame in an extended id.
@@ -143,6 +147,7 @@ impl Interest {
             errors: true,
             fd: true,
             every_frame: false,
+            handed: [0; 32],
         }
     }
 
@@ -161,6 +166,7 @@ impl Interest {
             errors: false,
             fd: false,
             every_frame: false,
+            handed: [0; 32],
         }
     }
 
@@ -168,11 +174,12 @@ impl Interest {
     /// ([`Interest::wants`]), but a reader that can time a line without
     /// decoding it (the candump hot loop) decodes only the frames this
     /// interest [`decodes`](Interest::decodes) and hands the others over
-    /// with their times ([`IdCounts::timed_lines`](crate::IdCounts::timed_lines)).
-    /// No frame is only timed or folded: every one counts on its own.
+    /// with their times ([`IdCounts::timed_lines`](crate::IdCounts::timed_lines)),
+    /// those the content filter only times too. Readers that cannot do so
+    /// decode every frame: [`Interest::timed_only`] is then `false`. No
+    /// frame is folded: every one counts on its own.
     pub fn every_frame(&self) -> Interest {
         Interest {
-            filtered: [0; 32],
             foldable: [0; 32],
             fold_masks: Vec::new(),
             untimed: [0; 32],
@@ -188,6 +195,27 @@ impl Interest {
     #[inline]
     pub fn times_every_frame(&self) -> bool {
         self.every_frame
+    }
+
+    /// Wants the frames on standard `id` for their times alone, each one:
+    /// a reader that can time a line without decoding it (the candump hot
+    /// loop) hands it over with its time
+    /// ([`IdCounts::timed_lines`](crate::IdCounts::timed_lines)) and goes
+    /// on, the others decode the frame. They move no input time
+    /// ([`Interest::untime`]): they are counted as the lines around them.
+    pub fn hand_over(&mut self, id: u32) {
+        self.add_standard(id);
+        self.untime(id);
+        if let Some(word) = self.handed.get_mut((id >> 6) as usize) {
+            *word |= 1 << (id & 63);
+        }
+    }
+
+    /// Whether frames on `id` are wanted for their times alone
+    /// ([`Interest::hand_over`]).
+    #[inline]
+    pub fn hands_over(&self, id: u32, extended: bool) -> bool {
+        !extended && bit(&self.handed, id)
     }
 
     /// Puts wanted standard ids under a content filter (one for all).
@@ -319,13 +347,16 @@ impl Interest {
     }
 
     /// Whether a frame on a wanted id is only to be timed: a standard id
-    /// under the content filter, and data it rejects.
+    /// under the content filter, and data it rejects; never with every
+    /// frame timed ([`Interest::every_frame`]).
     #[inline]
     pub fn timed_only(&self, id: u32, extended: bool, data: &[u8]) -> bool {
-        !extended && self.timed_only_head(id, DataHead::of(data))
+        !self.every_frame && !extended && self.timed_only_head(id, DataHead::of(data))
     }
 
-    /// [`Interest::timed_only`] for a standard id, from the data's head.
+    /// [`Interest::timed_only`] for a standard id, from the data's head,
+    /// whether every frame is timed or not: for a reader that hands such a
+    /// line over with its time then (the candump hot loop).
     #[inline]
     pub fn timed_only_head(&self, id: u32, head: DataHead) -> bool {
         bit(&self.filtered, id) && !(self.content.0)(id, head)
@@ -464,8 +495,13 @@ mod tests {
             );
         }
         assert!(every.decodes(0x705, false));
-        // No frame is only timed, folded, untimed or kept inside a run.
-        assert!(!every.filters(0x705) && !every.folds(0x705));
+        // No frame is folded, untimed or kept inside a run; one the filter
+        // rejects is only timed by a reader that hands it over with its
+        // time, the others decode it.
+        assert!(!every.folds(0x705));
+        assert!(i.timed_only(0x705, false, &[1]) && !every.timed_only(0x705, false, &[1]));
+        assert!(every.timed_only_head(0x705, DataHead::of(&[1])));
+        assert!(!every.timed_only_head(0x705, DataHead::of(&[0])));
         assert!(every.times(0x181, false) && !every.keeps_inside(0x85));
         assert!(every.wants_error_frames() && every.wants_fd());
     }

@@ -136,6 +136,24 @@ impl Ticks {
         let below = MAX_FRACTION_DIGITS.saturating_sub(usize::from(self.digits));
         i128::from(n) * i128::from(pow10(below))
     }
+
+    /// `n` ticks of this precision in attoseconds when that fits in an
+    /// `i64` (under 9.2 s), without 128-bit arithmetic.
+    #[inline]
+    pub fn attos_i64(self, n: u64) -> Option<i64> {
+        let below = MAX_FRACTION_DIGITS.saturating_sub(usize::from(self.digits));
+        n.checked_mul(pow10(below))
+            .and_then(|a| i64::try_from(a).ok())
+    }
+
+    /// `n` ticks of this precision as a span (of these digits, as
+    /// [`Timestamp::since`] gives between two times of them).
+    pub fn span(self, n: u64) -> Span {
+        Span {
+            atto: self.attos(n),
+            digits: self.digits,
+        }
+    }
 }
 
 /// 10^0 ..= 10^18.

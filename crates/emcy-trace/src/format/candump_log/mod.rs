@@ -94,13 +94,11 @@ impl LineParser for CandumpLogParser {
         if !layout.sep.matches(bytes, layout.close) {
             return run;
         }
-        let (channel, timed_lines) = ids.run_parts(layout.channel(bytes));
+        run.channel = layout.channel(bytes);
+        let (channel, timed_lines) = ids.run_parts(run.channel);
         // With every frame timed, each line only counted is handed over
         // with its time.
         let every_frame = interest.times_every_frame();
-        if every_frame {
-            run.channel = layout.channel(bytes);
-        }
         while let Some(rest) = bytes.get(run.bytes..)
             && let Some((shape, len)) = layout.line(rest)
             && len <= max_line
@@ -112,15 +110,15 @@ impl LineParser for CandumpLogParser {
                 Kind::Plain => {
                     channel.count(shape.id, shape.extended);
                     if every_frame {
-                        timed_lines.push(TimedLine {
-                            idx: run.plain,
-                            time: shape.ticks(line),
-                            id: shape.id,
-                            extended: shape.extended,
-                            kind: shape.kind,
-                            len: (shape.data.len() / 2) as u8,
-                        });
+                        // No line is only timed then (the content filter's
+                        // are handed over): its index is `plain`.
+                        timed_lines.push(shape.timed_line(line, run.plain));
                     }
+                    run.plain += 1;
+                }
+                Kind::Handed => {
+                    channel.count(shape.id, shape.extended);
+                    hand_over(timed_lines, shape, line, run.plain + run.timed);
                     run.plain += 1;
                 }
                 Kind::Timed => {
@@ -213,6 +211,16 @@ impl LineParser for CandumpLogParser {
     fn take_annotated(&mut self) -> bool {
         std::mem::take(&mut self.annotated)
     }
+}
+
+/// A line of [`CandumpLogParser::run`] on an id the interest hands over
+/// ([`Interest::hand_over`]): with its time, line `idx` of the run. Not
+/// inlined: in the loop's body it made every plain line 30 instructions
+/// slower (callgrind, the bench's trace of 32 drives, which has no SYNC),
+/// and so did taking the shape by reference (10 instructions a line).
+#[inline(never)]
+fn hand_over(timed_lines: &mut Vec<TimedLine>, shape: Shape, line: &[u8], idx: u64) {
+    timed_lines.push(shape.timed_line(line, idx));
 }
 
 /// A line of [`CandumpLogParser::run`] on a foldable id: folded into
@@ -450,6 +458,19 @@ impl Shape {
         Ticks::new(value, (self.close - self.dot - 1) as u8)
     }
 
+    /// The line as a [`TimedLine`], line `idx` of its run.
+    #[inline]
+    fn timed_line(&self, line: &[u8], idx: u64) -> TimedLine {
+        TimedLine {
+            idx,
+            time: self.ticks(line),
+            id: self.id,
+            extended: self.extended,
+            kind: self.kind,
+            len: (self.data.len() / 2) as u8,
+        }
+    }
+
     /// The data's head ([`DataHead`]), its first three bytes parsed.
     #[inline]
     fn head(&self, line: &[u8]) -> Option<DataHead> {
@@ -481,11 +502,12 @@ impl Shape {
             kind => kind,
         };
         match kind {
-            // With every frame timed, one outside the hot loop is decoded
-            // (as every frame once was: it is rare there).
+            // A line to be timed, outside the hot loop, is decoded (as
+            // every frame once was: it is rare there).
             Kind::Plain if interest.times_every_frame() => {
                 self.frame(line, true).map_or(Scan::Parse, Scan::Frame)
             }
+            Kind::Handed => self.frame(line, true).map_or(Scan::Parse, Scan::Frame),
             Kind::Plain => Scan::Plain(self.key(line)),
             Kind::Timed => self
                 .time(line)
@@ -505,6 +527,9 @@ impl Shape {
         if self.kind == FrameKind::Data && !self.extended && interest.folds(self.id) {
             return Kind::Fold;
         }
+        if interest.hands_over(self.id, self.extended) {
+            return Kind::Handed;
+        }
         self.wanted(line, interest)
     }
 
@@ -518,7 +543,13 @@ impl Shape {
                 return Kind::Parse;
             };
             if interest.timed_only_head(self.id, head) {
-                return Kind::Timed;
+                // With every frame timed, handed over (not decoded: an
+                // SDO-heavy bus's segments are most of its lines).
+                return if interest.times_every_frame() {
+                    Kind::Handed
+                } else {
+                    Kind::Timed
+                };
             }
             let Some(data) = self.data(line) else {
                 return Kind::Parse;
@@ -544,6 +575,8 @@ impl Shape {
 /// [`Scan`] with a timed frame's time not yet converted.
 enum Kind<'a> {
     Plain,
+    /// Wanted for its time alone ([`Interest::hand_over`]).
+    Handed,
     Timed,
     Frame(Frame<'a>),
     /// A data frame on an id the interest folds (a reader that folds
@@ -1384,6 +1417,45 @@ mod tests {
             0,
             "longer than max_line"
         );
+    }
+
+    #[test]
+    fn lines_only_timed_and_handed_ids_are_handed_over_at_their_index_in_the_run() {
+        // 0x705 under a filter that keeps only boot-ups (data 00), 0x080
+        // handed over: a heartbeat is only timed, SYNC handed over.
+        let block = b"(1.000001) can0 705#05\n(1.000002) can0 080#\n\
+                      (1.000003) can0 181#01\n(1.000004) can0 705#05\n\
+                      (1.000005) can0 080#\n(1.000006) can0 705#00\n";
+        let mut interest = Interest::none();
+        interest.add_standard(0x705);
+        interest.filter_content(0x705..=0x705, ContentFilter(|_, d| d.head() == [0]));
+        interest.hand_over(0x080);
+        let mut p = CandumpLogParser::new();
+        p.scan(b"(9.000000) can0 080#", &interest);
+        let mut handed = |interest: &Interest| {
+            let (folds, ids) = (&mut Folds::default(), &mut IdCounts::new());
+            let run = p.run(block, 100, interest, folds, ids);
+            assert_eq!((run.plain + run.timed, run.channel), (5, &b"can0"[..]));
+            assert_eq!(run.frame.map(|f| f.data.as_slice().to_vec()), Some(vec![0]));
+            let lines: Vec<_> = ids.timed_lines.iter().map(|l| (l.idx, l.id)).collect();
+            lines
+        };
+        // SYNC alone on the default path, as lines 1 and 4 of the run.
+        assert_eq!(handed(&interest), vec![(1, 0x080), (4, 0x080)]);
+        // Every line with every frame timed, the heartbeats only timed too.
+        assert_eq!(
+            handed(&interest.every_frame()),
+            vec![(0, 0x705), (1, 0x080), (2, 0x181), (3, 0x705), (4, 0x080)]
+        );
+        // Outside the hot loop, both are decoded.
+        let sync = b"(1.000002) can0 080#";
+        assert!(matches!(p.scan(sync, &interest), Scan::Frame(f) if f.id == 0x80));
+        let beat = b"(1.000001) can0 705#05";
+        assert!(matches!(p.scan(beat, &interest), Scan::Timed(..)));
+        assert!(matches!(
+            p.scan(beat, &interest.every_frame()),
+            Scan::Frame(_)
+        ));
     }
 
     #[test]
