@@ -48,9 +48,12 @@ pub(super) trait LineSink {
     fn take_id_counts(&mut self) -> IdCounts;
     /// The counts [`LineSink::take_id_counts`] lent, with the block's frames.
     fn put_id_counts(&mut self, ids: IdCounts);
-    /// With every frame timed: frames of a run the reader only counted
-    /// (also counted by `plain_frames`), on `channel`, each at its index
-    /// from `idx`, for their times.
+    /// Frames of a run the reader handed over for their times alone
+    /// (every frame it only counted when every frame is timed, and those
+    /// on the ids the interest hands over), also counted by
+    /// `plain_frames`, on `channel`, each at its index from `idx`. They
+    /// come before the run's other frames; a run with folds carries its
+    /// own ([`FoldedRun::handed`]).
     fn timed_lines(
         &mut self,
         idx: u64,
@@ -99,6 +102,9 @@ pub(super) struct FoldedRun<'a> {
     /// `timed`), on `channel`: taken after the folds when those are taken
     /// whole, else in line order among their frames.
     pub inner: &'a [Inner],
+    /// Frames handed over for their times ([`LineSink::timed_lines`]),
+    /// counted in `plain`, on `channel`: in line order among the others.
+    pub handed: &'a [TimedLine],
     /// Where `folds`, `frames` and `inner` begin in the block's.
     pub at: RunAt,
 }
@@ -178,12 +184,6 @@ fn classify_lines(
             ids,
         );
         pos += run.bytes;
-        // Every frame timed: the run's plain lines before the frame that
-        // ended it (no run has folds then, so none goes on past it).
-        if !ids.timed_lines.is_empty() {
-            sink.timed_lines(idx, run.channel, &ids.timed_lines)?;
-            ids.timed_lines.clear();
-        }
         // A frame the interest lets stay inside a run with folds does not
         // end it: the reader goes on (with the same layout, so the same
         // channel), the stretches' counts and times adding up.
@@ -198,6 +198,7 @@ fn classify_lines(
             ids.count(frame.key());
             // The frame's time, unless lines after it have one.
             last = frame.time;
+            let handed = ids.timed_lines.len();
             run = detector.run(
                 bytes.get(pos..).unwrap_or_default(),
                 max_line,
@@ -206,6 +207,11 @@ fn classify_lines(
                 ids,
             );
             pos += run.bytes;
+            // The reader counts this stretch's lines from its start.
+            let before = plain + timed + inner;
+            for l in ids.timed_lines.get_mut(handed..).unwrap_or_default() {
+                l.idx += before;
+            }
             plain += run.plain;
             timed += run.timed;
             if run.last_time.is_some() {
@@ -223,6 +229,7 @@ fn classify_lines(
                 folds: folds.as_slice(),
                 frames: folds.frames(),
                 inner: folds.inner(),
+                handed: &ids.timed_lines,
                 at: {
                     let (folds, frames, inner) = folds.run_start();
                     RunAt {
@@ -238,7 +245,11 @@ fn classify_lines(
             sink.folded(idx, &folded)?;
             idx += plain + timed + inner;
         } else {
-            // No folds, so one stretch.
+            // No folds, so one stretch: its lines handed over first (the
+            // frames around them only count and move the input's times).
+            if !ids.timed_lines.is_empty() {
+                sink.timed_lines(idx, run.channel, &ids.timed_lines)?;
+            }
             if plain > 0 {
                 sink.plain_frames(plain);
                 idx += plain;
@@ -248,6 +259,7 @@ fn classify_lines(
                 idx += timed;
             }
         }
+        ids.timed_lines.clear();
         if let Some(frame) = run.frame {
             deliver(sink, ids, idx, &frame, None)?;
             idx += 1;

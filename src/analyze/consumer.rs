@@ -20,7 +20,7 @@ use super::monitor::{Carried, Monitors, TakenFold};
 use super::nodes::Nodes;
 use super::options::Options;
 use super::sink::Sink;
-use super::traffic::{SyncMissed, Traffic};
+use super::traffic::{FrameTime, SyncMissed, Traffic};
 use crate::canopen::profile::Profile;
 use crate::canopen::{NodeId, emcy};
 use crate::timeline::At;
@@ -478,10 +478,10 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         Ok(())
     }
 
-    /// A frame for the channel's traffic (`--timing`): counted and timed
-    /// there, a gap in SYNC told. `true` when that is all the frame is for
-    /// (one the analysis does not decode): it is then counted as a frame,
-    /// and nothing else happens.
+    /// A frame for the channel's traffic (SYNC, or any with `--timing`):
+    /// timed there, a gap in SYNC told. `true` when that is all the frame
+    /// is for (one the analysis does not decode, or wants for its time
+    /// alone): it is then counted as a frame, and nothing else happens.
     fn traffic(&mut self, idx: u64, frame: &Frame<'_>) -> Result<bool, OutputError> {
         let line = self.line_no(idx);
         let at = At {
@@ -499,7 +499,33 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         if let Some(gap) = gap {
             self.sync_missed(frame.channel, at, gap)?;
         }
-        Ok(!self.wanted.interest.wants(frame.id, frame.extended))
+        let interest = &self.wanted.interest;
+        Ok(!interest.wants(frame.id, frame.extended)
+            || interest.hands_over(frame.id, frame.extended))
+    }
+
+    /// A line handed over for its time ([`LineSink::timed_lines`]), line
+    /// `l.idx` from `idx`, on `channel` (the traffic's channel `c`).
+    #[inline]
+    pub(super) fn timed_line(
+        &mut self,
+        idx: u64,
+        c: usize,
+        channel: &[u8],
+        l: &TimedLine,
+    ) -> Result<(), OutputError> {
+        let line = self.line_no(idx + l.idx);
+        let time = l.time.map(FrameTime::Ticks);
+        match self
+            .traffic
+            .frame_in(c, l.id, l.extended, l.kind, l.len, time, line)
+        {
+            Some(gap) => {
+                let at = gap.end.unwrap_or(At { time: None, line });
+                self.sync_missed(channel, at, gap)
+            }
+            None => Ok(()),
+        }
     }
 
     /// A gap in SYNC, ended at `at`: told.
@@ -591,17 +617,15 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         let Some(c) = self.traffic.channel_index(channel) else {
             return Ok(());
         };
-        for l in lines {
-            let at = At {
-                time: l.time.map(|t| t.timestamp()),
-                line: self.line_no(idx + l.idx),
+        let mut rest = lines;
+        while !rest.is_empty() {
+            let timed = self.traffic.lines_until_gap(c, self.line_no(idx), rest);
+            // The line that ends a gap, with its event.
+            let Some((l, after)) = rest.get(timed..).and_then(|r| r.split_first()) else {
+                break;
             };
-            if let Some(gap) = self
-                .traffic
-                .frame_in(c, l.id, l.extended, l.kind, l.len, at)
-            {
-                self.sync_missed(channel, at, gap)?;
-            }
+            self.timed_line(idx, c, channel, l)?;
+            rest = after;
         }
         Ok(())
     }
@@ -641,8 +665,9 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
     }
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
-        let only_traffic =
-            frame.kind != FrameKind::Error && self.traffic.wants() && self.traffic(idx, frame)?;
+        let only_traffic = frame.kind != FrameKind::Error
+            && self.traffic.wants(frame.id, frame.extended)
+            && self.traffic(idx, frame)?;
         // Heartbeats are the most frequent frames decoded.
         if !only_traffic && foreign.is_none() && self.steady_heartbeat(idx, frame) {
             return Ok(());

@@ -5,6 +5,7 @@
 //! dispatcher takes it, asking each monitor about its folds.
 
 use std::io::Write;
+use std::iter::Peekable;
 
 use super::analysis::OutputError;
 use super::classify::{FoldedRun, LineSink};
@@ -12,7 +13,7 @@ use super::consumer::Consumer;
 use super::monitor::{NmtMonitor, TakenFold};
 use crate::canopen::nmt;
 use crate::timeline::At;
-use crate::trace::{Frame, FrameKind, Inner, Payload, Timestamp};
+use crate::trace::{Frame, FrameKind, Inner, Payload, TimedLine, Timestamp};
 
 impl<E: Write> Consumer<'_, '_, E> {
     /// Heartbeats and PDOs the reader folded ([`FoldedRun`]), with the
@@ -26,12 +27,24 @@ impl<E: Write> Consumer<'_, '_, E> {
     /// had been read (the others of the run only count and move the
     /// input's first and last time), so the result never depends on
     /// folding.
+    ///
+    /// The lines handed over for their times alone (SYNC) change nothing
+    /// but their id's timing until one ends a gap, which is an event: those
+    /// before it are timed first, and a run with such a gap is taken one by
+    /// one, the event in its place among the others.
     pub(super) fn take_folded_run(
         &mut self,
         idx: u64,
         run: &FoldedRun<'_>,
     ) -> Result<(), OutputError> {
-        if (run.inner.is_empty() || self.inner_after_folds(run)) && self.take_folds(idx, run) {
+        let timed = self.time_handed_until_gap(idx, run);
+        let handed = run.handed.get(timed..).unwrap_or_default();
+        #[cfg(test)]
+        fold_tally::gap(!handed.is_empty());
+        if handed.is_empty()
+            && (run.inner.is_empty() || self.inner_after_folds(run))
+            && self.take_folds(idx, run)
+        {
             for inner in run.inner {
                 self.inner_frame(idx, run, inner)?;
             }
@@ -43,7 +56,22 @@ impl<E: Write> Consumer<'_, '_, E> {
             fold_tally::inner(run.inner.len());
             return Ok(());
         }
-        self.unfold(idx, run)
+        self.unfold(idx, run, handed)
+    }
+
+    /// The lines `run` handed over, timed in order up to the first that
+    /// would end a gap (an event to tell in line order): how many.
+    fn time_handed_until_gap(&mut self, idx: u64, run: &FoldedRun<'_>) -> usize {
+        if run.handed.is_empty() {
+            return 0;
+        }
+        match self.traffic.channel_index(run.channel) {
+            Some(c) => self
+                .traffic
+                .lines_until_gap(c, self.line_no(idx), run.handed),
+            // Past the channel bound: counted, not timed.
+            None => run.handed.len(),
+        }
     }
 
     /// Whether the frames kept inside `run` may be taken after its folds:
@@ -65,19 +93,26 @@ impl<E: Write> Consumer<'_, '_, E> {
             })
     }
 
-    /// The folded frames of `run` and those kept inside it one by one, in
-    /// line order; its other lines counted.
-    fn unfold(&mut self, idx: u64, run: &FoldedRun<'_>) -> Result<(), OutputError> {
+    /// The folded frames of `run`, those kept inside it and the lines it
+    /// handed over not yet timed (`handed`) one by one, in line order; its
+    /// other lines counted.
+    fn unfold(
+        &mut self,
+        idx: u64,
+        run: &FoldedRun<'_>,
+        handed: &[TimedLine],
+    ) -> Result<(), OutputError> {
         self.plain_frames(run.plain);
         let others = run.timed.saturating_sub(run.frames.len() as u64);
         self.counts.frames += others;
         // The run's first time before its frames', its last after.
         self.time(run.first);
-        let mut inner = run.inner.iter().peekable();
+        let mut between = Between {
+            inner: run.inner.iter().peekable(),
+            handed: handed.iter().peekable(),
+        };
         for f in run.frames {
-            while let Some(i) = inner.next_if(|i| i.idx() < f.idx()) {
-                self.inner_frame(idx, run, i)?;
-            }
+            self.lines_before(idx, run, &mut between, f.idx())?;
             let frame = Frame {
                 time: Some(f.time()),
                 channel: run.channel,
@@ -89,11 +124,50 @@ impl<E: Write> Consumer<'_, '_, E> {
             };
             self.frame(idx + f.idx(), &frame, None)?;
         }
-        for i in inner {
-            self.inner_frame(idx, run, i)?;
-        }
+        self.lines_before(idx, run, &mut between, u64::MAX)?;
         self.time(run.last);
         Ok(())
+    }
+
+    /// The frames kept inside `run` and its lines handed over that come
+    /// before its line `end`, in line order.
+    fn lines_before(
+        &mut self,
+        idx: u64,
+        run: &FoldedRun<'_>,
+        between: &mut Between<'_>,
+        end: u64,
+    ) -> Result<(), OutputError> {
+        loop {
+            let inner = between.inner.peek().map(|i| i.idx()).filter(|&n| n < end);
+            let handed = between.handed.peek().map(|l| l.idx).filter(|&n| n < end);
+            match (inner, handed) {
+                (Some(i), Some(h)) if h < i => self.handed_line(idx, run, between)?,
+                (Some(_), _) => {
+                    if let Some(i) = between.inner.next() {
+                        self.inner_frame(idx, run, i)?;
+                    }
+                }
+                (None, Some(_)) => self.handed_line(idx, run, between)?,
+                (None, None) => return Ok(()),
+            }
+        }
+    }
+
+    /// The next line `run` handed over, timed.
+    fn handed_line(
+        &mut self,
+        idx: u64,
+        run: &FoldedRun<'_>,
+        between: &mut Between<'_>,
+    ) -> Result<(), OutputError> {
+        match (
+            between.handed.next(),
+            self.traffic.channel_index(run.channel),
+        ) {
+            (Some(l), Some(c)) => self.timed_line(idx, c, run.channel, l),
+            _ => Ok(()),
+        }
     }
 
     /// A frame kept inside `run` (of the block's lines from `idx`), as
@@ -205,6 +279,12 @@ impl<E: Write> Consumer<'_, '_, E> {
     }
 }
 
+/// What of a folded run comes between its folded frames, in line order.
+struct Between<'a> {
+    inner: Peekable<std::slice::Iter<'a, Inner>>,
+    handed: Peekable<std::slice::Iter<'a, TimedLine>>,
+}
+
 /// How many folded runs the consumer took and refused on this thread, for
 /// tests that must see both paths taken.
 #[cfg(test)]
@@ -214,6 +294,17 @@ pub(crate) mod fold_tally {
     thread_local! {
         static TALLY: Cell<(u64, u64)> = const { Cell::new((0, 0)) };
         static INNER: Cell<u64> = const { Cell::new(0) };
+        static GAPS: Cell<u64> = const { Cell::new(0) };
+    }
+
+    /// A folded run whose handed lines end a gap (`true`): taken one by one.
+    pub(super) fn gap(gap: bool) {
+        GAPS.with(|t| t.set(t.get() + u64::from(gap)));
+    }
+
+    /// Folded runs with a gap in their handed lines since the last call.
+    pub(crate) fn take_gaps() -> u64 {
+        GAPS.with(|t| t.replace(0))
     }
 
     /// Frames kept inside a run taken after its folds.

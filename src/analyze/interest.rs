@@ -6,6 +6,7 @@ use std::sync::{Arc, RwLock};
 
 use super::options::Options;
 use crate::canopen::cia402;
+use crate::canopen::cob_id;
 use crate::canopen::emcy;
 use crate::canopen::nmt;
 use crate::canopen::pdo;
@@ -43,6 +44,9 @@ pub(crate) fn interest(opts: &Options) -> Interest {
     // Error frames are rare on a sound bus, and on a faulty one they are
     // the story.
     i.add_error_frames();
+    // SYNC is timed always (a gap is a `sync_missed`): the candump hot
+    // loop hands its lines over with their times, undecoded.
+    i.hand_over(cob_id::SYNC_ID);
     i
 }
 

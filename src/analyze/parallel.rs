@@ -46,7 +46,7 @@ enum BlockRecord {
     /// A wanted frame that only moves the input's first/last time (already
     /// counted in `plain_frames`).
     Time(Timestamp),
-    /// With every frame timed: a run's frames only counted, `lines` of the
+    /// A run's frames handed over for their times, `lines` of the
     /// block's timed lines, on `channel` of the channel bytes.
     TimedLines {
         idx: u64,
@@ -66,6 +66,7 @@ enum BlockRecord {
         folds: Range<usize>,
         frames: Range<usize>,
         inner: Range<usize>,
+        handed: Range<usize>,
     },
 }
 
@@ -99,7 +100,8 @@ struct BlockResult {
     folds: Vec<Fold>,
     folded: Vec<Folded>,
     inner: Vec<Inner>,
-    /// The timed lines of the block's [`BlockRecord::TimedLines`].
+    /// The timed lines of the block's [`BlockRecord::TimedLines`] and
+    /// folded runs.
     timed_lines: Vec<TimedLine>,
 }
 
@@ -255,6 +257,8 @@ impl LineSink for Recorder {
             frames,
             inner,
         } = run.at;
+        let handed = self.result.timed_lines.len();
+        self.result.timed_lines.extend_from_slice(run.handed);
         self.result.records.push(BlockRecord::Folded {
             idx,
             plain: run.plain,
@@ -266,6 +270,7 @@ impl LineSink for Recorder {
             folds: folds..folds + run.folds.len(),
             frames: frames..frames + run.frames.len(),
             inner: inner..inner + run.inner.len(),
+            handed: handed..self.result.timed_lines.len(),
         });
         Ok(())
     }
@@ -484,6 +489,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                     folds,
                     frames,
                     inner,
+                    handed,
                 } => {
                     let run = FoldedRun {
                         plain,
@@ -495,6 +501,7 @@ impl<E: Write> Consumer<'_, '_, E> {
                         folds: r.folds.get(folds.clone()).unwrap_or_default(),
                         frames: r.folded.get(frames.clone()).unwrap_or_default(),
                         inner: r.inner.get(inner.clone()).unwrap_or_default(),
+                        handed: r.timed_lines.get(handed).unwrap_or_default(),
                         at: RunAt {
                             folds: folds.start,
                             frames: frames.start,

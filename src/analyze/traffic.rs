@@ -4,17 +4,17 @@
 //! the wire.
 //!
 //! The counts come from the readers ([`IdCounts`]: every frame by channel
-//! and identifier, on every run). With `--timing` every frame of the input
-//! also comes here to be timed: the frames the analysis decodes, and the
-//! others with their times only (the candump hot loop's
-//! [`TimedLine`](crate::trace::TimedLine)s; the other readers decode
-//! them), and a SYNC producer that skips cycles is a `sync_missed` event
-//! ([`Traffic::frame`] says when).
+//! and identifier, on every run). SYNC's frames come here on every run,
+//! and with `--timing` every frame of the input: the frames the analysis
+//! decodes, and the others with their times only (the candump hot loop's
+//! [`TimedLine`]s; the other readers decode them). A SYNC producer that
+//! skips cycles is a `sync_missed` event ([`Traffic::frame`] says when).
 //!
-//! SYNC is not timed without `--timing`: decoding every SYNC frame of a
-//! 1 kHz bus cost the default path 40-50% more instructions (callgrind,
-//! the bench's bus traces), against a budget of 5%. The timed lines would
-//! carry it cheaply, but they come with `--timing` only.
+//! Times are kept as the reader's ticks where they can be (one
+//! precision: intervals are integer subtractions), and SYNC's lines are
+//! timed in batches ([`Traffic::lines_until_gap`]): so timed, SYNC costs a
+//! 1 kHz bus's default path 3-8% more instructions, where decoding each
+//! SYNC frame cost 40-50% (callgrind, the bench's bus traces).
 //!
 //! Memory is bounded per identifier: counts, running sums and a thinned
 //! sample of at most 256 intervals for the median, nothing per frame.
@@ -26,7 +26,7 @@ use crate::timeline::At;
 // a heartbeat's: the median of fewer is one odd interval from wrong.
 use crate::timeline::heartbeat::LEARN_FROM;
 use crate::trace::id_counts::{MAX_CHANNELS, MAX_EXTENDED};
-use crate::trace::{FrameKind, IdCounts, Span, Timestamp};
+use crate::trace::{FrameKind, IdCounts, Span, Ticks, TimedLine, Timestamp};
 
 /// Identifiers timed over all channels (at most [`MAX_EXTENDED`] of them
 /// extended per channel, the bound the counts have); frames on more are
@@ -40,9 +40,8 @@ const MISSED_FACTOR: f64 = 1.5;
 /// Load is measured over windows of this many seconds.
 const WINDOW_SECS: u64 = 1;
 
-fn window() -> Span {
-    Span::from_millis(WINDOW_SECS * 1000)
-}
+/// [`WINDOW_SECS`] in microseconds, as intervals are compared.
+const WINDOW_MICROS: f64 = WINDOW_SECS as f64 * 1e6;
 
 /// The traffic of one input.
 pub(crate) struct Traffic {
@@ -71,7 +70,7 @@ struct IdTraffic {
     /// miss cycles. EMCY, SDO, NMT and LSS frames come when something
     /// happens; their intervals say nothing.
     cyclic: bool,
-    last: Option<Timestamp>,
+    last: Option<FrameTime>,
     /// The line of the last frame: where a missed cycle's gap began.
     last_line: u64,
     median: Median,
@@ -80,7 +79,90 @@ struct IdTraffic {
     deviation: f64,
     regular: u64,
     max_gap: Option<Span>,
+    /// `max_gap` in microseconds (compared with every interval).
+    max_gap_us: f64,
     missed: u64,
+}
+
+/// A frame's interval as [`IdTraffic::judge`] finds it.
+#[derive(Clone, Copy)]
+struct Judged {
+    /// In microseconds, and exactly.
+    interval: Option<(f64, Gap)>,
+    /// The period it is judged against.
+    period: Option<f64>,
+    /// The period, when the interval missed cycles of it.
+    missed: Option<f64>,
+}
+
+/// A frame's time as it came: a line's [`Ticks`] (the candump hot loop
+/// hands lines over so) or a decoded frame's [`Timestamp`], as ticks of
+/// its own precision where they fit. Two ticks of one precision subtract
+/// as integers; timestamps take 128-bit arithmetic, which with the
+/// conversion cost every SYNC line about 400 instructions more
+/// (callgrind, the bench's commissioning trace), more than the line's
+/// reading and counting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum FrameTime {
+    Ticks(Ticks),
+    Stamp(Timestamp),
+}
+
+impl FrameTime {
+    /// A decoded frame's time.
+    pub(crate) fn of(t: Timestamp) -> FrameTime {
+        t.ticks().map_or(FrameTime::Stamp(t), FrameTime::Ticks)
+    }
+
+    pub(crate) fn timestamp(self) -> Timestamp {
+        match self {
+            FrameTime::Ticks(t) => t.timestamp(),
+            FrameTime::Stamp(t) => t,
+        }
+    }
+
+    /// The time from `earlier` to `self` in microseconds, and exactly;
+    /// `None` when negative.
+    #[inline(always)]
+    fn since(self, earlier: FrameTime) -> Option<(f64, Gap)> {
+        if let (FrameTime::Ticks(now), FrameTime::Ticks(then)) = (self, earlier)
+            && now.digits == then.digits
+        {
+            let n = now.value.checked_sub(then.value)?;
+            let gap = Gap::Ticks(now, n);
+            return Some((gap.micros(), gap));
+        }
+        let span = self.timestamp().since(earlier.timestamp());
+        (!span.is_negative()).then(|| (micros(span), Gap::Span(span)))
+    }
+}
+
+/// An interval, exactly: `n` ticks of a precision, or a span.
+#[derive(Clone, Copy)]
+enum Gap {
+    Ticks(Ticks, u64),
+    Span(Span),
+}
+
+impl Gap {
+    fn span(self) -> Span {
+        match self {
+            Gap::Ticks(unit, n) => unit.span(n),
+            Gap::Span(s) => s,
+        }
+    }
+
+    /// In microseconds, as [`micros`] gives the span.
+    #[inline]
+    fn micros(self) -> f64 {
+        match self {
+            Gap::Ticks(unit, n) => match unit.attos_i64(n) {
+                Some(attos) => attos as f64 / 1e12,
+                None => micros(unit.span(n)),
+            },
+            Gap::Span(s) => micros(s),
+        }
+    }
 }
 
 /// Bits on the wire per window of [`WINDOW_SECS`].
@@ -88,10 +170,10 @@ struct IdTraffic {
 struct Load {
     bits: u64,
     /// The current window: its start, and the bits in it.
-    window: Option<(Timestamp, u64)>,
+    window: Option<(FrameTime, u64)>,
     peak_bits: u64,
-    first: Option<Timestamp>,
-    last: Option<Timestamp>,
+    first: Option<FrameTime>,
+    last: Option<FrameTime>,
 }
 
 /// SYNC skipped cycles: told as a `sync_missed` event.
@@ -168,10 +250,49 @@ impl Traffic {
         }
     }
 
-    /// Whether frames come here (`--timing`).
+    /// Whether frames on `id` come here: with `--timing` every frame,
+    /// else SYNC's.
     #[inline]
-    pub(crate) fn wants(&self) -> bool {
-        self.every_frame
+    pub(crate) fn wants(&self, id: u32, extended: bool) -> bool {
+        self.every_frame || (id == SYNC_ID && !extended)
+    }
+
+    /// Lines handed over for their times ([`TimedLine`]), of the channel
+    /// at `c`, the first at line `first_line`, timed in order up to the
+    /// first that would end a gap in SYNC (an event its caller must tell in
+    /// line order, through [`Traffic::frame_in`]): how many were timed. One
+    /// tight loop: a SYNC line taken one call at a time cost the default
+    /// path about 200 instructions more (callgrind, the bench's
+    /// commissioning trace).
+    pub(crate) fn lines_until_gap(
+        &mut self,
+        c: usize,
+        first_line: u64,
+        lines: &[TimedLine],
+    ) -> usize {
+        let every_frame = self.every_frame;
+        let Some(channel) = self.channels.get_mut(c) else {
+            return lines.len();
+        };
+        for (n, l) in lines.iter().enumerate() {
+            let time = l.time.map(FrameTime::Ticks);
+            let room = self.ids < MAX_IDS;
+            let known = channel.ids.len();
+            let id = channel.id(l.id, l.extended, room);
+            if let (Some(now), Some(t)) = (time, id.and_then(|i| channel.ids.get_mut(i))) {
+                let judged = t.judge(now);
+                // (An id made just now has no last frame, so no gap.)
+                if judged.missed.is_some() {
+                    return n;
+                }
+                t.take(now, first_line + l.idx, judged);
+            }
+            self.ids += channel.ids.len() - known;
+            if every_frame {
+                channel.load.frame(time, bits(l.extended, l.kind, l.len));
+            }
+        }
+        lines.len()
     }
 
     fn channel(&mut self, name: &[u8]) -> Option<&mut ChannelTraffic> {
@@ -205,7 +326,8 @@ impl Traffic {
             return;
         }
         if let Some(c) = self.channel(channel) {
-            c.load.frame(time, bits(false, FrameKind::Error, 0));
+            c.load
+                .frame(time.map(FrameTime::of), bits(false, FrameKind::Error, 0));
         }
     }
 
@@ -222,13 +344,15 @@ impl Traffic {
         at: At,
     ) -> Option<SyncMissed> {
         let c = self.channel_index(channel)?;
-        self.frame_in(c, id, extended, kind, len, at)
+        let time = at.time.map(FrameTime::of);
+        self.frame_in(c, id, extended, kind, len, time, at.line)
     }
 
     /// [`Traffic::frame`] on the channel [`Traffic::channel_index`] gave
     /// (a run of frames on one channel finds it once: comparing its name
     /// for every frame was a tenth of `--timing`'s instructions).
     #[inline]
+    #[allow(clippy::too_many_arguments)] // A frame's fields, taken apart.
     pub(crate) fn frame_in(
         &mut self,
         c: usize,
@@ -236,17 +360,23 @@ impl Traffic {
         extended: bool,
         kind: FrameKind,
         len: u8,
-        at: At,
+        time: Option<FrameTime>,
+        line: u64,
     ) -> Option<SyncMissed> {
         let room = self.ids < MAX_IDS;
         let c = self.channels.get_mut(c)?;
-        c.load.frame(at.time, bits(extended, kind, len));
+        // The load needs every frame: with `--timing` only.
+        if self.every_frame {
+            c.load.frame(time, bits(extended, kind, len));
+        }
         let known = c.ids.len();
         let i = c.id(id, extended, room)?;
         let made = c.ids.len() - known;
         let t = c.ids.get_mut(i)?;
-        let missed = t.interval(at);
         self.ids += made;
+        let now = time?;
+        let judged = t.judge(now);
+        let missed = t.take(now, line, judged);
         (id == SYNC_ID && !extended).then_some(missed).flatten()
     }
 
@@ -324,8 +454,22 @@ impl ChannelTraffic {
     }
 
     /// The index in `ids` of `id`'s traffic, made when `room` allows.
-    #[inline]
+    #[inline(always)]
     fn id(&mut self, id: u32, extended: bool, room: bool) -> Option<usize> {
+        // A standard id already followed: the common case, inline.
+        if !extended
+            && let Some(&slot) = self.standard.get(id as usize)
+            && slot != 0
+        {
+            return Some(usize::from(slot) - 1);
+        }
+        self.new_or_extended_id(id, extended, room)
+    }
+
+    /// [`ChannelTraffic::id`] of an extended id, or of a standard one not
+    /// followed yet.
+    #[inline(never)]
+    fn new_or_extended_id(&mut self, id: u32, extended: bool, room: bool) -> Option<usize> {
         let slot = if extended {
             match self.extended.binary_search_by_key(&id, |e| e.0) {
                 Ok(i) => self.extended.get(i).map(|e| e.1),
@@ -368,6 +512,7 @@ impl ChannelTraffic {
             deviation: 0.0,
             regular: 0,
             max_gap: None,
+            max_gap_us: 0.0,
             missed: 0,
         });
         self.ids.len() as u16
@@ -386,35 +531,52 @@ impl ChannelTraffic {
 }
 
 impl IdTraffic {
-    /// The interval since the last frame, into the statistics; a gap of
-    /// missed cycles once the period is known.
-    #[inline]
-    fn interval(&mut self, at: At) -> Option<SyncMissed> {
-        let now = at.time?;
-        let last = self.last.replace(now);
-        let start = At {
-            time: last,
-            line: std::mem::replace(&mut self.last_line, at.line),
+    /// What a frame at `now` would be to the statistics, nothing changed:
+    /// its interval since the last frame (none for the first, or one that
+    /// goes back in time), and whether it missed cycles of the period
+    /// known so far.
+    #[inline(always)]
+    fn judge(&self, now: FrameTime) -> Judged {
+        let interval = self.last.and_then(|last| now.since(last));
+        let period = if self.cyclic { self.period() } else { None };
+        let missed = match (interval, period) {
+            (Some((us, _)), Some(p)) if misses(us, p) => Some(p),
+            _ => None,
         };
-        let gap = now.since(last?);
-        if gap.is_negative() {
-            return None;
+        Judged {
+            interval,
+            period,
+            missed,
         }
-        if self.max_gap.is_none_or(|m| gap > m) {
-            self.max_gap = Some(gap);
+    }
+
+    /// The frame at `now`, line `line`, as `judged`, into the statistics;
+    /// a gap of missed cycles is the event to tell.
+    #[inline(always)]
+    fn take(&mut self, now: FrameTime, line: u64, judged: Judged) -> Option<SyncMissed> {
+        let last = self.last.replace(now);
+        let start_line = std::mem::replace(&mut self.last_line, line);
+        let (us, gap) = judged.interval?;
+        if self.max_gap.is_none() || us > self.max_gap_us {
+            self.max_gap = Some(gap.span());
+            self.max_gap_us = us;
         }
-        let us = micros(gap);
         if !self.cyclic {
             return None;
         }
-        let period = self.median.current();
         self.median.push(us);
-        let period = period.filter(|p| *p > 0.0)?;
-        if us > MISSED_FACTOR * period {
+        let period = judged.period?;
+        if judged.missed.is_some() {
             self.missed += 1;
             return Some(SyncMissed {
-                start,
-                end: Some(at),
+                start: At {
+                    time: last.map(FrameTime::timestamp),
+                    line: start_line,
+                },
+                end: Some(At {
+                    time: Some(now.timestamp()),
+                    line,
+                }),
                 period: Span::from_micros(period.round() as i64),
                 missed: ((us / period).round() as u64).saturating_sub(1).max(1),
             });
@@ -424,12 +586,17 @@ impl IdTraffic {
         None
     }
 
+    /// The period an interval is judged against, once there is one.
+    fn period(&self) -> Option<f64> {
+        self.median.current().filter(|p| *p > 0.0)
+    }
+
     /// Silent from the last frame to `end` for more than 1.5 periods.
     fn silent_until(&mut self, end: Timestamp) -> Option<SyncMissed> {
-        let last = self.last?;
-        let period = self.median.current()?;
+        let last = self.last?.timestamp();
+        let period = self.period()?;
         let us = micros(end.since(last));
-        (period > 0.0 && us > MISSED_FACTOR * period).then(|| {
+        misses(us, period).then(|| {
             self.missed += 1;
             SyncMissed {
                 start: At {
@@ -479,6 +646,11 @@ impl IdReport {
     }
 }
 
+/// Whether an interval of `us` microseconds missed a cycle of `period`.
+fn misses(us: f64, period: f64) -> bool {
+    us > MISSED_FACTOR * period
+}
+
 /// A span in microseconds, for the statistics (exact to well under a
 /// microsecond for any gap a trace can hold).
 fn micros(s: Span) -> f64 {
@@ -493,7 +665,7 @@ fn micros(s: Span) -> f64 {
 
 impl Load {
     #[inline]
-    fn frame(&mut self, time: Option<Timestamp>, bits: u64) {
+    fn frame(&mut self, time: Option<FrameTime>, bits: u64) {
         self.bits += bits;
         let Some(t) = time else {
             return;
@@ -501,7 +673,9 @@ impl Load {
         self.first.get_or_insert(t);
         self.last = Some(t);
         match &mut self.window {
-            Some((start, n)) if t >= *start && t.since(*start) < window() => *n += bits,
+            Some((start, n)) if t.since(*start).is_some_and(|(us, _)| us < WINDOW_MICROS) => {
+                *n += bits
+            }
             w => {
                 if let Some((_, n)) = w {
                     self.peak_bits = self.peak_bits.max(*n);
@@ -514,7 +688,7 @@ impl Load {
     fn report(&self, bit_rate: u32) -> Option<LoadReport> {
         let rate = f64::from(bit_rate);
         let span = match (self.first, self.last) {
-            (Some(a), Some(b)) => b.since(a).as_f64(),
+            (Some(a), Some(b)) => b.timestamp().since(a.timestamp()).as_f64(),
             _ => 0.0,
         };
         let peak = self.peak_bits.max(self.window.map_or(0, |w| w.1));
@@ -581,6 +755,7 @@ struct Median {
 }
 
 impl Median {
+    #[inline]
     fn push(&mut self, x: f64) {
         self.count += 1;
         if self.skip > 0 {
@@ -838,8 +1013,10 @@ mod tests {
     #[test]
     fn without_timing_frames_are_counted_not_timed() {
         let mut t = Counted::new(false);
-        assert!(!t.t.wants());
-        assert!(Traffic::new(true).wants());
+        assert!(!t.t.wants(0x181, false));
+        assert!(t.t.wants(SYNC_ID, false), "SYNC is timed always");
+        assert!(!t.t.wants(SYNC_ID, true));
+        assert!(Traffic::new(true).wants(0x181, false));
         t.error_frame(b"can0", None);
         // The classifier counts a frame the traffic is not given.
         t.ids.count(FrameKey::new(b"can0", 0x181, false));

@@ -1,6 +1,6 @@
 //! The bus's traffic through the command line, on the SYNC fixture
-//! (scripts/make_sync_fixtures.py), with `--timing`: SYNC's gaps told once
-//! each, every identifier counted and timed, the load with a bit rate
+//! (scripts/make_sync_fixtures.py): SYNC's gaps told once each, with
+//! `--timing` or not, every identifier counted and timed, the load with a bit rate
 //! given or recorded, and the same result on one thread and on two (split
 //! anywhere: `analyze::tests::parallel`; folded or not:
 //! `analyze::tests::folds`).
@@ -48,18 +48,32 @@ fn sync_gaps_are_events_once_per_gap() {
     assert_eq!(sync["max_gap"].as_f64(), Some(0.05));
     // The input object stays the last line.
     assert_eq!(objects.last().unwrap()["type"], "input");
-    // Without --timing SYNC is not followed: no gaps; the channel object
-    // counts every frame by id all the same, its timing null.
+    // Without --timing SYNC is timed all the same: the same gaps, told
+    // where they were, and the same timing of its id; the channel object
+    // counts every frame by id, the other ids' timing null.
     let plain = ndjson([TRACE]);
-    assert!(of_type(&plain, "sync_missed").is_empty());
+    assert_eq!(of_type(&plain, "sync_missed"), gaps);
     let channels = of_type(&plain, "channel");
     assert_eq!(channels.len(), 1);
     assert_eq!(channels[0]["frames"], c["frames"]);
-    let untimed = id(channels[0], 0x80);
+    assert_eq!(id(channels[0], 0x80), sync, "SYNC timed always");
+    let untimed = id(channels[0], 0x181);
     assert_eq!(untimed["count"], 177);
     for key in ["period", "jitter", "max_gap", "missed"] {
         assert!(untimed[key].is_null(), "{key} without --timing");
     }
+    let order = |objects: &[Value]| {
+        objects
+            .iter()
+            .filter(|o| o["type"] != "channel" && o["type"] != "input")
+            .map(|o| (o["type"].clone(), o["line"].clone()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        order(&plain),
+        order(&objects),
+        "the same events in the same order, timed or not"
+    );
     let counts = |c: &Value| {
         let ids = c["ids"].as_array().cloned().unwrap_or_default();
         ids.iter()
@@ -75,8 +89,13 @@ fn sync_gaps_are_events_once_per_gap() {
 
 #[test]
 fn the_sync_error_follows_from_the_gap_in_its_incident() {
-    let objects = ndjson(["--timing", TRACE]);
-    let incidents = of_type(&objects, "incident");
+    for objects in [ndjson(["--timing", TRACE]), ndjson([TRACE])] {
+        sync_error_follows_from_the_gap(&objects);
+    }
+}
+
+fn sync_error_follows_from_the_gap(objects: &[Value]) {
+    let incidents = of_type(objects, "incident");
     assert_eq!(incidents.len(), 1);
     let i = incidents[0];
     assert_eq!(i["root"]["kind"], "sync_missed");
@@ -203,11 +222,24 @@ fn the_tables_say_the_bus() {
         text.contains("bus: 932 frames, SYNC every 10 ms (2 gaps), load 8.6% (peak 10.6%)"),
         "{text}"
     );
-    // Without --timing, neither table.
-    let out = emcy_decode().arg(TRACE).output().unwrap();
+    // Without --timing, the Bus table for SYNC's timing, no Timing table.
+    let out = emcy_decode()
+        .env_remove("NO_COLOR")
+        .env_remove("COLUMNS")
+        .arg(TRACE)
+        .output()
+        .unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
-        !text.contains("\nTiming\n") && !text.contains("\nBus\n"),
+        !text.contains("\nTiming\n") && text.contains("\nBus\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("SYNC missed 4 cycles (period 10 ms)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("bus: 932 frames, SYNC every 10 ms (2 gaps), 1 EMCY"),
         "{text}"
     );
 }
@@ -232,9 +264,9 @@ fn the_chart_has_a_bus_strip_where_the_bus_had_trouble() {
         "the legend names the bands"
     );
     assert!(bus_off.contains(".ec .bus .bo{"), "the strip's style");
-    // SYNC's two gaps, with --timing only.
+    // SYNC's two gaps, timed or not.
     assert_eq!(count(&svg(&["--timing", TRACE]), "sg"), 2);
-    assert_eq!(count(&svg(&[TRACE]), "sg"), 0);
+    assert_eq!(count(&svg(&[TRACE]), "sg"), 2);
     // A quiet bus: no strip, no style for it.
     let quiet = svg(&["fixtures/s300.log"]);
     assert!(!quiet.contains("class=\"bus\"") && !quiet.contains(".ec .bus"));

@@ -482,3 +482,80 @@ fn incidents_are_the_same_with_folds() {
         assert!(taken > 0, "{name}: no run was folded");
     }
 }
+
+/// SYNC every 10 ms among heartbeats, PDOs and EMCYs, with gaps of a few
+/// cycles to two seconds, and now and then a drive's SYNC error after one.
+/// The reader hands SYNC lines over inside runs of folded heartbeats: a
+/// gap is an event, told in line order among the EMCYs kept inside the
+/// run, so a run that holds one is taken one by one.
+fn sync_trace(seed: u64, millis: u64) -> Vec<u8> {
+    let mut rng = Lcg(seed);
+    let mut t = Vec::new();
+    let mut line = |micros: u64, frame: &str| {
+        t.extend(
+            format!(
+                "({}.{:06}) can0 {frame}\n",
+                micros / 1_000_000,
+                micros % 1_000_000
+            )
+            .bytes(),
+        );
+    };
+    let start: u64 = 1_700_000_000_000_000;
+    let mut silent_until = 0;
+    for ms in 0..millis {
+        let now = start + ms * 1000;
+        if ms % 10 == 0 && ms >= silent_until {
+            line(now, "080#");
+            if rng.below(150) == 0 {
+                silent_until = ms + 10 * (3 + rng.below(200));
+            }
+        }
+        for node in 1..=4u64 {
+            if ms % 100 == node * 20 {
+                line(
+                    now + 50 + rng.below(200),
+                    &format!("{:03X}#05", 0x700 + node),
+                );
+            }
+        }
+        if ms % 10 == 1 {
+            for node in 1..=4u64 {
+                line(
+                    now + 100 * node,
+                    &format!("{:03X}#{:016X}", 0x180 + node, rng.next()),
+                );
+            }
+        }
+        if ms % 10 == 5 && rng.below(70) == 0 {
+            let code = if ms < silent_until { "4082" } else { "0010" };
+            line(
+                now + 300,
+                &format!("{:03X}#{code}110000000000", 0x80 + 1 + rng.below(4)),
+            );
+        }
+    }
+    t
+}
+
+#[test]
+fn sync_gaps_are_told_in_line_order_with_folds() {
+    let mut gaps = 0;
+    for seed in [21, 22, 23] {
+        let t = sync_trace(seed, 20_000);
+        fold_tally::take_gaps();
+        let (taken, refused) = assert_fold_independent("SYNC", &t, &base_options());
+        gaps += fold_tally::take_gaps();
+        assert!(
+            taken > 0 && refused > 0,
+            "{seed}: {taken} taken, {refused} refused"
+        );
+        let (out, _) = run_with(&t, base_options());
+        assert!(out.contains("\"type\":\"sync_missed\""), "{seed}");
+        assert!(
+            out.contains("\"kind\":\"sync_missed\""),
+            "{seed}: in an incident"
+        );
+    }
+    assert!(gaps > 0, "no gap inside a folded run");
+}

@@ -172,13 +172,13 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = parse_seconds, value_name = "SECONDS", help_heading = DECODING)]
     pub incident_gap: Option<Span>,
 
-    /// Time every frame per channel and id: period, jitter, gaps, missed cycles, SYNC gaps
+    /// Time every frame per channel and id: period, jitter, gaps, missed cycles
     ///
     /// Time every frame per channel and identifier: each id's period (median interval),
     /// jitter, largest gap and missed cycles, in the `channel` objects and the Timing
-    /// table, and SYNC's gaps as `sync_missed` events. The readers then decode every
-    /// line's time, which the default path spares (see the manual for the cost). Every
-    /// frame is counted per channel and identifier without it
+    /// table. The readers then read every line's time, which the default path spares
+    /// (see the manual for the cost). Without it every frame is still counted per
+    /// channel and identifier, and SYNC is timed (its gaps are `sync_missed` events)
     #[arg(long, help_heading = DECODING)]
     pub timing: bool,
 
