@@ -150,6 +150,7 @@ impl Decoder {
         ) {
             Packet::Plain(ident) => Item::Plain {
                 iface,
+                ts,
                 device: device(interface, data),
                 ident,
             },

@@ -64,7 +64,7 @@ impl Interface {
 }
 
 /// A packet's time as the file stores it.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 pub(super) enum Ts {
     /// A simple packet block: none.
     None,
@@ -90,6 +90,9 @@ pub(super) enum Item {
     /// under the channel and identifier its frame would have.
     Plain {
         iface: usize,
+        /// Its time as stored (read only if it is the input's first or
+        /// last frame).
+        ts: Ts,
         device: Option<u32>,
         ident: Ident,
     },

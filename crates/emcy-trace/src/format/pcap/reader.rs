@@ -508,9 +508,13 @@ impl<R: Read> PcapReader<R> {
             match item {
                 Some(Item::Plain {
                     iface,
+                    ts,
                     device,
                     ident,
                 }) => {
+                    // Counted outside the hot loop (a block with options,
+                    // say), it may be the input's first or last frame too.
+                    self.counted.saw(iface, ts);
                     let channel =
                         self.decoder
                             .counted_channel(&mut self.counted.ids, iface, device);

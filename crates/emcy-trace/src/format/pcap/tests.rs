@@ -8,7 +8,7 @@ use super::consts::{BOM, BUFFER};
 use super::packet::Order;
 use super::*;
 use crate::id_counts::testing::{self, assert_counts_add_up};
-use crate::{FrameKind, FrameSource, Interest, Parsed};
+use crate::{FrameKind, FrameSource, Interest, Next, Parsed};
 
 // ---- writers -------------------------------------------------------------------------
 
@@ -288,6 +288,43 @@ fn the_fixtures_frames_only_counted_add_up_to_every_frame() {
         counted += counts_add_up(&bytes, &name);
     }
     assert!(counted > 0, "some frames only counted");
+}
+
+/// An enhanced packet block with options is read outside the hot loop:
+/// a frame only counted there is the input's first or last frame all the
+/// same (a real capture whose every block had options said it had no
+/// time at all).
+#[test]
+fn frames_only_counted_outside_the_hot_loop_give_the_input_its_span() {
+    let o = Order::Little;
+    let mut f = shb(o);
+    f.extend(idb(o, 113, &[(2, b"can0")]));
+    let with_options = |units: u64| {
+        let mut b = epb(o, 0, units, &sll(0x0C, &can(o, 0x281, &EMCY)));
+        let opts = options(o, &[(1, b"note")]);
+        let len = b.len() + opts.len();
+        b.truncate(b.len() - 4);
+        b.extend(&opts);
+        b.extend(u32s(o, len as u32));
+        b[4..8].copy_from_slice(&u32s(o, len as u32));
+        b
+    };
+    for units in [1_000_000, 2_000_000, 3_500_000] {
+        f.extend(with_options(units));
+    }
+    let mut reader = PcapReader::new(&f[..]).expect("a header");
+    let mut only_counted = 0;
+    while let Ok(Some(next)) = reader.next_item(Some(&Interest::none())) {
+        if let Next::Counted(c) = next {
+            only_counted += c.plain;
+        }
+    }
+    assert_eq!(only_counted, 3);
+    let (first, last) = reader.plain_span().expect("the counted frames' span");
+    assert_eq!(
+        (first.to_string(), last.to_string()),
+        ("1.000000".into(), "3.500000".into())
+    );
 }
 
 /// Frames only counted outside the hot loop (an enhanced packet block
