@@ -363,7 +363,7 @@ pub(super) fn deliver(
         let wanted = match frame.kind {
             FrameKind::Data | FrameKind::Remote => interest.wants(frame.id, frame.extended),
             FrameKind::Error => interest.wants_error_frames(),
-            FrameKind::Fd => interest.wants_fd() && interest.wants(frame.id, frame.extended),
+            FrameKind::Fd => interest.wants_fd_on(frame.id, frame.extended),
         };
         if !wanted {
             sink.plain_frames(1);

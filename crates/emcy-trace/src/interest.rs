@@ -385,6 +385,14 @@ impl Interest {
         self.fd
     }
 
+    /// Whether a CAN FD frame on `id` is wanted: on a wanted id when FD
+    /// frames are ([`Interest::wants_fd`]), and on an id handed over,
+    /// whose frames are wanted for their times whatever their kind.
+    #[inline]
+    pub fn wants_fd_on(&self, id: u32, extended: bool) -> bool {
+        (self.fd || self.hands_over(id, extended)) && self.wants(id, extended)
+    }
+
     /// Wants the extended id `id`.
     pub fn add_extended(&mut self, id: u32) {
         if let Err(i) = self.extended.binary_search(&id) {

@@ -88,7 +88,7 @@ pub fn fuzz_pcap(data: &[u8]) {
     let wanted = |p: &Parsed<'_>| match p {
         Parsed::Frame(f) => match f.kind {
             FrameKind::Data | FrameKind::Remote => interest.wants(f.id, f.extended),
-            FrameKind::Fd => interest.wants_fd() && interest.wants(f.id, f.extended),
+            FrameKind::Fd => interest.wants_fd_on(f.id, f.extended),
             FrameKind::Error => false,
         },
         _ => true,

@@ -326,7 +326,7 @@ impl Head {
             // Rare, and always decoded whole, whatever the interest.
             FrameKind::Error => false,
             FrameKind::Data | FrameKind::Remote => !interest.wants(self.id, self.extended),
-            FrameKind::Fd => !(interest.wants_fd() && interest.wants(self.id, self.extended)),
+            FrameKind::Fd => !interest.wants_fd_on(self.id, self.extended),
         }
     }
 }
