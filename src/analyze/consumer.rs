@@ -160,7 +160,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         monitors.finish(end, nodes, facts, emit)?;
         let mut told = std::mem::take(&mut self.told);
         self.facts.bus.finish(&mut told);
-        let input_end = self.last_time.max(self.frame_times.1);
+        let input_end = self.input_span().1;
         for (channel, gap) in self.traffic.finish(input_end) {
             told.push(Told {
                 channel,
@@ -269,8 +269,8 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             ));
         }
         let report = InputReport {
-            first_time: earliest(self.first_time, self.frame_times.0),
-            last_time: self.last_time.max(self.frame_times.1),
+            first_time: self.input_span().0,
+            last_time: self.input_span().1,
             timestamps: self.timestamps,
             file: file.to_string(),
             format,
@@ -407,6 +407,15 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         if last.is_some() {
             self.frame_times.1 = last;
         }
+    }
+
+    /// The input's first and last frame times. An input with no frame
+    /// time has neither: an ASC file of relative times keeps a running
+    /// time through malformed lines, which is no frame's (and read in
+    /// blocks, no block's that had no frame).
+    fn input_span(&self) -> (Option<Timestamp>, Option<Timestamp>) {
+        let first = earliest(self.first_time, self.frame_times.0);
+        (first, first.and(self.last_time.max(self.frame_times.1)))
     }
 
     /// The first and last times of the frames a binary reader only
