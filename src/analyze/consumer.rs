@@ -675,7 +675,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         let only_traffic = frame.kind != FrameKind::Error
-            && self.traffic.wants(frame.id, frame.extended)
+            && (self.traffic.wants() || self.wanted.interest.hands_over(frame.id, frame.extended))
             && self.traffic(idx, frame)?;
         // Heartbeats are the most frequent frames decoded.
         if !only_traffic && foreign.is_none() && self.steady_heartbeat(idx, frame) {

@@ -13,7 +13,7 @@
 //! Times are kept as the reader's ticks where they can be (one
 //! precision: intervals are integer subtractions), and SYNC's lines are
 //! timed in batches ([`Traffic::lines_until_gap`]): so timed, SYNC costs a
-//! 1 kHz bus's default path 3-8% more instructions, where decoding each
+//! 1 kHz bus's default path 2-7% more instructions, where decoding each
 //! SYNC frame cost 40-50% (callgrind, the bench's bus traces).
 //!
 //! Memory is bounded per identifier: counts, running sums and a thinned
@@ -91,9 +91,12 @@ struct Judged {
     interval: Option<(f64, Gap)>,
     /// The period it is judged against.
     period: Option<f64>,
-    /// The period, when the interval missed cycles of it.
-    missed: Option<f64>,
+    /// Whether the interval missed cycles of it.
+    missed: bool,
 }
+
+/// A frame [`Traffic::take`] left alone: it would end a gap in SYNC.
+struct EndsGap;
 
 /// A frame's time as it came: a line's [`Ticks`] (the candump hot loop
 /// hands lines over so) or a decoded frame's [`Timestamp`], as ticks of
@@ -250,11 +253,11 @@ impl Traffic {
         }
     }
 
-    /// Whether frames on `id` come here: with `--timing` every frame,
-    /// else SYNC's.
+    /// Whether every frame comes here (`--timing`); else the frames the
+    /// interest hands over for their times (SYNC's) only.
     #[inline]
-    pub(crate) fn wants(&self, id: u32, extended: bool) -> bool {
-        self.every_frame || (id == SYNC_ID && !extended)
+    pub(crate) fn wants(&self) -> bool {
+        self.every_frame
     }
 
     /// Lines handed over for their times ([`TimedLine`]), of the channel
@@ -270,29 +273,15 @@ impl Traffic {
         first_line: u64,
         lines: &[TimedLine],
     ) -> usize {
-        let every_frame = self.every_frame;
-        let Some(channel) = self.channels.get_mut(c) else {
-            return lines.len();
-        };
-        for (n, l) in lines.iter().enumerate() {
-            let time = l.time.map(FrameTime::Ticks);
-            let room = self.ids < MAX_IDS;
-            let known = channel.ids.len();
-            let id = channel.id(l.id, l.extended, room);
-            if let (Some(now), Some(t)) = (time, id.and_then(|i| channel.ids.get_mut(i))) {
-                let judged = t.judge(now);
-                // (An id made just now has no last frame, so no gap.)
-                if judged.missed.is_some() {
-                    return n;
-                }
-                t.take(now, first_line + l.idx, judged);
-            }
-            self.ids += channel.ids.len() - known;
-            if every_frame {
-                channel.load.frame(time, bits(l.extended, l.kind, l.len));
-            }
-        }
-        lines.len()
+        lines
+            .iter()
+            .position(|l| {
+                let time = l.time.map(FrameTime::Ticks);
+                let line = first_line + l.idx;
+                self.take(c, l.id, l.extended, l.kind, l.len, time, line, true)
+                    .is_err()
+            })
+            .unwrap_or(lines.len())
     }
 
     fn channel(&mut self, name: &[u8]) -> Option<&mut ChannelTraffic> {
@@ -363,21 +352,50 @@ impl Traffic {
         time: Option<FrameTime>,
         line: u64,
     ) -> Option<SyncMissed> {
+        self.take(c, id, extended, kind, len, time, line, false)
+            .ok()
+            .flatten()
+    }
+
+    /// A frame on the channel at `c` into its identifier's statistics
+    /// (and, with `--timing`, the load); a gap in SYNC it ends is the event
+    /// to tell. With `before_gap`, a frame that would end one is left
+    /// alone ([`EndsGap`]: nothing changed).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)] // A frame's fields, taken apart.
+    fn take(
+        &mut self,
+        c: usize,
+        id: u32,
+        extended: bool,
+        kind: FrameKind,
+        len: u8,
+        time: Option<FrameTime>,
+        line: u64,
+        before_gap: bool,
+    ) -> Result<Option<SyncMissed>, EndsGap> {
         let room = self.ids < MAX_IDS;
-        let c = self.channels.get_mut(c)?;
+        let Some(channel) = self.channels.get_mut(c) else {
+            return Ok(None);
+        };
+        let known = channel.ids.len();
+        let slot = channel.id(id, extended, room);
+        // (An id made just now has no last frame, so ends no gap.)
+        self.ids += channel.ids.len() - known;
+        let sync = id == SYNC_ID && !extended;
+        let mut gap = None;
+        if let (Some(now), Some(t)) = (time, slot.and_then(|i| channel.ids.get_mut(i))) {
+            let judged = t.judge(now);
+            if before_gap && sync && judged.missed {
+                return Err(EndsGap);
+            }
+            gap = t.take(now, line, judged).filter(|_| sync);
+        }
         // The load needs every frame: with `--timing` only.
         if self.every_frame {
-            c.load.frame(time, bits(extended, kind, len));
+            channel.load.frame(time, bits(extended, kind, len));
         }
-        let known = c.ids.len();
-        let i = c.id(id, extended, room)?;
-        let made = c.ids.len() - known;
-        let t = c.ids.get_mut(i)?;
-        self.ids += made;
-        let now = time?;
-        let judged = t.judge(now);
-        let missed = t.take(now, line, judged);
-        (id == SYNC_ID && !extended).then_some(missed).flatten()
+        Ok(gap)
     }
 
     /// The end of the input at `end` (the last frame's time): a SYNC
@@ -539,10 +557,7 @@ impl IdTraffic {
     fn judge(&self, now: FrameTime) -> Judged {
         let interval = self.last.and_then(|last| now.since(last));
         let period = if self.cyclic { self.period() } else { None };
-        let missed = match (interval, period) {
-            (Some((us, _)), Some(p)) if misses(us, p) => Some(p),
-            _ => None,
-        };
+        let missed = matches!((interval, period), (Some((us, _)), Some(p)) if misses(us, p));
         Judged {
             interval,
             period,
@@ -566,7 +581,7 @@ impl IdTraffic {
         }
         self.median.push(us);
         let period = judged.period?;
-        if judged.missed.is_some() {
+        if judged.missed {
             self.missed += 1;
             return Some(SyncMissed {
                 start: At {
@@ -1013,10 +1028,8 @@ mod tests {
     #[test]
     fn without_timing_frames_are_counted_not_timed() {
         let mut t = Counted::new(false);
-        assert!(!t.t.wants(0x181, false));
-        assert!(t.t.wants(SYNC_ID, false), "SYNC is timed always");
-        assert!(!t.t.wants(SYNC_ID, true));
-        assert!(Traffic::new(true).wants(0x181, false));
+        assert!(!t.t.wants());
+        assert!(Traffic::new(true).wants());
         t.error_frame(b"can0", None);
         // The classifier counts a frame the traffic is not given.
         t.ids.count(FrameKey::new(b"can0", 0x181, false));
