@@ -40,9 +40,6 @@ const MISSED_FACTOR: f64 = 1.5;
 /// Load is measured over windows of this many seconds.
 const WINDOW_SECS: u64 = 1;
 
-/// [`WINDOW_SECS`] in microseconds, as intervals are compared.
-const WINDOW_MICROS: f64 = WINDOW_SECS as f64 * 1e6;
-
 /// The traffic of one input.
 pub(crate) struct Traffic {
     /// `--timing`: every frame comes here, every identifier is reported.
@@ -87,13 +84,18 @@ struct IdTraffic {
 /// A frame's interval as [`IdTraffic::judge`] finds it.
 #[derive(Clone, Copy)]
 struct Judged {
-    /// In microseconds, and exactly.
-    interval: Option<(f64, Gap)>,
+    /// In microseconds (the exact span is made only for a new largest gap).
+    interval: Option<f64>,
     /// The period it is judged against.
     period: Option<f64>,
     /// Whether the interval missed cycles of it.
     missed: bool,
 }
+
+/// Microseconds below this come out of [`micros`] exactly: `n` of them
+/// are `n` × 5^12 × 2^12 attoseconds, an exact `f64` while `n` × 5^12 is
+/// under 2^53, so the division by 10^12 gives `n` again.
+const EXACT_MICROS: u64 = 1 << 25;
 
 /// A frame [`Traffic::take`] left alone: it would end a gap in SYNC.
 struct EndsGap;
@@ -124,47 +126,40 @@ impl FrameTime {
         }
     }
 
-    /// The time from `earlier` to `self` in microseconds, and exactly;
-    /// `None` when negative.
+    /// The time from `earlier` to `self` in microseconds; `None` when
+    /// negative.
     #[inline(always)]
-    fn since(self, earlier: FrameTime) -> Option<(f64, Gap)> {
+    fn micros_since(self, earlier: FrameTime) -> Option<f64> {
         if let (FrameTime::Ticks(now), FrameTime::Ticks(then)) = (self, earlier)
             && now.digits == then.digits
         {
             let n = now.value.checked_sub(then.value)?;
-            let gap = Gap::Ticks(now, n);
-            return Some((gap.micros(), gap));
+            // Microsecond ticks (candump's) are the microseconds: the
+            // division below gives `n` exactly for these, and its latency
+            // was a sixth of the time `--timing` spends here (perf, the
+            // bench's commissioning trace).
+            if now.digits == 6 && n < EXACT_MICROS {
+                return Some(n as f64);
+            }
+            return Some(match now.attos_i64(n) {
+                Some(attos) => attos as f64 / 1e12,
+                None => micros(now.span(n)),
+            });
         }
         let span = self.timestamp().since(earlier.timestamp());
-        (!span.is_negative()).then(|| (micros(span), Gap::Span(span)))
-    }
-}
-
-/// An interval, exactly: `n` ticks of a precision, or a span.
-#[derive(Clone, Copy)]
-enum Gap {
-    Ticks(Ticks, u64),
-    Span(Span),
-}
-
-impl Gap {
-    fn span(self) -> Span {
-        match self {
-            Gap::Ticks(unit, n) => unit.span(n),
-            Gap::Span(s) => s,
-        }
+        (!span.is_negative()).then(|| micros(span))
     }
 
-    /// In microseconds, as [`micros`] gives the span.
-    #[inline]
-    fn micros(self) -> f64 {
-        match self {
-            Gap::Ticks(unit, n) => match unit.attos_i64(n) {
-                Some(attos) => attos as f64 / 1e12,
-                None => micros(unit.span(n)),
-            },
-            Gap::Span(s) => micros(s),
+    /// The time from `earlier` to `self`, exactly (negative when it goes
+    /// back).
+    fn since(self, earlier: FrameTime) -> Span {
+        if let (FrameTime::Ticks(now), FrameTime::Ticks(then)) = (self, earlier)
+            && now.digits == then.digits
+            && let Some(n) = now.value.checked_sub(then.value)
+        {
+            return now.span(n);
         }
+        self.timestamp().since(earlier.timestamp())
     }
 }
 
@@ -172,11 +167,24 @@ impl Gap {
 #[derive(Default)]
 struct Load {
     bits: u64,
-    /// The current window: its start, and the bits in it.
-    window: Option<(FrameTime, u64)>,
+    window: Option<Window>,
     peak_bits: u64,
     first: Option<FrameTime>,
     last: Option<FrameTime>,
+}
+
+/// The current window of a [`Load`]: from a frame's time for
+/// [`WINDOW_SECS`], and the bits in it.
+#[derive(Clone, Copy)]
+struct Window {
+    start: FrameTime,
+    /// Where the window ends in the start's ticks (when it has them and the
+    /// end fits): a frame of the same precision is in the window when its
+    /// ticks lie in `start..end`. Integers compared, where the span since
+    /// the start converted to microseconds cost every frame of `--timing`
+    /// about 20 instructions (callgrind, the bench's commissioning trace).
+    end: Option<u64>,
+    bits: u64,
 }
 
 /// SYNC skipped cycles: told as a `sync_missed` event.
@@ -555,9 +563,9 @@ impl IdTraffic {
     /// known so far.
     #[inline(always)]
     fn judge(&self, now: FrameTime) -> Judged {
-        let interval = self.last.and_then(|last| now.since(last));
+        let interval = self.last.and_then(|last| now.micros_since(last));
         let period = if self.cyclic { self.period() } else { None };
-        let missed = matches!((interval, period), (Some((us, _)), Some(p)) if misses(us, p));
+        let missed = matches!((interval, period), (Some(us), Some(p)) if misses(us, p));
         Judged {
             interval,
             period,
@@ -571,9 +579,9 @@ impl IdTraffic {
     fn take(&mut self, now: FrameTime, line: u64, judged: Judged) -> Option<SyncMissed> {
         let last = self.last.replace(now);
         let start_line = std::mem::replace(&mut self.last_line, line);
-        let (us, gap) = judged.interval?;
+        let us = judged.interval?;
         if self.max_gap.is_none() || us > self.max_gap_us {
-            self.max_gap = Some(gap.span());
+            self.max_gap = last.map(|last| now.since(last));
             self.max_gap_us = us;
         }
         if !self.cyclic {
@@ -685,28 +693,42 @@ impl Load {
         let Some(t) = time else {
             return;
         };
-        self.first.get_or_insert(t);
         self.last = Some(t);
         match &mut self.window {
-            Some((start, n)) if t.since(*start).is_some_and(|(us, _)| us < WINDOW_MICROS) => {
-                *n += bits
-            }
-            w => {
-                if let Some((_, n)) = w {
-                    self.peak_bits = self.peak_bits.max(*n);
-                }
-                *w = Some((t, bits));
-            }
+            Some(w) if w.holds(t) => w.bits += bits,
+            _ => self.new_window(t, bits),
         }
+    }
+
+    /// A frame at `t` outside the current window (or the first) starts
+    /// the next; the one it ends may be the peak.
+    #[inline(never)]
+    fn new_window(&mut self, t: FrameTime, bits: u64) {
+        self.first.get_or_insert(t);
+        if let Some(w) = &self.window {
+            self.peak_bits = self.peak_bits.max(w.bits);
+        }
+        let end = match t {
+            FrameTime::Ticks(start) => 10u64
+                .checked_pow(u32::from(start.digits))
+                .and_then(|second| second.checked_mul(WINDOW_SECS))
+                .and_then(|window| start.value.checked_add(window)),
+            FrameTime::Stamp(_) => None,
+        };
+        self.window = Some(Window {
+            start: t,
+            end,
+            bits,
+        });
     }
 
     fn report(&self, bit_rate: u32) -> Option<LoadReport> {
         let rate = f64::from(bit_rate);
         let span = match (self.first, self.last) {
-            (Some(a), Some(b)) => b.timestamp().since(a.timestamp()).as_f64(),
+            (Some(a), Some(b)) => b.since(a).as_f64(),
             _ => 0.0,
         };
-        let peak = self.peak_bits.max(self.window.map_or(0, |w| w.1));
+        let peak = self.peak_bits.max(self.window.map_or(0, |w| w.bits));
         // A span under a window is measured as one window.
         let secs = span.max(WINDOW_SECS as f64);
         Some(LoadReport {
@@ -718,6 +740,22 @@ impl Load {
     }
 }
 
+impl Window {
+    /// Whether a frame at `t` is in the window: not before its start, and
+    /// less than [`WINDOW_SECS`] after it.
+    #[inline(always)]
+    fn holds(&self, t: FrameTime) -> bool {
+        if let (FrameTime::Ticks(now), FrameTime::Ticks(start), Some(end)) =
+            (t, self.start, self.end)
+            && now.digits == start.digits
+        {
+            return start.value <= now.value && now.value < end;
+        }
+        let span = t.since(self.start);
+        !span.is_negative() && span.attos() < i128::from(WINDOW_SECS) * 1_000_000_000_000_000_000
+    }
+}
+
 /// The bits a frame puts on the wire at the nominal bit rate: its fields
 /// (ISO 11898-1) and the most stuff bits they can need, one per four bits
 /// of the stuffed part after the first (start of frame to CRC). Real
@@ -725,12 +763,42 @@ impl Load {
 /// truth for typical data. CAN FD frames are counted at the nominal rate
 /// too (the trace does not say the data phase's): an upper bound again.
 pub(crate) fn bits(extended: bool, kind: FrameKind, len: u8) -> u64 {
+    // Classic data frames, nearly every frame, from a table: the fields
+    // summed for each cost `--timing` about 25 instructions a frame
+    // (callgrind, the bench's commissioning trace).
+    if kind == FrameKind::Data {
+        let table = if extended {
+            &EXTENDED_DATA_BITS
+        } else {
+            &STANDARD_DATA_BITS
+        };
+        return u64::from(table[usize::from(len.min(8))]);
+    }
+    wire_bits(extended, kind, len)
+}
+
+/// [`bits`] of classic data frames of 0 to 8 bytes, by length.
+const STANDARD_DATA_BITS: [u16; 9] = data_bits(false);
+const EXTENDED_DATA_BITS: [u16; 9] = data_bits(true);
+
+const fn data_bits(extended: bool) -> [u16; 9] {
+    let mut table = [0u16; 9];
+    let mut len = 0;
+    while len < table.len() {
+        table[len] = wire_bits(extended, FrameKind::Data, len as u8) as u16;
+        len += 1;
+    }
+    table
+}
+
+/// [`bits`], field by field.
+const fn wire_bits(extended: bool, kind: FrameKind, len: u8) -> u64 {
     let data = match kind {
         FrameKind::Remote | FrameKind::Error => 0,
-        FrameKind::Data => 8 * u64::from(len.min(8)),
-        FrameKind::Fd => 8 * u64::from(len.min(64)),
+        FrameKind::Data => 8 * (if len < 8 { len } else { 8 }) as u64,
+        FrameKind::Fd => 8 * (if len < 64 { len } else { 64 }) as u64,
     };
-    if kind == FrameKind::Error {
+    if matches!(kind, FrameKind::Error) {
         // An error flag (6 bits, up to 12 with the others' echo) and the
         // error delimiter (8), then intermission (3).
         return 23;
@@ -1056,6 +1124,64 @@ mod tests {
         let r = t.report(Some(1_000_000));
         assert_eq!(r[0].frames, 3);
         assert_eq!(r[0].load.map(|l| l.bits), Some(3 * 135));
+    }
+
+    #[test]
+    fn data_frame_bits_come_from_the_table_as_the_fields_give_them() {
+        for extended in [false, true] {
+            for len in 0..=12u8 {
+                assert_eq!(
+                    bits(extended, FrameKind::Data, len),
+                    wire_bits(extended, FrameKind::Data, len),
+                    "{extended} {len}"
+                );
+            }
+        }
+    }
+
+    /// A window holds the frames less than a second after its first, in
+    /// ticks and as timestamps alike: the frame a second after starts the
+    /// next, and one that goes back in time starts one too.
+    #[test]
+    fn a_window_is_one_second_from_its_first_frame_exactly() {
+        let ticks = |micros: u64| FrameTime::Ticks(Ticks::new(micros, 6).expect("6 digits"));
+        // Seven digits do not fit the 6-digit ticks of the others: the
+        // window compares spans then.
+        let stamp = |micros: u64| {
+            FrameTime::Stamp(Timestamp::from_parts(
+                micros / 1_000_000,
+                micros % 1_000_000 * 10,
+                7,
+            ))
+        };
+        for time in [ticks as fn(u64) -> FrameTime, stamp] {
+            let mut load = Load::default();
+            let start = 1_700_000_000_000_000;
+            load.frame(Some(time(start)), 10);
+            load.frame(Some(time(start + 999_999)), 20);
+            assert_eq!(load.window.map(|w| w.bits), Some(30));
+            load.frame(Some(time(start + 1_000_000)), 40);
+            assert_eq!(
+                (load.peak_bits, load.window.map(|w| w.bits)),
+                (30, Some(40))
+            );
+            load.frame(Some(time(start + 999_999)), 5);
+            assert_eq!((load.peak_bits, load.window.map(|w| w.bits)), (40, Some(5)));
+            assert_eq!(load.bits, 75);
+        }
+    }
+
+    proptest! {
+        /// Microsecond ticks give their count as the microseconds, as the
+        /// attoseconds divided down give them, within [`EXACT_MICROS`].
+        #[test]
+        fn microsecond_ticks_are_their_microseconds(then in 0u64..1 << 60, n in 0u64..EXACT_MICROS) {
+            let at = |v: u64| FrameTime::Ticks(Ticks::new(v, 6).expect("6 digits"));
+            let us = at(then + n).micros_since(at(then));
+            prop_assert_eq!(us, Some(micros(Ticks::new(0, 6).expect("6 digits").span(n))));
+            prop_assert_eq!(us, Some(n as f64));
+            prop_assert_eq!(at(then).micros_since(at(then + n + 1)), None);
+        }
     }
 
     #[test]
