@@ -58,6 +58,10 @@ pub(super) struct Consumer<'r, 'l, E: Write> {
     /// Buffers of the fold fast path, reused from run to run.
     pub(super) taken_as: Vec<TakenFold>,
     pub(super) rebounds: Vec<(u32, Option<Timestamp>)>,
+    /// The frames being taken are a folded run's, timed already as the
+    /// lines it handed over (with `--timing` the reader hands over every
+    /// folded line): the traffic does not time them again.
+    pub(super) timed_as_lines: bool,
     /// The last block's fold vectors, for the next.
     spare_folds: FoldBuffers,
     /// How workers read the input, if they did.
@@ -133,6 +137,7 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
             monitors,
             taken_as: Vec::new(),
             rebounds: Vec::new(),
+            timed_as_lines: false,
             spare_folds: FoldBuffers::default(),
             reading: Reading::default(),
             told: Vec::new(),
@@ -675,6 +680,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
 
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError> {
         let only_traffic = frame.kind != FrameKind::Error
+            && !self.timed_as_lines
             && (self.traffic.wants() || self.wanted.interest.hands_over(frame.id, frame.extended))
             && self.traffic(idx, frame)?;
         // Heartbeats are the most frequent frames decoded.

@@ -113,6 +113,9 @@ impl<E: Write> Consumer<'_, '_, E> {
         };
         for f in run.frames {
             self.lines_before(idx, run, &mut between, f.idx())?;
+            // With every frame timed, the folded lines were handed over
+            // too: timed there, in line order with the others.
+            self.timed_as_lines = self.traffic.wants();
             let frame = Frame {
                 time: Some(f.time()),
                 channel: run.channel,
@@ -122,7 +125,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                 len: f.len(),
                 data: Payload::inline(f.data().to_le_bytes(), f.len()),
             };
-            self.frame(idx + f.idx(), &frame, None)?;
+            let taken = self.frame(idx + f.idx(), &frame, None);
+            self.timed_as_lines = false;
+            taken?;
         }
         self.lines_before(idx, run, &mut between, u64::MAX)?;
         self.time(run.last);

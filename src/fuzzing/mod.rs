@@ -224,16 +224,28 @@ pub fn reader(format: Option<Format>, data: &[u8]) {
     check_run(&run, format, Some(data));
     if format == Some(Format::CandumpLog) {
         // Only the candump reader folds repeats: reading the lines one by
-        // one must give the same.
-        crate::analyze::interest::set_folding(false);
-        let unfolded = self::run(data, false, &opts, Output::Ndjson);
-        crate::analyze::interest::set_folding(true);
-        assert_eq!(
-            String::from_utf8_lossy(&unfolded.out),
-            String::from_utf8_lossy(&run.out),
-            "ndjson differs without folding"
-        );
-        assert_eq!(unfolded.err, run.err, "stderr differs without folding");
+        // one must give the same, and with `--timing` (where it hands the
+        // folded lines over to be timed) too.
+        let timed_opts = Options {
+            timing: true,
+            bit_rate: Some(500_000),
+            ..opts.clone()
+        };
+        let timed = self::run(data, false, &timed_opts, Output::Ndjson);
+        for (what, opts, folded) in [("", &opts, &run), (" with --timing", &timed_opts, &timed)] {
+            crate::analyze::interest::set_folding(false);
+            let unfolded = self::run(data, false, opts, Output::Ndjson);
+            crate::analyze::interest::set_folding(true);
+            assert_eq!(
+                String::from_utf8_lossy(&unfolded.out),
+                String::from_utf8_lossy(&folded.out),
+                "ndjson differs without folding{what}"
+            );
+            assert_eq!(
+                unfolded.err, folded.err,
+                "stderr differs without folding{what}"
+            );
+        }
     }
 }
 

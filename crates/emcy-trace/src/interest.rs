@@ -176,13 +176,12 @@ impl Interest {
     /// interest [`decodes`](Interest::decodes) and hands the others over
     /// with their times ([`IdCounts::timed_lines`](crate::IdCounts::timed_lines)),
     /// those the content filter only times too. Readers that cannot do so
-    /// decode every frame: [`Interest::timed_only`] is then `false`. No
-    /// frame is folded: every one counts on its own.
+    /// decode every frame: [`Interest::timed_only`] is then `false`. The
+    /// candump hot loop still folds, and hands each folded line over too;
+    /// no frame is kept inside a run of folds, so every frame's time comes
+    /// to its caller in line order.
     pub fn every_frame(&self) -> Interest {
         Interest {
-            foldable: [0; 32],
-            fold_masks: Vec::new(),
-            untimed: [0; 32],
             inside: [0; 32],
             errors: true,
             fd: true,
@@ -503,14 +502,15 @@ mod tests {
             );
         }
         assert!(every.decodes(0x705, false));
-        // No frame is folded, untimed or kept inside a run; one the filter
-        // rejects is only timed by a reader that hands it over with its
-        // time, the others decode it.
-        assert!(!every.folds(0x705));
+        // Frames are folded and move the input's time as before, none is
+        // kept inside a run; one the filter rejects is only timed by a
+        // reader that hands it over with its time, the others decode it.
+        assert_eq!(every.folds(0x705), i.folds(0x705));
         assert!(i.timed_only(0x705, false, &[1]) && !every.timed_only(0x705, false, &[1]));
         assert!(every.timed_only_head(0x705, DataHead::of(&[1])));
         assert!(!every.timed_only_head(0x705, DataHead::of(&[0])));
-        assert!(every.times(0x181, false) && !every.keeps_inside(0x85));
+        assert!(!every.times(0x181, false) && every.times(0x182, false));
+        assert!(!every.keeps_inside(0x85));
         assert!(every.wants_error_frames() && every.wants_fd());
     }
 

@@ -128,14 +128,25 @@ fn trace(seed: u64, nodes: u32, periods: u64, twists: Twists) -> Vec<u8> {
 
 /// Decodes `t` with folding and without, threads 1 and 2, blocks from 64
 /// bytes to 1 MiB (runs of a line or two, of a period or a few, of the
-/// whole trace): all the same. Returns the tally of folded runs taken
-/// and refused over the runs with folding.
+/// whole trace): all the same, with `--timing` (every frame timed, the
+/// folded ones as the lines the reader hands over) and without. Returns
+/// the tally of folded runs taken and refused over the runs with folding.
 fn assert_fold_independent(name: &str, t: &[u8], opts: &Options) -> (u64, u64) {
+    // With `--timing` first: the frames kept inside runs (none then) are
+    // tallied for the caller without it.
+    let timed = assert_fold_independent_as(&format!("{name}, --timing"), t, opts, true);
+    assert!(timed.0 + timed.1 > 0, "{name}: no run folded with --timing");
+    let (taken, refused) = assert_fold_independent_as(name, t, opts, false);
+    (taken + timed.0, refused + timed.1)
+}
+
+fn assert_fold_independent_as(name: &str, t: &[u8], opts: &Options, timing: bool) -> (u64, u64) {
     let with = |threads, block_size| Options {
         threads,
         block_size,
         heartbeat_timeout: opts.heartbeat_timeout,
         assume_cia402_pdo: opts.assume_cia402_pdo,
+        timing,
         ..base_options()
     };
     set_folding(false);

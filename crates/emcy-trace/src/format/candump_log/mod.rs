@@ -70,10 +70,53 @@ impl LineParser for CandumpLogParser {
         }
     }
 
+    #[inline]
+    fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
+        self.annotated = false;
+        if let Some(frame) = canonical(line, interest) {
+            return Parsed::Frame(frame);
+        }
+        match parse_line_full(line, interest) {
+            Ok(Some((frame, annotated))) => {
+                self.annotated = annotated;
+                Parsed::Frame(frame)
+            }
+            Ok(None) => Parsed::Skipped,
+            Err(_) if is_candump_command(line) => Parsed::Skipped,
+            Err(reason) => Parsed::Malformed(reason),
+        }
+    }
+
+    fn take_annotated(&mut self) -> bool {
+        std::mem::take(&mut self.annotated)
+    }
+
     /// Lines of the last line's layout, found without a separate newline
     /// search: the data field's end is where the line must end.
     #[inline]
     fn run<'a>(
+        &mut self,
+        bytes: &'a [u8],
+        max_line: usize,
+        interest: &Interest,
+        folds: &mut Folds,
+        ids: &mut IdCounts,
+    ) -> Run<'a> {
+        if interest.times_every_frame() {
+            self.lines::<true>(bytes, max_line, interest, folds, ids)
+        } else {
+            self.lines::<false>(bytes, max_line, interest, folds, ids)
+        }
+    }
+}
+
+impl CandumpLogParser {
+    /// [`LineParser::run`], one loop with every frame timed
+    /// (`EVERY_FRAME`, each line only counted handed over with its time)
+    /// and one without: the loop without lost 2-10 instructions a line to
+    /// the other's code in its body (callgrind, the bench's traces).
+    #[inline]
+    fn lines<'a, const EVERY_FRAME: bool>(
         &mut self,
         bytes: &'a [u8],
         max_line: usize,
@@ -96,9 +139,6 @@ impl LineParser for CandumpLogParser {
         }
         run.channel = layout.channel(bytes);
         let (channel, timed_lines) = ids.run_parts(run.channel);
-        // With every frame timed, each line only counted is handed over
-        // with its time.
-        let every_frame = interest.times_every_frame();
         while let Some(rest) = bytes.get(run.bytes..)
             && let Some((shape, len)) = layout.line(rest)
             && len <= max_line
@@ -109,10 +149,9 @@ impl LineParser for CandumpLogParser {
             match shape.kind(line, interest) {
                 Kind::Plain => {
                     channel.count(shape.id, shape.extended);
-                    if every_frame {
-                        // No line is only timed then (the content filter's
-                        // are handed over): its index is `plain`.
-                        timed_lines.push(shape.timed_line(line, run.plain));
+                    if EVERY_FRAME {
+                        // Timed, as every frame is: handed over.
+                        timed_lines.push(shape.timed_line(line, run.plain + run.timed));
                     }
                     run.plain += 1;
                 }
@@ -143,9 +182,16 @@ impl LineParser for CandumpLogParser {
                 // trace went 160.6M -> 164-170M).
                 Kind::Fold => {
                     let (id, extended) = (shape.id, shape.extended);
+                    // For the line's timed line (the shape moves on).
+                    let data_len = shape.data.len();
                     match fold_line(folds, shape, line, run.plain + run.timed, interest) {
                         Kind::Timed => {
                             channel.count(id, extended);
+                            if EVERY_FRAME {
+                                // Folded, and timed as every frame is.
+                                let idx = run.plain + run.timed;
+                                timed_lines.push(layout.timed_line(line, id, data_len, idx));
+                            }
                             if run.first_time.is_none() {
                                 run.first_time = time_at(line, layout.dot, layout.close);
                             }
@@ -157,6 +203,12 @@ impl LineParser for CandumpLogParser {
                             run.bytes += len + 1;
                             run.frame = Some(frame);
                             break;
+                        }
+                        Kind::Handed if EVERY_FRAME => {
+                            channel.count(id, extended);
+                            let idx = run.plain + run.timed;
+                            timed_lines.push(layout.timed_line(line, id, data_len, idx));
+                            run.plain += 1;
                         }
                         _ => break,
                     }
@@ -190,27 +242,6 @@ impl LineParser for CandumpLogParser {
         }
         run
     }
-
-    #[inline]
-    fn parse<'a>(&mut self, line: &'a [u8], interest: &Interest) -> Parsed<'a> {
-        self.annotated = false;
-        if let Some(frame) = canonical(line, interest) {
-            return Parsed::Frame(frame);
-        }
-        match parse_line_full(line, interest) {
-            Ok(Some((frame, annotated))) => {
-                self.annotated = annotated;
-                Parsed::Frame(frame)
-            }
-            Ok(None) => Parsed::Skipped,
-            Err(_) if is_candump_command(line) => Parsed::Skipped,
-            Err(reason) => Parsed::Malformed(reason),
-        }
-    }
-
-    fn take_annotated(&mut self) -> bool {
-        std::mem::take(&mut self.annotated)
-    }
 }
 
 /// A line of [`CandumpLogParser::run`] on an id the interest hands over
@@ -225,8 +256,10 @@ fn hand_over(timed_lines: &mut Vec<TimedLine>, shape: Shape, line: &[u8], idx: u
 
 /// A line of [`CandumpLogParser::run`] on a foldable id: folded into
 /// `folds` ([`Folds::add`]) and then timed like a frame nobody wants, or
-/// what [`Shape::kind`] makes of it. Not inlined: in the loop's body it
-/// made every line slower (callgrind on plain lines).
+/// what [`Shape::kind`] makes of it (with every frame timed, one the
+/// content filter only times is handed over, as [`Shape::wanted`] says).
+/// Not inlined: in the loop's body it made every line slower (callgrind
+/// on plain lines).
 #[inline(never)]
 fn fold_line<'a>(
     folds: &mut Folds,
@@ -246,8 +279,12 @@ fn fold_line<'a>(
     let Some(data) = shape.data(line) else {
         return Kind::Parse;
     };
-    if interest.timed_only(shape.id, false, data.as_slice()) {
-        return Kind::Timed;
+    if interest.timed_only_head(shape.id, DataHead::of(data.as_slice())) {
+        return if interest.times_every_frame() {
+            Kind::Handed
+        } else {
+            Kind::Timed
+        };
     }
     if let (Some((word, _)), Some(text), Some(time)) = (data.word(), text, time)
         && folds.add(shape.id, word, text, time, idx, rule)
@@ -612,6 +649,23 @@ struct Layout {
 }
 
 impl Layout {
+    /// A line of this layout as a [`TimedLine`], line `idx` of its run: a
+    /// classic data frame on standard `id` with `data_len` hex digits (a
+    /// folded line's, whose shape is gone).
+    #[inline]
+    fn timed_line(&self, line: &[u8], id: u32, data_len: usize, idx: u64) -> TimedLine {
+        let time = scan::decimal_ticks(line, 1, self.dot, self.close)
+            .and_then(|value| Ticks::new(value, (self.close - self.dot - 1) as u8));
+        TimedLine {
+            idx,
+            time,
+            id,
+            extended: false,
+            kind: FrameKind::Data,
+            len: (data_len / 2) as u8,
+        }
+    }
+
     fn of(line: &[u8], s: &Shape) -> Option<Layout> {
         if s.kind != FrameKind::Data || s.extended {
             return None;
