@@ -53,12 +53,14 @@ pub(super) trait LineSink {
     /// on the ids the interest hands over), also counted by
     /// `plain_frames`, on `channel`, each at its index from `idx`. They
     /// come before the run's other frames; a run with folds carries its
-    /// own ([`FoldedRun::handed`]).
+    /// own ([`FoldedRun::handed`]). They begin at `at` in the block's
+    /// ([`IdCounts::timed_lines`], given back with the counts).
     fn timed_lines(
         &mut self,
         idx: u64,
         channel: &[u8],
         lines: &[TimedLine],
+        at: usize,
     ) -> Result<(), OutputError>;
     fn frame(&mut self, idx: u64, frame: &Frame<'_>, foreign: Foreign) -> Result<(), OutputError>;
     /// After a line outside a run or the frame that ended a run: `lines`
@@ -110,12 +112,14 @@ pub(super) struct FoldedRun<'a> {
 }
 
 /// Where a [`FoldedRun`]'s folds and frames begin in its block's
-/// ([`LineSink::block_folds`]).
+/// ([`LineSink::block_folds`]), and its handed-over lines in the block's
+/// ([`IdCounts::timed_lines`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct RunAt {
     pub folds: usize,
     pub frames: usize,
     pub inner: usize,
+    pub handed: usize,
 }
 
 /// The one loop that classifies lines, sequentially or on a worker: runs
@@ -173,9 +177,15 @@ fn classify_lines(
         sink.malformed(idx, too_long(n, max_line));
         idx += 1;
     }
+    // The block's handed-over lines stay in the counts' buffer, each run's
+    // after the last: a worker's record points at them rather than copying
+    // them (the copy and the second buffer's pages were 2-6% of a worker's
+    // time with `--timing`: perf, the bench's segmented firmware trace).
+    ids.timed_lines.clear();
     loop {
         // Started here: in the reader's hot loop it made every line slower.
         folds.next_run();
+        let handed_at = ids.timed_lines.len();
         let mut run = detector.run(
             bytes.get(pos..).unwrap_or_default(),
             max_line,
@@ -229,13 +239,14 @@ fn classify_lines(
                 folds: folds.as_slice(),
                 frames: folds.frames(),
                 inner: folds.inner(),
-                handed: &ids.timed_lines,
+                handed: ids.timed_lines.get(handed_at..).unwrap_or_default(),
                 at: {
                     let (folds, frames, inner) = folds.run_start();
                     RunAt {
                         folds,
                         frames,
                         inner,
+                        handed: handed_at,
                     }
                 },
             }),
@@ -247,8 +258,9 @@ fn classify_lines(
         } else {
             // No folds, so one stretch: its lines handed over first (the
             // frames around them only count and move the input's times).
-            if !ids.timed_lines.is_empty() {
-                sink.timed_lines(idx, run.channel, &ids.timed_lines)?;
+            let handed = ids.timed_lines.get(handed_at..).unwrap_or_default();
+            if !handed.is_empty() {
+                sink.timed_lines(idx, run.channel, handed, handed_at)?;
             }
             if plain > 0 {
                 sink.plain_frames(plain);
@@ -259,7 +271,6 @@ fn classify_lines(
                 idx += timed;
             }
         }
-        ids.timed_lines.clear();
         if let Some(frame) = run.frame {
             deliver(sink, ids, idx, &frame, None)?;
             idx += 1;

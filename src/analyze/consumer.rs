@@ -627,6 +627,7 @@ impl<E: Write> LineSink for Consumer<'_, '_, E> {
         idx: u64,
         channel: &[u8],
         lines: &[TimedLine],
+        _at: usize,
     ) -> Result<(), OutputError> {
         let Some(c) = self.traffic.channel_index(channel) else {
             return Ok(());

@@ -100,9 +100,6 @@ struct BlockResult {
     folds: Vec<Fold>,
     folded: Vec<Folded>,
     inner: Vec<Inner>,
-    /// The timed lines of the block's [`BlockRecord::TimedLines`] and
-    /// folded runs.
-    timed_lines: Vec<TimedLine>,
 }
 
 /// What a worker counted of a block's lines (or of its lines up to a
@@ -171,7 +168,6 @@ struct Spare {
     folded: Vec<Folded>,
     inner: Vec<Inner>,
     ids: IdCounts,
-    timed_lines: Vec<TimedLine>,
 }
 
 impl BlockResult {
@@ -186,11 +182,9 @@ impl BlockResult {
             mut folded,
             mut inner,
             mut ids,
-            mut timed_lines,
             ..
         } = self;
         ids.clear();
-        timed_lines.clear();
         records.clear();
         cuts.clear();
         channels.clear();
@@ -206,7 +200,6 @@ impl BlockResult {
             folded,
             inner,
             ids,
-            timed_lines,
         }
     }
 }
@@ -256,9 +249,8 @@ impl LineSink for Recorder {
             folds,
             frames,
             inner,
+            handed,
         } = run.at;
-        let handed = self.result.timed_lines.len();
-        self.result.timed_lines.extend_from_slice(run.handed);
         self.result.records.push(BlockRecord::Folded {
             idx,
             plain: run.plain,
@@ -270,7 +262,7 @@ impl LineSink for Recorder {
             folds: folds..folds + run.folds.len(),
             frames: frames..frames + run.frames.len(),
             inner: inner..inner + run.inner.len(),
-            handed: handed..self.result.timed_lines.len(),
+            handed: handed..handed + run.handed.len(),
         });
         Ok(())
     }
@@ -306,16 +298,16 @@ impl LineSink for Recorder {
         idx: u64,
         channel: &[u8],
         lines: &[TimedLine],
+        at: usize,
     ) -> Result<(), OutputError> {
         self.flush_time();
         let c = self.result.channels.len();
         self.result.channels.extend_from_slice(channel);
-        let at = self.result.timed_lines.len();
-        self.result.timed_lines.extend_from_slice(lines);
+        // The lines stay where the reader put them, in the block's counts.
         self.result.records.push(BlockRecord::TimedLines {
             idx,
             channel: c..self.result.channels.len(),
-            lines: at..self.result.timed_lines.len(),
+            lines: at..at + lines.len(),
         });
         Ok(())
     }
@@ -475,8 +467,9 @@ impl<E: Write> Consumer<'_, '_, E> {
                     lines,
                 } => {
                     let channel = r.channels.get(channel).unwrap_or_default();
-                    let lines = r.timed_lines.get(lines).unwrap_or_default();
-                    self.timed_lines(idx, channel, lines)?;
+                    let at = lines.start;
+                    let lines = r.ids.timed_lines.get(lines).unwrap_or_default();
+                    self.timed_lines(idx, channel, lines, at)?;
                 }
                 BlockRecord::Folded {
                     idx,
@@ -501,11 +494,12 @@ impl<E: Write> Consumer<'_, '_, E> {
                         folds: r.folds.get(folds.clone()).unwrap_or_default(),
                         frames: r.folded.get(frames.clone()).unwrap_or_default(),
                         inner: r.inner.get(inner.clone()).unwrap_or_default(),
-                        handed: r.timed_lines.get(handed).unwrap_or_default(),
+                        handed: r.ids.timed_lines.get(handed.clone()).unwrap_or_default(),
                         at: RunAt {
                             folds: folds.start,
                             frames: frames.start,
                             inner: inner.start,
+                            handed: handed.start,
                         },
                     };
                     self.folded(idx, &run)?;
@@ -638,7 +632,6 @@ pub(super) fn run<R: Read + Send, E: Write>(
                             folded: spare.folded,
                             inner: spare.inner,
                             ids: spare.ids,
-                            timed_lines: spare.timed_lines,
                         },
                     };
                     // A recorder never fails: it only collects.
