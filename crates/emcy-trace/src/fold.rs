@@ -523,6 +523,13 @@ impl Folds {
         self.latest.map(Ticks::timestamp)
     }
 
+    /// [`Folds::latest`] as the line's ticks: the time of the line folded
+    /// last, for a caller that times it without reading it again.
+    #[inline]
+    pub fn latest_ticks(&self) -> Option<Ticks> {
+        self.latest
+    }
+
     /// Line `idx` as kept, if a frame at `time` may follow the frames
     /// folded so far (times only go forward, with the same digits; a
     /// block's lines are far fewer than 2^32).

@@ -204,9 +204,11 @@ impl CandumpLogParser {
                         Kind::Timed => {
                             channel.count(id, extended);
                             if EVERY_FRAME {
-                                // Folded, and timed as every frame is.
+                                // Folded, and timed as every frame is: its
+                                // ticks are the fold's latest, read already.
                                 let idx = run.plain + run.timed;
-                                timed_lines.push(layout.timed_line(line, id, data_len, idx));
+                                let time = folds.latest_ticks();
+                                timed_lines.push(data_line(id, data_len, time, idx));
                             }
                             if run.first_time.is_none() {
                                 run.first_time = time_at(line, layout.dot, layout.close);
@@ -223,7 +225,8 @@ impl CandumpLogParser {
                         Kind::Handed if EVERY_FRAME => {
                             channel.count(id, extended);
                             let idx = run.plain + run.timed;
-                            timed_lines.push(layout.timed_line(line, id, data_len, idx));
+                            let time = ticks_at(line, layout.dot, layout.close);
+                            timed_lines.push(data_line(id, data_len, time, idx));
                             run.plain += 1;
                         }
                         _ => break,
@@ -507,8 +510,7 @@ impl Shape {
     /// The time as [`Ticks`] (what folding compares); `None` past 19 digits.
     #[inline]
     fn ticks(&self, line: &[u8]) -> Option<Ticks> {
-        let value = scan::decimal_ticks(line, 1, self.dot, self.close)?;
-        Ticks::new(value, (self.close - self.dot - 1) as u8)
+        ticks_at(line, self.dot, self.close)
     }
 
     /// The line as a [`TimedLine`], line `idx` of its run.
@@ -664,24 +666,30 @@ struct Layout {
     sep: scan::Fixed,
 }
 
-impl Layout {
-    /// A line of this layout as a [`TimedLine`], line `idx` of its run: a
-    /// classic data frame on standard `id` with `data_len` hex digits (a
-    /// folded line's, whose shape is gone).
-    #[inline]
-    fn timed_line(&self, line: &[u8], id: u32, data_len: usize, idx: u64) -> TimedLine {
-        let time = scan::decimal_ticks(line, 1, self.dot, self.close)
-            .and_then(|value| Ticks::new(value, (self.close - self.dot - 1) as u8));
-        TimedLine {
-            idx,
-            time,
-            id,
-            extended: false,
-            kind: FrameKind::Data,
-            len: (data_len / 2) as u8,
-        }
+/// A classic data frame on standard `id` with `data_len` hex digits at
+/// `time`, line `idx` of its run, as a [`TimedLine`] (a folded line's,
+/// whose shape is gone).
+#[inline]
+fn data_line(id: u32, data_len: usize, time: Option<Ticks>, idx: u64) -> TimedLine {
+    TimedLine {
+        idx,
+        time,
+        id,
+        extended: false,
+        kind: FrameKind::Data,
+        len: (data_len / 2) as u8,
     }
+}
 
+/// The time of a canonical line with its dot and `)` at `dot` and
+/// `close`, as [`Ticks`]; `None` past 19 digits.
+#[inline]
+fn ticks_at(line: &[u8], dot: usize, close: usize) -> Option<Ticks> {
+    let value = scan::decimal_ticks(line, 1, dot, close)?;
+    Ticks::new(value, (close - dot - 1) as u8)
+}
+
+impl Layout {
     fn of(line: &[u8], s: &Shape) -> Option<Layout> {
         if s.kind != FrameKind::Data || s.extended {
             return None;
