@@ -218,9 +218,11 @@ fn classify_lines(
             );
             pos += run.bytes;
             // The reader counts this stretch's lines from its start.
-            let before = plain + timed + inner;
+            // (A block holds fewer lines than a `u32` counts: see
+            // `BlockReader::new`.)
+            let before = u32::try_from(plain + timed + inner).unwrap_or(u32::MAX);
             for l in ids.timed_lines.get_mut(handed..).unwrap_or_default() {
-                l.idx += before;
+                l.idx = l.idx.saturating_add(before);
             }
             plain += run.plain;
             timed += run.timed;

@@ -528,11 +528,11 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
         channel: &[u8],
         l: &TimedLine,
     ) -> Result<(), OutputError> {
-        let line = self.line_no(idx + l.idx);
-        let time = l.time.map(FrameTime::Ticks);
+        let line = self.line_no(idx + u64::from(l.idx));
+        let time = l.time().map(FrameTime::Ticks);
         match self
             .traffic
-            .frame_in(c, l.id, l.extended, l.kind, l.len, time, line)
+            .frame_in(c, l.id(), false, FrameKind::Data, l.len, time, line)
         {
             Some(gap) => {
                 let at = gap.end.unwrap_or(At { time: None, line });

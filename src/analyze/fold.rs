@@ -145,7 +145,11 @@ impl<E: Write> Consumer<'_, '_, E> {
     ) -> Result<(), OutputError> {
         loop {
             let inner = between.inner.peek().map(|i| i.idx()).filter(|&n| n < end);
-            let handed = between.handed.peek().map(|l| l.idx).filter(|&n| n < end);
+            let handed = between
+                .handed
+                .peek()
+                .map(|l| u64::from(l.idx))
+                .filter(|&n| n < end);
             match (inner, handed) {
                 (Some(i), Some(h)) if h < i => self.handed_line(idx, run, between)?,
                 (Some(_), _) => {

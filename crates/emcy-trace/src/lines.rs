@@ -184,20 +184,26 @@ pub struct BlockReader<R> {
 /// First read size, and the floor for the adaptive size.
 const MIN_READ: usize = 64 * 1024;
 
+/// The largest block and line length a reader takes: a block then holds
+/// fewer lines than a `u32` counts, as a run's timed lines do
+/// ([`TimedLine::idx`](crate::TimedLine::idx)).
+pub const MAX_BLOCK: usize = 1 << 30;
+
 /// Reads are aligned to the input's offset within a page of this size.
 const PAGE: usize = 4096;
 
 impl<R: Read> BlockReader<R> {
     /// Cuts `inner` into blocks of about `block` bytes; lines longer than
-    /// `max_line` are only measured.
+    /// `max_line` are only measured. Both are taken as at most
+    /// [`MAX_BLOCK`].
     pub fn new(inner: R, block: usize, max_line: usize) -> Self {
         BlockReader {
             inner,
             carry: Vec::new(),
             begin: 0,
             filled: 0,
-            block: block.max(1),
-            max_line: max_line.max(1),
+            block: block.clamp(1, MAX_BLOCK),
+            max_line: max_line.clamp(1, MAX_BLOCK),
             eof: false,
             cut: false,
             skipping: None,

@@ -101,7 +101,9 @@ pub trait LineParser: Send {
     /// no newline, or not the common shape), which the caller then reads
     /// one at a time. Saves the per-line dispatch of the general loop.
     /// Every frame only counted or timed is counted in `ids`; the frame
-    /// that ends the run is the caller's to count.
+    /// that ends the run is the caller's to count. `bytes` is shorter than
+    /// 4 GiB, as a [`BlockReader`](crate::lines::BlockReader)'s blocks are:
+    /// a run numbers its lines in a `u32` ([`TimedLine::idx`](crate::TimedLine::idx)).
     #[inline]
     fn run<'a>(
         &mut self,

@@ -18,6 +18,16 @@ use crate::{
 };
 use crate::{hex, scan};
 
+/// The bytes [`LineParser::run`] looks at with every frame timed: fewer
+/// lines than a `u32` counts (a line has at least its newline), whatever
+/// block a caller hands it. Without, a caller's slice is that short
+/// ([`LineParser::run`]).
+const MAX_RUN_BYTES: usize = u32::MAX as usize;
+
+/// Where the dot of a time in Unix seconds with microseconds is, what
+/// candump writes: `(1700000000.001000)`.
+const UNIX_DOT: usize = 11;
+
 /// candump sets this bit in an 8-digit id to mark an error frame.
 pub const ERROR_FLAG: u32 = 0x2000_0000;
 const EFF_MASK: u32 = 0x1FFF_FFFF;
@@ -124,6 +134,12 @@ impl CandumpLogParser {
         folds: &mut Folds,
         ids: &mut IdCounts,
     ) -> Run<'a> {
+        // Every line is a timed line here, and a run numbers them in a
+        // `u32` ([`TimedLine::idx`]): the line cut here ends the run, and the
+        // caller reads it whole. (Without every frame timed only SYNC lines
+        // are, in blocks far shorter: the same cut in the default loop cost
+        // it 4% of its time, the bench's segmented firmware trace.)
+        let bytes = bytes.get(..MAX_RUN_BYTES).unwrap_or(bytes);
         self.lines::<true>(bytes, max_line, interest, folds, ids)
     }
 
@@ -173,7 +189,13 @@ impl CandumpLogParser {
                 }
                 Kind::Handed => {
                     channel.count(shape.id, shape.extended);
-                    hand_over(timed_lines, shape, line, run.plain + run.timed);
+                    let idx = run.plain + run.timed;
+                    if EVERY_FRAME {
+                        // Most lines here: in the loop's body.
+                        timed_lines.push(shape.timed_line(line, idx));
+                    } else {
+                        hand_over(timed_lines, shape, line, idx);
+                    }
                     run.plain += 1;
                 }
                 Kind::Timed => {
@@ -513,17 +535,11 @@ impl Shape {
         ticks_at(line, self.dot, self.close)
     }
 
-    /// The line as a [`TimedLine`], line `idx` of its run.
+    /// The line as a [`TimedLine`], line `idx` of its run (a line of a
+    /// [`Layout`], so a classic data frame on a standard id).
     #[inline]
     fn timed_line(&self, line: &[u8], idx: u64) -> TimedLine {
-        TimedLine {
-            idx,
-            time: self.ticks(line),
-            id: self.id,
-            extended: self.extended,
-            kind: self.kind,
-            len: (self.data.len() / 2) as u8,
-        }
+        data_line(self.id, self.data.len(), self.ticks(line), idx)
     }
 
     /// The data's head ([`DataHead`]), its first three bytes parsed.
@@ -668,24 +684,25 @@ struct Layout {
 
 /// A classic data frame on standard `id` with `data_len` hex digits at
 /// `time`, line `idx` of its run, as a [`TimedLine`] (a folded line's,
-/// whose shape is gone).
+/// whose shape is gone). `idx` fits a `u32`: see [`MAX_RUN_BYTES`].
 #[inline]
 fn data_line(id: u32, data_len: usize, time: Option<Ticks>, idx: u64) -> TimedLine {
-    TimedLine {
-        idx,
-        time,
-        id,
-        extended: false,
-        kind: FrameKind::Data,
-        len: (data_len / 2) as u8,
-    }
+    let idx = u32::try_from(idx).unwrap_or(u32::MAX);
+    // A layout's id has three hex digits and its data at most 16.
+    TimedLine::new(idx, time, id as u16, (data_len / 2) as u8)
 }
 
 /// The time of a canonical line with its dot and `)` at `dot` and
-/// `close`, as [`Ticks`]; `None` past 19 digits.
-#[inline]
+/// `close`, as [`Ticks`]; `None` past 19 digits. Inlined, with the
+/// general reading a call: a call for every line cost 15 instructions of
+/// saved registers more (callgrind, `--timing`).
+#[inline(always)]
 fn ticks_at(line: &[u8], dot: usize, close: usize) -> Option<Ticks> {
-    let value = scan::decimal_ticks(line, 1, dot, close)?;
+    let value = if (dot, close) == (UNIX_DOT, UNIX_DOT + 7) {
+        scan::unix_micros(line)?
+    } else {
+        scan::decimal_ticks(line, 1, dot, close)?
+    };
     Ticks::new(value, (close - dot - 1) as u8)
 }
 
@@ -1515,7 +1532,7 @@ mod tests {
             let run = p.run(block, 100, interest, folds, ids);
             assert_eq!((run.plain + run.timed, run.channel), (5, &b"can0"[..]));
             assert_eq!(run.frame.map(|f| f.data.as_slice().to_vec()), Some(vec![0]));
-            let lines: Vec<_> = ids.timed_lines.iter().map(|l| (l.idx, l.id)).collect();
+            let lines: Vec<_> = ids.timed_lines.iter().map(|l| (l.idx, l.id())).collect();
             lines
         };
         // SYNC alone on the default path, as lines 1 and 4 of the run.
@@ -1555,9 +1572,8 @@ mod tests {
             .map(|l| {
                 (
                     l.idx,
-                    l.time.map(|t| t.timestamp().to_string()),
-                    l.id,
-                    l.kind,
+                    l.time().map(|t| t.timestamp().to_string()),
+                    l.id(),
                     l.len,
                 )
             })
@@ -1566,9 +1582,26 @@ mod tests {
         assert_eq!(
             got,
             vec![
-                (0, at(1), 0x181, FrameKind::Data, 1),
-                (1, at(2), 0x281, FrameKind::Data, 2),
-                (2, at(3), 0x381, FrameKind::Data, 0),
+                (0, at(1), 0x181, 1),
+                (1, at(2), 0x281, 2),
+                (2, at(3), 0x381, 0),
+            ]
+        );
+        // Unix seconds with microseconds, what candump writes, are read
+        // their own way: the same times.
+        let unix = b"(1700000000.000001) can0 181#00\n(1700000000.999999) can0 281#0102 T\n\
+                     (1700000001.000003) can0 381#\n(1700000001.000004) can0 081#10\n";
+        p.scan(b"(1700000000.000000) can0 080#", &interest);
+        let ids = &mut IdCounts::new();
+        p.run(unix, 100, &every, folds, ids);
+        let got: Vec<_> = ids.timed_lines.iter().map(|l| l.time()).collect();
+        let ticks = |value| Ticks::new(value, 6);
+        assert_eq!(
+            got,
+            vec![
+                ticks(1_700_000_000_000_001),
+                ticks(1_700_000_000_999_999),
+                ticks(1_700_000_001_000_003)
             ]
         );
         // Without every frame timed, none is handed over.
