@@ -13,9 +13,11 @@
 //! 1 kHz, with and without `--assume-cia402-pdo`).
 //!
 //! `BENCH_COMPARE=/path/to/emcy-decode` holds another build against this
-//! one: each emcy-decode case runs both, their runs interleaved (so load
-//! from elsewhere falls on both alike), and a row gives the other's
-//! figures and this build's time as a multiple of its.
+//! one: each emcy-decode case runs both, their runs interleaved and each
+//! first every other run (so load from elsewhere falls on both alike), and
+//! a row gives the other's figures and this build's time as a multiple of
+//! its. Where `--timing` is measured, its cost follows as a multiple of the
+//! default's time, the two interleaved the same way.
 
 #[path = "../tests/integration/support/tracegen.rs"]
 mod tracegen;
@@ -172,17 +174,54 @@ fn measure_both(
     };
     let (mut this, mut that) = ((Duration::MAX, 0), Some((Duration::MAX, 0)));
     let mut cpu = Duration::MAX;
-    for _ in 0..runs {
+    for run in 0..runs {
+        // Each goes first every other run: on 2 cores the second of a pair
+        // ran up to 10% faster or slower than the first, which the best of
+        // runs in one order took for a difference between the builds.
+        let other_first = run % 2 == 1;
+        let mut theirs = || {
+            that = that
+                .zip(try_measure(1, input, other, args))
+                .map(|((best, most), (t, peak))| (best.min(t), most.max(peak)));
+        };
+        if other_first {
+            theirs();
+        }
         let (t, peak) = measure(1, input, program, args);
         cpu = cpu.min(last_cpu());
         this = (this.0.min(t), this.1.max(peak));
-        that = that
-            .zip(try_measure(1, input, other, args))
-            .map(|((best, most), (t, peak))| (best.min(t), most.max(peak)));
+        if !other_first {
+            theirs();
+        }
     }
     // This build's, as [`last_cpu`] promises.
     LAST_CPU.with(|c| c.set(cpu));
     (this, that)
+}
+
+/// `--timing`'s best time over the default's (`args` without the flag),
+/// `runs` of each with this build, each going first every other run: the
+/// figure the flag's cost is stated in, free of the drift between cases
+/// measured one after the other.
+fn timing_cost(runs: u64, input: &str, program: &str, args: &[&str]) -> f64 {
+    let timed: Vec<&str> = args.iter().copied().chain(["--timing"]).collect();
+    let (mut default, mut timing) = (Duration::MAX, Duration::MAX);
+    for run in 0..runs {
+        let order = if run % 2 == 0 {
+            [false, true]
+        } else {
+            [true, false]
+        };
+        for timed_now in order {
+            let (t, _) = measure(1, input, program, if timed_now { &timed } else { args });
+            if timed_now {
+                timing = timing.min(t);
+            } else {
+                default = default.min(t);
+            }
+        }
+    }
+    timing.as_secs_f64() / default.as_secs_f64()
 }
 
 fn mb_per_s(bytes: u64, t: Duration) -> f64 {
@@ -431,6 +470,7 @@ fn main() {
                 vec!["--format", "ndjson", "-j1", assume, &f],
             ));
         }
+        let timed = cases.iter().any(|(case, _)| *case == "ndjson --timing");
         for (case, args) in cases {
             let ((t, peak), other) = measure_both(runs, &f, bin, compare.as_deref(), &args);
             row(
@@ -453,6 +493,10 @@ fn main() {
                     t.as_secs_f64() / o.as_secs_f64()
                 );
             }
+        }
+        if timed {
+            let cost = timing_cost(runs, &f, bin, &["--format", "ndjson", &f]);
+            println!("  --timing's time: {cost:.2}x the default ndjson's (runs interleaved)");
         }
         println!();
     }
