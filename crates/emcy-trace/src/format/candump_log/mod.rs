@@ -20,8 +20,8 @@ use crate::{hex, scan};
 
 /// The bytes [`LineParser::run`] looks at with every frame timed: fewer
 /// lines than a `u32` counts (a line has at least its newline), whatever
-/// block a caller hands it. Without, a caller's slice is that short
-/// ([`LineParser::run`]).
+/// block a caller hands it. Without every frame timed, the slices callers
+/// hand over are that short ([`LineParser::run`]).
 const MAX_RUN_BYTES: usize = u32::MAX as usize;
 
 /// Where the dot of a time in Unix seconds with microseconds is, what
@@ -136,10 +136,9 @@ impl CandumpLogParser {
     ) -> Run<'a> {
         // Every line is a timed line here, and a run numbers them in a
         // `u32` ([`TimedLine::idx`]): the line cut here ends the run, and the
-        // caller reads it whole. (Without every frame timed only SYNC lines
-        // are, and callers hand blocks shorter than that ([`LineParser::run`]):
-        // the same cut in the default loop cost it 4% of its time, the
-        // bench's segmented firmware trace.)
+        // caller reads it whole. The default loop has no such cut (it cost
+        // that loop 4% of its time, the bench's segmented firmware trace):
+        // only SYNC lines are timed there, in slices callers keep shorter.
         let bytes = bytes.get(..MAX_RUN_BYTES).unwrap_or(bytes);
         self.lines::<true>(bytes, max_line, interest, folds, ids)
     }
