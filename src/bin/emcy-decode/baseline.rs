@@ -103,7 +103,7 @@ fn read_traces(args: &TraceArgs, unwritten: &str) -> Result<Result<Traces, Unrea
             &source,
             mode,
             &opts,
-            auto_threads,
+            |opened| auto_threads(opened, opts.timing),
             |_, reader| reader,
             &mut Discard,
             &mut log,

@@ -82,7 +82,7 @@ pub(super) fn read_whole<E: io::Write>(
         &source,
         mode,
         opts,
-        auto_threads,
+        |opened| auto_threads(opened, opts.timing),
         |_, reader| reader,
         sink,
         log,
