@@ -250,9 +250,9 @@ pub struct DecodeArgs {
     ///
     /// Threads for reading large inputs, and for writing the errors listed
     /// in ndjson node objects (0 = automatic: all cores for files over 16 MiB
-    /// and gzip input, one more with --timing, one for small files and live
-    /// streams; all cores for the node objects). At most 1024; more than 4
-    /// per core counts as 4 per core
+    /// and gzip input, one for small files and live streams; all cores for
+    /// the node objects). At most 1024; more than 4 per core counts as 4 per
+    /// core. With --timing a big input gets one worker more than the cores
     #[arg(long, short = 'j', default_value_t = 0, value_name = "N", value_parser = parse_threads, help_heading = PERFORMANCE)]
     pub threads: usize,
 
