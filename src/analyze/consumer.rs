@@ -558,10 +558,14 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
     #[inline]
     fn steady_heartbeat(&mut self, idx: u64, frame: &Frame<'_>) -> bool {
         // An incident due to close closes on the frame path, as it would
-        // frame by frame. (An SDO transfer that ran out need not: what it
-        // says does not depend on the frame that tells it, and every other
-        // event is told on the frame path, which tells it first.)
-        if frame.time.is_some_and(|t| self.incidents.passed(t)) {
+        // frame by frame, and an SDO transfer that ran out is told there:
+        // at the first frame after its deadline that the analysis reads,
+        // heartbeat or not, so where it is told among the other events does
+        // not depend on which frames took this path (nor on folding).
+        if frame
+            .time
+            .is_some_and(|t| self.incidents.passed(t) || self.monitors.sdo.passed(t))
+        {
             return false;
         }
         let line_base = self.line_base;

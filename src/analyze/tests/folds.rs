@@ -436,6 +436,41 @@ fn pdo_repeats_are_folded_and_give_what_they_give_one_by_one() {
     }
 }
 
+/// An SDO transfer that runs out among steady heartbeats is told at the
+/// first frame after its timeout, folding or not: before a heartbeat loss
+/// found later. (Folded runs taken whole left it to the next frame off the
+/// fold path, which told the loss first.)
+#[test]
+fn an_sdo_transfer_running_out_among_steady_heartbeats_is_told_in_time() {
+    // Four nodes beating every 100 ms; node 1 is asked at 2.05 s and never
+    // answers (out at 3.05 s); node 4 beats for the last time at 2.804 s
+    // (lost at 3.104 s); an EMCY at 4.15 s.
+    let mut t: Vec<u8> = Vec::new();
+    for tick in 0..60u32 {
+        for node in 1..=4u32 {
+            if node == 4 && tick > 28 {
+                continue;
+            }
+            let at = format!("({}.{:03}0)", 1000 + tick / 10, tick % 10 * 100 + node);
+            t.extend(format!("{at} can0 {:03X}#05\n", 0x700 + node).bytes());
+        }
+        if tick == 20 {
+            t.extend(b"(1002.0500) can0 601#4000100000000000\n");
+        }
+        if tick == 41 {
+            t.extend(b"(1004.1500) can0 081#1043090000000000\n");
+        }
+    }
+    let (taken, _) = assert_fold_independent("unanswered before lost", &t, &base_options());
+    assert!(taken > 0, "runs folded");
+    let out = run_with(&t, base_options()).0;
+    let told = |what: &str| out.find(what).unwrap_or(usize::MAX);
+    assert!(
+        told("\"result\":\"unanswered\"") < told("\"type\":\"heartbeat_lost\""),
+        "{out}"
+    );
+}
+
 /// With `--assume-cia402-pdo`, an I/O module whose device type says it is
 /// no drive sends event PDOs among the drives' repeats: its ids leave the
 /// interest once its device type is read, so the runs that hold them
