@@ -271,12 +271,15 @@ impl Builder {
         }
     }
 
+    /// What is known of `node`'s past on `channel`, made on first use. (Only
+    /// NMT states come here, a few per node: the channel's name is copied
+    /// for the lookup.)
     fn past(&mut self, channel: &str, node: NodeId) -> &mut NodePast {
-        if !self.past.contains_key(channel) {
-            self.past.insert(channel.to_string(), HashMap::new());
-        }
-        let nodes = self.past.get_mut(channel).expect("inserted above");
-        nodes.entry(node).or_default()
+        self.past
+            .entry(channel.to_owned())
+            .or_default()
+            .entry(node)
+            .or_default()
     }
 
     /// An error EMCY (codes other than 0x0000).
