@@ -134,6 +134,37 @@ fn frames_are_what_python_can_reads() {
     assert_eq!(data, want);
 }
 
+/// A sorted file stores its groups one after another, so its last record
+/// need not be its latest: its span runs from its earliest frame to its
+/// latest, whichever group holds them, the same whether the frames were
+/// decoded or only counted (`--timing` decodes every one).
+#[test]
+fn a_sorted_file_spans_its_earliest_to_its_latest_frame() {
+    let file = "fixtures/sorted-sd.mf4";
+    let f = frames(file);
+    let times: Vec<_> = f.iter().filter_map(|f| f.time).collect();
+    let latest = times.iter().max().expect("times").to_string();
+    let last = times.last().expect("times").to_string();
+    assert!(
+        last < latest,
+        "the file's last record is not its latest frame"
+    );
+    let span = |extra: &[&str]| {
+        let mut args = extra.to_vec();
+        args.push(file);
+        let v = ndjson(&args);
+        let input = v.iter().find(|o| o["type"] == "input").expect("input");
+        (
+            input["first_time_text"].as_str().map(String::from),
+            input["last_time_text"].as_str().map(String::from),
+        )
+    };
+    let default = span(&[]);
+    assert_eq!(default.1.as_deref(), Some("2023-11-14T22:13:27.100000000Z"));
+    assert_eq!(default.0.as_deref(), Some("2023-11-14T22:13:20.000000000Z"));
+    assert_eq!(span(&["--timing"]), default);
+}
+
 #[test]
 fn times_are_the_start_plus_the_master_channel_exactly() {
     let time = |file: &str, i: usize| {

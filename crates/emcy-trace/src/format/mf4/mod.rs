@@ -207,6 +207,18 @@ impl CountedIds {
 
 /// Adds `n` plain frames to the queue's last entry when that is plain
 /// frames too, else queues them.
+/// `span` widened to reach from `first` to `last`.
+fn widen(
+    span: Option<(Timestamp, Timestamp)>,
+    first: Timestamp,
+    last: Timestamp,
+) -> (Timestamp, Timestamp) {
+    match span {
+        Some((a, b)) => (a.min(first), b.max(last)),
+        None => (first, last),
+    }
+}
+
 fn queue_plain(queue: &mut VecDeque<Out>, n: u64) {
     match queue.back_mut() {
         Some(Out::Plain(k)) => *k += n,
@@ -227,9 +239,18 @@ impl<R: Read> FrameSource for Mf4Reader<R> {
         self.decode_next(interest, true)
     }
 
+    /// Every frame's span, not only the plain frames': a sorted file's
+    /// groups come one after another, so its last record need not be its
+    /// latest (a CANedge file's last group ended a second before another's),
+    /// and the span is the earliest and latest frame whatever was decoded.
     fn plain_span(&self) -> Option<(Timestamp, Timestamp)> {
-        let first = self.plain_time(self.plain_first?)?;
-        Some((first, self.plain_time(self.plain_last?)?))
+        let plain = self.states.iter().flat_map(|s| s.plain.iter().flatten());
+        plain.fold(self.handed_span, |span, (first, last)| {
+            match (self.plain_time(*first), self.plain_time(*last)) {
+                (Some(first), Some(last)) => Some(widen(span, first, last)),
+                _ => span,
+            }
+        })
     }
 
     /// Every frame only counted so far, including those of the
@@ -456,6 +477,10 @@ struct DgState {
     lost: bool,
     /// Records read per channel group (the value of virtual channels).
     samples: Vec<u64>,
+    /// Per channel group: its first and last plain frames' times as stored
+    /// (a group's records come in time order; the groups of a sorted file
+    /// one after another, so the span is taken over them at the end).
+    plain: Vec<Option<(PlainTime, PlainTime)>>,
     /// Per VLSD group: the offset of its next record, and its last records.
     vlsd: Vec<(u64, Window)>,
 }
@@ -487,9 +512,8 @@ pub struct Mf4Reader<R> {
     active: Option<Active>,
     /// Records decoded, not yet taken (at most one chunk's).
     queue: VecDeque<Out>,
-    /// The first and last plain frames' times as stored (the input's span).
-    plain_first: Option<PlainTime>,
-    plain_last: Option<PlainTime>,
+    /// The earliest and latest times of the frames handed on.
+    handed_span: Option<(Timestamp, Timestamp)>,
     /// Every plain frame by channel and identifier.
     counted_ids: CountedIds,
     /// Records taken from the queue so far (queue positions of waiters).
@@ -593,8 +617,7 @@ impl<R: Read> Mf4Reader<R> {
             replay: None,
             active: None,
             queue: VecDeque::new(),
-            plain_first: None,
-            plain_last: None,
+            handed_span: None,
             counted_ids: CountedIds::default(),
             popped: 0,
             waiting: HashMap::new(),
@@ -719,7 +742,18 @@ impl<R: Read> Mf4Reader<R> {
         time(&c, &t.bytes, t.sample, self.start)
     }
 
+    /// A run of plain frames of group `gi` of data group `dg`, from `first`
+    /// to `last`, into the group's span.
+    fn note_plain(&mut self, dg: usize, gi: usize, first: PlainTime, last: PlainTime) {
+        if let Some(span) = self.states.get_mut(dg).and_then(|s| s.plain.get_mut(gi)) {
+            *span = Some((span.map_or(first, |(f, _)| f), last));
+        }
+    }
+
     fn frame(&mut self, d: Decoded) -> Frame<'_> {
+        if let Some(t) = d.time {
+            self.handed_span = Some(widen(self.handed_span, t, t));
+        }
         Frame {
             time: d.time,
             channel: self.channel.name(d.channel),
@@ -913,6 +947,7 @@ impl<R: Read> Mf4Reader<R> {
                         .iter()
                         .map(|dg| DgState {
                             samples: vec![0; dg.groups.len()],
+                            plain: vec![None; dg.groups.len()],
                             vlsd: vec![(0, VecDeque::new()); dg.groups.len()],
                             ..DgState::default()
                         })
@@ -1358,13 +1393,11 @@ impl<R: Read> Mf4Reader<R> {
                 };
                 // Only the run's first and last records: the span is all
                 // the report needs of them.
-                if self.plain_first.is_none() {
-                    self.plain_first = at(0);
-                }
-                if let Some(last) = at(n - 1) {
-                    self.plain_last = Some(last);
-                }
+                let run = at(0).zip(at(n - 1));
                 *s += n;
+                if let Some((first, last)) = run {
+                    self.note_plain(dg, gi, first, last);
+                }
             }
             queue_plain(&mut self.queue, n);
         }
@@ -1546,10 +1579,12 @@ impl<R: Read> Mf4Reader<R> {
         {
             if let Some(c) = group.time.as_ref() {
                 let time = PlainTime::of(dg, gi, c, record, sample);
-                if self.plain_first.is_none() {
-                    self.plain_first = Some(time);
+                if let Some(span) = self.states.get_mut(dg).and_then(|s| s.plain.get_mut(gi)) {
+                    match span {
+                        Some((_, last)) => *last = time,
+                        None => *span = Some((time, time)),
+                    }
                 }
-                self.plain_last = Some(time);
             }
             // Under the channel its frame would name: the one field read
             // for it beyond those that decided it is only counted.
