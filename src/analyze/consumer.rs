@@ -555,17 +555,21 @@ impl<'r, 'l, E: Write> Consumer<'r, 'l, E> {
 
     /// The common heartbeat ([`NmtMonitor::steady_heartbeat`]), counted
     /// and timed. `false`: not that case, nothing was changed.
+    /// Whether something is due by `t` that the frame path tells at the
+    /// first frame after it (a burst of error frames to close, an
+    /// incident's gap passed, an SDO transfer run out): a frame at `t`
+    /// then takes that path, never a shortcut (a steady heartbeat, a folded
+    /// run taken whole), so where such an event is told among the others
+    /// does not depend on which frames take the shortcuts, nor on folding.
+    /// The one list of them: each shortcut asks here.
+    #[inline]
+    pub(super) fn frame_path_due(&self, t: Timestamp) -> bool {
+        self.facts.bus.passed(t) || self.incidents.passed(t) || self.monitors.sdo.passed(t)
+    }
+
     #[inline]
     fn steady_heartbeat(&mut self, idx: u64, frame: &Frame<'_>) -> bool {
-        // An incident due to close closes on the frame path, as it would
-        // frame by frame, and an SDO transfer that ran out is told there:
-        // at the first frame after its deadline that the analysis reads,
-        // heartbeat or not, so where it is told among the other events does
-        // not depend on which frames took this path (nor on folding).
-        if frame
-            .time
-            .is_some_and(|t| self.incidents.passed(t) || self.monitors.sdo.passed(t))
-        {
+        if frame.time.is_some_and(|t| self.frame_path_due(t)) {
             return false;
         }
         let line_base = self.line_base;

@@ -242,13 +242,9 @@ impl<E: Write> Consumer<'_, '_, E> {
         taken_as: &mut Vec<TakenFold>,
         rebounds: &mut Vec<(u32, Option<Timestamp>)>,
     ) -> bool {
-        // A burst of error frames closes within the run, an incident's gap
-        // passes or an SDO transfer runs out: frame by frame, so each is
-        // told where the frame path tells it.
-        if self.facts.bus.passed(run.latest)
-            || self.incidents.passed(run.latest)
-            || self.monitors.sdo.passed(run.latest)
-        {
+        // Something the frame path tells falls due within the run: frame
+        // by frame, so it is told where the frame path tells it.
+        if self.frame_path_due(run.latest) {
             return false;
         }
         // Index + 1 into the folds by node (0: not folded).

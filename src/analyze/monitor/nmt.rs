@@ -387,8 +387,9 @@ impl NmtMonitor {
     /// deadline, nothing awaited of it): its deadline moves on and nothing
     /// else happens; its time, `Some`, is all the dispatcher has to count.
     /// Checked ahead of the general frame path, which costs several times
-    /// as much (measured in docs/performance.md). `None`: not that case,
-    /// nothing was changed.
+    /// as much (measured in docs/performance.md), once the dispatcher found
+    /// nothing else due (`Consumer::frame_path_due`). `None`: not that
+    /// case, nothing was changed.
     #[inline]
     pub(in crate::analyze) fn steady_heartbeat(
         &self,
@@ -413,7 +414,6 @@ impl NmtMonitor {
         };
         if !decided
             || self.passed(time)
-            || facts.bus.passed(time)
             || !interest.wants(frame.id, false)
             || facts.moved_emcy(frame.id)
         {
