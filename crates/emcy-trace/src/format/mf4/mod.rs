@@ -219,6 +219,18 @@ fn widen(
     }
 }
 
+/// Plain frames of group `gi` of data group `dg`, a run from `first` to
+/// `last` or one frame, into the group's span.
+fn note_plain(states: &mut [DgState], dg: usize, gi: usize, first: PlainTime, last: PlainTime) {
+    if let Some(span) = states.get_mut(dg).and_then(|s| s.plain.get_mut(gi)) {
+        // The group's first is kept: only the last is stored again.
+        match span {
+            Some((_, l)) => *l = last,
+            None => *span = Some((first, last)),
+        }
+    }
+}
+
 fn queue_plain(queue: &mut VecDeque<Out>, n: u64) {
     match queue.back_mut() {
         Some(Out::Plain(k)) => *k += n,
@@ -740,14 +752,6 @@ impl<R: Read> Mf4Reader<R> {
             ..group.time.clone()?
         };
         time(&c, &t.bytes, t.sample, self.start)
-    }
-
-    /// A run of plain frames of group `gi` of data group `dg`, from `first`
-    /// to `last`, into the group's span.
-    fn note_plain(&mut self, dg: usize, gi: usize, first: PlainTime, last: PlainTime) {
-        if let Some(span) = self.states.get_mut(dg).and_then(|s| s.plain.get_mut(gi)) {
-            *span = Some((span.map_or(first, |(f, _)| f), last));
-        }
     }
 
     fn frame(&mut self, d: Decoded) -> Frame<'_> {
@@ -1396,7 +1400,7 @@ impl<R: Read> Mf4Reader<R> {
                 let run = at(0).zip(at(n - 1));
                 *s += n;
                 if let Some((first, last)) = run {
-                    self.note_plain(dg, gi, first, last);
+                    note_plain(&mut self.states, dg, gi, first, last);
                 }
             }
             queue_plain(&mut self.queue, n);
@@ -1579,12 +1583,7 @@ impl<R: Read> Mf4Reader<R> {
         {
             if let Some(c) = group.time.as_ref() {
                 let time = PlainTime::of(dg, gi, c, record, sample);
-                if let Some(span) = self.states.get_mut(dg).and_then(|s| s.plain.get_mut(gi)) {
-                    match span {
-                        Some((_, last)) => *last = time,
-                        None => *span = Some((time, time)),
-                    }
-                }
+                note_plain(&mut self.states, dg, gi, time, time);
             }
             // Under the channel its frame would name: the one field read
             // for it beyond those that decided it is only counted.
