@@ -637,10 +637,10 @@ const PROGRESS_MIN_BYTES: u64 = 50 * 1024 * 1024;
 /// (one worker more cost it 5%).
 pub(super) fn auto_threads(opened: &input::Opened, timing: bool) -> usize {
     let big = opened.gzip || opened.size.is_some_and(|s| s >= PARALLEL_MIN_BYTES);
-    match (big, timing) {
-        (false, _) => 1,
-        (true, false) => cores(),
-        (true, true) => cores() + 1,
+    if big {
+        cores() + usize::from(timing)
+    } else {
+        1
     }
 }
 
